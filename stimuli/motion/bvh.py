@@ -1,0 +1,560 @@
+"""BVH reading and writing.
+
+Reading resolves, at the edge, everything the real files disagree on
+(``../shared/mocap/SOURCES.md`` lists them):
+
+* **Euler orders** per joint, as the CHANNELS line lists them (intrinsic);
+* **root translation convention**: if the root OFFSET equals the first frame's
+  position channels (MASS exports) the channels are absolute; otherwise
+  (raw CMU with a zero OFFSET, iClone with OFFSET = standing hip height and
+  small channel deltas) the position is OFFSET + channels.  The same rule is
+  used for any other joint that carries position channels;
+* **units**: ``scale=`` (file units → metres) or ``scale=None`` to guess from the
+  size of the rest skeleton (an adult standing); the guess is recorded;
+* **frame time**: ``fps=`` overrides the header (the header of some CMU
+  conversions is wrong: physics, not the reader, notices that);
+* **T-pose first frame** of raw CMU files: detected and dropped (``drop_tpose``).
+
+The numbers of the MOTION block are parsed in one vectorised step.  Malformed
+input raises :class:`BVHError` naming the file, the line and what was expected.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .clip import Clip
+from .skeleton import POSITION_CHANNELS, ROTATION_CHANNELS, Skeleton
+
+KNOWN_CHANNELS = set(POSITION_CHANNELS) | set(ROTATION_CHANNELS)
+
+#: Length units a BVH file is commonly written in: (metres per unit, name).
+UNIT_CANDIDATES = (
+    (1.0, "m"),
+    (0.01, "cm"),
+    (0.001, "mm"),
+    (0.0254, "in"),
+    (0.0254 / 0.45, "CMU/ASF length units (1/0.45 in)"),
+    (0.3048, "ft"),
+)
+STANDING_HEIGHT_M = 1.70
+
+
+class BVHError(ValueError):
+    """A malformed BVH file: the message names the file, the line and what was expected."""
+
+    def __init__(self, path, line: int | None, message: str):
+        self.path = str(path)
+        self.line = line
+        where = f"{self.path}" + (f", line {line}" if line is not None else "")
+        super().__init__(f"{where}: {message}")
+
+
+# --------------------------------------------------------------------- reading
+def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
+    """Parse HIERARCHY up to MOTION. Returns skeleton parts and the MOTION line index."""
+    names: list[str] = []
+    parents: list[int] = []
+    offsets: list[list[float]] = []
+    channels: list[tuple[str, ...]] = []
+    end_sites: list[tuple[int, np.ndarray]] = []
+    stack: list[int] = []          # joint index per open brace; -2 for an End Site block
+    pending: int | None = None     # a joint (or -2) waiting for its '{'
+    cur_end: list | None = None
+    i = 0
+    n = len(lines)
+    # skip leading blank lines
+    while i < n and not lines[i].strip():
+        i += 1
+    if i >= n:
+        raise BVHError(path, None, "empty file: expected 'HIERARCHY'")
+    if lines[i].strip().upper() != "HIERARCHY":
+        raise BVHError(path, i + 1, f"expected 'HIERARCHY', found {lines[i].strip()[:40]!r}")
+    i += 1
+    root_seen = False
+    while i < n:
+        raw = lines[i].strip()
+        ln = i + 1
+        i += 1
+        if not raw:
+            continue
+        parts = raw.split()
+        key = parts[0]
+        if key == "MOTION":
+            if stack:
+                raise BVHError(path, ln, f"unbalanced braces: {len(stack)} block(s) still open "
+                                         f"before MOTION (expected '}}')")
+            if pending is not None:
+                raise BVHError(path, ln, "expected '{' after the joint line before MOTION")
+            if not names:
+                raise BVHError(path, ln, "no ROOT joint in HIERARCHY")
+            return dict(names=names, parents=parents, offsets=offsets, channels=channels,
+                        end_sites=end_sites), i
+        if pending is not None and key != "{":
+            raise BVHError(path, ln, f"expected '{{' after joint line, found {raw[:40]!r}")
+        if key in ("ROOT", "JOINT"):
+            name = raw[len(key):].strip()
+            if not name:
+                raise BVHError(path, ln, f"{key} without a name")
+            if key == "ROOT":
+                if root_seen or stack:
+                    raise BVHError(path, ln, "a second ROOT (only one skeleton per file is read)")
+                root_seen = True
+                parent = -1
+            else:
+                if not stack or stack[-1] < 0:
+                    raise BVHError(path, ln, "JOINT outside a ROOT/JOINT block")
+                parent = stack[-1]
+            if name in names:
+                raise BVHError(path, ln, f"duplicate joint name {name!r} "
+                                         f"(first at joint {names.index(name)})")
+            names.append(name)
+            parents.append(parent)
+            offsets.append(None)  # type: ignore[arg-type]
+            channels.append(None)  # type: ignore[arg-type]
+            pending = len(names) - 1
+        elif key == "End" and len(parts) >= 2 and parts[1] == "Site":
+            if not stack or stack[-1] < 0:
+                raise BVHError(path, ln, "End Site outside a joint block")
+            pending = -2
+            cur_end = [stack[-1], None]
+        elif key == "{":
+            if pending is None:
+                raise BVHError(path, ln, "unexpected '{' (no ROOT, JOINT or End Site before it)")
+            stack.append(pending)
+            pending = None
+        elif key == "}":
+            if not stack:
+                raise BVHError(path, ln, "unbalanced braces: '}' with no open block")
+            top = stack.pop()
+            if top == -2:
+                if cur_end is None or cur_end[1] is None:
+                    raise BVHError(path, ln, "End Site without OFFSET")
+                end_sites.append((cur_end[0], cur_end[1]))
+                cur_end = None
+            else:
+                if offsets[top] is None:
+                    raise BVHError(path, ln, f"joint {names[top]!r} has no OFFSET")
+                if channels[top] is None:
+                    channels[top] = ()
+        elif key == "OFFSET":
+            if not stack:
+                raise BVHError(path, ln, "OFFSET outside a block")
+            try:
+                vals = [float(v) for v in parts[1:]]
+            except ValueError:
+                raise BVHError(path, ln, f"OFFSET needs 3 numbers, found {' '.join(parts[1:])!r}") from None
+            if len(vals) != 3 or not all(np.isfinite(vals)):
+                raise BVHError(path, ln, f"OFFSET needs 3 finite numbers, found {len(vals)}: "
+                                         f"{' '.join(parts[1:])!r}")
+            if stack[-1] == -2:
+                cur_end[1] = np.array(vals)  # type: ignore[index]
+            else:
+                offsets[stack[-1]] = vals
+        elif key == "CHANNELS":
+            if not stack or stack[-1] < 0:
+                raise BVHError(path, ln, "CHANNELS outside a joint block")
+            try:
+                count = int(parts[1])
+            except (IndexError, ValueError):
+                raise BVHError(path, ln, "CHANNELS needs a count, e.g. 'CHANNELS 3 Zrotation "
+                                         "Yrotation Xrotation'") from None
+            chans = tuple(parts[2:])
+            if len(chans) != count:
+                raise BVHError(path, ln, f"CHANNELS says {count} but lists {len(chans)} names")
+            for c in chans:
+                if c not in KNOWN_CHANNELS:
+                    raise BVHError(path, ln, f"unknown channel name {c!r}; expected one of "
+                                             f"{sorted(KNOWN_CHANNELS)}")
+            rot = [c for c in chans if c in ROTATION_CHANNELS]
+            pos = [c for c in chans if c in POSITION_CHANNELS]
+            if len(set(chans)) != len(chans) or len(rot) not in (0, 3) or len(pos) not in (0, 3):
+                raise BVHError(path, ln, f"CHANNELS must list 0 or 3 distinct rotations and 0 or "
+                                         f"3 distinct positions, found {list(chans)}")
+            channels[stack[-1]] = chans
+        else:
+            raise BVHError(path, ln, f"unexpected {raw[:40]!r} in HIERARCHY; expected ROOT, JOINT, "
+                                     f"End Site, OFFSET, CHANNELS, braces or MOTION")
+    if stack or pending is not None:
+        raise BVHError(path, n, f"unbalanced braces: file ends with {len(stack)} block(s) open")
+    raise BVHError(path, n, "no MOTION section (file ends inside HIERARCHY)")
+
+
+def _header_value(line: str, key: str, path, ln: int) -> str:
+    s = line.strip()
+    if not s.startswith(key):
+        raise BVHError(path, ln, f"expected '{key} ...', found {s[:40]!r}")
+    return s[len(key):].strip()
+
+
+def _tokens_per_line(data: bytes, n_lines: int) -> np.ndarray:
+    """Number of whitespace-separated tokens on each line, vectorised over bytes."""
+    b = np.frombuffer(data, dtype=np.uint8)
+    if b.size == 0:
+        return np.zeros(n_lines, dtype=np.int64)
+    nl = b == 10
+    sep = nl | (b == 32) | (b == 9) | (b == 13) | (b == 11) | (b == 12)
+    start = ~sep
+    start[1:] &= sep[:-1]
+    line_of = np.cumsum(nl) - nl  # line index of every byte
+    return np.bincount(line_of[start], minlength=n_lines)[:n_lines]
+
+
+def _parse_motion(lines: list[str], start: int, n_channels: int, path):
+    """Frames, frame time and the (F, C) value array from the MOTION block."""
+    i = start
+    while i < len(lines) and not lines[i].strip():
+        i += 1
+    if i >= len(lines):
+        raise BVHError(path, i, "MOTION block is empty: expected 'Frames: N'")
+    val = _header_value(lines[i].replace(":", ": ", 1), "Frames:", path, i + 1)
+    try:
+        n_frames = int(val)
+    except ValueError:
+        raise BVHError(path, i + 1, f"'Frames:' needs a whole number, found {val!r}") from None
+    if n_frames < 0:
+        raise BVHError(path, i + 1, f"'Frames:' must not be negative, found {n_frames}")
+    i += 1
+    while i < len(lines) and not lines[i].strip():
+        i += 1
+    if i >= len(lines) or not lines[i].strip().startswith("Frame Time"):
+        raise BVHError(path, min(i + 1, len(lines)), "missing 'Frame Time: seconds' after 'Frames:'")
+    val = lines[i].strip()[len("Frame Time"):].lstrip().lstrip(":").strip()
+    try:
+        frame_time = float(val)
+    except ValueError:
+        raise BVHError(path, i + 1, f"'Frame Time:' needs a number of seconds, found {val!r}") from None
+    if not (np.isfinite(frame_time) and frame_time > 0):
+        raise BVHError(path, i + 1, f"'Frame Time:' must be a positive number of seconds, "
+                                    f"found {val!r}")
+    first = i + 1  # 0-based index of the first data line
+    data_lines = lines[first:]
+    # drop trailing blank lines
+    k = len(data_lines)
+    while k > 0 and not data_lines[k - 1].strip():
+        k -= 1
+    data_lines = data_lines[:k]
+    if len(data_lines) < n_frames:
+        raise BVHError(path, first + len(data_lines) + 1,
+                       f"truncated MOTION block: 'Frames: {n_frames}' but the file ends after "
+                       f"{len(data_lines)} frame line(s)")
+    if len(data_lines) > n_frames:
+        raise BVHError(path, first + n_frames + 1,
+                       f"{len(data_lines)} frame lines but 'Frames: {n_frames}' "
+                       f"(more data than the header declares)")
+    if n_frames == 0:
+        return n_frames, frame_time, np.zeros((0, n_channels)), first
+    text = "\n".join(data_lines)
+    counts = _tokens_per_line(text.encode("ascii", "replace"), len(data_lines))
+    bad = np.nonzero(counts != n_channels)[0]
+    if bad.size:
+        b = int(bad[0])
+        raise BVHError(path, first + b + 1, f"wrong number of values on a frame line: expected "
+                                            f"{n_channels} (the CHANNELS of the hierarchy), "
+                                            f"found {int(counts[b])}")
+    tokens = text.split()
+    try:
+        values = np.array(tokens, dtype=np.float64)
+    except ValueError:
+        for j, tok in enumerate(tokens):  # error path only: find the culprit
+            try:
+                float(tok)
+            except ValueError:
+                line = first + j // n_channels + 1
+                raise BVHError(path, line, f"non-numeric value {tok!r} in frame "
+                                           f"{j // n_channels + 1}, channel {j % n_channels + 1}") from None
+        raise
+    values = values.reshape(n_frames, n_channels)
+    finite = np.isfinite(values)
+    if not finite.all():
+        f, c = np.argwhere(~finite)[0]
+        raise BVHError(path, first + int(f) + 1, f"non-finite value {values[f, c]!r} in frame "
+                                                 f"{int(f) + 1}, channel {int(c) + 1} (NaN/inf "
+                                                 f"are not valid motion data)")
+    return n_frames, frame_time, values, first
+
+
+def guess_scale(skeleton: Skeleton) -> tuple[float, str]:
+    """Guess file units → metres from the size of the rest skeleton.
+
+    The rest pose of every file we know is standing (T- or A-pose), so its largest
+    extent (height, or arm span in a T-pose) is about an adult's height.  The unit
+    whose conversion puts it closest to 1.70 m (in log scale) wins."""
+    P = skeleton.rest_positions()
+    pts = [P]
+    if skeleton.end_sites:
+        pts.append(np.array([P[p] + o for p, o in skeleton.end_sites]))
+    pts = np.concatenate(pts)
+    extent = float(np.max(pts.max(0) - pts.min(0)))
+    if extent <= 0:
+        return 1.0, "m (skeleton has no extent; assumed)"
+    best = min(UNIT_CANDIDATES, key=lambda u: abs(np.log(extent * u[0] / STANDING_HEIGHT_M)))
+    return best[0], best[1]
+
+
+def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]]) -> np.ndarray:
+    """(F,J,4) quaternions from Euler channels, one scipy call per distinct order."""
+    F = values.shape[0]
+    J = len(orders)
+    q = np.zeros((F, J, 4))
+    q[..., 3] = 1.0
+    groups: dict[str, list[int]] = {}
+    for j, o in enumerate(orders):
+        if o:
+            groups.setdefault(o, []).append(j)
+    for order, joints in groups.items():
+        cols = np.array([col_of[j] for j in joints])         # (Jg, 3)
+        ang = values[:, cols]                                  # (F, Jg, 3)
+        r = Rotation.from_euler(order.upper(), ang.reshape(-1, 3), degrees=True)
+        q[:, joints] = r.as_quat().reshape(F, len(joints), 4)
+    return q
+
+
+def _detect_tpose(values: np.ndarray, rot_cols: np.ndarray, q: np.ndarray) -> bool:
+    """True when frame 0 is a calibration T-pose: nearly all rotation channels exactly
+    zero, unlike frame 1, and a pose jump to frame 1 far above the clip's usual
+    frame-to-frame change."""
+    if values.shape[0] < 4 or rot_cols.size == 0:
+        return False
+    zero0 = np.mean(values[0, rot_cols] == 0.0)
+    zero1 = np.mean(values[1, rot_cols] == 0.0)
+    if zero0 < 0.75 or zero1 > 0.5:
+        return False
+    dots = np.abs(np.sum(q[1:] * q[:-1], axis=-1)).clip(0, 1)     # (F-1, J)
+    step = (2 * np.arccos(dots)).sum(axis=1)
+    return bool(step[0] > 10 * max(np.median(step[1:]), 1e-6))
+
+
+def load_bvh(path, scale: float | None = None, fps: float | None = None,
+             drop_tpose: bool | str = "auto") -> Clip:
+    """Read a BVH file into a :class:`Clip` in metres.
+
+    Parameters
+    ----------
+    path : file path.
+    scale : metres per file unit; ``None`` guesses it from the skeleton's size.
+    fps : frames per second, overriding the header's Frame Time.
+    drop_tpose : ``"auto"`` drops a calibration T-pose first frame (raw CMU);
+        ``True`` always drops frame 0, ``False`` never.
+
+    Example
+    -------
+    >>> clip = load_bvh("88_01.bvh", fps=60)            # doctest: +SKIP
+    >>> clip.meta["scale_source"]                        # doctest: +SKIP
+    'guess: CMU/ASF length units (1/0.45 in)'
+    """
+    path = Path(path)
+    try:
+        raw = path.read_bytes()
+    except OSError as e:
+        raise BVHError(path, None, f"cannot read file: {e.strerror}") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    if not text.strip():
+        raise BVHError(path, None, "empty file: expected 'HIERARCHY'")
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    h, motion_at = _parse_hierarchy(lines, path)
+    n_frames, frame_time, values, first = _parse_motion(
+        lines, motion_at, sum(len(c) for c in h["channels"]), path)
+    if n_frames == 0:
+        raise BVHError(path, first, "'Frames: 0': a clip needs at least one frame")
+
+    names, parents, channels = h["names"], h["parents"], h["channels"]
+    J = len(names)
+    offsets = np.array(h["offsets"], dtype=np.float64)
+    # channel columns
+    col_of_rot: list[list[int]] = []
+    col_of_pos: list[list[int] | None] = []
+    c0 = 0
+    for ch in channels:
+        idx = {c: c0 + k for k, c in enumerate(ch)}
+        rot = [c for c in ch if c in ROTATION_CHANNELS]
+        col_of_rot.append([idx[c] for c in rot])
+        col_of_pos.append([idx[c] for c in POSITION_CHANNELS] if POSITION_CHANNELS[0] in idx else None)
+        c0 += len(ch)
+    orders = ["".join(c[0] for c in ch if c in ROTATION_CHANNELS) for ch in channels]
+    q = _euler_to_quat(values, orders, col_of_rot)
+
+    meta: dict = {"name": path.stem, "path": str(path), "warnings": [], "dropped_frames": []}
+    rot_cols = np.array([c for cols in col_of_rot for c in cols], dtype=np.int64)
+    do_drop = drop_tpose is True or (drop_tpose == "auto" and _detect_tpose(values, rot_cols, q))
+    if do_drop and n_frames > 1:
+        values = values[1:]
+        q = q[1:]
+        meta["dropped_frames"] = [0]
+        meta["warnings"].append(
+            "frame 1 of the file is a calibration T-pose (rotation channels zero, a pose jump to "
+            "frame 2); it was dropped, so frame indices count from the file's frame 2")
+
+    # translations: root and any other joint with position channels
+    root_pos = np.broadcast_to(offsets[0], (values.shape[0], 3)).copy()
+    joint_pos = None
+    conventions = {}
+    for j in range(J):
+        cols = col_of_pos[j]
+        if cols is None:
+            continue
+        ch = values[:, cols]
+        off = offsets[j]
+        tol = 1e-4 * max(1.0, float(np.abs(off).max()))
+        if np.any(off != 0) and np.allclose(off, ch[0], atol=tol):
+            pos = ch
+            conventions[names[j]] = "channels are absolute (OFFSET repeats frame 1)"
+        else:
+            pos = off + ch
+            conventions[names[j]] = "OFFSET + channels"
+        if j == 0:
+            root_pos = pos
+        else:
+            if joint_pos is None:
+                joint_pos = np.broadcast_to(offsets[None], (values.shape[0], J, 3)).copy()
+            joint_pos[:, j] = pos
+    meta["root_convention"] = conventions.get(names[0], "no position channels (OFFSET only)")
+    meta["file_root_offset"] = offsets[0].tolist()
+    offsets[0] = 0.0  # root_pos is absolute from here on
+
+    skel = Skeleton(names, parents, offsets, channels, h["end_sites"])
+    if scale is None:
+        s, unit = guess_scale(skel)
+        meta["scale_source"] = f"guess: {unit}"
+    else:
+        s = float(scale)
+        if not (np.isfinite(s) and s > 0):
+            raise ValueError(f"scale must be a positive number of metres per file unit, got {scale!r}")
+        meta["scale_source"] = "given"
+    meta["scale"] = s
+    meta["header_fps"] = 1.0 / frame_time
+    meta["header_frame_time"] = frame_time
+    if fps is not None:
+        fps = float(fps)
+        if not (np.isfinite(fps) and fps > 0):
+            raise ValueError(f"fps must be a positive number, got {fps!r}")
+        meta["fps_source"] = "given"
+    else:
+        fps = 1.0 / frame_time
+        # headers store a rounded frame time (".016667"); snap to the whole rate it means
+        if abs(fps - round(fps)) < 2e-4 * fps:
+            fps = float(round(fps))
+        meta["fps_source"] = "header"
+    clip = Clip(skel, fps, root_pos, q, joint_pos, meta)
+    return clip.scaled(s) if s != 1.0 else clip
+
+
+# --------------------------------------------------------------------- writing
+def _fmt(x: float) -> str:
+    s = f"{x:.9f}".rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def bvh_text(clip: Clip, scale: float = 1.0) -> str:
+    """The BVH text of a clip; lengths are written as metres / ``scale``."""
+    sk = clip.skeleton
+    J = sk.num_joints
+    inv = 1.0 / scale
+    jp = clip.joint_pos
+    offsets = sk.offsets * inv
+    if jp is not None:
+        # joints with position channels: write OFFSET = frame 1 and absolute channels,
+        # which the reader's rule reads back unambiguously
+        has = sk.has_position.copy()
+        has[0] = False
+        offsets[has] = jp[0, has] * inv
+    children: list[list[int]] = [[] for _ in range(J)]
+    for j in range(1, J):
+        children[sk.parents[j]].append(j)
+    ends: list[list[np.ndarray]] = [[] for _ in range(J)]
+    for p, o in sk.end_sites:
+        ends[p].append(o * inv)
+    out = ["HIERARCHY"]
+
+    def emit(j: int, depth: int):
+        ind = "\t" * depth
+        out.append(f"{ind}{'ROOT' if j == 0 else 'JOINT'} {sk.joint_names[j]}")
+        out.append(f"{ind}{{")
+        out.append(f"{ind}\tOFFSET {' '.join(_fmt(v) for v in offsets[j])}")
+        if sk.channels[j]:
+            out.append(f"{ind}\tCHANNELS {len(sk.channels[j])} {' '.join(sk.channels[j])}")
+        for c in children[j]:
+            emit(c, depth + 1)
+        for o in ends[j]:
+            out.append(f"{ind}\tEnd Site")
+            out.append(f"{ind}\t{{")
+            out.append(f"{ind}\t\tOFFSET {' '.join(_fmt(v) for v in o)}")
+            out.append(f"{ind}\t}}")
+        out.append(f"{ind}}}")
+
+    # the writer walks depth-first, which must reproduce the stored topological order
+    emit(0, 0)
+    order = [n.split()[-1] for n in out if n.strip().startswith(("ROOT", "JOINT"))]
+    if order != sk.joint_names:
+        raise ValueError("bvh_text: skeleton joints are not in depth-first order; "
+                         "reorder the skeleton before writing")
+    F = clip.num_frames
+    cols = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # gimbal-lock warnings: the angles stay valid
+        rots = {}
+        for order in set(sk.euler_orders):
+            if order:
+                js = [j for j in range(J) if sk.euler_orders[j] == order]
+                e = Rotation.from_quat(clip.rotations[:, js].reshape(-1, 4)).as_euler(order.upper(), degrees=True)
+                e = np.unwrap(e.reshape(F, len(js), 3), period=360.0, axis=0)
+                for k, j in enumerate(js):
+                    rots[j] = e[:, k]
+    for j in range(J):
+        order = sk.euler_orders[j]
+        for ch in sk.channels[j]:
+            axis = "XYZ".index(ch[0])
+            if ch in POSITION_CHANNELS:
+                src = clip.root_pos if j == 0 else jp[:, j]
+                cols.append(src[:, axis] * inv)
+            else:
+                cols.append(rots[j][:, order.index(ch[0])])
+    data = np.stack(cols, axis=1) if cols else np.zeros((F, 0))
+    data[np.abs(data) < 5e-10] = 0.0
+    fmt = " ".join("%.9f" if ch in POSITION_CHANNELS else "%.7f"
+                   for ch in (c for chs in sk.channels for c in chs))
+    body = "\n".join(fmt % tuple(row) for row in data)
+    out.append("MOTION")
+    out.append(f"Frames: {F}")
+    out.append(f"Frame Time: {1.0 / clip.fps:.10f}")
+    return "\n".join(out) + "\n" + body + "\n"
+
+
+def atomic_write_text(path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and a rename, so a reader
+    never sees a half-written file."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", newline="\n") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def save_bvh(clip: Clip, path, scale: float = 1.0) -> Path:
+    """Write a clip as BVH (atomically).  Lengths are written in units of ``scale``
+    metres (1.0: metres, 0.01: centimetres).  Euler orders and channel layout are
+    the skeleton's; the root OFFSET is zero and its channels absolute.
+
+    Example
+    -------
+    >>> save_bvh(builtin("backflip"), "backflip.bvh", scale=0.01)   # doctest: +SKIP
+    """
+    atomic_write_text(path, bvh_text(clip, scale))
+    return Path(path)

@@ -1,0 +1,217 @@
+"""A motion clip: a skeleton, a frame rate, root translation and local joint rotations.
+
+Conventions
+-----------
+* frames are the leading axis of every array;
+* ``root_pos`` (F,3) is the world position of the root joint in metres (the BVH
+  reader has already resolved how the file's root OFFSET and position channels
+  combine);
+* ``rotations`` (F,J,4) are the local joint rotations as unit quaternions in
+  scipy's scalar-last ``(x, y, z, w)`` order, so ``Rotation.from_quat`` reads them;
+* ``joint_pos`` (F,J,3), optional, is the animated local translation of joints
+  that carry position channels (replacing their OFFSET); ``None`` when only the
+  root moves;
+* world frame: metres, seconds, Y up, right-handed.
+
+A clip is immutable in spirit: operations return new clips.  Derived arrays
+(forward kinematics) are computed once and cached.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from .skeleton import Skeleton
+
+
+class Clip:
+    """Motion of a skeleton over ``F`` frames at ``fps`` frames per second.
+
+    Example
+    -------
+    >>> from stimuli import builtin
+    >>> clip = builtin("backflip")
+    >>> P = clip.joint_positions()      # (F, J, 3) metres
+    >>> P.shape[0] == clip.num_frames
+    True
+    """
+
+    def __init__(self, skeleton: Skeleton, fps: float, root_pos, rotations,
+                 joint_pos=None, meta: dict[str, Any] | None = None):
+        root_pos = np.asarray(root_pos, dtype=np.float64)
+        rotations = np.asarray(rotations, dtype=np.float64)
+        F = root_pos.shape[0]
+        J = skeleton.num_joints
+        if root_pos.shape != (F, 3):
+            raise ValueError(f"Clip: root_pos must be (F,3), got {root_pos.shape}")
+        if rotations.shape != (F, J, 4):
+            raise ValueError(f"Clip: rotations must be (F={F}, J={J}, 4), got {rotations.shape}")
+        if not (np.isfinite(fps) and fps > 0):
+            raise ValueError(f"Clip: fps must be a positive number, got {fps!r}")
+        if not np.all(np.isfinite(root_pos)) or not np.all(np.isfinite(rotations)):
+            raise ValueError("Clip: root_pos and rotations must be finite")
+        norms = np.linalg.norm(rotations, axis=-1, keepdims=True)
+        if np.any(norms < 1e-9):
+            raise ValueError("Clip: zero quaternion in rotations")
+        rotations = rotations / norms
+        if joint_pos is not None:
+            joint_pos = np.asarray(joint_pos, dtype=np.float64)
+            if joint_pos.shape != (F, J, 3):
+                raise ValueError(f"Clip: joint_pos must be (F,J,3), got {joint_pos.shape}")
+        self.skeleton = skeleton
+        self.fps = float(fps)
+        self.root_pos = root_pos
+        self.rotations = rotations
+        self.joint_pos = joint_pos
+        self.meta = dict(meta or {})
+        for a in (self.root_pos, self.rotations, self.joint_pos):
+            if a is not None:
+                a.setflags(write=False)
+        self._cache: dict[str, Any] = {}
+
+    # ------------------------------------------------------------------ basics
+    @property
+    def num_frames(self) -> int:
+        return self.root_pos.shape[0]
+
+    @property
+    def dt(self) -> float:
+        return 1.0 / self.fps
+
+    @property
+    def duration(self) -> float:
+        return (self.num_frames - 1) / self.fps
+
+    @property
+    def times(self) -> np.ndarray:
+        return np.arange(self.num_frames) / self.fps
+
+    def __len__(self) -> int:
+        return self.num_frames
+
+    def __repr__(self) -> str:
+        name = self.meta.get("name", "")
+        return (f"Clip({name!r}, {self.num_frames} frames @ {self.fps:g} fps, "
+                f"{self.skeleton.num_joints} joints)")
+
+    def replace(self, **kw) -> "Clip":
+        """A new clip with some fields replaced (skeleton, fps, root_pos, rotations,
+        joint_pos, meta)."""
+        args = dict(skeleton=self.skeleton, fps=self.fps, root_pos=self.root_pos,
+                    rotations=self.rotations, joint_pos=self.joint_pos, meta=self.meta)
+        args.update(kw)
+        return Clip(**args)
+
+    def slice(self, start: int | None = None, stop: int | None = None) -> "Clip":
+        """Frames ``start:stop`` as a new clip."""
+        s = slice(start, stop)
+        jp = None if self.joint_pos is None else self.joint_pos[s]
+        return self.replace(root_pos=self.root_pos[s], rotations=self.rotations[s], joint_pos=jp)
+
+    def with_fps(self, fps: float) -> "Clip":
+        """Same frames, another frame time (fixing a wrong header, not resampling)."""
+        return self.replace(fps=fps)
+
+    def scaled(self, s: float) -> "Clip":
+        """All lengths multiplied by ``s`` (unit conversion)."""
+        jp = None if self.joint_pos is None else self.joint_pos * s
+        return self.replace(skeleton=self.skeleton.scaled(s), root_pos=self.root_pos * s,
+                            joint_pos=jp)
+
+    def local_rotations(self) -> Rotation:
+        """Local joint rotations as a scipy ``Rotation`` of shape (F, J)."""
+        return Rotation.from_quat(self.rotations)
+
+    # ------------------------------------------------------- forward kinematics
+    def _fk(self):
+        if "fk" in self._cache:
+            return self._cache["fk"]
+        sk = self.skeleton
+        F, J = self.num_frames, sk.num_joints
+        local_R = Rotation.from_quat(self.rotations.reshape(-1, 4)).as_matrix().reshape(F, J, 3, 3)
+        if self.joint_pos is not None:
+            trans = np.where(sk.has_position[None, :, None], self.joint_pos, sk.offsets[None])
+        else:
+            trans = np.broadcast_to(sk.offsets[None], (F, J, 3))
+        world_R = np.empty((F, J, 3, 3))
+        world_P = np.empty((F, J, 3))
+        world_R[:, 0] = local_R[:, 0]
+        world_P[:, 0] = self.root_pos
+        for idx in sk.levels()[1:]:
+            par = sk.parents[idx]
+            pR = world_R[:, par]
+            world_R[:, idx] = pR @ local_R[:, idx]
+            world_P[:, idx] = world_P[:, par] + np.einsum("fjab,fjb->fja", pR, trans[:, idx])
+        world_R.setflags(write=False)
+        world_P.setflags(write=False)
+        self._cache["fk"] = (world_R, world_P)
+        return world_R, world_P
+
+    def joint_positions(self) -> np.ndarray:
+        """(F,J,3) world joint positions in metres."""
+        return self._fk()[1]
+
+    def joint_rotations(self) -> np.ndarray:
+        """(F,J,3,3) world rotation matrices of the joint frames."""
+        return self._fk()[0]
+
+    def end_site_positions(self) -> np.ndarray:
+        """(F,E,3) world positions of the end sites, in skeleton order."""
+        R, P = self._fk()
+        if not self.skeleton.end_sites:
+            return np.zeros((self.num_frames, 0, 3))
+        par = np.array([p for p, _ in self.skeleton.end_sites])
+        off = np.stack([o for _, o in self.skeleton.end_sites])
+        return P[:, par] + np.einsum("fjab,jb->fja", R[:, par], off)
+
+    def points(self, joint: np.ndarray, local: np.ndarray) -> np.ndarray:
+        """(F,K,3) world positions of K points fixed in the frames of ``joint`` (K,)
+        at ``local`` (K,3) offsets."""
+        R, P = self._fk()
+        joint = np.asarray(joint)
+        return P[:, joint] + np.einsum("fkab,kb->fka", R[:, joint], np.asarray(local, float))
+
+    # -------------------------------------------------------------- velocities
+    def derivative(self, x: np.ndarray) -> np.ndarray:
+        """Time derivative of an array with frames first (central differences,
+        one-sided at the ends), consistent with ``fps``."""
+        return finite_difference(x, self.fps)
+
+    def angular_velocities(self) -> np.ndarray:
+        """(F,J,3) world-frame angular velocity of every joint frame, rad/s."""
+        if "omega" not in self._cache:
+            self._cache["omega"] = angular_velocity(self.joint_rotations(), self.fps)
+        return self._cache["omega"]
+
+
+def finite_difference(x: np.ndarray, fps: float) -> np.ndarray:
+    """d/dt along axis 0: central differences inside, one-sided second-order at the
+    ends (exact for quadratics), so a ballistic parabola differentiates exactly."""
+    x = np.asarray(x, dtype=np.float64)
+    if x.shape[0] < 3:
+        if x.shape[0] < 2:
+            return np.zeros_like(x)
+        return np.gradient(x, 1.0 / fps, axis=0)
+    return np.gradient(x, 1.0 / fps, axis=0, edge_order=2)
+
+
+def angular_velocity(R: np.ndarray, fps: float) -> np.ndarray:
+    """World-frame angular velocity from world rotation matrices R (F,...,3,3).
+
+    Central difference on the rotation group: ``ω(t) = log(R(t+1) R(t-1)ᵀ) / 2Δt``,
+    one-sided at the ends.  Exact for a constant angular velocity.
+    """
+    R = np.asarray(R, dtype=np.float64)
+    F = R.shape[0]
+    out = np.zeros(R.shape[:-1])
+    if F < 2:
+        return out
+    rot = Rotation.from_matrix(R)
+    if F >= 3:
+        out[1:-1] = (rot[2:] * rot[:-2].inv()).as_rotvec() * (fps / 2.0)
+    out[0] = (rot[1] * rot[0].inv()).as_rotvec() * fps
+    out[-1] = (rot[-1] * rot[-2].inv()).as_rotvec() * fps
+    return out
