@@ -1,5 +1,20 @@
-"""flipstudy.stimuli: motion in, stimuli out (clips, BVH, body model, physics)."""
+"""flipstudy.stimuli: motion in, stimuli out (clips, BVH, body model, physics).
+
+Stable entry points::
+
+    from stimuli import load_bvh, save_bvh, builtin, analyse
+"""
 from .motion import BVHError, Clip, Skeleton, load_bvh, save_bvh
 from .body import Body
+from .analyse import Analysis, analyse
 
-__all__ = ["BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh", "Body"]
+
+def builtin(name: str, **params) -> Clip:
+    """A built-in, physically exact synthetic clip: ``"backflip"``, ``"frontflip"``
+    or ``"jump"`` (see :mod:`stimuli.synth`)."""
+    from .synth import builtin as _builtin
+    return _builtin(name, **params)
+
+
+__all__ = ["BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh", "Body", "Analysis",
+           "analyse", "builtin"]

@@ -229,7 +229,8 @@ class Body:
         for key, start in (("head_top", "head"), ("toe_tip_l", "ankle_l"), ("toe_tip_r", "ankle_r"),
                            ("hand_tip_l", "wrist_l"), ("hand_tip_r", "wrist_r")):
             if key in lm and not isinstance(lm[key], str):
-                tips[key] = tuple(lm[key])
+                j, e = lm[key]
+                tips[key] = (skeleton.index(j) if isinstance(j, str) else int(j), e)
             elif key in idx:
                 tips[key] = (idx[key], None)
             else:

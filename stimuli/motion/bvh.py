@@ -431,7 +431,11 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
             raise ValueError(f"scale must be a positive number of metres per file unit, got {scale!r}")
         meta["scale_source"] = "given"
     meta["scale"] = s
-    meta["header_fps"] = 1.0 / frame_time
+    header_fps = 1.0 / frame_time
+    # headers store a rounded frame time (".016667"); snap to the whole rate it means
+    if abs(header_fps - round(header_fps)) < 2e-4 * header_fps:
+        header_fps = float(round(header_fps))
+    meta["header_fps"] = header_fps
     meta["header_frame_time"] = frame_time
     if fps is not None:
         fps = float(fps)
@@ -439,10 +443,7 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
             raise ValueError(f"fps must be a positive number, got {fps!r}")
         meta["fps_source"] = "given"
     else:
-        fps = 1.0 / frame_time
-        # headers store a rounded frame time (".016667"); snap to the whole rate it means
-        if abs(fps - round(fps)) < 2e-4 * fps:
-            fps = float(round(fps))
+        fps = header_fps
         meta["fps_source"] = "header"
     clip = Clip(skel, fps, root_pos, q, joint_pos, meta)
     return clip.scaled(s) if s != 1.0 else clip

@@ -1,0 +1,56 @@
+"""Physics plots of a clip (matplotlib, headless): |L|(t), |p|(t) and COM height
+with the flight shaded — the view `flipstudy inspect --plot` writes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+
+def _mpl():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    return plt
+
+
+def plot_analysis(a, path, title: str | None = None) -> Path:
+    """Write a three-panel PNG (or PDF, by suffix) of an :class:`~stimuli.analyse.Analysis`.
+
+    Example
+    -------
+    >>> plot_analysis(analyse(builtin("backflip")), "backflip.png")   # doctest: +SKIP
+    """
+    plt = _mpl()
+    clip = a.clip
+    t = clip.times
+    fig, axes = plt.subplots(3, 1, figsize=(7.5, 7.0), sharex=True, constrained_layout=True)
+    panels = [
+        (np.linalg.norm(a.L, axis=1), "|L| (kg·m²/s)", "#0072B2"),
+        (np.linalg.norm(a.p, axis=1), "|p| (kg·m/s)", "#D55E00"),
+        (a.com[:, 1], "COM height (m)", "#009E73"),
+    ]
+    for ax, (y, label, colour) in zip(axes, panels):
+        for k, f in enumerate(a.flights):
+            ax.axvspan(t[f.takeoff], t[f.landing], color="0.85" if k else "#F0E442",
+                       alpha=0.5 if k else 0.45, lw=0,
+                       label=("main flight" if k == 0 else ("other flights" if k == 1 else None)))
+        ax.plot(t, y, color=colour, lw=1.6)
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    if a.flight is not None:
+        fr = a.flight_frames
+        path_y = a.path[1, 0] * (t[fr] - t[a.takeoff]) ** 2 + a.path[1, 1] * (t[fr] - t[a.takeoff]) + a.path[1, 2]
+        axes[2].plot(t[fr], path_y, "k--", lw=1.0, label=f"parabola, g = {a.apparent_gravity:.2f} m/s²")
+        axes[0].axhline(a.L_mean, color="k", lw=0.8, ls=":", label=f"flight mean {a.L_mean:.1f} (CV {a.L_cv_pct:.1f} %)")
+        axes[0].legend(loc="upper right", fontsize=8)
+        axes[2].legend(loc="upper right", fontsize=8)
+    axes[-1].set_xlabel("time (s)")
+    name = title or clip.meta.get("name", "clip")
+    axes[0].set_title(f"{name}: {clip.num_frames} frames at {clip.fps:g} fps")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

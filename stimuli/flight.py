@@ -1,0 +1,153 @@
+"""Ballistic (flight) phase detection, after Section 4.1 of Majkowska & Faloutsos.
+
+1. **Contact from end effectors.**  Toe tips, ankles, finger tips and wrists that
+   are nearly still *and* low (near the level where that effector rests) are in
+   contact.  Hands count: the hand-supported phases of a round-off or a
+   handspring are not flight.
+2. **Candidates** are the runs of frames with no effector in contact.
+3. **Ballistic check.**  In flight the COM moves on a line horizontally and a
+   parabola vertically.  The ends of each candidate are trimmed while the COM
+   there leaves the fitted path by much more than it does inside (the ground
+   still pushing at take-off, already braking at landing: the paper's momentum
+   build-up/release pattern); a candidate whose COM does not fit a downward
+   parabola within ``tol`` (RMS) is not a flight.
+4. The flight is the longest surviving interval; all of them are reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .body import Body
+from .motion.clip import Clip, finite_difference
+
+
+@dataclass
+class Flight:
+    """A ballistic phase: ``takeoff`` and ``landing`` are the first and last
+    airborne frames (inclusive); the COM fit is y = a t² + b t + c with t in
+    seconds from the take-off frame, x and z linear."""
+
+    takeoff: int
+    landing: int
+    coef: np.ndarray          # (3,3): rows x,y,z; columns t², t, 1
+    rms: float                # COM residual from the fitted path, metres
+
+    @property
+    def frames(self) -> int:
+        return self.landing - self.takeoff + 1
+
+    def apparent_gravity(self) -> float:
+        return float(-2.0 * self.coef[1, 0])
+
+
+def effector_points(clip: Clip, body: Body) -> tuple[np.ndarray, list[str]]:
+    """(F,E,3) world positions of the contact candidates: toe tips, ankles, hand
+    tips and wrists of both sides."""
+    sk = clip.skeleton
+    lm = body.landmarks
+    joints, local, names = [], [], []
+    for key in ("toe_tip_l", "toe_tip_r", "ankle_l", "ankle_r",
+                "hand_tip_l", "hand_tip_r", "wrist_l", "wrist_r"):
+        v = lm[key]
+        if isinstance(v, str):
+            joints.append(sk.index(v))
+            local.append(np.zeros(3))
+        else:
+            j, e = v
+            joints.append(sk.index(j))
+            local.append(sk.end_sites[e][1] if e is not None else np.zeros(3))
+        names.append(key)
+    return clip.points(np.array(joints), np.array(local)), names
+
+
+def contact_mask(clip: Clip, body: Body, v_thr: float = 1.0, margin: float = 0.10) -> np.ndarray:
+    """(F,E) bool: effector nearly still (speed < ``v_thr`` m/s) and within
+    ``margin`` metres of its own resting level (the 5th percentile of its
+    height over the frames where it is still)."""
+    P, _ = effector_points(clip, body)
+    speed = np.linalg.norm(finite_difference(P, clip.fps), axis=-1)
+    still = speed < v_thr
+    h = P[..., 1]
+    masked = np.where(still, h, np.nan)
+    with np.errstate(all="ignore"):
+        rest = np.nanpercentile(masked, 5, axis=0) if still.any() else np.full(h.shape[1], np.nan)
+    rest = np.where(np.isfinite(rest), rest, np.nanmin(h, axis=0))
+    return still & (h < rest[None] + margin)
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Inclusive (start, end) of the runs of True."""
+    m = np.concatenate([[False], mask, [False]]).astype(np.int8)
+    d = np.diff(m)
+    starts = np.nonzero(d == 1)[0]
+    ends = np.nonzero(d == -1)[0] - 1
+    return list(zip(starts.tolist(), ends.tolist()))
+
+
+def trim_to_ballistic(com: np.ndarray, fps: float, min_frames: int, k: float = 3.0,
+                      floor: float = 0.015):
+    """Trim the ends of a candidate flight while the COM there leaves the fitted
+    ballistic path: an end frame whose residual exceeds ``max(k × median
+    residual, floor)`` is still being pushed by the ground (take-off) or already
+    stopped by it (landing).  Returns (start, end, rms) relative to ``com`` or
+    None when too little is left.  Each step is one vectorised fit; there are at
+    most as many steps as trimmed frames."""
+    s, e = 0, com.shape[0] - 1
+    while e - s + 1 >= min_frames:
+        seg = com[s:e + 1]
+        coef = fit_path(seg, fps)
+        r = np.linalg.norm(seg - path_values(coef, np.arange(seg.shape[0]) / fps), axis=1)
+        thr = max(k * float(np.median(r)), floor)
+        if r[0] > thr and r[0] >= r[-1]:
+            s += 1
+        elif r[-1] > thr:
+            e -= 1
+        elif r[0] > thr:
+            s += 1
+        else:
+            return s, e, float(np.sqrt(np.mean(r ** 2))), coef
+    return None
+
+
+def fit_path(com: np.ndarray, fps: float) -> np.ndarray:
+    """(3,3) least-squares ballistic path of ``com`` (N,3): rows x,y,z, columns
+    t², t, 1 (t from the first frame, seconds); x and z have no t² term."""
+    t = np.arange(com.shape[0]) / fps
+    coef = np.zeros((3, 3))
+    A = np.stack([t ** 2, t, np.ones_like(t)], 1)
+    coef[1] = np.linalg.lstsq(A, com[:, 1], rcond=None)[0]
+    for ax in (0, 2):
+        coef[ax, 1:] = np.linalg.lstsq(A[:, 1:], com[:, ax], rcond=None)[0]
+    return coef
+
+
+def path_values(coef: np.ndarray, t: np.ndarray) -> np.ndarray:
+    return coef[:, 0][None] * t[:, None] ** 2 + coef[:, 1][None] * t[:, None] + coef[:, 2][None]
+
+
+def detect_flights(clip: Clip, body: Body, com: np.ndarray | None = None, *,
+                   v_thr: float = 1.0, margin: float = 0.10, tol: float = 0.06,
+                   min_duration: float = 0.1) -> list[Flight]:
+    """All ballistic phases of a clip, longest first (empty list: no flight)."""
+    from .physics import center_of_mass
+    if com is None:
+        com = center_of_mass(clip, body)
+    contact = contact_mask(clip, body, v_thr=v_thr, margin=margin)
+    airborne = ~contact.any(axis=1)
+    min_frames = max(4, int(np.ceil(min_duration * clip.fps)))
+    flights = []
+    for s, e in _runs(airborne):
+        if e - s + 1 < min_frames:
+            continue
+        found = trim_to_ballistic(com[s:e + 1], clip.fps, min_frames)
+        if found is None:
+            continue
+        a, b, rms, coef = found
+        if rms > tol or coef[1, 0] >= 0:      # not ballistic: no downward parabola
+            continue
+        flights.append(Flight(s + a, s + b, coef, rms))
+    flights.sort(key=lambda f: -f.frames)
+    return flights
