@@ -63,11 +63,17 @@ def effector_points(clip: Clip, body: Body) -> tuple[np.ndarray, list[str]]:
     return clip.points(np.array(joints), np.array(local)), names
 
 
-def contact_mask(clip: Clip, body: Body, v_thr: float = 1.0, margin: float = 0.10) -> np.ndarray:
-    """(F,E) bool: effector nearly still (speed < ``v_thr`` m/s) and within
-    ``margin`` metres of its own resting level (the 5th percentile of its
-    height over the frames where it is still)."""
-    P, _ = effector_points(clip, body)
+def contact_mask(clip: Clip, body: Body, v_thr: float = 1.0, margin: float = 0.10,
+                 touch: float = 0.03) -> np.ndarray:
+    """(F,E) bool contact of the effectors of :func:`effector_points`.
+
+    An effector is in contact when it is nearly still (speed < ``v_thr`` m/s)
+    within ``margin`` metres of its own resting level (the 5th percentile of its
+    height over the frames where it is still), or — at any speed — within
+    ``touch`` metres of it (a foot landing or pushing off touches the floor
+    before it stops or after it starts moving).  The touch rule applies to hands
+    only when they rest on the floor somewhere in the clip."""
+    P, names = effector_points(clip, body)
     speed = np.linalg.norm(finite_difference(P, clip.fps), axis=-1)
     still = speed < v_thr
     h = P[..., 1]
@@ -75,7 +81,10 @@ def contact_mask(clip: Clip, body: Body, v_thr: float = 1.0, margin: float = 0.1
     with np.errstate(all="ignore"):
         rest = np.nanpercentile(masked, 5, axis=0) if still.any() else np.full(h.shape[1], np.nan)
     rest = np.where(np.isfinite(rest), rest, np.nanmin(h, axis=0))
-    return still & (h < rest[None] + margin)
+    feet = np.array([n.startswith(("toe", "ankle")) for n in names])
+    floor = rest[feet].min()
+    touches = feet | (rest < floor + 0.35)
+    return (still & (h < rest[None] + margin)) | (touches[None] & (h < rest[None] + touch))
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:

@@ -1,0 +1,68 @@
+"""Body model: automatic mapping on every real skeleton, table masses, inertia."""
+import numpy as np
+import pytest
+
+from stimuli.body import Body, BodyMappingError, GROUPS, SEGMENT_TABLE, ellipsoid_inertia
+from stimuli.motion import Skeleton, load_bvh
+
+from _shared import ALL_BVH, shared_file
+
+
+def test_table_fractions_sum_to_one():
+    total = sum(v[0] * (1 if g in ("head", "trunk") else 2) for g, v in SEGMENT_TABLE.items())
+    assert total == pytest.approx(1.0, abs=1e-3)
+
+
+def test_ellipsoid_inertia_closed_form():
+    # a solid ellipsoid with semi-axes (a, b, b) along x: Ixx = 2/5 m b², Iyy = Izz = m/5 (a²+b²)
+    I = ellipsoid_inertia(np.array([2.0]), np.array([0.3]), np.array([0.1]), np.array([[1.0, 0, 0]]))[0]
+    assert np.allclose(np.diag(I), [2 / 5 * 2 * 0.01, 2 / 5 * (0.09 + 0.01), 2 / 5 * (0.09 + 0.01)])
+    assert np.allclose(I, I.T)
+    # rotated axis: same eigenvalues
+    u = np.array([[1.0, 1.0, 0.0]]) / np.sqrt(2)
+    I2 = ellipsoid_inertia(np.array([2.0]), np.array([0.3]), np.array([0.1]), u)[0]
+    assert np.allclose(np.sort(np.linalg.eigvalsh(I2)), np.sort(np.diag(I)))
+
+
+@pytest.mark.parametrize("name", ALL_BVH)
+def test_every_real_skeleton_maps(name):
+    clip = load_bvh(shared_file(name))
+    body = Body.from_skeleton(clip.skeleton, total_mass=70.0)
+    masses = body.segment_masses()
+    assert sum(masses.values()) == pytest.approx(70.0)
+    for g in GROUPS:
+        assert body.group_masses()[g] == pytest.approx(
+            SEGMENT_TABLE[g][0] * 70.0 * (1 if g in ("head", "trunk") else 2), rel=1e-9)
+    # limbs hang off the right joints: left and right segments on opposite sides of the
+    # body's sagittal plane in the rest pose
+    P = clip.skeleton.rest_positions()
+    lm = body.landmarks
+    hl, hr = P[clip.skeleton.index(lm["hip_l"])], P[clip.skeleton.index(lm["hip_r"])]
+    sl, sr = P[clip.skeleton.index(lm["shoulder_l"])], P[clip.skeleton.index(lm["shoulder_r"])]
+    assert np.linalg.norm(hl - hr) > 0.05 and np.linalg.norm(sl - sr) > 0.1
+    # the thigh is longer than the foot, the trunk heavier than a thigh
+    assert np.all(body.radius > 0) and np.all(np.isfinite(body.inertia))
+
+
+def test_mapping_override_and_errors():
+    names = ["Root", "Torso", "Skull", "A1", "A2", "A3", "B1", "B2", "B3", "C1", "C2", "C3", "D1", "D2", "D3"]
+    parents = [-1, 0, 1, 1, 3, 4, 1, 6, 7, 0, 9, 10, 0, 12, 13]
+    offs = np.zeros((15, 3))
+    offs[1] = [0, 0.5, 0]; offs[2] = [0, 0.2, 0]
+    offs[3] = [0.2, 0.0, 0]; offs[4] = [0.3, 0, 0]; offs[5] = [0.25, 0, 0]
+    offs[6] = [-0.2, 0.0, 0]; offs[7] = [-0.3, 0, 0]; offs[8] = [-0.25, 0, 0]
+    offs[9] = [0.1, -0.05, 0]; offs[10] = [0, -0.45, 0]; offs[11] = [0, -0.45, 0]
+    offs[12] = [-0.1, -0.05, 0]; offs[13] = [0, -0.45, 0]; offs[14] = [0, -0.45, 0]
+    sk = Skeleton(names, parents, offs, end_sites=[(2, [0, 0.2, 0]), (5, [0.1, 0, 0]), (8, [-0.1, 0, 0]),
+                                                  (11, [0, -0.05, 0.15]), (14, [0, -0.05, 0.15])])
+    with pytest.raises(BodyMappingError, match="no joint found"):
+        Body.from_skeleton(sk)
+    mapping = {"neck": "Torso", "head": "Skull", "shoulder_l": "A1", "elbow_l": "A2", "wrist_l": "A3",
+               "shoulder_r": "B1", "elbow_r": "B2", "wrist_r": "B3", "hip_l": "C1", "knee_l": "C2",
+               "ankle_l": "C3", "hip_r": "D1", "knee_r": "D2", "ankle_r": "D3"}
+    body = Body.from_skeleton(sk, total_mass=60.0, mapping=mapping)
+    assert sum(body.segment_masses().values()) == pytest.approx(60.0)
+    with pytest.raises(BodyMappingError, match="no such joint"):
+        Body.from_skeleton(sk, mapping={**mapping, "head": "Nope"})
+    heavier = body.with_segment_masses({"trunk": 30.0})
+    assert heavier.segment_masses()["trunk"] == pytest.approx(30.0)
