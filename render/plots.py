@@ -54,3 +54,42 @@ def plot_analysis(a, path, title: str | None = None) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_compare(stim, original, path, title: str | None = None) -> Path:
+    """|L|(t) of a stimulus over its original, both from take-off (the paper's
+    Figure 3 view), with the ratio stimulus/original below."""
+    plt = _mpl()
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7.5, 5.5), sharex=True, constrained_layout=True,
+                                  gridspec_kw={"height_ratios": [2, 1]})
+    series = []
+    # frames before take-off are the original's, so both clocks start at the
+    # original's take-off frame
+    t0 = original.takeoff or 0
+    for a, label, colour in ((original, "original", "#E69F00"), (stim, "stimulus", "#009E9E")):
+        t = (np.arange(a.clip.num_frames) - t0) / a.clip.fps
+        L = np.linalg.norm(a.L, axis=1)
+        ax.plot(t, L, color=colour, lw=1.8, label=label)
+        if a.flight is not None:
+            ax.axvspan((a.takeoff - t0) / a.clip.fps, (a.landing - t0) / a.clip.fps, color=colour,
+                       alpha=0.12, lw=0)
+        series.append((t, L))
+    (to, Lo), (ts, Ls) = series
+    if original.flight is not None and stim.flight is not None:
+        fr = stim.flight_frames
+        ratio = Ls[fr] / np.maximum(np.interp(ts[fr], to, Lo), 1e-9)
+        ax2.plot(ts[fr], 100 * (ratio - 1), color="#009E9E", lw=1.6)
+        ax2.axhline(0, color="k", lw=0.8)
+        ax2.set_ylabel("|L| change at the same\nclock time (%)")
+        ax2.grid(alpha=0.3)
+    ax.set_ylabel("|L| (kg·m²/s)")
+    ax.legend(loc="upper right")
+    ax.grid(alpha=0.3)
+    ax2.set_xlabel("time from take-off (s)")
+    ax.set_title(title or f"{stim.clip.meta.get('name', 'stimulus')} over "
+                          f"{original.clip.meta.get('name', 'original')}")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

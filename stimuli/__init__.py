@@ -9,6 +9,9 @@ from .body import Body
 from .analyse import Analysis, analyse
 
 
+BUILTIN_NAMES = ("backflip", "frontflip", "jump")
+
+
 def builtin(name: str, **params) -> Clip:
     """A built-in, physically exact synthetic clip: ``"backflip"``, ``"frontflip"``
     or ``"jump"`` (see :mod:`stimuli.synth`)."""
@@ -17,4 +20,4 @@ def builtin(name: str, **params) -> Clip:
 
 
 __all__ = ["BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh", "Body", "Analysis",
-           "analyse", "builtin"]
+           "analyse", "builtin", "BUILTIN_NAMES"]

@@ -1,0 +1,5 @@
+"""Editing operations: retiming, repositioning (and the papers' algorithms)."""
+from .timing import ratio_retime_frames, retime, sample, source_times
+from .reposition import ballistic_path, move_com
+
+__all__ = ["sample", "retime", "source_times", "ratio_retime_frames", "move_com", "ballistic_path"]
