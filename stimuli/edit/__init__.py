@@ -1,5 +1,5 @@
 """Editing operations: retiming, repositioning (and the papers' algorithms)."""
 from .timing import ratio_retime_frames, retime, sample, source_times
-from .reposition import ballistic_path, move_com
+from .reposition import ballistic_path, move_com, rotate
 
-__all__ = ["sample", "retime", "source_times", "ratio_retime_frames", "move_com", "ballistic_path"]
+__all__ = ["sample", "retime", "source_times", "ratio_retime_frames", "move_com", "ballistic_path", "rotate"]

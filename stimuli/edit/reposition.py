@@ -41,3 +41,18 @@ def ballistic_path(c0: np.ndarray, v0: np.ndarray, g: float, t: np.ndarray) -> n
     p = np.asarray(c0, float)[None] + np.asarray(v0, float)[None] * t
     p[:, 1] -= 0.5 * g * t[:, 0] ** 2
     return p
+
+
+def rotate(clip: Clip, rotation, center: np.ndarray) -> Clip:
+    """The whole clip rotated rigidly by ``rotation`` (a scipy ``Rotation``, one
+    for all frames or one per frame) about the point(s) ``center`` ((3,) or
+    (F,3)).  Angular momentum rotates with it: rotating about an axis along L
+    through the COM leaves L unchanged (Section 5.1)."""
+    from scipy.spatial.transform import Rotation
+    center = np.broadcast_to(np.asarray(center, float), clip.root_pos.shape)
+    root = Rotation.from_quat(clip.rotations[:, 0])
+    rot = clip.rotations.copy()
+    rot[:, 0] = (rotation * root).as_quat()
+    pos = center + rotation.apply(clip.root_pos - center)
+    jp = clip.joint_pos
+    return clip.replace(root_pos=pos, rotations=rot, joint_pos=jp)

@@ -1,0 +1,106 @@
+"""Editing primitives and their effect on momentum (Section 5.1 of the paper)."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+from scipy.spatial.transform import Rotation
+
+from stimuli import analyse, load_bvh
+from stimuli.body import Body
+from stimuli.edit import ballistic_path, move_com, ratio_retime_frames, retime, rotate, sample, source_times
+from stimuli.physics import center_of_mass, momentum
+
+from _shared import shared_file
+
+
+@pytest.fixture(scope="module")
+def flip():
+    clip = load_bvh(shared_file("88_01.bvh"), fps=60)
+    return clip, Body.from_skeleton(clip.skeleton)
+
+
+def test_sample_at_integer_frames_is_identity(flip):
+    clip, _ = flip
+    s = sample(clip, np.arange(clip.num_frames, dtype=float))
+    assert np.allclose(s.joint_positions(), clip.joint_positions(), atol=1e-12)
+
+
+def test_sample_midpoint_is_slerp(flip):
+    clip, _ = flip
+    s = sample(clip, np.array([10.5]))
+    r0 = Rotation.from_quat(clip.rotations[10])
+    r1 = Rotation.from_quat(clip.rotations[11])
+    mid = Rotation.from_quat(s.rotations[0])
+    # the midpoint is equally far from both ends, on the geodesic
+    d0 = (r0.inv() * mid).magnitude()
+    d1 = (mid.inv() * r1).magnitude()
+    full = (r0.inv() * r1).magnitude()
+    assert np.allclose(d0, d1, atol=1e-9) and np.allclose(d0 + d1, full, atol=1e-9)
+    assert np.allclose(s.root_pos[0], (clip.root_pos[10] + clip.root_pos[11]) / 2)
+
+
+@pytest.mark.parametrize("n", [0.5, 0.8, 1.25, 2.0])
+def test_uniform_retime_scales_p_and_L_by_n(n):
+    # a smooth synthetic motion: a rigid two-bone body spinning and flying, so the
+    # finite differences are accurate and the scaling can be checked tightly
+    from _tiny import tiny_body_clip
+    clip, body = tiny_body_clip(fps=240, seconds=1.0)
+    m = momentum(clip, body)
+    fast = retime(clip, n)
+    mf = momentum(fast, body)
+    # frame k of the retimed clip is source frame k*n
+    k = np.arange(5, fast.num_frames - 5)
+    src = k * n
+    keep = src < clip.num_frames - 6
+    k, src = k[keep], src[keep]
+    Lo = np.stack([np.interp(src, np.arange(clip.num_frames), m.L[:, a]) for a in range(3)], 1)
+    po = np.stack([np.interp(src, np.arange(clip.num_frames), m.p[:, a]) for a in range(3)], 1)
+    assert np.allclose(mf.L[k], n * Lo, rtol=2e-3, atol=1e-3 * np.abs(Lo).max())
+    assert np.allclose(mf.p[k], n * po, rtol=2e-3, atol=1e-3 * np.abs(po).max())
+
+
+@settings(max_examples=25, deadline=None)
+@given(angle=st.floats(-3.0, 3.0), frame=st.integers(50, 75))
+def test_rotation_about_L_through_com_keeps_L(angle, frame):
+    clip = load_bvh(shared_file("88_01.bvh"), fps=60)
+    body = Body.from_skeleton(clip.skeleton)
+    m = momentum(clip, body)
+    axis = m.L[frame] / np.linalg.norm(m.L[frame])
+    R = Rotation.from_rotvec(axis * angle)
+    r = rotate(clip, R, m.com)
+    m2 = momentum(r, body)
+    assert np.allclose(m2.L[frame], m.L[frame], atol=1e-6 * np.linalg.norm(m.L[frame]) + 1e-9)
+    # and in general L is rotated with the body
+    assert np.allclose(m2.L, R.apply(m.L), atol=1e-6 * np.abs(m.L).max())
+
+
+def test_repositioning_keeps_L_and_puts_com_on_the_path(flip):
+    clip, body = flip
+    a = analyse(clip, body=body, estimate=False)
+    fr = a.flight_frames
+    t = (np.arange(clip.num_frames)[fr] - a.takeoff) / clip.fps
+    target = ballistic_path(a.com[a.takeoff], [0.3, 3.5, -0.2], 9.81, t)
+    moved = move_com(clip, body, fr, target)
+    m2 = momentum(moved, body)
+    assert np.allclose(center_of_mass(moved, body)[fr], target, atol=1e-9)
+    inner = np.arange(clip.num_frames)[fr][1:-1]   # L is untouched where the shift is smooth
+    assert np.allclose(m2.L[inner], a.L[inner], atol=1e-6 * np.abs(a.L).max())
+    # after the flight the motion continues from where the new flight ends
+    jump = moved.root_pos[a.landing + 1] - moved.root_pos[a.landing]
+    orig = clip.root_pos[a.landing + 1] - clip.root_pos[a.landing]
+    assert np.allclose(jump, orig, atol=1e-12)
+
+
+def test_source_times_of_a_linear_rate():
+    # r(τ) = 1 + τ  ⇒  s(τ) = τ + τ²/2
+    s = source_times(lambda tau: 1 + tau, 2.0, fps=100)
+    tau = np.arange(s.size) / 100
+    assert np.allclose(s, tau + tau ** 2 / 2, atol=1e-6)
+    assert s[-1] <= 2.0 and s[-1] + (1 + tau[-1]) / 100 > 2.0 - 1e-9
+
+
+def test_ratio_rule_next_frame():
+    # ratio 2 everywhere: steps of half a frame
+    f = ratio_retime_frames(lambda x: 2.0, 10, 20)
+    assert np.allclose(np.diff(f), 0.5) and f[0] == 10 and f[-1] == 20
+    with pytest.raises(ValueError, match="positive"):
+        ratio_retime_frames(lambda x: 0.0, 0, 5)
