@@ -6,8 +6,11 @@ Angular momentum about the whole-body COM:
     L(t) = Σ_i R_i I_i R_iᵀ ω_i + m_i (c_i − c) × (v_i − v_c)
 
 (the paper's printed formula, Section 4.3, drops the ω_i of the first term;
-ours keeps it).  Velocities are central finite differences consistent with
-``clip.fps`` (exact for a ballistic parabola and a constant spin).
+ours keeps it).  The root's velocity is a central finite difference and each
+joint frame's ω a central difference on the rotation group, both consistent
+with ``clip.fps``; piece velocities are propagated along the chain
+(v_joint + ω × r), so a ballistic parabola and a constant spin are
+differentiated exactly.
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .body import Body
-from .motion.clip import Clip, finite_difference
+from .motion.clip import Clip
 
 
 def piece_positions(clip: Clip, body: Body) -> np.ndarray:
@@ -59,7 +62,7 @@ def momentum(clip: Clip, body: Body) -> Momentum:
     R = clip.joint_rotations()[:, body.joint]                 # (F,P,3,3)
     omega = clip.angular_velocities()[:, body.joint]           # (F,P,3)
     c = piece_positions(clip, body)                            # (F,P,3)
-    v = finite_difference(c, clip.fps)
+    v = clip.point_velocities(body.joint, body.com)            # rigid-body propagation
     m = body.mass
     M = m.sum()
     com = np.einsum("fpa,p->fa", c, m) / M

@@ -180,6 +180,42 @@ class Clip:
         one-sided at the ends), consistent with ``fps``."""
         return finite_difference(x, self.fps)
 
+    def joint_velocities(self) -> np.ndarray:
+        """(F,J,3) world linear velocity of every joint, propagated along the chain:
+        v_j = v_parent + ω_parent × (p_j − p_parent) (+ the parent-frame rate of an
+        animated translation).  With the root's position differenced and ω from the
+        rotation group, a rigid motion (ballistic flight, constant spin) is
+        differentiated exactly — differencing every point instead would shrink
+        rotational velocities by sin(θ)/θ, θ = |ω|/fps."""
+        if "vel" in self._cache:
+            return self._cache["vel"]
+        sk = self.skeleton
+        R, P = self._fk()
+        w = self.angular_velocities()
+        V = np.empty_like(P)
+        V[:, 0] = finite_difference(self.root_pos, self.fps)
+        dtrans = None
+        if self.joint_pos is not None:
+            dtrans = finite_difference(self.joint_pos, self.fps)
+        for idx in sk.levels()[1:]:
+            par = sk.parents[idx]
+            V[:, idx] = V[:, par] + np.cross(w[:, par], P[:, idx] - P[:, par])
+            if dtrans is not None:
+                moving = sk.has_position[idx]
+                if moving.any():
+                    ii, pp = idx[moving], par[moving]
+                    V[:, ii] += np.einsum("fjab,fjb->fja", R[:, pp], dtrans[:, ii])
+        self._cache["vel"] = V
+        return V
+
+    def point_velocities(self, joint: np.ndarray, local: np.ndarray) -> np.ndarray:
+        """(F,K,3) world velocities of points fixed in joint frames (see
+        :meth:`points`): v_joint + ω_joint × (x − p_joint)."""
+        joint = np.asarray(joint)
+        x = self.points(joint, local)
+        P = self.joint_positions()[:, joint]
+        return self.joint_velocities()[:, joint] + np.cross(self.angular_velocities()[:, joint], x - P)
+
     def angular_velocities(self) -> np.ndarray:
         """(F,J,3) world-frame angular velocity of every joint frame, rad/s."""
         if "omega" not in self._cache:
