@@ -137,6 +137,16 @@ def path_values(coef: np.ndarray, t: np.ndarray) -> np.ndarray:
     return coef[:, 0][None] * t[:, None] ** 2 + coef[:, 1][None] * t[:, None] + coef[:, 2][None]
 
 
+def body_size(clip: Clip) -> float:
+    """Largest extent of the rest skeleton in metres (height, or span in a T-pose)."""
+    sk = clip.skeleton
+    P = sk.rest_positions()
+    if sk.end_sites:
+        P = np.concatenate([P, np.array([P[p] + o for p, o in sk.end_sites])])
+    ext = float(np.max(P.max(0) - P.min(0)))
+    return ext if ext > 0 else 1.7
+
+
 def detect_flights(clip: Clip, body: Body, com: np.ndarray | None = None, *,
                    v_thr: float = 1.0, margin: float = 0.10, tol: float = 0.06,
                    min_duration: float = 0.1) -> list[Flight]:
@@ -144,7 +154,11 @@ def detect_flights(clip: Clip, body: Body, com: np.ndarray | None = None, *,
     from .physics import center_of_mass
     if com is None:
         com = center_of_mass(clip, body)
-    contact = contact_mask(clip, body, v_thr=v_thr, margin=margin)
+    # thresholds are for an adult of 1.7 m; a bigger (retargeted or mis-scaled)
+    # skeleton gets proportionally larger ones
+    size = body_size(clip) / 1.7
+    v_thr, margin, tol = v_thr * size, margin * size, tol * size
+    contact = contact_mask(clip, body, v_thr=v_thr, margin=margin, touch=0.03 * size)
     airborne = ~contact.any(axis=1)
     min_frames = max(4, int(np.ceil(min_duration * clip.fps)))
     flights = []

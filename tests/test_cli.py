@@ -1,0 +1,79 @@
+"""The command line as a user runs it."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from study.cli import main
+
+from _shared import shared_file
+
+KEYS = {"frames", "fps", "scale", "apparent_gravity", "takeoff", "landing", "flight_s",
+        "takeoff_angle_deg", "L_mean", "L_cv_pct", "segment_masses", "warnings"}
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_inspect_json_has_the_design_keys_real_clip(capsys):
+    code, out, _ = run(capsys, "inspect", str(shared_file("88_01.bvh")), "--json")
+    assert code == 0
+    d = json.loads(out)
+    assert KEYS <= set(d)
+    assert d["fps"] == 120 and d["scale"] == pytest.approx(0.0254 / 0.45)
+    assert d["apparent_gravity"] > 25
+    assert any("--fps 60" in w for w in d["warnings"])
+    assert sum(d["segment_masses"].values()) == pytest.approx(70.0, abs=0.01)
+
+
+def test_inspect_fps_and_scale_overrides(capsys):
+    code, out, _ = run(capsys, "inspect", str(shared_file("88_01.bvh")), "--fps", "60", "--json")
+    d = json.loads(out)
+    assert d["fps"] == 60 and d["fps_source"] == "given"
+    assert d["apparent_gravity"] == pytest.approx(9.81, rel=0.25)
+    code, out, _ = run(capsys, "inspect", str(shared_file("88_01.bvh")), "--fps", "60",
+                       "--scale", "0.1", "--json")
+    d2 = json.loads(out)
+    assert d2["scale"] == 0.1 and d2["scale_source"] == "given"
+    # lengths ×(0.1/0.0564): apparent gravity scales with them
+    assert d2["apparent_gravity"] / d["apparent_gravity"] == pytest.approx(0.1 / (0.0254 / 0.45), rel=0.05)
+
+
+def test_inspect_no_flight_clip(capsys):
+    code, out, _ = run(capsys, "inspect", str(shared_file("mass_kick.bvh")), "--json")
+    d = json.loads(out)
+    assert code == 0 and d["takeoff"] is None and d["apparent_gravity"] is None
+
+
+def test_inspect_plot_is_written(capsys, tmp_path):
+    png = tmp_path / "p.png"
+    code, out, _ = run(capsys, "inspect", str(shared_file("87_03.bvh")), "--fps", "60", "--plot", str(png))
+    assert code == 0 and "flight" in out
+    data = png.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20000
+
+
+def test_inspect_builtin_text_and_json(capsys):
+    code, out, _ = run(capsys, "inspect", "backflip", "--json")
+    d = json.loads(out)
+    assert code == 0 and d["apparent_gravity"] == pytest.approx(9.81, rel=0.01)
+    assert d["L_cv_pct"] < 1.0 and not any("gravity" in w for w in d["warnings"])
+
+
+def test_bad_file_gives_a_clear_error_not_a_traceback(capsys, tmp_path):
+    bad = tmp_path / "bad.bvh"
+    bad.write_text("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 3 Xposition Yposition Qrotation\n}\nMOTION\n")
+    code, out, err = run(capsys, "inspect", str(bad))
+    assert code == 1 and "bad.bvh, line 5" in err and "Qrotation" in err and "Traceback" not in err
+    with pytest.raises(SystemExit, match="neither a built-in"):
+        main(["inspect", str(tmp_path / "missing.bvh")])
+
+
+def test_console_script_help():
+    r = subprocess.run([sys.executable, "-m", "study.cli", "--help"], capture_output=True, text=True)
+    assert r.returncode == 0 and "inspect" in r.stdout
