@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from decimal import Decimal, InvalidOperation
 import warnings
 from pathlib import Path
 
@@ -73,7 +74,7 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
     while i < n and not lines[i].strip():
         i += 1
     if i >= n:
-        raise BVHError(path, None, "empty file: expected 'HIERARCHY'")
+        raise BVHError(path, 1, "empty file: expected 'HIERARCHY'")
     if lines[i].strip().upper() != "HIERARCHY":
         raise BVHError(path, i + 1, f"expected 'HIERARCHY', found {lines[i].strip()[:40]!r}")
     i += 1
@@ -198,16 +199,18 @@ def _tokens_per_line(data: bytes, n_lines: int) -> np.ndarray:
     b = np.frombuffer(data, dtype=np.uint8)
     if b.size == 0:
         return np.zeros(n_lines, dtype=np.int64)
+    # the separators are exactly those of bytes.split(), which makes the tokens
     nl = b == 10
     sep = nl | (b == 32) | (b == 9) | (b == 13) | (b == 11) | (b == 12)
     start = ~sep
     start[1:] &= sep[:-1]
-    line_of = np.cumsum(nl) - nl  # line index of every byte
-    return np.bincount(line_of[start], minlength=n_lines)[:n_lines]
+    line_of = np.searchsorted(np.flatnonzero(nl), np.flatnonzero(start))  # line of each token
+    return np.bincount(line_of, minlength=n_lines)[:n_lines]
 
 
 def _parse_motion(lines: list[str], start: int, n_channels: int, path):
-    """Frames, frame time and the (F, C) value array from the MOTION block."""
+    """Frames, frame time (number and text as written), the (F, C) value array and the
+    0-based index of the first frame line, from the MOTION block."""
     i = start
     while i < len(lines) and not lines[i].strip():
         i += 1
@@ -220,6 +223,8 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
         raise BVHError(path, i + 1, f"'Frames:' needs a whole number, found {val!r}") from None
     if n_frames < 0:
         raise BVHError(path, i + 1, f"'Frames:' must not be negative, found {n_frames}")
+    if n_frames == 0:
+        raise BVHError(path, i + 1, "'Frames: 0': a clip needs at least one frame")
     i += 1
     while i < len(lines) and not lines[i].strip():
         i += 1
@@ -248,17 +253,15 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
         raise BVHError(path, first + n_frames + 1,
                        f"{len(data_lines)} frame lines but 'Frames: {n_frames}' "
                        f"(more data than the header declares)")
-    if n_frames == 0:
-        return n_frames, frame_time, np.zeros((0, n_channels)), first
-    text = "\n".join(data_lines)
-    counts = _tokens_per_line(text.encode("ascii", "replace"), len(data_lines))
+    data = "\n".join(data_lines).encode("ascii", "replace")  # one byte per character
+    counts = _tokens_per_line(data, len(data_lines))
     bad = np.nonzero(counts != n_channels)[0]
     if bad.size:
         b = int(bad[0])
         raise BVHError(path, first + b + 1, f"wrong number of values on a frame line: expected "
                                             f"{n_channels} (the CHANNELS of the hierarchy), "
                                             f"found {int(counts[b])}")
-    tokens = text.split()
+    tokens = data.split()  # same separators as the count above, so F * C tokens
     try:
         values = np.array(tokens, dtype=np.float64)
     except ValueError:
@@ -267,7 +270,7 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
                 float(tok)
             except ValueError:
                 line = first + j // n_channels + 1
-                raise BVHError(path, line, f"non-numeric value {tok!r} in frame "
+                raise BVHError(path, line, f"non-numeric value {tok.decode('ascii')!r} in frame "
                                            f"{j // n_channels + 1}, channel {j % n_channels + 1}") from None
         raise
     values = values.reshape(n_frames, n_channels)
@@ -277,7 +280,7 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
         raise BVHError(path, first + int(f) + 1, f"non-finite value {values[f, c]!r} in frame "
                                                  f"{int(f) + 1}, channel {int(c) + 1} (NaN/inf "
                                                  f"are not valid motion data)")
-    return n_frames, frame_time, values, first
+    return n_frames, frame_time, val, values, first
 
 
 def guess_scale(skeleton: Skeleton) -> tuple[float, str]:
@@ -298,8 +301,31 @@ def guess_scale(skeleton: Skeleton) -> tuple[float, str]:
     return best[0], best[1]
 
 
+def _header_fps(frame_time: float, text: str) -> float:
+    """Frames per second from the header's Frame Time.
+
+    Headers store a rounded frame time (".0083333", ".016667"): snap to the whole rate
+    it stands for, but only when that rate's frame time rounds to the digits written
+    (so a frame time written with 10 decimals for 119.99 fps stays 119.99)."""
+    fps = 1.0 / frame_time
+    whole = round(fps)
+    if whole < 1 or abs(fps - whole) >= 2e-4 * fps:
+        return fps
+    try:
+        half_unit = 0.5 * 10.0 ** Decimal(text).as_tuple().exponent
+    except (InvalidOperation, TypeError, ValueError):
+        return fps
+    if abs(frame_time - 1.0 / whole) <= half_unit * (1 + 1e-9):
+        return float(whole)
+    return fps
+
+
 def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]]) -> np.ndarray:
-    """(F,J,4) quaternions from Euler channels, one scipy call per distinct order."""
+    """(F,J,4) quaternions (scipy's x, y, z, w) from Euler channels in degrees.
+
+    BVH angles are intrinsic, in the order the CHANNELS line lists them:
+    ``Rotation.from_euler(order.upper(), angles, degrees=True)``, one scipy call per
+    distinct order for all frames and joints with that order at once."""
     F = values.shape[0]
     J = len(orders)
     q = np.zeros((F, J, 4))
@@ -355,17 +381,15 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     except OSError as e:
         raise BVHError(path, None, f"cannot read file: {e.strerror}") from None
     try:
-        text = raw.decode("utf-8")
+        text = raw.decode("utf-8-sig")  # a byte-order mark is not part of 'HIERARCHY'
     except UnicodeDecodeError:
         text = raw.decode("latin-1")
     if not text.strip():
-        raise BVHError(path, None, "empty file: expected 'HIERARCHY'")
+        raise BVHError(path, 1, "empty file: expected 'HIERARCHY'")
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
     h, motion_at = _parse_hierarchy(lines, path)
-    n_frames, frame_time, values, first = _parse_motion(
+    n_frames, frame_time, frame_time_text, values, first = _parse_motion(
         lines, motion_at, sum(len(c) for c in h["channels"]), path)
-    if n_frames == 0:
-        raise BVHError(path, first, "'Frames: 0': a clip needs at least one frame")
 
     names, parents, channels = h["names"], h["parents"], h["channels"]
     J = len(names)
@@ -385,6 +409,7 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
 
     meta: dict = {"name": path.stem, "path": str(path), "warnings": [], "dropped_frames": []}
     rot_cols = np.array([c for cols in col_of_rot for c in cols], dtype=np.int64)
+    first_frame = values[0]  # the translation convention is decided on the file's frame 1
     do_drop = drop_tpose is True or (drop_tpose == "auto" and _detect_tpose(values, rot_cols, q))
     if do_drop and n_frames > 1:
         values = values[1:]
@@ -405,7 +430,7 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
         ch = values[:, cols]
         off = offsets[j]
         tol = 1e-4 * max(1.0, float(np.abs(off).max()))
-        if np.any(off != 0) and np.allclose(off, ch[0], atol=tol):
+        if np.any(off != 0) and np.allclose(off, first_frame[cols], atol=tol):
             pos = ch
             conventions[names[j]] = "channels are absolute (OFFSET repeats frame 1)"
         else:
@@ -431,10 +456,7 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
             raise ValueError(f"scale must be a positive number of metres per file unit, got {scale!r}")
         meta["scale_source"] = "given"
     meta["scale"] = s
-    header_fps = 1.0 / frame_time
-    # headers store a rounded frame time (".016667"); snap to the whole rate it means
-    if abs(header_fps - round(header_fps)) < 2e-4 * header_fps:
-        header_fps = float(round(header_fps))
+    header_fps = _header_fps(frame_time, frame_time_text)
     meta["header_fps"] = header_fps
     meta["header_frame_time"] = frame_time
     if fps is not None:
@@ -445,8 +467,11 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     else:
         fps = header_fps
         meta["fps_source"] = "header"
-    clip = Clip(skel, fps, root_pos, q, joint_pos, meta)
-    return clip.scaled(s) if s != 1.0 else clip
+    if s != 1.0:  # the same as Clip.scaled(s), without building the clip twice
+        skel = skel.scaled(s)
+        root_pos = root_pos * s
+        joint_pos = None if joint_pos is None else joint_pos * s
+    return Clip(skel, fps, root_pos, q, joint_pos, meta)
 
 
 # --------------------------------------------------------------------- writing
@@ -461,16 +486,38 @@ def bvh_text(clip: Clip, scale: float = 1.0) -> str:
     J = sk.num_joints
     inv = 1.0 / scale
     jp = clip.joint_pos
+    if jp is None:
+        # joints other than the root may declare position channels yet hold their OFFSET
+        jp = np.broadcast_to(sk.offsets[None], (clip.num_frames, J, 3))
     offsets = sk.offsets * inv
-    if jp is not None:
-        # joints with position channels: write OFFSET = frame 1 and absolute channels,
-        # which the reader's rule reads back unambiguously
-        has = sk.has_position.copy()
-        has[0] = False
-        offsets[has] = jp[0, has] * inv
+    # joints with position channels: write OFFSET = frame 1 and absolute channels,
+    # which the reader's rule reads back unambiguously
+    has = sk.has_position.copy()
+    has[0] = False
+    offsets[has] = jp[0, has] * inv
+    # the root: a clip's root_pos is its world position (the skeleton's root offset plays
+    # no part in forward kinematics), so write OFFSET 0 + absolute channels; a root without
+    # position channels can only carry a fixed position, in its OFFSET
+    if sk.has_position[0]:
+        offsets[0] = 0.0
+    else:
+        if not np.allclose(clip.root_pos, clip.root_pos[:1], rtol=0, atol=1e-9):
+            raise ValueError("bvh_text: the root moves but has no position channels; give it "
+                             "Xposition Yposition Zposition channels before writing")
+        offsets[0] = clip.root_pos[0] * inv
     children: list[list[int]] = [[] for _ in range(J)]
     for j in range(1, J):
         children[sk.parents[j]].append(j)
+    # the writer walks depth-first, which must reproduce the stored topological order
+    dfs: list[int] = []
+    todo = [0]
+    while todo:
+        j = todo.pop()
+        dfs.append(j)
+        todo.extend(reversed(children[j]))
+    if dfs != list(range(J)):
+        raise ValueError("bvh_text: skeleton joints are not in depth-first order; "
+                         "reorder the skeleton before writing")
     ends: list[list[np.ndarray]] = [[] for _ in range(J)]
     for p, o in sk.end_sites:
         ends[p].append(o * inv)
@@ -492,12 +539,7 @@ def bvh_text(clip: Clip, scale: float = 1.0) -> str:
             out.append(f"{ind}\t}}")
         out.append(f"{ind}}}")
 
-    # the writer walks depth-first, which must reproduce the stored topological order
     emit(0, 0)
-    order = [n.split()[-1] for n in out if n.strip().startswith(("ROOT", "JOINT"))]
-    if order != sk.joint_names:
-        raise ValueError("bvh_text: skeleton joints are not in depth-first order; "
-                         "reorder the skeleton before writing")
     F = clip.num_frames
     cols = []
     with warnings.catch_warnings():
@@ -551,7 +593,8 @@ def atomic_write_text(path, text: str) -> None:
 def save_bvh(clip: Clip, path, scale: float = 1.0) -> Path:
     """Write a clip as BVH (atomically).  Lengths are written in units of ``scale``
     metres (1.0: metres, 0.01: centimetres).  Euler orders and channel layout are
-    the skeleton's; the root OFFSET is zero and its channels absolute.
+    the skeleton's; the root OFFSET is zero and its channels absolute (a root without
+    position channels must stand still: its position is written as its OFFSET).
 
     Example
     -------
