@@ -1,0 +1,139 @@
+"""The ``render`` and ``figure`` subcommands (wired into ``study/cli.py``)::
+
+    from render.cli import add_commands
+    add_commands(subparsers)          # adds `render` and `figure`
+
+``flipstudy render STUDY_DIR [--what video,ghost,trail,strip,composite,overlay]
+[--size WxH] [--jobs N] [--fps 60] [--style STYLE.toml] [--frames] [--quiet]``
+
+``flipstudy figure CLIP [--ghost|--trail|--strip|--composite|--overlay OTHER]
+--out FILE.png [--fps F] [--scale S] [--size WxH] [--interval S] [--debug]
+[--style STYLE.toml]``
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def _size(text: str):
+    from .study import parse_size
+    try:
+        return parse_size(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+def _style(path):
+    if not path:
+        return None
+    from .style import Style
+    return Style.from_toml(path)
+
+
+def cmd_render(args) -> int:
+    """``flipstudy render``: all stimuli of a study, one camera, in parallel."""
+    from .study import StudyRenderError, parse_what, render_study
+    try:
+        what = parse_what(args.what)
+        rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs, fps=args.fps,
+                           style=_style(args.style), frames=args.frames, progress=not args.quiet,
+                           orient=not args.no_orient)
+    except (StudyRenderError, ValueError, OSError) as e:
+        print(f"flipstudy render: error: {e}", file=sys.stderr)
+        return 1
+    n = len(rec["stimuli"])
+    print(f"rendered {n} stimuli ({', '.join(rec['what'])}) at {rec['size'][0]}x{rec['size'][1]}, "
+          f"{rec['fps']:g} fps, {rec['jobs']} worker(s), {rec['seconds']:.1f} s")
+    print(f"  settings  {args.study_dir.rstrip('/')}/render/render.json")
+    return 0
+
+
+def cmd_figure(args) -> int:
+    """``flipstudy figure``: one still of one clip (ghost, trail, strip, composite, overlay)."""
+    from study.cli import load_clip
+
+    from . import figures as fg
+    try:
+        clip = load_clip(args.clip, args.scale, args.fps)
+        style = _style(args.style)
+        kw = dict(size=args.size, style=style)
+        debug = ("com", "path", "L", "v", "support") if args.debug else ()
+        interval = args.interval
+        if args.overlay:
+            other = load_clip(args.overlay, args.scale, args.fps)
+            from pathlib import Path
+            labels = (Path(args.clip).stem, Path(args.overlay).stem)
+            fg.overlay_image(clip, other, args.out, interval=interval or 0.2, labels=labels, **kw)
+            kind = "overlay"
+        elif args.trail:
+            fg.trail_image(clip, args.out, debug=debug, **kw)
+            kind = "trail"
+        elif args.strip:
+            h = args.size[1]
+            fg.strip_image(clip, args.out, dt=interval or 0.1, panel_size=(2 * int(round(0.35 * h)), h),
+                           style=style, debug=debug)
+            kind = "strip"
+        elif args.composite:
+            fg.composite_image(clip, args.out, interval=interval or 0.2, debug=debug, **kw)
+            kind = "composite"
+        else:
+            fg.ghost_image(clip, args.out, interval=interval or 0.2, debug=debug, **kw)
+            kind = "ghost"
+    except (ValueError, OSError) as e:
+        print(f"flipstudy figure: error: {e}", file=sys.stderr)
+        return 1
+    print(f"{kind} figure of {args.clip}: {args.out}")
+    return 0
+
+
+def add_commands(subparsers) -> None:
+    """Add the ``render`` and ``figure`` subcommands to an argparse subparsers
+    object; each sets ``func`` (returns an exit code)."""
+    p = subparsers.add_parser(
+        "render", help="render a study's stimuli (videos, ghosts, trails, strips, composites)",
+        description="Render every stimulus of STUDY_DIR/manifest.csv with one style, one camera "
+                    "and one take-off spot; outputs and render.json go to STUDY_DIR/render/.")
+    p.add_argument("study_dir", metavar="STUDY_DIR",
+                   help="folder with manifest.csv and the stimuli's .bvh")
+    p.add_argument("--what", default="video",
+                   help="comma-separated outputs: video, ghost, trail, strip, composite, overlay "
+                        "(overlay: each stimulus over its clip's reference; default: video)")
+    p.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
+                   help="image/video size in pixels (default 640x480; even for video)")
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="worker processes (default: number of CPUs); each builds its plotter once")
+    p.add_argument("--fps", type=float, default=60.0,
+                   help="display frame rate of the videos (default 60)")
+    p.add_argument("--style", metavar="STYLE.toml", help="style overrides (colours, sizes, ground)")
+    p.add_argument("--frames", action="store_true", help="also write every video frame as PNG")
+    p.add_argument("--no-orient", action="store_true",
+                   help="do not turn base clips that travel in other directions to travel like "
+                        "the first one (they are only moved to the take-off spot)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_render)
+
+    f = subparsers.add_parser(
+        "figure", help="one still of one clip: ghosts, marker trails, strip, composite, overlay",
+        description="Draw one figure of CLIP (a built-in name or a BVH path) in the style of "
+                    "Ooi (2016, Chapter 4).")
+    f.add_argument("clip", metavar="CLIP", help="built-in name (backflip, frontflip, jump) or BVH path")
+    g = f.add_mutually_exclusive_group()
+    g.add_argument("--ghost", action="store_true", help="ghost copies every --interval s (default)")
+    g.add_argument("--trail", action="store_true", help="marker trails with a legend")
+    g.add_argument("--strip", action="store_true", help="animation strip, panels every --interval s")
+    g.add_argument("--composite", action="store_true", help="layered frames (first opaque, rest 75 %%)")
+    g.add_argument("--overlay", metavar="OTHER", help="overlay CLIP (yellow) and OTHER (turquoise)")
+    f.add_argument("--out", required=True, metavar="FILE.png", help="output PNG")
+    f.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
+                   help="image size (strip: panel height) in pixels (default 640x480)")
+    f.add_argument("--interval", type=float, default=None, metavar="S",
+                   help="seconds between copies/panels (default 0.2; strip 0.1)")
+    f.add_argument("--debug", action="store_true",
+                   help="draw COM and its path, L and velocity arrows, support polygon")
+    f.add_argument("--style", metavar="STYLE.toml", help="style overrides")
+    f.add_argument("--scale", type=float, default=None,
+                   help="metres per file unit (default: guessed from the skeleton's size)")
+    f.add_argument("--fps", type=float, default=None,
+                   help="frames per second, overriding the file's Frame Time")
+    f.set_defaults(func=cmd_figure)

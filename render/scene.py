@@ -1,0 +1,494 @@
+"""One offscreen plotter, reused: ground, lights, posable characters, gizmos.
+
+A :class:`Scene` owns a single :class:`pyvista.Plotter` (VTK through EGL).
+Everything in it is created once and then updated in place: characters are
+:class:`~render.geometry.BodyMesh` objects whose points are rewritten each
+frame, extra characters (ghosts) come from a pool and are hidden when unused,
+markers and gizmos have fixed topology.  Frames are read back into a reused
+buffer.  Close the scene (or use it as a context manager) when done.
+
+Rendering notes (VTK 9.7, Mesa llvmpipe through EGL): depth peeling is on for
+correct transparency; MSAA breaks depth peeling there (blank images), so the
+anti-aliasing is SSAA (``Style.anti_aliasing``).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from stimuli.body import Body
+
+from ._pv import pv
+from .camera import Camera
+from .geometry import BodyMesh
+from .style import DEFAULT_STYLE, Style, rgb
+
+
+class Character:
+    """A posable body drawn by one actor (created once per scene slot)."""
+
+    def __init__(self, plotter, body: Body, style: Style, name: str, inflate: float = 0.0):
+        self.body_mesh = BodyMesh(body, style.ellipsoid_resolution, inflate)
+        self.actor = plotter.add_mesh(self.body_mesh.mesh, color=style.body_color,
+                                      smooth_shading=False, name=name, reset_camera=False,
+                                      ambient=style.ambient, diffuse=style.diffuse,
+                                      specular=style.specular, specular_power=style.specular_power)
+        self.actor.prop.interpolation = "gouraud"
+        self.actor.mapper.scalar_visibility = False
+        self.name = name
+        self._look = None
+
+    def set_body(self, body: Body) -> None:
+        if body is not self.body_mesh.body:
+            self.body_mesh.set_body(body)
+
+    def look(self, color, opacity: float = 1.0) -> None:
+        """Colour and opacity; translucent bodies cull back faces so a ghost
+        reads as one layer."""
+        key = (str(color), float(opacity))
+        if key == self._look:
+            return
+        self._look = key
+        p = self.actor.prop
+        p.color = color
+        p.opacity = float(opacity)
+        p.culling = "back" if opacity < 1.0 else "none"
+
+    def pose(self, R: np.ndarray, P: np.ndarray) -> None:
+        self.body_mesh.pose(R, P)
+
+    @property
+    def visible(self) -> bool:
+        return bool(self.actor.GetVisibility())
+
+    @visible.setter
+    def visible(self, v: bool) -> None:
+        self.actor.SetVisibility(bool(v))
+
+
+class Markers:
+    """Up to ``capacity`` spheres of one colour, in one actor (glyphs rebuilt
+    from a fixed-size point set; unused points are parked on the first one)."""
+
+    def __init__(self, plotter, name: str, capacity: int, radius: float, color, style: Style):
+        self.capacity = int(capacity)
+        self.points = pv.PolyData(np.zeros((self.capacity, 3)))
+        sphere = pv.Sphere(radius=radius, theta_resolution=12, phi_resolution=8)
+        self._glyph = self.points.glyph(geom=sphere, orient=False, scale=False)
+        self.actor = plotter.add_mesh(self._glyph, color=color, name=name, reset_camera=False,
+                                      smooth_shading=True, ambient=0.35, diffuse=0.7, specular=0.1)
+        self.actor.mapper.scalar_visibility = False
+        self._sphere_pts = np.asarray(sphere.points).copy()
+        self._n = self._sphere_pts.shape[0]
+        self._gpts = np.asarray(self._glyph.points)
+
+    def set(self, pts: np.ndarray) -> None:
+        pts = np.asarray(pts, float).reshape(-1, 3)
+        if pts.shape[0] > self.capacity:
+            raise ValueError(f"Markers: {pts.shape[0]} markers, capacity {self.capacity}")
+        full = np.empty((self.capacity, 3))
+        if pts.shape[0]:
+            full[: pts.shape[0]] = pts
+            full[pts.shape[0]:] = pts[0]
+        else:
+            full[:] = 0.0
+        out = self._gpts.reshape(self.capacity, self._n, 3)
+        np.add(full[:, None, :], self._sphere_pts[None], out=out)
+        self._glyph.GetPoints().Modified()
+        self._glyph.Modified()
+        self.actor.SetVisibility(pts.shape[0] > 0)
+
+
+class Polyline:
+    """A polyline of up to ``capacity`` points (unused points repeat the last)."""
+
+    def __init__(self, plotter, name: str, capacity: int, color, width: float, closed=False,
+                 opacity: float = 1.0):
+        self.capacity = int(capacity)
+        n = self.capacity + (1 if closed else 0)
+        idx = np.arange(n) % self.capacity
+        self.mesh = pv.PolyData(np.zeros((self.capacity, 3)), lines=np.hstack([[n], idx]))
+        self.actor = plotter.add_mesh(self.mesh, color=color, line_width=width, name=name,
+                                      reset_camera=False, lighting=False, opacity=opacity)
+        self._pts = np.asarray(self.mesh.points)
+
+    def set(self, pts: np.ndarray) -> None:
+        pts = np.asarray(pts, float).reshape(-1, 3)[: self.capacity]
+        if pts.shape[0] == 0:
+            self.actor.SetVisibility(False)
+            return
+        self._pts[: pts.shape[0]] = pts
+        self._pts[pts.shape[0]:] = pts[-1]
+        self.mesh.GetPoints().Modified()
+        self.mesh.Modified()
+        self.actor.SetVisibility(True)
+
+
+class Arrow:
+    """An arrow from a point along a vector, posed in place (template along +x)."""
+
+    def __init__(self, plotter, name: str, color):
+        tmpl = pv.Arrow(start=(0, 0, 0), direction=(1, 0, 0), tip_length=0.25, tip_radius=0.08,
+                        shaft_radius=0.03, scale=1.0)
+        self._tmpl = np.asarray(tmpl.points).copy()
+        self.mesh = tmpl
+        self.actor = plotter.add_mesh(self.mesh, color=color, name=name, reset_camera=False,
+                                      ambient=0.4, diffuse=0.7)
+        self._pts = np.asarray(self.mesh.points)
+
+    def set(self, start, vec, thickness: float = 1.0) -> None:
+        v = np.asarray(vec, float)
+        L = float(np.linalg.norm(v))
+        if L < 1e-6:
+            self.actor.SetVisibility(False)
+            return
+        x = v / L
+        h = np.array([0.0, 1.0, 0.0]) if abs(x[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+        y = np.cross(h, x)
+        y /= np.linalg.norm(y)
+        z = np.cross(x, y)
+        # length along x; a fixed girth (tip radius 4 cm, shaft 1.5 cm) except for
+        # short arrows, which are thinned so they still look like arrows
+        s = 0.5 * thickness * min(1.0, L / 0.25)
+        M = np.stack([x * L, y * s, z * s], axis=1)
+        self._pts[:] = self._tmpl @ M.T + np.asarray(start, float)
+        self.mesh.GetPoints().Modified()
+        self.mesh.Modified()
+        self.actor.SetVisibility(True)
+
+
+class Scene:
+    """An offscreen plotter with a ground, lights and posable characters.
+
+    Example
+    -------
+    >>> with Scene(body, size=(320, 240), camera=stage.camera) as sc:   # doctest: +SKIP
+    ...     ch = sc.character(0)
+    ...     ch.pose(clip.joint_rotations()[0], clip.joint_positions()[0])
+    ...     img = sc.grab()                                          # (240, 320, 3) uint8
+    """
+
+    def __init__(self, body: Body | None = None, style: Style | None = None, size=(640, 480),
+                 camera: Camera | None = None, ground_bounds=None):
+        self.style = style or DEFAULT_STYLE
+        self.size = (int(size[0]), int(size[1]))
+        self.plotter = pv.Plotter(off_screen=True, window_size=list(self.size),
+                                  lighting="none" if self.style.lighting == "key-fill" else "light kit")
+        pl = self.plotter
+        pl.render_window.SetMultiSamples(0)
+        pl.set_background(self.style.background)
+        if self.style.lighting == "key-fill":
+            key = pv.Light(position=(-0.6, 1.2, 1.0), light_type="camera light", intensity=0.85)
+            fill = pv.Light(position=(0.8, 0.3, 0.6), light_type="camera light", intensity=0.35)
+            pl.add_light(key)
+            pl.add_light(fill)
+        pl.enable_depth_peeling(number_of_peels=self.style.depth_peels, occlusion_ratio=0.0)
+        if self.style.anti_aliasing == "ssaa":
+            import warnings
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                pl.enable_anti_aliasing("ssaa")
+        self.body = body
+        self._chars: dict = {}
+        self._markers: dict = {}
+        self._lines: dict = {}
+        self._arrows: dict = {}
+        self._texts: dict = {}
+        self._legend = None
+        self._overlay = None
+        self.ground_actor = None
+        self._ground_key = None
+        self.camera: Camera | None = None
+        if camera is not None:
+            self.set_camera(camera)
+        if ground_bounds is not None and self.style.ground:
+            self.set_ground(ground_bounds)
+        self._w2i = None
+        self._w2i_alpha = None
+        self._closed = False
+
+    # ---------------------------------------------------------------- setup
+    def set_camera(self, camera: Camera) -> None:
+        self.camera = camera
+        pl = self.plotter
+        pl.camera_position = [camera.position, camera.focal_point, camera.view_up]
+        pl.camera.view_angle = camera.view_angle
+        self._clip_range()
+
+    def _clip_range(self) -> None:
+        # fixed, generous clipping range shared by both layers (gizmos may stick
+        # out of the main layer's bounds); depth precision stays far below 1 mm
+        if self.camera is not None:
+            far = 10.0 * self.camera.distance + 100.0
+            self.plotter.renderer.GetActiveCamera().SetClippingRange(0.1, far)
+
+    def set_size(self, size) -> None:
+        size = (int(size[0]), int(size[1]))
+        if size != self.size:
+            self.size = size
+            self.plotter.window_size = list(size)
+            self._w2i = self._w2i_alpha = None
+
+    def set_ground(self, bounds) -> None:
+        """A checkerboard plane at ``style.ground_height`` covering ``bounds``
+        (x0, x1, z0, z1), tiles of ``style.ground_tile`` metres aligned to the
+        origin (the take-off spot is a tile corner)."""
+        st = self.style
+        if not st.ground:
+            return
+        t = st.ground_tile
+        x0, x1 = np.floor(bounds[0] / t) * t, np.ceil(bounds[1] / t) * t
+        z0, z1 = np.floor(bounds[2] / t) * t, np.ceil(bounds[3] / t) * t
+        key = (x0, x1, z0, z1)
+        if key == self._ground_key:
+            return
+        self._ground_key = key
+        nx, nz = int(round((x1 - x0) / t)), int(round((z1 - z0) / t))
+        xs, zs = np.linspace(x0, x1, nx + 1), np.linspace(z0, z1, nz + 1)
+        grid = pv.RectilinearGrid(xs, np.array([st.ground_height]), zs).extract_surface(
+            algorithm=None).triangulate()
+        cx = ((grid.cell_centers().points[:, 0] - x0) // t).astype(int)
+        cz = ((grid.cell_centers().points[:, 2] - z0) // t).astype(int)
+        grid.cell_data["tile"] = ((cx + cz) % 2).astype(np.uint8)
+        colors = np.array([rgb(c) for c in st.ground_colors])
+        grid.cell_data["rgb"] = (colors[grid.cell_data["tile"]] * 255).astype(np.uint8)
+        if self.ground_actor is not None:
+            self.plotter.remove_actor(self.ground_actor)
+        self.ground_actor = self.plotter.add_mesh(grid, scalars="rgb", rgb=True, name="ground",
+                                                  reset_camera=False, ambient=0.5, diffuse=0.5,
+                                                  specular=0.0, show_scalar_bar=False)
+
+    def set_body(self, body: Body) -> None:
+        """Switch every character to another body (another skeleton)."""
+        self.body = body
+        for ch in self._chars.values():
+            ch.set_body(body)
+
+    # ------------------------------------------------------------- contents
+    def character(self, key=0, body: Body | None = None, inflate: float = 0.0) -> Character:
+        """The character in slot ``key`` (created on first use, then reused),
+        made visible.  ``inflate``: see :class:`~render.geometry.BodyMesh`."""
+        body = body or self.body
+        if body is None:
+            raise ValueError("Scene: no body; pass body= to Scene() or character()")
+        ch = self._chars.get(key)
+        if ch is None:
+            ch = Character(self.plotter, body, self.style, f"character-{key}", inflate)
+            self._chars[key] = ch
+        else:
+            ch.set_body(body)
+        ch.visible = True
+        return ch
+
+    def _top(self):
+        """The overlay renderer (layer 1, same camera, own depth buffer): what is
+        added there is drawn over everything, like Unity's gizmos."""
+        if self._overlay is None:
+            from vtkmodules.vtkRenderingCore import vtkRenderer
+            r = vtkRenderer()
+            r.SetLayer(1)
+            r.InteractiveOff()
+            r.SetActiveCamera(self.plotter.renderer.GetActiveCamera())
+            rw = self.plotter.render_window
+            rw.SetNumberOfLayers(2)
+            rw.AddRenderer(r)
+            self._overlay = r
+        return self._overlay
+
+    def _place(self, obj, on_top: bool, old=None) -> None:
+        if old is not None:
+            ren = self._top() if getattr(old, "on_top", False) else self.plotter.renderer
+            ren.RemoveActor(old.actor)
+        obj.on_top = on_top
+        if on_top:
+            self.plotter.renderer.RemoveActor(obj.actor)
+            self._top().AddActor(obj.actor)
+
+    def markers(self, key, capacity: int, color, radius: float | None = None,
+                on_top: bool = False) -> Markers:
+        """Up to ``capacity`` marker spheres in slot ``key`` (reused);
+        ``on_top`` draws them over everything (gizmos)."""
+        m = self._markers.get(key)
+        if m is None or m.capacity < capacity:
+            new = Markers(self.plotter, f"markers-{key}", max(capacity, 8),
+                          radius or self.style.marker_size, color, self.style)
+            self._place(new, on_top, m)
+            m = self._markers[key] = new
+        m.actor.prop.color = color
+        return m
+
+    def polyline(self, key, capacity: int, color, width: float = 2.0, closed=False,
+                 opacity: float = 1.0, on_top: bool = False) -> Polyline:
+        """A polyline of up to ``capacity`` points in slot ``key`` (reused)."""
+        ln = self._lines.get(key)
+        if ln is None or ln.capacity < capacity:
+            new = Polyline(self.plotter, f"line-{key}", max(capacity, 2), color, width, closed, opacity)
+            self._place(new, on_top, ln)
+            ln = self._lines[key] = new
+        ln.actor.prop.color = color
+        ln.actor.prop.line_width = width
+        ln.actor.prop.opacity = opacity
+        return ln
+
+    def arrow(self, key, color, on_top: bool = False) -> Arrow:
+        """An arrow in slot ``key`` (reused)."""
+        a = self._arrows.get(key)
+        if a is None:
+            a = Arrow(self.plotter, f"arrow-{key}", color)
+            self._place(a, on_top)
+            self._arrows[key] = a
+        a.actor.prop.color = color
+        return a
+
+    def text(self, key, text: str, position, font_size: int, color=None, background=None,
+             background_opacity: float = 0.85):
+        """A 2D label (VTK's built-in font) in slot ``key``: lower-left corner
+        at pixel ``position`` (x, y from the bottom left), ``font_size`` in
+        pixels, optional box ``background``."""
+        from vtkmodules.vtkRenderingCore import vtkTextActor
+        t = self._texts.get(key)
+        if t is None:
+            t = vtkTextActor()
+            self.plotter.renderer.AddViewProp(t)
+            self._texts[key] = t
+        t.SetInput(str(text))
+        t.SetDisplayPosition(int(position[0]), int(position[1]))
+        tp = t.GetTextProperty()
+        tp.SetFontFamilyToArial()
+        tp.SetFontSize(int(font_size))
+        tp.SetColor(*rgb(color or self.style.label_color))
+        tp.SetJustificationToLeft()
+        tp.SetVerticalJustificationToBottom()
+        if background is not None:
+            tp.SetBackgroundColor(*rgb(background))
+            tp.SetBackgroundOpacity(float(background_opacity))
+        else:
+            tp.SetBackgroundOpacity(0.0)
+        t.SetVisibility(True)
+        return t
+
+    def legend(self, entries, font_size: int):
+        """A legend drawn with VTK's built-in font (for systems without a font
+        file for OpenImageIO): dark labels on light boxes, top left.  The
+        colour discs are painted into the image afterwards: call the returned
+        function on the grabbed image."""
+        self.clear_legend()
+        H = self.size[1]
+        fs = int(round(font_size * 1.25))        # VTK's points look smaller than OIIO's pixels
+        line = int(round(fs * 1.3))
+        pad = max(4, fs // 3)
+        r = max(3, int(round(fs * 0.36)))
+        discs = []
+        for i, (lab, col) in enumerate(entries):
+            top = pad + i * line
+            self.text(("legend", i), f" {lab} ", (pad + 2 * r + 2, H - top - line + 2), fs,
+                      background="white")
+            discs.append((pad + r, top + line // 2, col))
+        self._legend = len(entries)
+
+        def paint(img: np.ndarray) -> np.ndarray:
+            yy, xx = np.mgrid[0:img.shape[0], 0:img.shape[1]]
+            for cx, cy, col in discs:
+                ys = slice(max(0, cy - line // 2), cy + line // 2 + 1)
+                xs = slice(max(0, cx - r - 2), cx + r + 3)
+                img[ys, xs, :3] = np.rint(img[ys, xs, :3] * 0.15 + 255 * 0.85).astype(np.uint8)
+                m = (xx - cx) ** 2 + (yy - cy) ** 2 <= r * r
+                img[m, :3] = np.asarray(rgb(col)) * 255
+            return img
+        return paint
+
+    def clear_legend(self) -> None:
+        for k, t in self._texts.items():
+            if isinstance(k, tuple) and k and k[0] == "legend":
+                t.SetVisibility(False)
+        self._legend = None
+
+    def hide(self, key) -> None:
+        """Hide the character in slot ``key`` (if there is one)."""
+        ch = self._chars.get(key)
+        if ch is not None:
+            ch.visible = False
+
+    def hide_all(self) -> None:
+        """Hide every character, marker, line, arrow, text and the legend
+        (ground stays)."""
+        for d in (self._chars, self._markers, self._lines, self._arrows):
+            for v in d.values():
+                v.actor.SetVisibility(False) if hasattr(v, "actor") else None
+        for t in self._texts.values():
+            t.SetVisibility(False)
+        self.clear_legend()
+
+    def show_ground(self, visible: bool = True) -> None:
+        if self.ground_actor is not None:
+            self.ground_actor.SetVisibility(bool(visible))
+
+    # --------------------------------------------------------------- output
+    def _filter(self, alpha: bool):
+        from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
+        attr = "_w2i_alpha" if alpha else "_w2i"
+        f = getattr(self, attr)
+        if f is None:
+            f = vtkWindowToImageFilter()
+            f.SetInput(self.plotter.render_window)
+            f.SetInputBufferTypeToRGBA() if alpha else f.SetInputBufferTypeToRGB()
+            f.ReadFrontBufferOn()
+            f.ShouldRerenderOff()
+            f.FixBoundaryOn()
+            setattr(self, attr, f)
+        return f
+
+    def grab(self, alpha: bool = False, out: np.ndarray | None = None) -> np.ndarray:
+        """Render and read the frame: (H, W, 3) uint8, or (H, W, 4) with
+        ``alpha=True`` (transparent background: the alpha channel is the matte,
+        colours premultiplied).  ``out`` receives the pixels when given."""
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+        pl = self.plotter
+        ren = pl.renderer
+        if alpha:
+            # black, fully transparent background: VTK then writes premultiplied
+            # colour (what OIIO's over expects) and alpha is the matte
+            bg = ren.GetBackground()
+            ren.SetBackground(0.0, 0.0, 0.0)
+            ren.SetBackgroundAlpha(0.0)
+            pl.render_window.SetAlphaBitPlanes(1)
+        self._clip_range()
+        if self._overlay is not None:
+            self._overlay.SetActiveCamera(ren.GetActiveCamera())
+        pl.render_window.Render()
+        f = self._filter(alpha)
+        f.Modified()
+        f.Update()
+        img = f.GetOutput()
+        w, h, _ = img.GetDimensions()
+        arr = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)
+        if alpha:
+            ren.SetBackground(*bg)
+            ren.SetBackgroundAlpha(1.0)
+        if out is None:
+            return arr[::-1].copy()
+        np.copyto(out, arr[::-1])
+        return out
+
+    def close(self) -> None:
+        """Release the plotter and its OpenGL context."""
+        if self._closed:
+            return
+        self._closed = True
+        self._w2i = self._w2i_alpha = None
+        self._overlay = None
+        self._chars.clear()
+        self._markers.clear()
+        self._lines.clear()
+        self._arrows.clear()
+        self._texts.clear()
+        try:
+            self.plotter.close()
+            self.plotter.deep_clean()
+        except Exception:  # noqa: BLE001 — closing twice or after a failed init
+            pass
+
+    def __enter__(self) -> "Scene":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,157 @@
+"""The look of every rendered image, as data.
+
+A :class:`Style` holds colours, sizes, background, ground and lighting.  One
+style is used for a whole study ("the same style"), recorded in
+``render/render.json`` and loadable from a dict or a TOML file::
+
+    [style]                       # or at the top level of the file
+    background = "#ffffff"
+    body_color = "#3d6a9e"
+    ghost_opacity = 0.3
+
+Colours are anything :class:`pyvista.Color` accepts (``"#rrggbb"``, names,
+RGB tuples in 0..1 or 0..255).
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from pathlib import Path
+
+#: Paul Tol's "muted" qualitative palette: nine colours distinguishable with the
+#: common colour-vision deficiencies (https://personal.sron.nl/~pault/).
+TOL_MUTED = ("#CC6677", "#332288", "#DDCC77", "#117733", "#88CCEE",
+             "#882255", "#44AA99", "#999933", "#AA4499")
+
+#: Okabe & Ito (2008) colour-blind-safe palette.
+OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2",
+             "#D55E00", "#CC79A7", "#000000")
+
+
+@dataclass
+class Style:
+    """Colours, sizes, ground and lighting of the renders.
+
+    Example
+    -------
+    >>> s = Style.from_dict({"background": "white", "ghost_opacity": 0.25})
+    >>> s.ghost_opacity, Style.from_dict(s.to_dict()) == s
+    (0.25, True)
+    """
+
+    # scene
+    background: str = "#f7f7f4"
+    ground: bool = True
+    ground_colors: tuple = ("#dcdcd6", "#c9c9c2")   # checker tiles
+    ground_tile: float = 0.5                         # metres
+    ground_height: float = 0.0                       # metres (Y)
+    ground_margin: float = 4.0                       # metres around the motion
+    # character (the Body's mass ellipsoids)
+    body_color: str = "#3d6a9e"
+    ellipsoid_resolution: tuple = (20, 12)           # (around the bone, along the bone)
+    ambient: float = 0.30
+    diffuse: float = 0.75
+    specular: float = 0.15
+    specular_power: float = 20.0
+    # ghosts and layered composites
+    ghost_color: str | None = None                   # None: body_color
+    ghost_opacity: float = 0.30
+    ghost_last_opacity: float = 1.0
+    layer_opacity: float = 0.75                      # Ooi's composited frames
+    # original vs edited (Majkowska & Faloutsos, Figure 4)
+    overlay_colors: tuple = ("#e8b500", "#19b2a8")   # yellow, turquoise
+    overlay_opacity: float = 0.45
+    # marker trails (Ooi, Figure 4.1)
+    trail_palette: tuple = TOL_MUTED
+    trail_rate: float = 10.0                         # markers per second
+    marker_size: float = 0.035                       # sphere radius, metres
+    trail_line: bool = True                          # a thin line through each joint's path
+    trail_line_width: float = 2.0
+    trail_com_color: str = "#111111"                 # the COM trail is black
+    trail_body_color: str = "#9b9b9b"                # neutral, so it does not read as a trail colour
+    trail_body_opacity: float = 0.45                 # the character drawn with the trails
+    legend: bool = True
+    legend_size: tuple = (0.22, 0.36)                # fraction of the image (w, h)
+    # labels (strips, legends)
+    label_color: str = "#222222"
+    font_size: float = 0.075                         # fraction of the panel height
+    # debug gizmos (Ooi, Figure 4.5)
+    com_color: str = "#D55E00"
+    com_radius: float = 0.04
+    L_color: str = "#CC79A7"
+    L_scale: float = 0.02                            # metres per kg·m²/s
+    v_color: str = "#0072B2"
+    v_scale: float = 0.15                            # metres per m/s
+    support_color: str = "#009E73"
+    # rendering
+    anti_aliasing: str = "ssaa"                      # "ssaa" or "none" (no MSAA: breaks depth peeling)
+    depth_peels: int = 8
+    lighting: str = "key-fill"                       # "key-fill" or "light kit"
+
+    def __post_init__(self):
+        for name in ("ground_colors", "ellipsoid_resolution", "overlay_colors",
+                     "trail_palette", "legend_size"):
+            setattr(self, name, tuple(getattr(self, name)))
+        if self.anti_aliasing not in ("ssaa", "none"):
+            raise ValueError(f"Style.anti_aliasing must be 'ssaa' or 'none', got {self.anti_aliasing!r}")
+        if self.lighting not in ("key-fill", "light kit"):
+            raise ValueError(f"Style.lighting must be 'key-fill' or 'light kit', got {self.lighting!r}")
+        for name in ("ghost_opacity", "ghost_last_opacity", "layer_opacity", "overlay_opacity",
+                     "trail_body_opacity"):
+            v = getattr(self, name)
+            if not 0.0 <= v <= 1.0:
+                raise ValueError(f"Style.{name} must be in [0, 1], got {v!r}")
+        if len(self.trail_palette) == 0:
+            raise ValueError("Style.trail_palette is empty")
+
+    # ------------------------------------------------------------ conversions
+    def to_dict(self) -> dict:
+        """Plain dict (JSON/TOML-serialisable; tuples become lists)."""
+        d = dataclasses.asdict(self)
+        return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
+
+    @classmethod
+    def from_dict(cls, d: dict | None) -> "Style":
+        """A style from a dict; unknown keys raise ``ValueError`` naming them."""
+        d = dict(d or {})
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(d) - names)
+        if unknown:
+            raise ValueError(f"Style: unknown field(s) {unknown}; known fields: {sorted(names)}")
+        return cls(**d)
+
+    @classmethod
+    def from_toml(cls, path_or_text) -> "Style":
+        """A style from a TOML file (or TOML text): the ``[style]`` table if there
+        is one, else the top level."""
+        import tomllib
+        p = Path(path_or_text) if not (isinstance(path_or_text, str) and "\n" in path_or_text) else None
+        text = p.read_text() if p is not None and p.exists() else str(path_or_text)
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise ValueError(f"{p or 'style'}: not valid TOML: {e}") from None
+        return cls.from_dict(data.get("style", data))
+
+    def replace(self, **kw) -> "Style":
+        return dataclasses.replace(self, **kw)
+
+    @property
+    def ghost(self) -> str:
+        return self.ghost_color or self.body_color
+
+
+def rgb(color) -> tuple:
+    """A colour as an (r, g, b) tuple of floats in 0..1."""
+    from ._pv import pv
+    return tuple(float(c) for c in pv.Color(color).float_rgb)
+
+
+def rgb8(color) -> tuple:
+    """A colour as an (r, g, b) tuple of ints in 0..255."""
+    from ._pv import pv
+    return tuple(int(c) for c in pv.Color(color).int_rgb)
+
+
+DEFAULT_STYLE = Style()
+__all__ = ["Style", "DEFAULT_STYLE", "TOL_MUTED", "OKABE_ITO", "rgb", "rgb8"]
