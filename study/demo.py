@@ -1,0 +1,88 @@
+"""A tiny study folder for tests, demos and development: a design, a manifest in
+the format of :mod:`stimuli.stimset` and small placeholder videos (a moving
+square; H.264, yuv420p) — no motion data or renderer needed.
+
+Example
+-------
+>>> make_demo_study("/tmp/tiny")          # doctest: +SKIP
+PosixPath('/tmp/tiny')
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+DEMO_GROUPS = (("smooth-increase", "angular-momentum", "smooth", 1),
+               ("abrupt-decrease", "angular-momentum", "abrupt", -1))
+
+
+def write_test_video(path, *, size=(64, 48), frames: int = 30, fps: float = 30.0,
+                     color=(230, 180, 40)) -> Path:
+    """A small valid MP4 (H.264, yuv420p): a square moving left to right."""
+    import imageio_ffmpeg
+    w, h = size
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    gen = imageio_ffmpeg.write_frames(str(path), (w, h), fps=fps, codec="libx264",
+                                      pix_fmt_in="rgb24", pix_fmt_out="yuv420p", macro_block_size=2,
+                                      quality=None, ffmpeg_log_level="error",
+                                      output_params=["-movflags", "+faststart", "-crf", "30",
+                                                     "-preset", "ultrafast"])
+    gen.send(None)
+    s = max(h // 4, 2)
+    for i in range(frames):
+        img = np.full((h, w, 3), 40, np.uint8)
+        x = int((w - s) * i / max(frames - 1, 1))
+        y = (h - s) // 2
+        img[y:y + s, x:x + s] = color
+        gen.send(img.tobytes())
+    gen.close()
+    return path
+
+
+def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_every=40,
+                     clips=("backflip",), levels=(0, 25), groups=DEMO_GROUPS,
+                     reference=True) -> str:
+    lines = ["[study]", f'name = "{name}"', f"seed = {seed}", f"repetitions = {repetitions}",
+             f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}", ""]
+    for c in clips:
+        lines += ["[[clips]]", f'name = "{c}"', f'source = "{c}"', ""]
+    if reference:
+        lines += ["[reference]", "clips = [" + ", ".join(f'"{c}"' for c in clips) + "]", ""]
+    for g, kind, profile, sign in groups:
+        lines += ["[[groups]]", f'name = "{g}"', f'kind = "{kind}"']
+        if kind == "angular-momentum":
+            lines.append(f'profile = "{profile}"')
+        lines += [f"sign = {sign}", "levels = [" + ", ".join(f"{v:g}" for v in levels) + "]", ""]
+    return "\n".join(lines)
+
+
+def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, size=(64, 48),
+                    videos: bool = True, **design) -> Path:
+    """Write ``design.toml``, ``manifest.csv`` and ``render/<stimulus>.mp4`` into ``out``
+    (keyword arguments go to :func:`demo_design_text`)."""
+    from stimuli.design import parse_design
+    from stimuli.stimset import MANIFEST_COLUMNS, plan, write_manifest
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    text = demo_design_text(**design)
+    (out / "design.toml").write_text(text)
+    d = parse_design(text, out / "design.toml")
+    rows = []
+    for name, spec, group, level in plan(d):
+        r = {c: 0.0 for c in MANIFEST_COLUMNS}
+        r.update(stimulus=name, clip=spec.name, group=group.name if group else "reference",
+                 kind=group.kind if group else "reference",
+                 profile=(group.profile or "") if group else "", level=level,
+                 nominal_error_pct=(group.sign * level) if group else 0.0, takeoff=10, landing=20,
+                 seed=0, sha256="0" * 64, frames=video_frames, fps=video_fps,
+                 bvh=f"{name}.bvh", npz=f"{name}.npz")
+        rows.append(r)
+    write_manifest(out / "manifest.csv", rows)
+    if videos:
+        palette = [(230, 180, 40), (80, 170, 230), (220, 90, 90), (120, 200, 120), (200, 120, 220)]
+        for i, r in enumerate(rows):
+            write_test_video(out / "render" / f"{r['stimulus']}.mp4", size=size, frames=video_frames,
+                             fps=video_fps, color=palette[i % len(palette)])
+    return out

@@ -1,0 +1,98 @@
+"""Experimenter output: the response table and the participants table.
+
+``responses.csv`` is DESIGN.md's long format, one row per answered trial::
+
+    participant, session, trial, stimulus, group, level, repetition, response,
+    rt_ms, shown_ms, timestamp, clip, kind, late_frames, replays, input
+
+(``trial`` and ``repetition`` 1-based, ``level`` the nominal error in percent,
+``timestamp`` ISO 8601 UTC of the moment the answer was stored).
+``participants.csv`` (next to it) has one row per session: participant,
+session, source (browser/simulated), age (empty: not given), gender,
+animation_experience, gymnastics_experience, started, finished, answered,
+n_trials.  Both files are written to a temporary file in the same folder and
+renamed into place (``os.replace``), so a reader never sees half a file.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import os
+import tempfile
+from pathlib import Path
+
+from . import store
+
+RESPONSE_COLUMNS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
+                    "response", "rt_ms", "shown_ms", "timestamp", "clip", "kind", "late_frames",
+                    "replays", "input"]
+PARTICIPANT_COLUMNS = ["participant", "session", "source", "age", "gender", "animation_experience",
+                       "gymnastics_experience", "started", "finished", "answered", "n_trials"]
+
+
+def atomic_write_text(path: Path, text: str) -> None:
+    """Write ``text`` to ``path`` through a temporary file and ``os.replace``."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", newline="", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def _csv(columns, rows) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for r in rows:
+        w.writerow(["" if r.get(c) is None else r[c] for c in columns])
+    return buf.getvalue()
+
+
+def _fmt_response(r: dict) -> dict:
+    out = dict(r)
+    out["group"] = r["group_name"]
+    out["level"] = f"{r['level']:g}"
+    out["rt_ms"] = f"{r['rt_ms']:.1f}"
+    out["shown_ms"] = f"{r['shown_ms']:.1f}"
+    return out
+
+
+def export_responses(study_dir, out=None, *, participants_out=None,
+                     include_simulated: bool = True) -> dict:
+    """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``) and
+    ``participants.csv`` beside it.  Returns ``{"responses": path, "participants":
+    path, "rows": n, "sessions": m}``."""
+    study_dir = Path(study_dir)
+    out = Path(out) if out is not None else study_dir / "responses.csv"
+    pout = Path(participants_out) if participants_out is not None else out.parent / "participants.csv"
+    if pout.resolve() == out.resolve():
+        raise ValueError(f"{out}: the responses and participants tables need different files")
+    conn = store.connect(study_dir, create=False)
+    try:
+        rows = [_fmt_response(r) for r in store.response_rows(conn, include_simulated=include_simulated)]
+        parts = store.participant_rows(conn, include_simulated=include_simulated)
+    finally:
+        conn.close()
+    atomic_write_text(out, _csv(RESPONSE_COLUMNS, rows))
+    atomic_write_text(pout, _csv(PARTICIPANT_COLUMNS, parts))
+    return {"responses": out, "participants": pout, "rows": len(rows), "sessions": len(parts)}
+
+
+def status(study_dir) -> list[dict]:
+    """One dict per session: participant, session, source, answered, total,
+    started, last_answer, finished (timestamp or None)."""
+    conn = store.connect(study_dir, create=False)
+    try:
+        return store.status_rows(conn)
+    finally:
+        conn.close()

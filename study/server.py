@@ -1,0 +1,292 @@
+"""The participant's local web server (Starlette + uvicorn).
+
+One server runs one participant's session.  Routes (nothing else answers; every
+error is a JSON object ``{"error": "..."}`` with a 4xx status):
+
+``GET  /``                  the page (``study/static/index.html``)
+``GET  /static/<file>``     ``session.js``, ``session.css`` (a fixed list, read at start)
+``GET  /api/session``       the timeline (:func:`study.timeline.build_timeline`)
+``POST /api/answer``        one trial's answer (:func:`study.session.submit_answer`)
+``POST /api/demographics``  the demographics (:func:`study.session.submit_demographics`)
+``GET  /stimuli/<name>.mp4`` a stimulus video: ``name`` must be a stimulus of the
+                            manifest and the file must resolve inside
+                            ``STUDY_DIR/render/`` (no traversal, no symlinks out)
+
+Experimenter actions (export, status) are command-line only.  The server binds
+to 127.0.0.1 unless told otherwise, accepts only loopback ``Host`` headers then,
+refuses cross-origin posts and anything but ``application/json`` bodies of at
+most 8 KiB.
+
+Example
+-------
+>>> serve("study/", "P01", open_browser=False)        # doctest: +SKIP
+participant page: http://127.0.0.1:41233/
+"""
+from __future__ import annotations
+
+import ipaddress
+import socket
+import sys
+import threading
+import webbrowser
+from pathlib import Path
+
+from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.routing import Route
+
+from .session import Session, SessionError, load_study, open_session, submit_answer, submit_demographics
+from .timeline import build_timeline
+from .validate import MAX_BODY, RequestError, parse_json_object
+
+STATIC_DIR = Path(__file__).resolve().parent / "static"
+STATIC_FILES = {"session.js": "text/javascript; charset=utf-8",
+                "session.css": "text/css; charset=utf-8"}
+CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; connect-src 'self'; "
+       "media-src 'self' blob:; img-src 'self' data:; base-uri 'none'; form-action 'none'; "
+       "frame-ancestors 'none'")
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1", "[::1]")
+
+
+def _error(status: int, message: str) -> JSONResponse:
+    return JSONResponse({"error": message}, status_code=status, headers={"Cache-Control": "no-store"})
+
+
+def is_loopback(host: str) -> bool:
+    if host in ("localhost",):
+        return True
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        return False
+
+
+class _Guard:
+    """ASGI middleware: Host-header check (DNS rebinding) and security headers."""
+
+    def __init__(self, app, allowed_hosts: set[str] | None):
+        self.app, self.allowed = app, allowed_hosts
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http":
+            return await self.app(scope, receive, send)
+        if self.allowed is not None:
+            host = dict(scope["headers"]).get(b"host", b"").decode("latin-1")
+            name = host.rsplit(":", 1)[0] if not host.endswith("]") else host
+            if name.lower() not in self.allowed:
+                resp = _error(400, f"host {host!r} is not served here")
+                return await resp(scope, receive, send)
+
+        async def send_with_headers(message):
+            if message["type"] == "http.response.start":
+                headers = list(message.get("headers", []))
+                headers += [(b"x-content-type-options", b"nosniff"),
+                            (b"referrer-policy", b"no-referrer"),
+                            (b"x-frame-options", b"DENY"),
+                            (b"cross-origin-resource-policy", b"same-origin")]
+                message = {**message, "headers": headers}
+            await send(message)
+
+        await self.app(scope, receive, send_with_headers)
+
+
+async def _read_json(request: Request) -> dict:
+    ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if ctype != "application/json":
+        raise RequestError(415, "send the body as application/json")
+    origin = request.headers.get("origin")
+    if origin is not None and origin != f"{request.url.scheme}://{request.headers.get('host', '')}":
+        raise RequestError(403, "cross-origin posts are refused")
+    cl = request.headers.get("content-length")
+    if cl is not None and (not cl.isdigit() or int(cl) > MAX_BODY):
+        raise RequestError(413, f"request body too large (at most {MAX_BODY} bytes)")
+    body = b""
+    async for chunk in request.stream():
+        body += chunk
+        if len(body) > MAX_BODY:
+            raise RequestError(413, f"request body too large (at most {MAX_BODY} bytes)")
+    return parse_json_object(body)
+
+
+def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
+               on_answer=None) -> Starlette:
+    """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
+    Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
+    is called after every stored answer (the CLI prints progress)."""
+    study = session.study
+    render_dir = study.render_dir.resolve()
+    videos = {f"{r['stimulus']}.mp4" for r in study.manifest}
+    assets = {name: (STATIC_DIR / name).read_bytes() for name in STATIC_FILES}
+    index = (STATIC_DIR / "index.html").read_bytes()
+
+    async def page(request: Request):
+        return Response(index, media_type="text/html; charset=utf-8",
+                        headers={"Content-Security-Policy": CSP, "Cache-Control": "no-store"})
+
+    async def static(request: Request):
+        name = request.path_params["name"]
+        if name not in STATIC_FILES:
+            return _error(404, "not found")
+        return Response(assets[name], media_type=STATIC_FILES[name], headers={"Cache-Control": "no-cache"})
+
+    async def api_session(request: Request):
+        tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
+        return JSONResponse(tl, headers={"Cache-Control": "no-store"})
+
+    async def api_answer(request: Request):
+        try:
+            obj = await _read_json(request)
+            result = await run_in_threadpool(submit_answer, session, obj)
+        except RequestError as e:
+            return _error(e.status, e.message)
+        if on_answer is not None and result["status"] == "stored":
+            on_answer(result)
+        return JSONResponse(result, headers={"Cache-Control": "no-store"})
+
+    async def api_demographics(request: Request):
+        try:
+            obj = await _read_json(request)
+            result = await run_in_threadpool(submit_demographics, session, obj)
+        except RequestError as e:
+            return _error(e.status, e.message)
+        return JSONResponse(result, headers={"Cache-Control": "no-store"})
+
+    async def stimulus(request: Request):
+        name = request.path_params["name"]
+        if name not in videos:                       # only the manifest's names, as given
+            return _error(404, "no such stimulus")
+        path = (render_dir / name).resolve()
+        if path.parent != render_dir or not path.is_file():   # symlinks out, directories
+            return _error(404, "no such stimulus")
+        return FileResponse(path, media_type="video/mp4", headers={"Cache-Control": "no-cache"})
+
+    async def http_error(request: Request, exc: HTTPException):
+        msg = {404: "not found", 405: "method not allowed"}.get(exc.status_code, str(exc.detail))
+        return _error(exc.status_code, msg)
+
+    async def server_error(request: Request, exc: Exception):
+        return _error(500, "internal error (see the terminal running flipstudy run)")
+
+    app = Starlette(routes=[
+        Route("/", page, methods=["GET"]),
+        Route("/static/{name}", static, methods=["GET"]),
+        Route("/api/session", api_session, methods=["GET"]),
+        Route("/api/answer", api_answer, methods=["POST"]),
+        Route("/api/demographics", api_demographics, methods=["POST"]),
+        Route("/stimuli/{name:path}", stimulus, methods=["GET"]),
+        Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
+    ], exception_handlers={HTTPException: http_error, 500: server_error})
+    app.router.redirect_slashes = False
+    hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}
+    app.add_middleware(_Guard, allowed_hosts=hosts)
+    return app
+
+
+def bind(host: str = "127.0.0.1", port: int = 0) -> socket.socket:
+    """A listening TCP socket (port 0: a free one), SO_REUSEADDR so a restarted
+    server gets its port back at once."""
+    infos = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, proto=socket.IPPROTO_TCP)
+    family, _, _, _, addr = infos[0]
+    # proto=IPPROTO_TCP matters: asyncio sets TCP_NODELAY only on sockets that say so,
+    # and without it every response waits ~40 ms for a delayed ACK (Nagle)
+    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind(addr)
+    except OSError as e:
+        sock.close()
+        raise SessionError(f"cannot listen on {host}:{port}: {e.strerror} (choose another --port, "
+                           f"or leave it out for a free one)") from None
+    sock.listen(128)
+    sock.set_inheritable(True)
+    return sock
+
+
+def serve(study_dir, participant: str, *, host: str = "127.0.0.1", port: int = 0,
+          open_browser: bool = True, new_session: bool = False, iti_ms: int = 500,
+          out=sys.stdout) -> int:
+    """Open or resume the session, print the URL, open the browser and serve
+    until interrupted (Ctrl-C)."""
+    import uvicorn
+
+    study = load_study(study_dir)
+    open_session(study, participant, new_session=new_session, dry_run=True)   # refusals first
+    missing = study.missing_videos()
+    if missing:
+        raise SessionError(f"{len(missing)} of {len(study.manifest)} stimulus videos are missing in "
+                           f"{study.render_dir} (e.g. {missing[0]}.mp4); render them first: "
+                           f"flipstudy render {study.dir}")
+    session = open_session(study, participant, new_session=new_session)
+    state = session.state()
+    sock = bind(host, port)
+    port = sock.getsockname()[1]
+    # a wildcard address is not one a browser can open: show this machine's loopback
+    shown = {"0.0.0.0": "127.0.0.1", "::": "::1"}.get(host, host)
+    url_host = f"[{shown}]" if ":" in shown else shown
+    url = f"http://{url_host}:{port}/"
+    loop = is_loopback(host)
+    what = (f"resuming session {session.session} at trial {state['next_trial']} of {session.n_trials}"
+            if session.resumed and not state["finished"] else
+            f"session {session.session}, {session.n_trials} trials")
+    print(f"flipstudy run: participant {participant}, {what}", file=out)
+    if not loop:
+        print(f"flipstudy run: warning: listening on {host}, reachable from the network", file=out)
+    print(f"participant page: {url}", file=out, flush=True)
+
+    def progress(result):
+        msg = f"{participant}: {result['trial']}/{session.n_trials} answered"
+        if result["finished"]:
+            msg += " — session finished; press Ctrl-C to stop the server"
+        print(msg, file=out, flush=True)
+
+    allowed = (set(LOOPBACK_NAMES) | {host}) if loop else None
+    app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress)
+    config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=False,
+                            server_header=False, lifespan="off", timeout_graceful_shutdown=3)
+    server = uvicorn.Server(config)
+    if open_browser:
+        threading.Timer(0.2, webbrowser.open, args=(url,)).start()
+    try:
+        server.run(sockets=[sock])
+    finally:      # uvicorn re-raises Ctrl-C (KeyboardInterrupt) after its graceful shutdown
+        s = session.state()
+        print(f"flipstudy run: stopped; {participant} session {session.session}: "
+              f"{s['answered']}/{session.n_trials} answered"
+              + ("" if s["finished"] else " (run the same command to resume)"), file=out, flush=True)
+    return 0
+
+
+class ServerThread:
+    """Serve an app on 127.0.0.1 in a background thread (tests, notebooks).
+
+    >>> with ServerThread(create_app(session)) as srv:     # doctest: +SKIP
+    ...     print(srv.url)
+    """
+
+    def __init__(self, app, host: str = "127.0.0.1", port: int = 0):
+        import uvicorn
+        self.sock = bind(host, port)
+        self.port = self.sock.getsockname()[1]
+        self.url = f"http://{host}:{self.port}/"
+        self.server = uvicorn.Server(uvicorn.Config(app, log_level="warning", access_log=False,
+                                                    lifespan="off", proxy_headers=False))
+        self.thread = threading.Thread(target=self.server.run, kwargs={"sockets": [self.sock]},
+                                       daemon=True)
+
+    def __enter__(self):
+        import time
+        self.thread.start()
+        t0 = time.monotonic()
+        while not self.server.started:
+            if not self.thread.is_alive() or time.monotonic() - t0 > 20:
+                raise RuntimeError("the server thread did not start")
+            time.sleep(0.01)
+        return self
+
+    def __exit__(self, *exc):
+        self.server.should_exit = True
+        self.thread.join(timeout=10)
+        self.sock.close()

@@ -1,0 +1,195 @@
+"""Session commands of the ``flipstudy`` CLI: run, export, status, simulate.
+
+``add_commands(subparsers)`` adds them to the main parser (``study/cli.py``);
+each sets ``func`` to a handler ``handler(args) -> int``.  ``python -m
+study.session_cli COMMAND ...`` runs them on their own.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from .validate import RequestError
+
+
+def _port(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
+    if not 0 <= v <= 65535:
+        raise argparse.ArgumentTypeError(f"a port is 0..65535 (0: a free one), got {v}")
+    return v
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {v}")
+    return v
+
+
+def _nonneg_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {v}")
+    return v
+
+
+def _fail(cmd: str, e: Exception) -> int:
+    msg = e.message if isinstance(e, RequestError) else str(e)
+    print(f"flipstudy {cmd}: error: {msg}", file=sys.stderr)
+    return 1
+
+
+def cmd_run(args) -> int:
+    from .server import serve
+    try:
+        return serve(args.study_dir, args.participant, host=args.host, port=args.port,
+                     open_browser=not args.no_browser, new_session=args.new_session,
+                     iti_ms=args.iti_ms)
+    except (ValueError, OSError, RequestError) as e:
+        return _fail("run", e)
+    except KeyboardInterrupt:
+        return 0
+
+
+def cmd_export(args) -> int:
+    from .export import export_responses
+    try:
+        r = export_responses(args.study_dir, args.out, participants_out=args.participants_out,
+                             include_simulated=not args.exclude_simulated)
+    except (ValueError, OSError) as e:
+        return _fail("export", e)
+    print(f"wrote {r['rows']} responses to {r['responses']} and {r['sessions']} session(s) to "
+          f"{r['participants']}")
+    return 0
+
+
+def cmd_status(args) -> int:
+    from pathlib import Path
+
+    from .export import status
+    from .store import db_path
+    d = Path(args.study_dir)
+    if not (d / "manifest.csv").is_file():
+        return _fail("status", ValueError(f"{d} is not a study folder (no manifest.csv)"))
+    try:
+        rows = status(d) if db_path(d).exists() else []
+    except (ValueError, OSError) as e:
+        return _fail("status", e)
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    if not rows:
+        print("no sessions yet")
+        return 0
+    head = ("participant", "session", "source", "answered", "started", "last answer", "finished")
+    table = [(r["participant"], str(r["session"]), r["source"], f"{r['answered']}/{r['total']}",
+              r["started"] or "—", r["last_answer"] or "—", r["finished"] or "no") for r in rows]
+    widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(head)]
+    line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip()  # noqa: E731
+    print(line(head))
+    for t in table:
+        print(line(t))
+    done = sum(1 for r in rows if r["finished"])
+    print(f"{len(rows)} session(s), {done} finished")
+    return 0
+
+
+def cmd_simulate(args) -> int:
+    from .simulate import simulate
+    try:
+        ids = simulate(args.study_dir, args.participants, model=args.model, seed=args.seed)
+    except (ValueError, OSError, RequestError) as e:
+        return _fail("simulate", e)
+    print(f"simulated {len(ids)} participant(s) ({ids[0]}..{ids[-1]}) in "
+          f"{args.study_dir}/sessions.sqlite; next: flipstudy export {args.study_dir}")
+    return 0
+
+
+def add_commands(subparsers) -> None:
+    """Add ``run``, ``export``, ``status`` and ``simulate`` to an argparse subparsers object."""
+    p = subparsers.add_parser(
+        "run", help="run one participant's session in the browser (local server)",
+        description="Start a local web server for one participant's session and open the "
+                    "participant page in the default browser: instructions, demographics, "
+                    "examples of correct motions, the test trials (with breaks), the end. "
+                    "Answers are stored in STUDY_DIR/sessions.sqlite as they are given; run the "
+                    "same command again to resume an interrupted session.")
+    p.add_argument("study_dir", metavar="STUDY_DIR",
+                   help="study folder (manifest.csv, design.toml, render/<stimulus>.mp4)")
+    p.add_argument("--participant", required=True, metavar="ID",
+                   help="participant ID: 1-32 letters, digits, '_' or '-'")
+    p.add_argument("--port", type=_port, default=0, help="TCP port (default: a free one)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1, this machine only)")
+    p.add_argument("--no-browser", action="store_true", help="print the URL, do not open a browser")
+    p.add_argument("--new-session", action="store_true",
+                   help="start a new session for this participant (the earlier ones are kept)")
+    p.add_argument("--iti-ms", type=_nonneg_int, default=500, metavar="MS",
+                   help="blank interval with a fixation cross before each motion (default 500)")
+    p.set_defaults(func=cmd_run)
+
+    p = subparsers.add_parser(
+        "export", help="write responses.csv (one row per trial) and participants.csv",
+        description="Write the answers as DESIGN.md's long format (participant, session, trial, "
+                    "stimulus, group, level, repetition, response, rt_ms, shown_ms, timestamp, "
+                    "plus clip, kind, late_frames, replays, input) and the demographics as "
+                    "participants.csv beside it; both atomically.")
+    p.add_argument("study_dir", metavar="STUDY_DIR")
+    p.add_argument("--out", metavar="responses.csv", default=None,
+                   help="output file (default STUDY_DIR/responses.csv)")
+    p.add_argument("--participants-out", metavar="participants.csv", default=None,
+                   help="demographics file (default: participants.csv next to --out)")
+    p.add_argument("--exclude-simulated", action="store_true",
+                   help="leave out simulated participants (flipstudy simulate)")
+    p.set_defaults(func=cmd_export)
+
+    p = subparsers.add_parser(
+        "status", help="who has done what: sessions, answered/total, finished",
+        description="One line per participant session: answered/total, started, last answer, "
+                    "finished.")
+    p.add_argument("study_dir", metavar="STUDY_DIR")
+    p.add_argument("--json", action="store_true", help="print a JSON list")
+    p.set_defaults(func=cmd_status)
+
+    p = subparsers.add_parser(
+        "simulate", help="answer every trial with simulated observers (sim001...)",
+        description="Simulated participants answer every trial through the same validation and "
+                    "storage as the participant page. The observer model gives P(correct) per "
+                    "group and level (default: the paper's Table 2 ratings) with a per-participant "
+                    "logit shift ~ N(0, sigma).")
+    p.add_argument("study_dir", metavar="STUDY_DIR")
+    p.add_argument("--participants", type=_positive_int, required=True, metavar="N",
+                   help="number of simulated participants (IDs sim001..)")
+    p.add_argument("--model", metavar="MODEL.toml", default=None,
+                   help="observer model: [groups.NAME] levels = [...], p_correct = [...]; sigma = 0.3")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.set_defaults(func=cmd_simulate)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="flipstudy", description="flipstudy session commands")
+    add_commands(ap.add_subparsers(dest="command", metavar="COMMAND"))
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    if not getattr(args, "func", None):
+        ap.print_help()
+        return 2
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

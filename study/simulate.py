@@ -1,0 +1,268 @@
+"""Simulated observers: whole sessions answered through the same storage path as
+the participant page.
+
+An observer model gives, for each error group, the probability of answering
+"correct" at a few levels; between them it is interpolated linearly.  Every
+simulated participant gets a random effect: a shift ``u ~ N(0, sigma)`` of the
+logit of that probability.  The model's base logits are calibrated so that the
+mean over participants equals the model's probability exactly (the logit-normal
+mean is not the probability at the mean logit), so a simulated panel reproduces
+the model's ratings in expectation.
+
+The default model is Table 2 of Majkowska & Faloutsos 2007 (mean ratings, % of
+"correct" answers); its empty smooth-increase 37 % cell is interpolated
+between 25 % (72) and 50 % (41).
+
+Model file (TOML)::
+
+    sigma = 0.3                                 # SD of the participant logit shift
+    [groups.smooth-increase]
+    levels    = [0, 17, 25, 37, 50]
+    p_correct = [0.72, 0.71, 0.72, 0.56, 0.41]  # probabilities (or percentages > 1)
+
+Simulated participants are ``sim001``, ``sim002``, …; each one's random
+numbers come from SHA-256 of the seed and the ID, so the answers do not depend
+on how many others are simulated.  Every answer goes as JSON bytes through the
+calls the server's POST handler makes (:func:`study.validate.parse_json_object`,
+then :func:`study.session.submit_answer`), so it is validated and stored alike.
+
+Example
+-------
+>>> simulate("study/", 19, seed=1)          # doctest: +SKIP
+['sim001', 'sim002', ...]
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib  # type: ignore[no-redef]
+
+from .session import SessionError, load_study, open_session, submit_answer, submit_demographics
+from .validate import DEMOGRAPHIC_FIELDS, PREFER_NOT, parse_json_object
+
+#: Majkowska & Faloutsos 2007, Table 2: mean ratings (% judged correct).  None = the
+#: cell the paper leaves empty (interpolated linearly in :data:`DEFAULT_MODEL`).
+PAPER_RATINGS = {
+    "smooth-increase": ((0, 17, 25, 37, 50), (72, 71, 72, None, 41)),
+    "smooth-decrease": ((0, 17, 25, 37, 50), (72, 79, 78, 78, 62)),
+    "abrupt-increase": ((0, 17, 25, 37, 50), (72, 76, 78, 48, 44)),
+    "abrupt-decrease": ((0, 17, 25, 37, 50), (72, 83, 68, 33, 22)),
+    "takeoff-increase": ((0, 10, 20, 30, 40), (63, 81, 50, 63, 18)),
+}
+DEFAULT_SIGMA = 0.3
+
+
+class ModelError(ValueError):
+    """An invalid observer model; the message names the file and field."""
+
+
+def _fill(levels, ratings) -> list[float]:
+    """Fill None cells by linear interpolation between their known neighbours."""
+    lv = np.asarray(levels, float)
+    known = [i for i, r in enumerate(ratings) if r is not None]
+    vals = np.interp(lv, lv[known], np.asarray([ratings[i] for i in known], float))
+    return [float(v) for v in vals]
+
+
+@dataclass
+class ObserverModel:
+    """P(answer "correct") per group as a piecewise-linear function of the level,
+    and the SD of the participants' logit shift."""
+    groups: dict[str, tuple[np.ndarray, np.ndarray]]
+    sigma: float = DEFAULT_SIGMA
+    source: str = "Majkowska & Faloutsos 2007, Table 2"
+    _calibrated: dict = field(default_factory=dict, repr=False)
+
+    def p_correct(self, group: str, level: float) -> float:
+        """The model's probability of "correct" (the panel mean) at ``level``."""
+        if group not in self.groups:
+            raise ModelError(f"observer model ({self.source}) has no group {group!r}; it has "
+                             f"{sorted(self.groups)}. Pass --model FILE with a [groups.{group}] table")
+        lv, p = self.groups[group]
+        if not lv[0] - 1e-9 <= level <= lv[-1] + 1e-9:
+            raise ModelError(f"observer model ({self.source}), group {group!r}: level {level:g} is "
+                             f"outside its levels {lv[0]:g}..{lv[-1]:g}; add levels to the model")
+        return float(np.interp(level, lv, p))
+
+    def base_logit(self, group: str, level: float) -> float:
+        """The logit b with E[expit(b + u)] = p_correct, u ~ N(0, sigma)."""
+        key = (group, round(float(level), 9))
+        if key not in self._calibrated:
+            self._calibrated[key] = _calibrate(self.p_correct(group, level), self.sigma)
+        return self._calibrated[key]
+
+    def probability(self, group: str, level: float, shift: float) -> float:
+        """P("correct") for a participant whose logit shift is ``shift``."""
+        return _expit(self.base_logit(group, level) + shift)
+
+
+def _expit(x):
+    return 1.0 / (1.0 + np.exp(-x))
+
+
+_GH_X, _GH_W = np.polynomial.hermite_e.hermegauss(40)
+_GH_W = _GH_W / _GH_W.sum()
+
+
+def _calibrate(p: float, sigma: float) -> float:
+    if p <= 0.0 or p >= 1.0 or sigma == 0.0:
+        return math.inf if p >= 1 else -math.inf if p <= 0 else math.log(p / (1 - p))
+    lo, hi = -30.0, 30.0
+    for _ in range(100):                       # bisection on a monotone function
+        mid = (lo + hi) / 2
+        if float(np.dot(_GH_W, _expit(mid + sigma * _GH_X))) < p:
+            lo = mid
+        else:
+            hi = mid
+    return (lo + hi) / 2
+
+
+def default_model(sigma: float = DEFAULT_SIGMA) -> ObserverModel:
+    """The paper's Table 2 (missing cell interpolated) as an observer model."""
+    groups = {g: (np.asarray(lv, float), np.asarray(_fill(lv, r), float) / 100.0)
+              for g, (lv, r) in PAPER_RATINGS.items()}
+    return ObserverModel(groups, sigma)
+
+
+DEFAULT_MODEL = default_model()
+
+
+def parse_model(text: str, source: str = "<model>") -> ObserverModel:
+    """An observer model from TOML text (see the module docstring)."""
+    try:
+        d = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ModelError(f"{source}: not valid TOML: {e}") from None
+    unknown = set(d) - {"sigma", "groups", "name"}
+    if unknown:
+        raise ModelError(f"{source}: unknown key(s) {sorted(unknown)}; expected sigma, groups")
+    sigma = d.get("sigma", DEFAULT_SIGMA)
+    if isinstance(sigma, bool) or not isinstance(sigma, (int, float)) or not (0 <= sigma <= 5):
+        raise ModelError(f"{source}: sigma: expected a number from 0 to 5, got {sigma!r}")
+    groups_in = d.get("groups")
+    if not isinstance(groups_in, dict) or not groups_in:
+        raise ModelError(f"{source}: expected [groups.NAME] tables with levels and p_correct")
+    groups = {}
+    for g, t in groups_in.items():
+        w = f"{source}: [groups.{g}]"
+        if not isinstance(t, dict) or set(t) != {"levels", "p_correct"}:
+            raise ModelError(f"{w}: expected exactly the keys levels and p_correct")
+        lv, p = t["levels"], t["p_correct"]
+        if (not isinstance(lv, list) or not isinstance(p, list) or not lv or len(lv) != len(p)):
+            raise ModelError(f"{w}: levels and p_correct must be lists of the same, non-zero length")
+        if not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in lv + p):
+            raise ModelError(f"{w}: levels and p_correct must hold numbers")
+        lv = np.asarray(lv, float)
+        p = np.asarray(p, float)
+        if np.any(np.diff(lv) <= 0):
+            raise ModelError(f"{w}.levels: must increase strictly, got {lv.tolist()}")
+        if np.any(p > 1):
+            p = p / 100.0                      # percentages
+        if np.any(p < 0) or np.any(p > 1) or not np.all(np.isfinite(p)):
+            raise ModelError(f"{w}.p_correct: probabilities from 0 to 1 (or percentages 0-100)")
+        groups[str(g)] = (lv, p)
+    return ObserverModel(groups, float(sigma), source)
+
+
+def load_model(path) -> ObserverModel:
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as e:
+        raise ModelError(f"{p}: cannot read the observer model: {e.strerror}") from None
+    return parse_model(text, str(p))
+
+
+def sim_ids(n: int) -> list[str]:
+    width = max(3, len(str(n)))
+    return [f"sim{i:0{width}d}" for i in range(1, n + 1)]
+
+
+def _rng(seed: int, participant: str) -> np.random.Generator:
+    h = hashlib.sha256(f"simulate:{int(seed)}:{participant}".encode()).digest()
+    return np.random.default_rng(int.from_bytes(h[:8], "big"))
+
+
+def _post(fn, session, obj: dict) -> dict:
+    """The server's POST path: JSON bytes → parse_json_object → submit_*."""
+    return fn(session, parse_json_object(json.dumps(obj).encode()))
+
+
+def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None, seed: int = 0,
+             progress=None) -> list[str]:
+    """Simulate ``n`` participants (``sim001``…) answering every trial of the study.
+
+    ``model`` is an :class:`ObserverModel`, a TOML file, or None (the paper's
+    Table 2).  Unfinished simulated participants are resumed; finished ones are
+    left as they are (their answers would be the same).  Returns the IDs.
+    """
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1 or n > 9999:
+        raise ValueError(f"--participants: expected 1 to 9999, got {n!r}")
+    if model is None:
+        model = DEFAULT_MODEL
+    elif not isinstance(model, ObserverModel):
+        model = load_model(model)
+    study = load_study(study_dir)
+    rows = study.by_name
+    groups = {r["group"] for r in study.manifest if r["group"] != "reference"}
+    for g in sorted(groups):                   # fail before anything is stored
+        for r in study.manifest:
+            if r["group"] == g:
+                model.p_correct(g, float(r["level"]))
+    ids = sim_ids(n)
+    for pid in ids:
+        try:
+            session = open_session(study, pid, source="simulated")
+        except SessionError as e:
+            if "already finished" in str(e):
+                continue
+            raise
+        rng = _rng(seed, pid)
+        shift = float(rng.normal(0.0, model.sigma)) if model.sigma > 0 else 0.0
+        state = session.state()
+        demo = {"participant": pid, "session": session.session}
+        for f in DEMOGRAPHIC_FIELDS:           # drawn even when stored: same stream on resume
+            if f["kind"] == "number":
+                age = int(rng.integers(19, 31))
+                demo[f["name"]] = age if rng.random() > 0.15 else None
+            else:
+                opts = [o[0] for o in f["options"] if o[0] != PREFER_NOT]
+                demo[f["name"]] = opts[int(rng.integers(len(opts)))]
+        if not state["demographics"]:
+            _post(submit_demographics, session, demo)
+        # draw every trial's numbers up front, so a resumed run gives the same answers
+        T = session.n_trials
+        u = rng.random(T)
+        rt = np.exp(rng.normal(np.log(1100.0), 0.4, T))
+        jitter = rng.normal(0.0, 8.0, T)
+        late = rng.poisson(0.3, T)
+        for t, ui, rti, ji, li in zip(session.trials, u, rt, jitter, late):
+            if t.trial < state["next_trial"]:
+                continue
+            p = model.probability(t.group, t.level, shift)
+            row = rows[t.stimulus]
+            try:
+                dur = 1000.0 * float(row.get("frames", "nan")) / float(row.get("fps", "nan"))
+            except ValueError:
+                dur = float("nan")
+            if not math.isfinite(dur) or dur <= 0:
+                dur = 2000.0
+            _post(submit_answer, session, {
+                "participant": pid, "session": session.session, "trial": t.trial,
+                "stimulus": t.stimulus, "response": "correct" if ui < p else "incorrect",
+                "rt_ms": round(float(min(max(rti, 150.0), 20000.0)), 1),
+                "shown_ms": round(max(dur + float(ji), 0.0), 1),
+                "late_frames": int(li), "replays": 0, "input": "simulated"})
+        session.close()
+        if progress is not None:
+            progress(pid, session)
+    return ids

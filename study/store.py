@@ -1,0 +1,293 @@
+"""Session storage: SQLite (stdlib) at ``STUDY_DIR/sessions.sqlite``.
+
+WAL journal, ``synchronous=FULL`` (every commit reaches the disk before the
+answer is acknowledged), foreign keys on.  Every write is one ``BEGIN
+IMMEDIATE … COMMIT`` transaction, so a killed server (even ``kill -9``) leaves
+either the whole answer or none of it.
+
+Schema (version 1, also in ``PRAGMA user_version``)::
+
+    meta(key PRIMARY KEY, value)                      schema_version
+    sessions(participant, session, source, seed, manifest_sha256, n_trials,
+             started, finished)                       PRIMARY KEY (participant, session)
+    trials(participant, session, trial, stimulus, clip, group_name, kind,
+           level, repetition)                         PRIMARY KEY (participant, session, trial)
+    responses(participant, session, trial, response, rt_ms, shown_ms,
+              late_frames, replays, input, timestamp) PRIMARY KEY (participant, session, trial)
+    demographics(participant, session, age, gender, animation_experience,
+                 gymnastics_experience, timestamp)    PRIMARY KEY (participant, session)
+
+The trial order is written (``trials``) in the same transaction that creates
+the session, before the first trial is served.  The responses' primary key makes
+a second answer to the same trial impossible.  Timestamps are ISO 8601 UTC with
+milliseconds (``2026-01-05T10:00:00.123Z``).
+"""
+from __future__ import annotations
+
+import sqlite3
+from contextlib import contextmanager
+from datetime import datetime, timezone
+from pathlib import Path
+
+from .order import Trial
+
+DB_NAME = "sessions.sqlite"
+SCHEMA_VERSION = 1
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (
+    key   TEXT PRIMARY KEY,
+    value TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS sessions (
+    participant     TEXT    NOT NULL,
+    session         INTEGER NOT NULL CHECK (session >= 1),
+    source          TEXT    NOT NULL CHECK (source IN ('browser', 'simulated')),
+    seed            TEXT    NOT NULL,
+    manifest_sha256 TEXT    NOT NULL,
+    n_trials        INTEGER NOT NULL CHECK (n_trials >= 1),
+    started         TEXT    NOT NULL,
+    finished        TEXT,
+    PRIMARY KEY (participant, session)
+);
+CREATE TABLE IF NOT EXISTS trials (
+    participant TEXT    NOT NULL,
+    session     INTEGER NOT NULL,
+    trial       INTEGER NOT NULL CHECK (trial >= 1),
+    stimulus    TEXT    NOT NULL,
+    clip        TEXT    NOT NULL,
+    group_name  TEXT    NOT NULL,
+    kind        TEXT    NOT NULL,
+    level       REAL    NOT NULL,
+    repetition  INTEGER NOT NULL CHECK (repetition >= 1),
+    PRIMARY KEY (participant, session, trial),
+    FOREIGN KEY (participant, session) REFERENCES sessions (participant, session)
+);
+CREATE TABLE IF NOT EXISTS responses (
+    participant TEXT    NOT NULL,
+    session     INTEGER NOT NULL,
+    trial       INTEGER NOT NULL,
+    response    TEXT    NOT NULL CHECK (response IN ('correct', 'incorrect')),
+    rt_ms       REAL    NOT NULL CHECK (rt_ms >= 0),
+    shown_ms    REAL    NOT NULL CHECK (shown_ms >= 0),
+    late_frames INTEGER NOT NULL CHECK (late_frames >= 0),
+    replays     INTEGER NOT NULL DEFAULT 0 CHECK (replays >= 0),
+    input       TEXT    NOT NULL,
+    timestamp   TEXT    NOT NULL,
+    PRIMARY KEY (participant, session, trial),
+    FOREIGN KEY (participant, session, trial) REFERENCES trials (participant, session, trial)
+);
+CREATE TABLE IF NOT EXISTS demographics (
+    participant           TEXT    NOT NULL,
+    session               INTEGER NOT NULL,
+    age                   INTEGER,
+    gender                TEXT    NOT NULL,
+    animation_experience  TEXT    NOT NULL,
+    gymnastics_experience TEXT    NOT NULL,
+    timestamp             TEXT    NOT NULL,
+    PRIMARY KEY (participant, session),
+    FOREIGN KEY (participant, session) REFERENCES sessions (participant, session)
+);
+"""
+
+
+class Conflict(Exception):
+    """A write that contradicts what is stored (HTTP 409)."""
+
+
+def utc_now() -> str:
+    """Now as ISO 8601 UTC with milliseconds, e.g. ``2026-01-05T10:00:00.123Z``."""
+    return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
+
+
+def db_path(study_dir) -> Path:
+    return Path(study_dir) / DB_NAME
+
+
+def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
+    """Open (and on first use create) the study's database.  The connection is
+    in autocommit mode; use :func:`transaction` for writes.  It may be shared
+    between threads if the caller serialises its use (the server does)."""
+    path = db_path(study_dir)
+    if not create and not path.exists():
+        raise FileNotFoundError(f"{path}: no sessions yet (run `flipstudy run` or `flipstudy simulate`)")
+    conn = sqlite3.connect(path, timeout=30.0, isolation_level=None, check_same_thread=False)
+    try:
+        conn.row_factory = sqlite3.Row
+        conn.execute("PRAGMA journal_mode=WAL")
+        conn.execute("PRAGMA synchronous=FULL")
+        conn.execute("PRAGMA foreign_keys=ON")
+        version = conn.execute("PRAGMA user_version").fetchone()[0]
+        if version == 0:
+            with transaction(conn):
+                if conn.execute("PRAGMA user_version").fetchone()[0] == 0:   # not raced
+                    for stmt in SCHEMA.split(";"):
+                        if stmt.strip():
+                            conn.execute(stmt)
+                    conn.execute("INSERT OR REPLACE INTO meta VALUES ('schema_version', ?)",
+                                 (str(SCHEMA_VERSION),))
+                    conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+        elif version != SCHEMA_VERSION:
+            raise RuntimeError(f"{path}: schema version {version}; this flipstudy reads version "
+                               f"{SCHEMA_VERSION}")
+    except BaseException:
+        conn.close()
+        raise
+    return conn
+
+
+@contextmanager
+def transaction(conn: sqlite3.Connection):
+    """``BEGIN IMMEDIATE`` … ``COMMIT`` (``ROLLBACK`` on any exception)."""
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        yield conn
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
+    conn.execute("COMMIT")
+
+
+# --- sessions -------------------------------------------------------------------------------
+
+def latest_session(conn, participant: str):
+    """The participant's newest session row (``sqlite3.Row``) or None."""
+    return conn.execute("SELECT * FROM sessions WHERE participant=? ORDER BY session DESC LIMIT 1",
+                        (participant,)).fetchone()
+
+
+def create_session(conn, participant: str, session: int, source: str, seed: int,
+                   manifest_sha256: str, trials: list[Trial]) -> None:
+    """Create a session and store its whole trial order, in one transaction."""
+    with transaction(conn):
+        conn.execute("INSERT INTO sessions (participant, session, source, seed, manifest_sha256, "
+                     "n_trials, started) VALUES (?,?,?,?,?,?,?)",
+                     (participant, session, source, str(seed), manifest_sha256, len(trials),
+                      utc_now()))
+        conn.executemany(
+            "INSERT INTO trials VALUES (?,?,?,?,?,?,?,?,?)",
+            [(participant, session, t.trial, t.stimulus, t.clip, t.group, t.kind, t.level,
+              t.repetition) for t in trials])
+
+
+def load_trials(conn, participant: str, session: int) -> list[Trial]:
+    rows = conn.execute("SELECT * FROM trials WHERE participant=? AND session=? ORDER BY trial",
+                        (participant, session)).fetchall()
+    return [Trial(r["trial"], r["stimulus"], r["clip"], r["group_name"], r["kind"], r["level"],
+                  r["repetition"]) for r in rows]
+
+
+def answered_trials(conn, participant: str, session: int) -> dict[int, sqlite3.Row]:
+    rows = conn.execute("SELECT * FROM responses WHERE participant=? AND session=? ORDER BY trial",
+                        (participant, session)).fetchall()
+    return {r["trial"]: r for r in rows}
+
+
+def count_answers(conn, participant: str, session: int) -> int:
+    return conn.execute("SELECT COUNT(*) FROM responses WHERE participant=? AND session=?",
+                        (participant, session)).fetchone()[0]
+
+
+# --- answers --------------------------------------------------------------------------------
+
+def insert_answer(conn, participant: str, session: int, n_trials: int, answer: dict,
+                  timestamp: str | None = None) -> str:
+    """Store one checked answer (see :func:`study.validate.parse_answer`).
+
+    Returns ``"stored"``, or ``"duplicate"`` when the same response to the same
+    trial is already stored (nothing is written).  Raises :class:`Conflict` when
+    the trial was answered differently (the first answer is kept) or is not the
+    participant's current trial (the first unanswered one).  The session is
+    marked finished in the same transaction as its last answer.
+    """
+    trial = answer["trial"]
+    with transaction(conn):
+        old = conn.execute("SELECT response FROM responses WHERE participant=? AND session=? "
+                           "AND trial=?", (participant, session, trial)).fetchone()
+        if old is not None:
+            if old["response"] == answer["response"]:
+                return "duplicate"
+            raise Conflict(f"trial {trial} is already answered ({old['response']}); "
+                           f"the first answer is kept")
+        n = count_answers(conn, participant, session)
+        if trial != n + 1:
+            raise Conflict(f"trial {trial} is not the current trial (trial {n + 1} is next)")
+        row = conn.execute("SELECT stimulus FROM trials WHERE participant=? AND session=? AND trial=?",
+                           (participant, session, trial)).fetchone()
+        if row is None:
+            raise Conflict(f"trial {trial} does not exist in this session")
+        if row["stimulus"] != answer["stimulus"]:
+            raise Conflict(f"trial {trial} shows {row['stimulus']!r}, not {answer['stimulus']!r}")
+        ts = timestamp or utc_now()
+        conn.execute("INSERT INTO responses VALUES (?,?,?,?,?,?,?,?,?,?)",
+                     (participant, session, trial, answer["response"], answer["rt_ms"],
+                      answer["shown_ms"], answer["late_frames"], answer.get("replays", 0),
+                      answer.get("input", "click"), ts))
+        if trial == n_trials:
+            conn.execute("UPDATE sessions SET finished=? WHERE participant=? AND session=?",
+                         (ts, participant, session))
+    return "stored"
+
+
+def insert_demographics(conn, participant: str, session: int, values: dict) -> str:
+    """Store the demographics once; ``"duplicate"`` for the same values again,
+    :class:`Conflict` for different ones."""
+    cols = ("age", "gender", "animation_experience", "gymnastics_experience")
+    with transaction(conn):
+        old = conn.execute("SELECT * FROM demographics WHERE participant=? AND session=?",
+                           (participant, session)).fetchone()
+        if old is not None:
+            if all(old[c] == values[c] for c in cols):
+                return "duplicate"
+            raise Conflict("the demographics of this session are already stored")
+        conn.execute("INSERT INTO demographics VALUES (?,?,?,?,?,?,?)",
+                     (participant, session, *(values[c] for c in cols), utc_now()))
+    return "stored"
+
+
+def has_demographics(conn, participant: str, session: int) -> bool:
+    return conn.execute("SELECT 1 FROM demographics WHERE participant=? AND session=?",
+                        (participant, session)).fetchone() is not None
+
+
+# --- reading for the experimenter -----------------------------------------------------------
+
+def status_rows(conn) -> list[dict]:
+    """One dict per session: participant, session, source, answered, total,
+    started, last_answer, finished."""
+    rows = conn.execute("""
+        SELECT s.participant, s.session, s.source, s.n_trials AS total, s.started, s.finished,
+               COUNT(r.trial) AS answered, MAX(r.timestamp) AS last_answer
+        FROM sessions s LEFT JOIN responses r
+             ON r.participant = s.participant AND r.session = s.session
+        GROUP BY s.participant, s.session
+        ORDER BY s.participant, s.session""").fetchall()
+    return [dict(r) for r in rows]
+
+
+def response_rows(conn, *, include_simulated: bool = True) -> list[dict]:
+    """Every answered trial joined with its trial row, ordered by participant,
+    session, trial."""
+    rows = conn.execute(f"""
+        SELECT t.participant, t.session, t.trial, t.stimulus, t.group_name, t.level, t.repetition,
+               r.response, r.rt_ms, r.shown_ms, r.timestamp, t.clip, t.kind, r.late_frames,
+               r.replays, r.input, s.source
+        FROM responses r
+        JOIN trials t ON t.participant = r.participant AND t.session = r.session AND t.trial = r.trial
+        JOIN sessions s ON s.participant = r.participant AND s.session = r.session
+        {"" if include_simulated else "WHERE s.source = 'browser'"}
+        ORDER BY t.participant, t.session, t.trial""").fetchall()
+    return [dict(r) for r in rows]
+
+
+def participant_rows(conn, *, include_simulated: bool = True) -> list[dict]:
+    rows = conn.execute(f"""
+        SELECT s.participant, s.session, s.source, d.age, d.gender, d.animation_experience,
+               d.gymnastics_experience, s.started, s.finished, s.n_trials,
+               (SELECT COUNT(*) FROM responses r WHERE r.participant = s.participant
+                    AND r.session = s.session) AS answered
+        FROM sessions s LEFT JOIN demographics d
+             ON d.participant = s.participant AND d.session = s.session
+        {"" if include_simulated else "WHERE s.source = 'browser'"}
+        ORDER BY s.participant, s.session""").fetchall()
+    return [dict(r) for r in rows]

@@ -1,0 +1,179 @@
+"""Trial order and timeline of a session (study.order, study.timeline)."""
+import collections
+import hashlib
+import json
+import os
+import re
+import subprocess
+import sys
+
+from stimuli.design import PAPER_DESIGN, parse_design
+from stimuli.stimset import plan
+from study.order import participant_seed, reference_stimuli, trial_order
+from study.timeline import build_timeline
+
+
+def paper_manifest():
+    d = parse_design(PAPER_DESIGN)
+    rows = []
+    for name, spec, group, level in plan(d):
+        rows.append({"stimulus": name, "clip": spec.name,
+                     "group": group.name if group else "reference",
+                     "kind": group.kind if group else "reference", "level": f"{level:.6f}"})
+    return d, rows
+
+
+def test_participant_seed_is_sha256_of_design_seed_and_id():
+    expect = int.from_bytes(hashlib.sha256(b"20070803:P01").digest()[:8], "big")
+    assert participant_seed(20070803, "P01") == expect
+    assert participant_seed(20070803, "P01", 2) != expect
+    assert participant_seed(20070803, "P02") != expect
+
+
+def test_paper_design_order_blocks_groups_and_levels():
+    d, rows = paper_manifest()
+    trials = trial_order(d, rows, "P01")
+    tests = [r for r in rows if r["group"] != "reference"]
+    assert len(tests) == 2 * 5 * 5
+    assert len(trials) == d.repetitions * len(tests) == 100
+    assert [t.trial for t in trials] == list(range(1, 101))
+    G = len(d.groups)
+    for rep in (1, 2):
+        block = [t for t in trials if t.repetition == rep]
+        # every stimulus of every non-reference group exactly once per block
+        assert collections.Counter(t.stimulus for t in block) == collections.Counter(
+            r["stimulus"] for r in tests)
+        # groups interleaved: every consecutive round of G trials holds each group once
+        for k in range(0, len(block), G):
+            assert sorted(t.group for t in block[k:k + G]) == sorted(g.name for g in d.groups)
+    # level-0 originals are trials too, in every group
+    assert {(t.group, t.level) for t in trials if t.level == 0} == {(g.name, 0.0) for g in d.groups}
+    # the trials are rows of the manifest, with its condition
+    by = {r["stimulus"]: r for r in rows}
+    for t in trials:
+        assert (t.group, t.clip, t.level) == (by[t.stimulus]["group"], by[t.stimulus]["clip"],
+                                              float(by[t.stimulus]["level"]))
+
+
+def test_order_is_random_within_group_and_seeded_per_participant():
+    d, rows = paper_manifest()
+    a1, a2 = trial_order(d, rows, "P01"), trial_order(d, rows, "P01")
+    b = trial_order(d, rows, "P02")
+    assert a1 == a2
+    assert [t.stimulus for t in a1] != [t.stimulus for t in b]
+    # the two repetition blocks differ, and within a group the order is not the manifest's
+    block1 = [t.stimulus for t in a1 if t.repetition == 1]
+    block2 = [t.stimulus for t in a1 if t.repetition == 2]
+    assert block1 != block2
+    manifest_order = [r["stimulus"] for r in rows if r["group"] == "smooth-increase"]
+    within = [s for s in block1 if "smooth-increase" in s]
+    assert sorted(within) == sorted(manifest_order) and within != manifest_order
+    # over many participants every group leads a block about equally often
+    firsts = collections.Counter(trial_order(d, rows, f"P{i:03d}")[0].group for i in range(200))
+    assert len(firsts) == 5 and min(firsts.values()) > 20
+
+
+def test_order_does_not_depend_on_python_hash_seed():
+    code = ("import types; from study.order import trial_order;"
+            "d = types.SimpleNamespace(seed=5, repetitions=2, groups=[]);"
+            "r = [{'stimulus': f'c_{g}_{l}', 'clip': 'c', 'group': g, 'kind': '', 'level': l}"
+            "     for g in 'abcde' for l in (0, 10, 20, 30)];"
+            "print(','.join(t.stimulus for t in trial_order(d, r, 'P01')))")
+    outs = set()
+    for seed in ("1", "2"):
+        env = dict(os.environ, PYTHONHASHSEED=seed)
+        out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                             cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                             check=True)
+        outs.add(out.stdout)
+    assert len(outs) == 1
+
+
+def test_uneven_groups_are_all_used():
+    d, rows = paper_manifest()
+    rows = [r for r in rows if not (r["group"] == "takeoff-increase" and r["level"] != "0.000000")]
+    trials = trial_order(d, rows, "X")
+    assert len(trials) == 2 * (len(rows) - 2)
+    assert collections.Counter(t.group for t in trials)["takeoff-increase"] == 2 * 2
+
+
+class _FakeSession:
+    def __init__(self, design, rows, n=None, participant="P01"):
+        from study.session import Study
+        self.study = Study(None, design, rows, "x", {r["stimulus"]: r for r in rows})
+        self.trials = trial_order(design, rows, participant)[:n]
+        self.participant, self.session = participant, 1
+
+    @property
+    def n_trials(self):
+        return len(self.trials)
+
+
+def _state(answered=0, demographics=False):
+    return {"answered": answered, "demographics": demographics}
+
+
+def test_timeline_screens_and_breaks():
+    d, rows = paper_manifest()
+    s = _FakeSession(d, rows)
+    tl = build_timeline(s, _state())
+    json.dumps(tl)                           # plain data
+    types = [x["type"] for x in tl["timeline"]]
+    assert types[:3] == ["instructions", "demographics", "examples"]
+    assert types[-1] == "end" and tl["start"] == 0
+    trials = [x for x in tl["timeline"] if x["type"] == "trial"]
+    assert [x["trial"] for x in trials] == list(range(1, 101))
+    assert [x["stimulus"] for x in trials] == [t.stimulus for t in s.trials]
+    assert all(x["video"] == f"/stimuli/{x['stimulus']}.mp4" and x["replay"] is False for x in trials)
+    # a break after every 40 trials (not after the last)
+    i_breaks = [i for i, x in enumerate(tl["timeline"]) if x["type"] == "break"]
+    assert [tl["timeline"][i - 1]["trial"] for i in i_breaks] == [40, 80]
+    ex = tl["timeline"][2]
+    assert [e["video"] for e in ex["stimuli"]] == [f"/stimuli/{r['stimulus']}.mp4"
+                                                   for r in reference_stimuli(rows)]
+    assert all("correct" in e["label"].lower() for e in ex["stimuli"])
+    assert tl["keys"] == {"correct": "f", "incorrect": "j"}
+
+
+def test_instructions_follow_the_paper_and_reveal_nothing():
+    d, rows = paper_manifest()
+    tl = build_timeline(_FakeSession(d, rows), _state())
+    text = " ".join(tl["timeline"][0]["paragraphs"]).lower()
+    assert "some of these motions are physically correct and some of them are not" in text
+    assert "correct" in text and "incorrect" in text and "examples of physically correct" in text
+    # not how many, not which kind
+    assert not re.search(r"\d", text.replace("f = correct", "").replace("j = incorrect", ""))
+    for word in ("momentum", "angle", "take-off", "takeoff", "half", "percent", "%", "speed",
+                 "rotation", "how many", "error"):
+        assert word not in text, word
+
+
+def test_timeline_resume_points():
+    d, rows = paper_manifest()
+    s = _FakeSession(d, rows)
+    tl = build_timeline(s, _state(demographics=True))
+    assert tl["timeline"][tl["start"]]["type"] == "examples"
+    tl = build_timeline(s, _state(answered=41, demographics=True))
+    first = tl["timeline"][tl["start"]]
+    assert first["id"] == "resume" and "41" in " ".join(first["paragraphs"])
+    nxt = tl["timeline"][tl["start"] + 1]
+    assert nxt["type"] == "trial" and nxt["trial"] == 42
+    tl = build_timeline(s, _state(answered=100, demographics=True))
+    assert tl["timeline"][tl["start"]]["type"] == "end"
+
+
+def test_replay_flag_comes_from_the_design():
+    text = PAPER_DESIGN.replace("replay = false", "replay = true")
+    d = parse_design(text)
+    _, rows = paper_manifest()
+    tl = build_timeline(_FakeSession(d, rows, n=5), _state())
+    assert all(x["replay"] is True for x in tl["timeline"] if x["type"] == "trial")
+
+
+def test_no_motion_twice_in_a_row():
+    d = parse_design(PAPER_DESIGN.replace("repetitions = 2", "repetitions = 4"))
+    rows = [{"stimulus": f"c_{g}_{lv}", "clip": "c", "group": g, "kind": "", "level": lv}
+            for g in ("smooth-increase", "abrupt-decrease") for lv in (0, 25)]
+    for i in range(300):
+        t = trial_order(d, rows, f"P{i}")
+        assert all(a.stimulus != b.stimulus for a, b in zip(t, t[1:]))
