@@ -1,0 +1,31 @@
+"""flipstudy analysis: ratings, d′, statistics, tables and figures from response tables.
+
+Reads response tables (the long format of DESIGN.md) with pandas; imports
+nothing of ``study``, ``render`` or ``stimuli``.
+
+>>> import analysis
+>>> round(float(analysis.dprime(59, 100, 28, 100)), 2)     # the paper's 41 % vs 72 % rated correct
+0.81
+
+Entry points:
+
+* :func:`analyze` — the whole pipeline (tables, GEE, psychometric fits, figures);
+* :func:`dprime`, :func:`criterion`, :func:`rates`, :func:`corrected_rate` —
+  signal detection on counts (vectorised);
+* :func:`load_responses` — read and check a response table;
+* :func:`summarize`, :func:`gee_levels`, :func:`fit_psychometric` — the steps;
+* :mod:`analysis.simulate` — simulated panels (the paper's, SDT observers).
+"""
+from .core import count_cells, participant_dprimes, summarize
+from .io import NeedsExport, ResponsesError, load_responses
+from .pipeline import Result, analyze
+from .sdt import CORRECTIONS, corrected_rate, criterion, dprime, rates, z
+from .stats import (PsychometricFit, detection_threshold, fit_psychometric, gee_levels,
+                    psychometric_curve)
+from .tables import fmt_cell, fmt_dprime, paper_layout, to_latex, to_markdown
+
+__all__ = ["analyze", "Result", "dprime", "criterion", "rates", "corrected_rate", "z", "CORRECTIONS",
+           "load_responses", "ResponsesError", "NeedsExport", "summarize", "count_cells",
+           "participant_dprimes", "gee_levels", "fit_psychometric", "PsychometricFit",
+           "detection_threshold", "psychometric_curve", "paper_layout", "to_markdown", "to_latex",
+           "fmt_cell", "fmt_dprime"]

@@ -1,0 +1,116 @@
+"""``flipstudy analyze``: wired into the main CLI with :func:`add_commands`.
+
+    from analysis.cli import add_commands
+    add_commands(subparsers)          # adds `analyze`, func=handler
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+
+def add_commands(subparsers) -> None:
+    """Add the ``analyze`` subcommand to an argparse subparsers object."""
+    p = subparsers.add_parser(
+        "analyze", help="ratings, d′, statistics, tables and figures from a response table",
+        description=(
+            "Analyse a response table (one row per trial: participant, group, level, response, ...). "
+            "Per error group and level: mean rating (% judged correct), d′ = z(P(incorrect | modified)) "
+            "− z(P(incorrect | original)) pooled and per participant with bootstrap CIs, the criterion, "
+            "a GEE test of each level against its original, a psychometric function with a detection "
+            "threshold per group; tables (CSV, Markdown, LaTeX) and figures (PDF + PNG)."),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=("examples:\n"
+                "  flipstudy analyze responses.csv --out results/\n"
+                "  flipstudy analyze STUDY_DIR            # reads STUDY_DIR/responses.csv\n"
+                "  flipstudy analyze responses.csv --out results/ --correction 1/2N --json\n"
+                "  flipstudy analyze responses.csv --out results/ --image ghost_orig.png "
+                "--image 'ghost strongest error=ghost_50.png'"))
+    p.add_argument("responses", metavar="RESPONSES",
+                   help="responses CSV, or a study folder holding responses.csv")
+    p.add_argument("--out", metavar="DIR", default=None,
+                   help="output folder (default: RESPONSES' folder/analysis)")
+    p.add_argument("--correction", default="loglinear",
+                   help="rates of 0 or 1: loglinear (default; Hautus 1995), loglinear-all, or 1/2N")
+    p.add_argument("--seed", type=int, default=0, help="seed of every random draw (default 0)")
+    p.add_argument("--n-boot", type=int, default=2000, help="bootstrap resamples (default 2000)")
+    p.add_argument("--ci", type=float, default=0.95, help="confidence level (default 0.95)")
+    p.add_argument("--psychometric", choices=("psignifit", "mle", "none"), default="psignifit",
+                   help="psychometric fit: psignifit (Bayesian, default), mle (maximum likelihood "
+                        "with parametric bootstrap) or none")
+    p.add_argument("--no-gee", action="store_true", help="skip the GEE tests")
+    p.add_argument("--no-figures", action="store_true", help="tables only")
+    p.add_argument("--image", action="append", default=[], metavar="[LABEL=]PNG",
+                   help="an image for the figure sheet (repeatable; without labels the order is: ghost "
+                        "original, ghost strongest error, trail original, trail strongest error)")
+    p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    p.set_defaults(func=handler)
+
+
+def _images(specs):
+    from .pipeline import IMAGE_SLOTS
+    out = {}
+    for i, s in enumerate(specs):
+        if "=" in s and not Path(s).exists():
+            label, path = s.split("=", 1)
+        else:
+            label, path = (IMAGE_SLOTS[i] if i < len(IMAGE_SLOTS) else Path(s).stem), s
+        out[label.strip()] = Path(path)
+    return out
+
+
+def handler(args) -> int:
+    """Run ``flipstudy analyze``; returns the exit code."""
+    from .io import NeedsExport, ResponsesError, resolve_responses_path
+    from .pipeline import analyze
+    try:
+        src = resolve_responses_path(args.responses)
+        out = Path(args.out) if args.out else src.parent / "analysis"
+        res = analyze(src, out, correction=args.correction, images=_images(args.image) or None,
+                      seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
+                      gee=not args.no_gee, figures=not args.no_figures)
+    except NeedsExport as e:
+        print(f"flipstudy analyze: {e}", file=sys.stderr)
+        return 2
+    except (ResponsesError, ValueError, OSError) as e:
+        print(f"flipstudy analyze: error: {e}", file=sys.stderr)
+        return 1
+    if args.json:
+        print(json.dumps(res.to_dict(), indent=2, ensure_ascii=False))
+        return 0
+    s = res.settings
+    print(f"analysed {s['n_trials']} trials of {s['n_participants']} participants "
+          f"({len(s['groups'])} groups); correction for rates of 0 or 1: {s['correction']}")
+    print()
+    from .tables import to_markdown
+    print(to_markdown(res.table))
+    if len(res.thresholds):
+        print("detection thresholds (P(incorrect) = (1 + γ)/2):")
+        for _, t in res.thresholds.iterrows():
+            if t["reached"]:
+                hi = "open" if t["threshold_ci_high"] != t["threshold_ci_high"] else f"{t['threshold_ci_high']:.1f}"
+                print(f"  {t['group']:20s} {t['threshold']:5.1f} %  [{t['threshold_ci_low']:.1f}, {hi}]")
+            else:
+                print(f"  {t['group']:20s} not reached")
+    notable = [n for n in res.notes if "not found" in n or "no images" in n or "failed" in n]
+    for n in notable:
+        print(f"note: {n}")
+    print(f"\nwrote {len(res.files)} files to {out}/ (table.csv, table_paper.md/.tex, figures, notes.md)")
+    return 0
+
+
+def main(argv=None) -> int:
+    """Stand-alone entry (``python -m analysis.cli``) until the main CLI wires it."""
+    ap = argparse.ArgumentParser(prog="flipstudy")
+    add_commands(ap.add_subparsers(dest="command"))
+    args = ap.parse_args(argv)
+    if not getattr(args, "func", None):
+        ap.print_help()
+        return 2
+    return args.func(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

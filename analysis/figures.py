@@ -1,0 +1,332 @@
+"""Publication figures: ratings, d′, psychometric curves, and a figure sheet.
+
+Every figure is written as PDF (vector, TrueType fonts embedded, no creation
+date so that the same data give the same bytes) and PNG.  Colours are the
+Okabe–Ito palette (distinguishable with the common colour-vision
+deficiencies), and each group also has its own marker, so the figures read in
+greyscale too.  No pyplot: figures are ``matplotlib.figure.Figure`` objects,
+so nothing here touches global state or needs a display.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+from pathlib import Path
+
+import matplotlib as mpl
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from .io import group_order
+from .stats import PsychometricFit
+
+#: Okabe & Ito (2008), "Color Universal Design"; yellow last (weak on white)
+OKABE_ITO = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442"]
+MARKERS = ["o", "s", "^", "v", "D", "P", "X", "h"]
+STYLE = {
+    "font.size": 9, "axes.titlesize": 9.5, "axes.labelsize": 9, "xtick.labelsize": 8,
+    "ytick.labelsize": 8, "legend.fontsize": 8, "axes.spines.top": False, "axes.spines.right": False,
+    "axes.linewidth": 0.8, "lines.linewidth": 1.4, "lines.markersize": 5, "errorbar.capsize": 2.5,
+    "axes.grid": True, "grid.color": "#e6e6e6", "grid.linewidth": 0.6, "axes.axisbelow": True,
+    "pdf.fonttype": 42, "ps.fonttype": 42, "savefig.bbox": "tight", "savefig.pad_inches": 0.03,
+    "figure.dpi": 100,
+}
+PNG_DPI = 200
+
+
+@contextmanager
+def style():
+    with mpl.rc_context(STYLE):
+        yield
+
+
+def group_styles(groups) -> dict:
+    """group → (colour, marker), stable in table order."""
+    return {g: (OKABE_ITO[i % len(OKABE_ITO)], MARKERS[i % len(MARKERS)]) for i, g in enumerate(groups)}
+
+
+def save(fig: Figure, stem: Path, dpi: int = PNG_DPI) -> list[Path]:
+    """``stem.pdf`` and ``stem.png``; returns both paths."""
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    pdf, png = stem.with_suffix(".pdf"), stem.with_suffix(".png")
+    with style():                         # savefig reads rcParams (font embedding, bbox)
+        fig.savefig(pdf, metadata={"CreationDate": None, "Creator": "flipstudy analysis", "Producer": None})
+        fig.savefig(png, dpi=dpi, metadata={"Software": "flipstudy analysis"})
+    return [pdf, png]
+
+
+def _dodge(n: int, step: float) -> np.ndarray:
+    return (np.arange(n) - (n - 1) / 2) * step
+
+
+def _level_axis(ax, levels):
+    ticks = sorted(set(float(v) for v in levels))
+    ax.set_xticks(ticks)
+    ax.set_xticklabels([f"{t:g}" for t in ticks])
+    span = (max(ticks) - min(ticks)) or 1.0
+    ax.set_xlim(min(ticks) - 0.06 * span, max(ticks) + 0.06 * span)
+
+
+def _panel_grid(n: int):
+    ncols = n if n <= 3 else 3
+    nrows = int(np.ceil(n / ncols))
+    return nrows, ncols
+
+
+def ratings_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
+    """Mean rating (% judged correct) against the error level with bootstrap
+    confidence intervals over participants: one panel per block of groups that
+    share their levels (the paper's angular-momentum and take-off blocks), one
+    line per group."""
+    from .tables import blocks
+    groups = group_order(table["group"].unique())
+    sty = group_styles(groups)
+    bl = blocks(table)
+    widths = [max(len(g), 1.0) + 1.2 for _, g in bl]
+    with style():
+        fig = Figure(figsize=(min(2.0 + 1.25 * sum(widths), 7.2), 3.4), layout="constrained")
+        axes = fig.subplots(1, len(bl), sharey=True, squeeze=False, width_ratios=widths)[0]
+        for ax, (levels, gs) in zip(axes, bl):
+            span = (max(levels) - min(levels)) or 1.0
+            dx = _dodge(len(gs), 0.022 * span)
+            for i, g in enumerate(gs):
+                sub = table[table["group"] == g].sort_values("level")
+                c, m = sty[g]
+                x = sub["level"].to_numpy() + dx[i]
+                y = sub["rating_pct"].to_numpy()
+                err = np.vstack([y - sub["rating_ci_low"].to_numpy(), sub["rating_ci_high"].to_numpy() - y])
+                ax.errorbar(x, y, yerr=err, color=c, marker=m, ms=5.5, mfc=c, mec="white", mew=0.6,
+                            lw=1.5, elinewidth=0.9, label=g, zorder=3)
+            ax.axhline(50, color="0.55", lw=0.8, ls=":", zorder=1)
+            _level_axis(ax, levels)
+            ax.set_xlabel("error level (%)")
+        axes[0].set_ylim(0, 100)
+        axes[0].set_yticks(range(0, 101, 20))
+        axes[0].set_ylabel("rated correct (%)")
+        handles, labels = [], []
+        for ax in axes:
+            h, lab = ax.get_legend_handles_labels()
+            handles += h
+            labels += lab
+        fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 3), frameon=False,
+                   handlelength=2.2, columnspacing=1.6)
+        fig.suptitle(f"points: pooled rating; bars: {ci_label} (bootstrap over participants)",
+                     fontsize=7.5, color="0.35", x=0.99, ha="right")
+    return fig
+
+
+def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
+    """d′ against the error level, one panel per group: the pooled d′ (filled,
+    as in the paper) and the mean of the participants' d′ (open), each with its
+    bootstrap interval over participants."""
+    groups = group_order(table["group"].unique())
+    sty = group_styles(groups)
+    nrows, ncols = _panel_grid(len(groups))
+    finite = table[["dprime", "dprime_pooled_ci_low", "dprime_pooled_ci_high", "dprime_ci_low",
+                    "dprime_ci_high"]].to_numpy(float)
+    finite = finite[np.isfinite(finite)]
+    lo = min(-0.5, float(finite.min()) - 0.1) if finite.size else -0.5
+    hi = max(1.0, float(finite.max()) + 0.1) if finite.size else 1.0
+    with style():
+        fig = Figure(figsize=(2.35 * ncols + 0.3, 2.15 * nrows + 0.2), layout="constrained")
+        axes = fig.subplots(nrows, ncols, sharey=True, squeeze=False)
+        for i, g in enumerate(groups):
+            ax = axes.flat[i]
+            sub = table[table["group"] == g].sort_values("level")
+            c, m = sty[g]
+            x = sub["level"].to_numpy(float)
+            step = 0.025 * ((x.max() - x.min()) or 1.0)
+            d = sub["dprime"].to_numpy(float)
+            ax.axhline(0, color="0.45", lw=0.8, ls="--", zorder=1)
+            ax.errorbar(x - step, d, yerr=np.vstack([d - sub["dprime_pooled_ci_low"], sub["dprime_pooled_ci_high"] - d]),
+                        color=c, marker=m, ms=5.5, mec="white", mew=0.6, lw=1.4, elinewidth=0.9,
+                        label="pooled d′", zorder=3)
+            dm = sub["dprime_mean_participants"].to_numpy(float)
+            ax.errorbar(x + step, dm, yerr=np.vstack([dm - sub["dprime_ci_low"], sub["dprime_ci_high"] - dm]),
+                        color=c, marker=m, ms=5, mfc="white", mec=c, mew=1.1, lw=0, elinewidth=0.9,
+                        label="mean of participants' d′", zorder=3)
+            ax.set_title(g, color=c, fontweight="bold")
+            _level_axis(ax, x)
+            ax.set_ylim(lo, hi)
+            if i % ncols == 0:
+                ax.set_ylabel("sensitivity d′")
+            if i >= len(groups) - ncols:
+                ax.set_xlabel("error level (%)")
+        for j in range(len(groups), nrows * ncols):
+            axes.flat[j].set_visible(False)
+        handles = [mpl.lines.Line2D([], [], color="0.2", marker="o", ls="-", mec="white", label="pooled d′ (as in the paper)"),
+                   mpl.lines.Line2D([], [], color="0.2", marker="o", ls="none", mfc="white",
+                                    label="mean of participants' d′")]
+        where = axes.flat[len(groups)] if len(groups) < nrows * ncols else None
+        if where is not None:
+            where.set_visible(True)
+            where.axis("off")
+            where.legend(handles=handles, loc="center", frameon=False,
+                         title=f"error bars: {ci_label},\nbootstrap over participants", title_fontsize=8)
+        else:
+            fig.legend(handles=handles, loc="outside lower center", ncols=2, frameon=False)
+    return fig
+
+
+def _point_intervals(fit: PsychometricFit, table: pd.DataFrame | None):
+    """P(incorrect) per magnitude with an interval: the table's bootstrap CI when
+    the magnitude is a single level of the table, else a Wilson 95 % interval."""
+    p = fit.k / fit.n
+    lo, hi = np.empty_like(p), np.empty_like(p)
+    z = 1.959963984540054
+    sub = None if table is None else table[table["group"] == fit.group]
+    for i, x in enumerate(fit.x):
+        rows = None if sub is None else sub[sub["level"].abs() == x]
+        if rows is not None and len(rows) == 1 and np.isfinite(rows["rating_ci_low"].iloc[0]):
+            lo[i] = 1 - rows["rating_ci_high"].iloc[0] / 100
+            hi[i] = 1 - rows["rating_ci_low"].iloc[0] / 100
+        else:
+            n = fit.n[i]
+            c = (p[i] + z * z / (2 * n)) / (1 + z * z / n)
+            h = z * np.sqrt(p[i] * (1 - p[i]) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+            lo[i], hi[i] = c - h, c + h
+    return p, lo, hi
+
+
+def _draw_fit(ax, fit: PsychometricFit, colour, marker, table=None, annotate=True, label=None):
+    xmax = float(fit.x.max())
+    xs = np.linspace(0, xmax * 1.04, 300)
+    ax.plot(xs, fit.curve(xs), color=colour, lw=1.6, zorder=2, label=label)
+    if not annotate:                  # the overview: points only, thresholds as open diamonds
+        ax.plot(fit.x, fit.k / fit.n, color=colour, marker=marker, ls="none", ms=4.5, mec="white",
+                mew=0.5, zorder=3)
+        if fit.reached:
+            ax.plot([fit.threshold], [0.5 * (1 + fit.params["gamma"])], marker="D", ms=7, mfc="white",
+                    mec=colour, mew=1.6, ls="none", zorder=4)
+        return
+    p, lo, hi = _point_intervals(fit, table)
+    ax.errorbar(fit.x, p, yerr=np.vstack([p - lo, hi - p]), color=colour, marker=marker, ls="none",
+                ms=5, mec="white", mew=0.6, elinewidth=0.9, zorder=3)
+    g = fit.params["gamma"]
+    ax.axhline(g, color="0.6", lw=0.8, ls=":", zorder=1)
+    pt = 0.5 * (1 + g)
+    if fit.reached:
+        ax.plot([fit.threshold, fit.threshold], [0, pt], color=colour, lw=0.9, ls="--", zorder=2)
+        lo_, hi_ = fit.ci_low, fit.ci_high
+        hi_draw = hi_ if np.isfinite(hi_) else xmax * 1.04
+        ax.plot([max(lo_, 0), min(hi_draw, xmax * 1.04)], [pt, pt], color=colour, lw=2.6, alpha=0.35,
+                solid_capstyle="butt", zorder=2)
+        ax.plot([fit.threshold], [pt], marker="|", color=colour, ms=9, mew=1.6, zorder=4)
+        txt = f"x* = {fit.threshold:.0f} %"
+        txt += (f"\n[{fit.ci_low:.0f}, {fit.ci_high:.0f}]" if np.isfinite(fit.ci_high)
+                else f"\n[{fit.ci_low:.0f}, open]")
+    else:
+        txt = "threshold\nnot reached"
+        if np.isfinite(fit.threshold_extrapolated) and fit.threshold_extrapolated < 10 * xmax:
+            txt += f"\n(≈ {fit.threshold_extrapolated:.0f} % extrapolated)"
+    ax.text(0.04, 0.96, txt, transform=ax.transAxes, va="top", ha="left", fontsize=7.8, color="0.15")
+
+
+def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None = None,
+                        method_note: str = "") -> Figure:
+    """One panel per group: P(judged incorrect) against |level| with the fitted
+    function, the base rate γ (dotted), the detection threshold x* (where
+    P = (1 + γ)/2; dashed) and its interval (shaded bar)."""
+    groups = [f.group for f in fits]
+    sty = group_styles(group_order(table["group"].unique()) if table is not None else groups)
+    nrows, ncols = _panel_grid(max(len(fits), 1))
+    with style():
+        fig = Figure(figsize=(2.35 * ncols + 0.3, 2.15 * nrows + 0.2), layout="constrained")
+        axes = fig.subplots(nrows, ncols, sharey=True, squeeze=False)
+        for i, f in enumerate(fits):
+            ax = axes.flat[i]
+            c, m = sty.get(f.group, (OKABE_ITO[0], "o"))
+            _draw_fit(ax, f, c, m, table)
+            ax.set_title(f.group, color=c, fontweight="bold")
+            _level_axis(ax, np.r_[0.0, f.x])
+            ax.set_ylim(0, 1)
+            if i % ncols == 0:
+                ax.set_ylabel("P(judged incorrect)")
+            if i >= len(fits) - ncols:
+                ax.set_xlabel("error magnitude |level| (%)")
+        for j in range(len(fits), nrows * ncols):
+            axes.flat[j].set_visible(False)
+        if len(fits) < nrows * ncols:
+            ax = axes.flat[len(fits)]
+            ax.set_visible(True)
+            ax.axis("off")
+            handles = [mpl.lines.Line2D([], [], color="0.2", lw=1.6, label="fitted function"),
+                       mpl.lines.Line2D([], [], color="0.2", marker="o", ls="none", label="data ± 95 % CI"),
+                       mpl.lines.Line2D([], [], color="0.6", ls=":", label="base rate γ"),
+                       mpl.lines.Line2D([], [], color="0.2", ls="--", lw=0.9,
+                                        label="threshold x*: P = (1 + γ)/2"),
+                       mpl.lines.Line2D([], [], color="0.2", lw=2.6, alpha=0.35, label="interval of x*")]
+            ax.legend(handles=handles, loc="center", frameon=False,
+                      title=method_note or None, title_fontsize=7.5)
+        elif not fits:
+            axes.flat[0].text(0.5, 0.5, "no psychometric fits", ha="center", va="center",
+                              transform=axes.flat[0].transAxes)
+    return fig
+
+
+def _load_image(path: Path, max_px: int = 900):
+    from PIL import Image
+    with Image.open(path) as im:
+        im = im.convert("RGBA")
+        im.thumbnail((max_px, max_px))
+        return np.asarray(im)
+
+
+def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict | None) -> tuple[Figure, list[str]]:
+    """A sheet: the images (ghost and marker-trail composites of an original and
+    its strongest error) on the left, the psychometric curves of all groups on
+    the right.  Missing image files leave their slot out; the returned notes say
+    which.  Returns (figure, notes)."""
+    notes = []
+    present = []
+    for label, p in (images or {}).items():
+        p = Path(p)
+        if p.is_file():
+            try:
+                present.append((label, _load_image(p)))
+            except Exception as e:  # noqa: BLE001
+                notes.append(f"figure sheet: image {p} could not be read ({type(e).__name__}: {e}); left out")
+        else:
+            notes.append(f"figure sheet: image {p} ({label}) not found; left out")
+    if not images:
+        notes.append("figure sheet: no images given (ghost / marker-trail composites); "
+                     "the sheet shows the curves only")
+    groups = group_order(table["group"].unique())
+    sty = group_styles(groups)
+    with style():
+        if present:
+            ncol_img = 2 if len(present) > 1 else 1
+            nrow_img = int(np.ceil(len(present) / ncol_img))
+            fig = Figure(figsize=(3.0 * ncol_img + 4.2, max(3.6, 2.3 * nrow_img)), layout="constrained")
+            sf_img, sf_curve = fig.subfigures(1, 2, width_ratios=[3.0 * ncol_img, 4.2])
+            axes = sf_img.subplots(nrow_img, ncol_img, squeeze=False)
+            for ax in axes.flat:
+                ax.axis("off")
+            for ax, (label, img) in zip(axes.flat, present):
+                ax.imshow(img, interpolation="antialiased")
+                ax.set_title(label, fontsize=8.5)
+            ax_c = sf_curve.add_subplot()
+        else:
+            fig = Figure(figsize=(5.2, 3.8), layout="constrained")
+            ax_c = fig.add_subplot()
+        for f in fits:
+            c, m = sty.get(f.group, (OKABE_ITO[0], "o"))
+            _draw_fit(ax_c, f, c, m, table, annotate=False, label=f.group)
+        ax_c.set_ylim(0, 1)
+        ax_c.set_xlabel("error magnitude |level| (%)")
+        ax_c.set_ylabel("P(judged incorrect)")
+        ax_c.set_title("psychometric functions (◇ threshold x*: P = (1 + γ)/2)", fontsize=9)
+        if fits:
+            _level_axis(ax_c, np.r_[0.0, np.concatenate([f.x for f in fits])])
+            ax_c.legend(loc="upper left", frameon=False, fontsize=7.5)
+        absent = [f"{label} ({Path(p).name})" for label, p in (images or {}).items()
+                  if label not in {lab for lab, _ in present}]
+        if not present:
+            fig.suptitle("images not provided (" + (f"not found: {'; '.join(absent)}" if absent
+                                                    else "no paths given") + "): curves only",
+                         fontsize=7.5, color="0.4", x=0.01, ha="left")
+        elif absent:
+            fig.suptitle("image(s) not found, left out: " + "; ".join(absent),
+                         fontsize=7.5, color="0.4", x=0.01, ha="left")
+    return fig, notes

@@ -1,0 +1,114 @@
+"""Reading and checking response tables (the long format of DESIGN.md)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+REQUIRED = ("participant", "group", "level", "response")
+DESIGN_COLUMNS = ("participant", "session", "trial", "stimulus", "group", "level", "repetition",
+                  "response", "rt_ms", "shown_ms", "timestamp")
+#: display order of the default design's groups; other names follow in order of appearance
+DEFAULT_GROUP_ORDER = ("smooth-increase", "smooth-decrease", "abrupt-increase",
+                       "abrupt-decrease", "takeoff-increase")
+IGNORED_GROUPS = ("reference",)
+EXPORT_HINT = "flipstudy export {d} --out {d}/responses.csv"
+
+
+class ResponsesError(ValueError):
+    """A response table that cannot be analysed; the message says where and what was expected."""
+
+
+class NeedsExport(ResponsesError):
+    """A study folder without ``responses.csv``."""
+
+
+def resolve_responses_path(path: str | Path) -> Path:
+    """A responses CSV, or a study folder holding ``responses.csv``."""
+    p = Path(path)
+    if p.is_dir():
+        csv = p / "responses.csv"
+        if csv.is_file():
+            return csv
+        raise NeedsExport(
+            f"{p} is a study folder without responses.csv: run "
+            f"`{EXPORT_HINT.format(d=p)}` first, then `flipstudy analyze {p}`")
+    if not p.exists():
+        raise ResponsesError(f"{p}: no such file or folder (expected a responses CSV or a study folder)")
+    return p
+
+
+def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
+    """Read and check a response table.
+
+    ``source`` is a DataFrame, a CSV path, or a study folder (its
+    ``responses.csv``).  Returns a new DataFrame with the checked columns:
+    ``participant`` (str), ``group`` (str), ``level`` (float, nominal error in
+    percent), ``response`` (``"correct"``/``"incorrect"``), ``incorrect`` (0/1)
+    and every other column as read.  Rows of the ``reference`` group are
+    dropped.  Raises :class:`ResponsesError` naming the file, the line and what
+    was expected.
+    """
+    if isinstance(source, pd.DataFrame):
+        df = source.copy()
+        where = name or "responses table"
+        line_offset = None
+    else:
+        path = resolve_responses_path(source)
+        where = str(path)
+        try:
+            df = pd.read_csv(path, dtype={"participant": str, "group": str, "response": str,
+                                          "stimulus": str, "session": str})
+        except pd.errors.EmptyDataError:
+            raise ResponsesError(f"{where}: the file is empty (expected a header line with "
+                                 f"{', '.join(DESIGN_COLUMNS)})") from None
+        except pd.errors.ParserError as e:
+            raise ResponsesError(f"{where}: not a readable CSV ({e})") from None
+        line_offset = 2                      # header is line 1
+
+    def line(i) -> str:
+        return f"line {i + line_offset}" if line_offset else f"row {i}"
+
+    missing = [c for c in REQUIRED if c not in df.columns]
+    if missing:
+        raise ResponsesError(f"{where}: missing column(s) {', '.join(missing)}; a response table "
+                             f"needs at least {', '.join(REQUIRED)} (DESIGN.md: {', '.join(DESIGN_COLUMNS)})")
+    df = df.reset_index(drop=True)
+    for col in ("participant", "group", "response"):
+        bad = df[col].isna()
+        if bad.any():
+            i = int(np.flatnonzero(bad.to_numpy())[0])
+            raise ResponsesError(f"{where}: {line(i)}: empty '{col}' ({int(bad.sum())} row(s) in all)")
+    df["participant"] = df["participant"].astype(str)
+    df["group"] = df["group"].astype(str).str.strip()
+    df = df[~df["group"].str.lower().isin(IGNORED_GROUPS)]
+    lvl = pd.to_numeric(df["level"], errors="coerce")
+    bad = lvl.isna() | ~np.isfinite(lvl)
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        raise ResponsesError(f"{where}: {line(i)}: level {df.loc[i, 'level']!r} is not a number "
+                             f"(expected the nominal error in percent, 0 = original)")
+    resp = df["response"].astype(str).str.strip().str.lower()
+    bad = ~resp.isin(("correct", "incorrect"))
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        raise ResponsesError(f"{where}: {line(i)}: response {df.loc[i, 'response']!r} is neither "
+                             f"'correct' nor 'incorrect' ({int(bad.sum())} such row(s))")
+    df = df.assign(level=lvl.astype(float), response=resp,
+                   incorrect=(resp == "incorrect").astype(np.int8)).reset_index(drop=True)
+    if df.empty:
+        raise ResponsesError(f"{where}: no trials to analyse (after dropping 'reference' rows)")
+    return df
+
+
+def group_order(groups) -> list[str]:
+    """Default-design groups in the paper's order, then the others as they first appear."""
+    seen = list(dict.fromkeys(groups))
+    known = [g for g in DEFAULT_GROUP_ORDER if g in seen]
+    return known + [g for g in seen if g not in known]
+
+
+def level_order(levels) -> list[float]:
+    """Levels by magnitude, then sign (0, 10, −10, 20, …)."""
+    return sorted(set(float(x) for x in levels), key=lambda v: (abs(v), v < 0))

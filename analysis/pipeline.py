@@ -1,0 +1,218 @@
+"""``analyze``: responses in, tables, statistics and figures out."""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .core import summarize
+from .io import load_responses
+from .sdt import CORRECTION_TEXT, normalise_correction
+from .stats import fit_psychometric, gee_levels
+from .tables import paper_layout, to_latex, to_markdown
+
+#: the default figure-sheet image slots, in display order
+IMAGE_SLOTS = ("ghost original", "ghost strongest error", "trail original", "trail strongest error")
+
+PAPER_CAPTION = ("Mean ratings (percent of answers \"correct\") and sensitivity d′ (in parentheses) "
+                 "per error group and level.")
+
+
+@dataclass
+class Result:
+    """What :func:`analyze` computed and wrote.
+
+    ``table``: one row per group and level (the columns of ``table.csv``);
+    ``participants``: per-participant d′; ``gee``: each level against its
+    original; ``thresholds``: one row per group; ``fits``: the
+    :class:`~analysis.stats.PsychometricFit` objects; ``paper``: the paper's
+    layout as strings; ``files``: name → path of every file written;
+    ``notes``: sentences worth reading (corrections, thresholds not reached,
+    missing images...).
+    """
+    table: pd.DataFrame
+    participants: pd.DataFrame
+    gee: pd.DataFrame
+    thresholds: pd.DataFrame
+    fits: list
+    paper: pd.DataFrame
+    notes: list[str]
+    files: dict[str, Path] = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary (what ``flipstudy analyze --json`` prints)."""
+        def clean(v):
+            if isinstance(v, (float, np.floating)):
+                return None if not math.isfinite(float(v)) else float(v)
+            if isinstance(v, (np.integer,)):
+                return int(v)
+            if isinstance(v, (np.bool_,)):
+                return bool(v)
+            return v
+
+        def records(df):
+            return [{k: clean(v) for k, v in r.items()} for r in df.to_dict("records")]
+        return {"settings": self.settings,
+                "table": records(self.table),
+                "thresholds": records(self.thresholds),
+                "notes": list(self.notes),
+                "files": {k: str(v) for k, v in self.files.items()}}
+
+
+def _normalise_images(images) -> dict:
+    if images is None:
+        return {}
+    if isinstance(images, (str, Path)):
+        images = [images]
+    if isinstance(images, dict):
+        return {str(k): Path(v) for k, v in images.items()}
+    out = {}
+    for i, p in enumerate(images):
+        label = IMAGE_SLOTS[i] if i < len(IMAGE_SLOTS) else Path(p).stem
+        out[label] = Path(p)
+    return out
+
+
+def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=None, seed=0,
+            n_boot: int = 2000, ci: float = 0.95, psychometric: str = "psignifit",
+            gee: bool = True, figures: bool = True) -> Result:
+    """Run the whole analysis and write its outputs.
+
+    ``responses``: a DataFrame, a responses CSV or a study folder (its
+    ``responses.csv``).  ``out_dir``: where to write (None: compute only).
+    ``correction``: ``"loglinear"`` (default), ``"loglinear-all"`` or
+    ``"1/(2N)"`` (see :mod:`analysis.sdt`).  ``images``: for the figure sheet,
+    a mapping label → PNG path or a list of up to four paths (ghost original,
+    ghost strongest error, trail original, trail strongest error).
+    ``seed``: every random draw (bootstrap, posterior samples).
+    ``psychometric``: ``"psignifit"``, ``"mle"`` or ``"none"``.
+
+    Files (in ``out_dir``): ``table.csv``, ``table_paper.csv``,
+    ``table_paper.md``, ``table_paper.tex``, ``participants.csv``,
+    ``levels_vs_original.csv`` (GEE), ``thresholds.csv``, ``notes.md``,
+    ``summary.json`` and the figures ``ratings``, ``dprime``,
+    ``psychometric``, ``sheet`` (``.pdf`` + ``.png``).
+
+    >>> from analysis.simulate import paper_panel
+    >>> r = analyze(paper_panel(19, seed=1), None, psychometric="none", gee=False, n_boot=200)
+    >>> list(r.table.columns[:5])
+    ['group', 'level', 'n', 'n_incorrect', 'n_participants']
+    """
+    correction = normalise_correction(correction)
+    df = load_responses(responses)
+    table, participants, notes = summarize(df, correction=correction, n_boot=n_boot, seed=seed, ci=ci)
+
+    if gee:
+        g = gee_levels(df, ci=ci)
+        table = table.merge(g, on=["group", "level"], how="left")
+        notes.append("Each level against its group's original: GEE logistic model of P(incorrect) on "
+                     "level as a category (reference: level 0), Binomial family, exchangeable "
+                     "working correlation, participants as clusters, bias-reduced (Mancl–DeRouen) "
+                     "sandwich covariance; odds ratios with 95 % Wald CIs, p values Holm-adjusted "
+                     "over all levels of all groups in gee_p_holm.")
+        for msg in sorted(set(m for m in g["gee_note"] if m)):
+            notes.append("GEE: " + msg)
+    else:
+        g = pd.DataFrame(columns=["group", "level", "gee_or", "gee_ci_low", "gee_ci_high", "gee_p",
+                                  "gee_p_holm", "gee_note"])
+
+    fits, fit_notes = fit_psychometric(df, psychometric, ci=ci, seed=seed)
+    notes += fit_notes
+    thresholds = pd.DataFrame([f.row() for f in fits]) if fits else pd.DataFrame(
+        columns=["group", "method", "threshold", "threshold_ci_low", "threshold_ci_high", "reached"])
+    if fits:
+        used = sorted(set(f.method for f in fits))
+        notes.append(
+            "Psychometric functions: P(incorrect) = γ + (1 − γ − λ)·Φ((|level| − m)/s) per group "
+            f"({', '.join(used)}; see analysis.stats). Detection threshold x*: the error at which "
+            "P(incorrect) is halfway between the base rate γ and 1, P(x*) = (1 + γ)/2; "
+            "'not reached' when x* lies beyond the largest tested level.")
+        if "psignifit" in used:
+            notes.append("psignifit 4: Schütt, Harmeling, Macke & Wichmann (2016), Vision Research 122, "
+                         "105–123; intervals of x* are 95 % credible intervals from its posterior.")
+        for f in fits:
+            if not f.reached:
+                why = next((p for p in f.note.split("; ") if p.startswith("not reached")), "not reached")
+                notes.append(f"{f.group}: threshold {why}")
+
+    paper = paper_layout(table)
+    result = Result(table=table, participants=participants, gee=g, thresholds=thresholds, fits=fits,
+                    paper=paper, notes=notes,
+                    settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
+                              "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
+                              "n_participants": int(df["participant"].nunique()),
+                              "n_trials": int(len(df)),
+                              "groups": list(dict.fromkeys(table["group"]))})
+    if out_dir is None:
+        return result
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    files = result.files
+    files["table.csv"] = out / "table.csv"
+    table.to_csv(files["table.csv"], index=False)
+    files["table_paper.csv"] = out / "table_paper.csv"
+    paper.to_csv(files["table_paper.csv"], index=False)
+    caption = PAPER_CAPTION + f" Correction for rates of 0 or 1: {correction}."
+    files["table_paper.md"] = out / "table_paper.md"
+    files["table_paper.md"].write_text(to_markdown(table, caption), encoding="utf-8")
+    files["table_paper.tex"] = out / "table_paper.tex"
+    files["table_paper.tex"].write_text(to_latex(table, caption), encoding="utf-8")
+    files["participants.csv"] = out / "participants.csv"
+    participants.to_csv(files["participants.csv"], index=False)
+    if gee:
+        files["levels_vs_original.csv"] = out / "levels_vs_original.csv"
+        g.to_csv(files["levels_vs_original.csv"], index=False)
+    if fits:
+        files["thresholds.csv"] = out / "thresholds.csv"
+        thresholds.to_csv(files["thresholds.csv"], index=False)
+
+    if figures:
+        from .figures import dprime_figure, psychometric_figure, ratings_figure, save, sheet_figure
+        ci_label = f"{ci:.0%} CI"
+        for name, fig in (("ratings", ratings_figure(table, ci_label)),
+                          ("dprime", dprime_figure(table, ci_label))):
+            for p in save(fig, out / name):
+                files[p.name] = p
+        if fits:
+            method_note = ("psignifit 4 (Bayesian, MAP)" if any(f.method == "psignifit" for f in fits)
+                           else "maximum likelihood")
+            for p in save(psychometric_figure(fits, table, method_note), out / "psychometric"):
+                files[p.name] = p
+        imgs = _normalise_images(images)
+        fig, sheet_notes = sheet_figure(fits, table, imgs)
+        notes += sheet_notes
+        for p in save(fig, out / "sheet"):
+            files[p.name] = p
+
+    files["notes.md"] = out / "notes.md"
+    files["summary.json"] = out / "summary.json"
+    files["notes.md"].write_text(_notes_md(result), encoding="utf-8")
+    files["summary.json"].write_text(json.dumps(result.to_dict(), indent=2, ensure_ascii=False) + "\n",
+                                     encoding="utf-8")
+    return result
+
+
+def _notes_md(r: Result) -> str:
+    s = r.settings
+    lines = ["# Analysis notes", "",
+             f"{s['n_participants']} participants, {s['n_trials']} trials, groups: "
+             f"{', '.join(s['groups'])}.", "",
+             f"Correction for rates of 0 or 1: **{s['correction']}** — {s['correction_text']}.", ""]
+    lines += [f"- {n}" for n in r.notes]
+    lines += ["", "## Table (paper layout)", "", to_markdown(r.table)]
+    if len(r.thresholds):
+        lines += ["## Detection thresholds", "",
+                  "| group | x* (%) | interval | P(reached) | γ | λ | note |", "|:--|--:|:--|--:|--:|--:|:--|"]
+        for _, t in r.thresholds.iterrows():
+            x = "not reached" if not t["reached"] else f"{t['threshold']:.1f}"
+            hi = "open" if not np.isfinite(t["threshold_ci_high"]) else f"{t['threshold_ci_high']:.1f}"
+            lo = "—" if not np.isfinite(t["threshold_ci_low"]) else f"{t['threshold_ci_low']:.1f}"
+            lines.append(f"| {t['group']} | {x} | [{lo}, {hi}] | {t['p_reached']:.2f} | "
+                         f"{t['gamma']:.2f} | {t['lambda']:.2f} | {t['note']} |")
+        lines.append("")
+    return "\n".join(lines) + "\n"

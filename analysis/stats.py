@@ -1,0 +1,391 @@
+"""Statistics a reviewer asks for: each level against its group's original (GEE),
+and a psychometric function per group with a detection threshold.
+
+GEE
+    Per group, a marginal logistic model of P(judged incorrect) on the level
+    as a category (reference: level 0, the original), fitted by generalised
+    estimating equations (statsmodels ``GEE``, Binomial family, logit link,
+    exchangeable working correlation, participants as clusters) with the
+    Mancl–DeRouen bias-reduced sandwich covariance (few clusters).  Reported per
+    level ≠ 0: odds ratio, its 95 % Wald CI, the Wald p value and Holm's
+    adjustment over all the levels of all groups.
+
+Psychometric function
+    Per group, ``P(incorrect | x) = γ + (1 − γ − λ) Φ((x − m) / s)`` against the
+    error magnitude ``x = |level|`` (trials pooled over participants and signed
+    levels), with ``γ`` the base rate (lower asymptote: originals and
+    undetectable errors), ``λ`` the lapse rate, ``m`` psignifit's threshold of
+    the unscaled sigmoid and width ``w = s (Φ⁻¹(.95) − Φ⁻¹(.05))``.
+
+    **Detection threshold** (our definition, reported as ``threshold``): the
+    error magnitude at which P(incorrect) is halfway between the base rate and
+    certainty, ``P(x*) = (1 + γ) / 2``, i.e. ``x* = m + s Φ⁻¹(F*)`` with
+    ``F* = (1 − γ) / (2 (1 − γ − λ))``.  It is "not reached" (NaN, with a note)
+    when ``x*`` lies beyond the largest tested level or the fitted curve never
+    climbs that high (``F* ≥ 1``).
+
+    ``method="psignifit"`` (default): Bayesian fit with psignifit 4 (Schütt,
+    Harmeling, Macke & Wichmann 2016, *Painfree and accurate Bayesian estimation
+    of psychometric functions for (potentially) overdispersed data*, Vision
+    Research 122, 105–123): yes/no design, cumulative normal, overdispersion
+    ``η`` free, a uniform prior on ``γ`` over [0, 0.9] (the base rate of an
+    "is this motion correct?" task is not a small guess rate), psignifit's
+    default priors elsewhere.  Point estimate: MAP; interval: 95 % credible
+    interval of ``x*`` from posterior samples.
+
+    ``method="mle"``: maximum likelihood (binomial, same function) with
+    ``λ ∈ [0, 0.06]`` (Wichmann & Hill 2001), ``γ ∈ [0, 0.9]``, found on a
+    parameter grid and refined by Levenberg–Marquardt (Fisher scoring);
+    interval: parametric bootstrap (``n_boot`` = 200 binomial data sets drawn
+    from the fitted curve, all refitted at once), percentile 95 %.
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy.special import ndtr, ndtri
+
+from .io import group_order, level_order
+
+_WSCALE = float(ndtri(0.95) - ndtri(0.05))      # width = scale * 3.29 (psignifit, alpha = .05)
+
+
+# ---------------------------------------------------------------------------- GEE
+
+def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced") -> pd.DataFrame:
+    """Each level ≠ 0 against level 0 of its group: GEE odds ratios (see module doc).
+
+    Returns one row per (group, level ≠ 0): ``group, level, gee_or, gee_ci_low,
+    gee_ci_high, gee_p, gee_p_holm, gee_note``.  A group whose model cannot be
+    fitted (no original, one level, a single participant, a singular design)
+    gets NaN with the reason in ``gee_note``; this function does not raise on
+    such data.
+    """
+    from scipy.stats import norm
+    try:
+        import statsmodels.api as sm
+        from statsmodels.stats.multitest import multipletests
+    except ImportError:
+        sm = multipletests = None
+
+    zq = norm.ppf(0.5 + ci / 2)
+    rows = []
+    for g in group_order(df["group"].unique()):
+        sub = df[df["group"] == g]
+        levels = level_order(sub["level"].unique())
+        others = [lv for lv in levels if lv != 0]
+        if not others:
+            continue
+
+        def fail(msg):
+            for lv in others:
+                rows.append((g, lv, np.nan, np.nan, np.nan, np.nan, msg))
+        if sm is None:
+            fail("statsmodels is not installed (pip install statsmodels): no GEE")
+            continue
+        if 0.0 not in levels:
+            fail("no original (level 0) in this group")
+            continue
+        n_clusters = sub["participant"].nunique()
+        if n_clusters < 2:
+            fail("GEE needs at least 2 participants")
+            continue
+        cat = pd.Categorical(sub["level"], categories=levels)
+        X = pd.get_dummies(cat, drop_first=True, dtype=float).to_numpy()
+        X = np.column_stack([np.ones(len(sub)), X])
+        y = sub["incorrect"].to_numpy(float)
+        # perfect prediction: a level (or the original) with all answers alike
+        kn = sub.groupby("level")["incorrect"].agg(["sum", "count"])
+        flat = [lv for lv in levels if kn.loc[lv, "sum"] in (0, kn.loc[lv, "count"])]
+        note = ""
+        if flat:
+            note = ("all answers alike at level(s) " + ", ".join(f"{lv:g}" for lv in flat)
+                    + ": odds ratio at the boundary, interval unreliable")
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                model = sm.GEE(y, X, groups=sub["participant"].to_numpy(),
+                               family=sm.families.Binomial(), cov_struct=sm.cov_struct.Exchangeable())
+                res = model.fit(cov_type=cov_type if n_clusters > X.shape[1] else "robust")
+                beta, se = np.asarray(res.params), np.asarray(res.bse)
+                p = np.asarray(res.pvalues)
+            if not np.all(np.isfinite(beta)):
+                raise FloatingPointError("non-finite coefficients")
+            msgs = sorted({str(w.message).split("\n")[0] for w in caught
+                           if "converge" in str(w.message).lower()})
+            if msgs:
+                note = "; ".join(filter(None, [note, "GEE: " + msgs[0]]))
+            if n_clusters <= X.shape[1]:
+                note = "; ".join(filter(None, [note, "too few participants for the bias-reduced "
+                                               "covariance: robust sandwich used"]))
+        except Exception as e:  # noqa: BLE001 — any failure becomes a note, never a crash
+            fail(f"GEE failed: {type(e).__name__}: {e}")
+            continue
+        for j, lv in enumerate(others, start=1):
+            ok = np.isfinite(se[j]) and se[j] > 0
+            rows.append((g, lv, float(np.exp(beta[j])),
+                         float(np.exp(beta[j] - zq * se[j])) if ok else np.nan,
+                         float(np.exp(beta[j] + zq * se[j])) if ok else np.nan,
+                         float(p[j]) if ok else np.nan, note))
+    out = pd.DataFrame(rows, columns=["group", "level", "gee_or", "gee_ci_low", "gee_ci_high",
+                                      "gee_p", "gee_note"])
+    out["gee_p_holm"] = np.nan
+    okp = out["gee_p"].notna().to_numpy()
+    if okp.any() and multipletests is not None:
+        out.loc[okp, "gee_p_holm"] = multipletests(out.loc[okp, "gee_p"].to_numpy(), method="holm")[1]
+    return out[["group", "level", "gee_or", "gee_ci_low", "gee_ci_high", "gee_p", "gee_p_holm",
+                "gee_note"]]
+
+
+# ------------------------------------------------------------- psychometric functions
+
+def psychometric_curve(x, threshold, width, gamma, lam):
+    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w)."""
+    s = np.asarray(width, float) / _WSCALE
+    return gamma + (1 - gamma - lam) * ndtr((np.asarray(x, float) - threshold) / s)
+
+
+def detection_threshold(threshold, width, gamma, lam):
+    """``x*`` where P(incorrect) = (1 + γ)/2 (vectorised; +inf where never reached)."""
+    threshold, width, gamma, lam = np.broadcast_arrays(*(np.asarray(a, float)
+                                                          for a in (threshold, width, gamma, lam)))
+    amp = 1 - gamma - lam
+    with np.errstate(divide="ignore", invalid="ignore"):
+        F = (1 - gamma) / (2 * amp)
+        x = threshold + width / _WSCALE * ndtri(np.clip(F, 0, 1))
+    return np.where((amp > 0) & (F < 1), x, np.inf)[()]
+
+
+@dataclass
+class PsychometricFit:
+    """One group's fitted psychometric function and detection threshold."""
+    group: str
+    method: str
+    x: np.ndarray                    # tested |levels|
+    k: np.ndarray                    # "incorrect" answers per |level|
+    n: np.ndarray                    # trials per |level|
+    params: dict                     # threshold (m), width, gamma, lambda (and eta for psignifit)
+    threshold: float                 # x*, NaN when not reached
+    ci_low: float
+    ci_high: float                   # NaN when the upper limit is open
+    p_reached: float                 # share of posterior / bootstrap samples with x* <= max level
+    threshold_extrapolated: float    # x* of the point estimate, even beyond the range (inf: never)
+    note: str = ""
+    samples: np.ndarray = field(default=None, repr=False)
+
+    @property
+    def reached(self) -> bool:
+        return bool(np.isfinite(self.threshold))
+
+    def curve(self, x):
+        p = self.params
+        return psychometric_curve(x, p["threshold"], p["width"], p["gamma"], p["lambda"])
+
+    def row(self) -> dict:
+        p = self.params
+        return {"group": self.group, "method": self.method,
+                "threshold": self.threshold, "threshold_ci_low": self.ci_low,
+                "threshold_ci_high": self.ci_high, "reached": self.reached,
+                "p_reached": self.p_reached, "threshold_extrapolated": self.threshold_extrapolated,
+                "p_at_threshold": 0.5 * (1 + p["gamma"]),
+                "gamma": p["gamma"], "lambda": p["lambda"], "m": p["threshold"], "width": p["width"],
+                "eta": p.get("eta", np.nan), "max_level": float(self.x.max()), "note": self.note}
+
+
+def pooled_magnitudes(sub: pd.DataFrame):
+    """(|level|, k incorrect, n trials) of one group, pooled over participants and signs."""
+    mag = sub["level"].abs().to_numpy()
+    xs = np.unique(mag)
+    idx = np.searchsorted(xs, mag)
+    n = np.bincount(idx, minlength=len(xs)).astype(float)
+    k = np.bincount(idx, weights=sub["incorrect"].to_numpy(float), minlength=len(xs))
+    return xs.astype(float), k, n
+
+
+def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_note=""):
+    x_hat = float(detection_threshold(params["threshold"], params["width"], params["gamma"],
+                                      params["lambda"]))
+    xmax = float(x.max())
+    a = (1 - ci) / 2
+    lo, hi = np.quantile(xs_samples, [a, 1 - a], method="inverted_cdf")
+    p_reached = float(np.mean(xs_samples <= xmax))
+    notes = [extra_note] if extra_note else []
+    xmin = float(x.min())
+    if np.isfinite(x_hat) and x_hat < xmin - 1e-9 * max(1.0, abs(xmin)):
+        thr = np.nan
+        notes.append(f"no threshold: P(incorrect) is above (1 + γ)/2 = {0.5 * (1 + params['gamma']):.2f} "
+                     f"already at the smallest tested level ({xmin:g} %; x* = {x_hat:.1f} by "
+                     f"extrapolation): the original is judged incorrect about as often as the errors")
+    elif np.isfinite(x_hat) and x_hat <= xmax:
+        thr = x_hat
+    else:
+        thr = np.nan
+        if np.isfinite(x_hat):
+            notes.append(f"not reached: P(incorrect) = (1 + γ)/2 = {0.5 * (1 + params['gamma']):.2f} "
+                         f"only beyond the largest tested level ({xmax:g} %), extrapolated at {x_hat:.1f} %")
+        else:
+            notes.append(f"not reached: the fitted curve stays below (1 + γ)/2 = "
+                         f"{0.5 * (1 + params['gamma']):.2f} (flat or lapse-limited)")
+    if not np.isfinite(hi):
+        notes.append(f"upper limit of the interval open (x* never reached in "
+                     f"{np.mean(~np.isfinite(xs_samples)):.0%} of the samples)")
+        hi = np.nan
+    if not np.isfinite(lo):
+        lo = np.nan
+    return PsychometricFit(group, method, x, k, n, params, thr, float(lo), float(hi), p_reached,
+                           x_hat, "; ".join(notes), samples=xs_samples)
+
+
+#: psignifit's posterior grid, coarser than its default (40/40/20/20/20) to keep a fit near 1 s;
+#: the MAP and credible intervals move by well under a grid step on the paper's design
+PSIGNIFIT_GRID = {"threshold": 30, "width": 25, "lambda": 12, "gamma": 15, "eta": 10}
+PSIGNIFIT_MOVING = {"threshold": 10, "width": 10, "lambda": 5, "gamma": 5, "eta": 5}
+
+
+def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000) -> PsychometricFit:
+    """Bayesian fit with psignifit 4 (see module doc)."""
+    import psignifit
+    data = np.column_stack([x, k, n])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = psignifit.psignifit(
+            data, experiment_type="yes/no", sigmoid="norm", verbose=False, debug=True,
+            bounds={"gamma": (0.0, 0.9)}, priors={"gamma": lambda v: np.ones_like(v)},
+            grid_steps=dict(PSIGNIFIT_GRID), steps_moving_bounds=dict(PSIGNIFIT_MOVING))
+    note = "95 % credible interval (psignifit posterior)"
+    est = res.parameter_estimate_MAP
+    if not (0 <= est["gamma"] <= 0.9 and 0 <= est["lambda"] <= 0.5 and est["width"] > 0
+            and est["gamma"] + est["lambda"] < 1 and 0 <= est["eta"] < 1):
+        # psignifit refines the MAP with an unbounded simplex search, which can leave the
+        # parameter space on degenerate data (every answer alike): use the posterior mean
+        est = res.parameter_estimate_mean
+        note += "; MAP outside the parameter bounds (degenerate data): posterior mean used"
+    params = {"threshold": float(est["threshold"]), "width": float(est["width"]),
+              "gamma": float(est["gamma"]), "lambda": float(est["lambda"]), "eta": float(est["eta"])}
+    s = res.posterior_samples(n_samples, random_state=np.random.default_rng(seed))
+    xs = detection_threshold(s["threshold"], s["width"], s["gamma"], s["lambda"])
+    return _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note)
+
+
+def _mle_grid(x):
+    xmax = float(x.max())
+    span = max(xmax - float(x.min()), 1e-9)
+    dmin = float(np.diff(x).min()) if len(x) > 1 else span
+    thr = np.linspace(x.min() - 0.5 * span, xmax + 0.5 * span, 37)
+    width = np.geomspace(max(dmin / 2, span / 100), 4.5 * span, 22)
+    gamma = np.linspace(0.0, 0.9, 31)
+    lam = np.array([0.0, 0.03, 0.06])
+    T, W, G, L = np.meshgrid(thr, width, gamma, lam, indexing="ij")
+    return np.column_stack([T.ravel(), W.ravel(), G.ravel(), L.ravel()]), (thr, width)
+
+
+def _grid_logs(grid, x):
+    P = psychometric_curve(x[None, :], grid[:, :1], grid[:, 1:2], grid[:, 2:3], grid[:, 3:4])
+    P = np.clip(P, 1e-9, 1 - 1e-9)
+    return np.log(P).T, np.log1p(-P).T                          # (L, G) each
+
+
+def _loglik_grid(logs, K, N):
+    logP, log1mP = logs
+    return K @ logP + (N - K) @ log1mP                           # (B, G)
+
+
+def _loglik_batch(theta, x, K, N):
+    P = np.clip(psychometric_curve(x[None, :], theta[:, :1], theta[:, 1:2], theta[:, 2:3], theta[:, 3:4]),
+                1e-12, 1 - 1e-12)
+    return (K * np.log(P) + (N - K) * np.log1p(-P)).sum(1)
+
+
+def _refine(theta, x, K, N, lo, hi, iters: int = 60):
+    """Batched Levenberg–Marquardt (Fisher scoring) on the binomial likelihood,
+    one independent fit per row of ``theta`` (B, 4), kept inside the box [lo, hi]."""
+    theta = theta.copy()
+    B = len(theta)
+    mu = np.full(B, 1e-3)
+    ll = _loglik_batch(theta, x, K, N)
+    for _ in range(iters):
+        m, w, g, lam = (theta[:, i:i + 1] for i in range(4))
+        s = w / _WSCALE
+        u = (x[None, :] - m) / s
+        phi, Phi = np.exp(-0.5 * u * u) / np.sqrt(2 * np.pi), ndtr(u)
+        A = 1 - g - lam
+        P = np.clip(g + A * Phi, 1e-12, 1 - 1e-12)
+        J = np.stack([-A * phi / s, -A * phi * u / w, 1 - Phi, -Phi], axis=2)        # (B, L, 4)
+        wgt = N / (P * (1 - P))
+        score = np.einsum("blp,bl->bp", J, (K - N * P) / (P * (1 - P)))
+        info = np.einsum("blp,bl,blq->bpq", J, wgt, J)
+        d = np.einsum("bpp->bp", info)
+        lhs = info + (mu[:, None] * d + 1e-12 * (1 + d.max(1, keepdims=True)))[:, :, None] * np.eye(4)
+        step = np.linalg.solve(lhs, score[:, :, None])[:, :, 0]
+        cand = np.clip(theta + step, lo, hi)
+        ll_new = _loglik_batch(cand, x, K, N)
+        better = ll_new > ll + 1e-12
+        theta[better], ll[better] = cand[better], ll_new[better]
+        mu = np.where(better, mu / 3, mu * 5)
+        if np.all(mu > 1e8):
+            break
+    return theta
+
+
+def fit_mle(group, x, k, n, *, ci=0.95, seed=0, n_boot=200) -> PsychometricFit:
+    """Maximum-likelihood fit with a parametric bootstrap (see module doc).
+
+    The likelihood is maximised on a parameter grid, then refined by a batched
+    Levenberg–Marquardt iteration; the ``n_boot`` binomial resamples from the
+    fitted curve are refitted the same way, all at once."""
+    grid, (thr, width) = _mle_grid(x)
+    lo = np.array([thr[0], width[0], 0.0, 0.0])
+    hi = np.array([thr[-1], width[-1], 0.9, 0.06])
+    logs = _grid_logs(grid, x)
+    start = grid[np.argmax(_loglik_grid(logs, k[None, :], n[None, :])[0])]
+    th = _refine(start[None, :], x, k[None, :], n[None, :], lo, hi)[0]
+    params = {"threshold": float(th[0]), "width": float(th[1]), "gamma": float(th[2]),
+              "lambda": float(th[3])}
+    rng = np.random.default_rng(seed)
+    p_hat = psychometric_curve(x, *th)
+    Kb = rng.binomial(n.astype(np.int64)[None, :], p_hat[None, :], size=(n_boot, len(x))).astype(float)
+    Nb = np.broadcast_to(n, Kb.shape)
+    best = np.empty((n_boot, 4))
+    for i in range(0, n_boot, 50):                      # blocks bound the (B, G) matrix
+        best[i:i + 50] = grid[np.argmax(_loglik_grid(logs, Kb[i:i + 50], Nb[i:i + 50]), axis=1)]
+    best = _refine(best, x, Kb, Nb, lo, hi)
+    xs = detection_threshold(best[:, 0], best[:, 1], best[:, 2], best[:, 3])
+    return _summarise_samples(group, "mle", x, k, n, params, xs, ci,
+                              f"95 % parametric-bootstrap interval ({n_boot} resamples)")
+
+
+def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95, seed=0,
+                     n_boot: int = 200) -> tuple[list[PsychometricFit], list[str]]:
+    """One :class:`PsychometricFit` per group (a group with fewer than two
+    magnitudes is skipped with a note), and notes.  ``method``: ``"psignifit"``
+    (falls back to ``"mle"`` with a note when psignifit is missing or fails),
+    ``"mle"``, or ``"none"``."""
+    method = method.lower()
+    if method not in ("psignifit", "mle", "none"):
+        raise ValueError(f"unknown psychometric method {method!r}: expected psignifit, mle or none")
+    fits, notes = [], []
+    if method == "none":
+        return fits, notes
+    if method == "psignifit":
+        try:
+            import psignifit  # noqa: F401
+        except ImportError:
+            notes.append("psignifit is not installed: psychometric functions fitted by maximum "
+                         "likelihood instead (pip install psignifit for the Bayesian fit)")
+            method = "mle"
+    for g in group_order(df["group"].unique()):
+        x, k, n = pooled_magnitudes(df[df["group"] == g])
+        if len(x) < 2:
+            notes.append(f"{g}: a single error magnitude, no psychometric function fitted")
+            continue
+        if method == "psignifit":
+            try:
+                fits.append(fit_psignifit(g, x, k, n, ci=ci, seed=seed))
+                continue
+            except Exception as e:  # noqa: BLE001
+                notes.append(f"{g}: psignifit failed ({type(e).__name__}: {e}); maximum-likelihood fit used")
+        fits.append(fit_mle(g, x, k, n, ci=ci, seed=seed, n_boot=n_boot))
+    return fits, notes

@@ -1,0 +1,122 @@
+"""The paper's table layout: "72 (.00)" — rating, then d′ in parentheses.
+
+Groups are rows, levels are columns; groups that share the same set of levels
+form one block with its own header row (the paper's Table 2 has two blocks:
+angular momentum 0/17/25/37/50 % and take-off angle 0/10/20/30/40 %).
+"""
+from __future__ import annotations
+
+import math
+
+import pandas as pd
+
+from .io import group_order, level_order
+
+MISSING = "—"
+
+
+def fmt_dprime(d: float, minus: str = "-") -> str:
+    """Two decimals, no leading zero, sign kept: 0.05 → ".05", −0.22 → "-.22", 1.4 → "1.40"."""
+    if d is None or not math.isfinite(d):
+        return MISSING
+    r = round(float(d), 2)
+    if r == 0:
+        return ".00"
+    s = f"{abs(r):.2f}"
+    if s.startswith("0"):
+        s = s[1:]
+    return (minus if r < 0 else "") + s
+
+
+def fmt_cell(rating: float, d: float, minus: str = "-") -> str:
+    """``"72 (.00)"``: the rating rounded to a whole percent, then d′."""
+    if rating is None or not math.isfinite(rating):
+        return MISSING
+    return f"{int(math.floor(rating + 0.5))} ({fmt_dprime(d, minus)})"
+
+
+def fmt_level(lv: float) -> str:
+    return f"{lv:g} %".replace("-", "−")
+
+
+def blocks(table: pd.DataFrame) -> list[tuple[list[float], list[str]]]:
+    """Groups sharing a level set, in table order: [(levels, groups), …]."""
+    out: dict[tuple, list[str]] = {}
+    for g in group_order(table["group"].unique()):
+        lv = tuple(level_order(table.loc[table["group"] == g, "level"]))
+        out.setdefault(lv, []).append(g)
+    return [(list(k), v) for k, v in out.items()]
+
+
+def paper_layout(table: pd.DataFrame, minus: str = "-") -> pd.DataFrame:
+    """Wide table, one row per group, one column per level (union of all
+    levels, sorted by magnitude); cells ``"72 (.00)"``, empty where a group did
+    not test a level."""
+    levels = level_order(table["level"])
+    rows = []
+    for g in group_order(table["group"].unique()):
+        sub = table[table["group"] == g].set_index("level")
+        row = {"group": g}
+        for lv in levels:
+            row[fmt_level(lv)] = (fmt_cell(sub.loc[lv, "rating_pct"], sub.loc[lv, "dprime"], minus)
+                                  if lv in sub.index else "")
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _block_rows(table, levels, groups, minus):
+    out = []
+    for g in groups:
+        sub = table[table["group"] == g].set_index("level")
+        out.append([g] + [fmt_cell(sub.loc[lv, "rating_pct"], sub.loc[lv, "dprime"], minus)
+                          if lv in sub.index else MISSING for lv in levels])
+    return out
+
+
+def to_markdown(table: pd.DataFrame, caption: str = "") -> str:
+    """GitHub Markdown, one table per block of groups sharing their levels."""
+    parts = []
+    if caption:
+        parts.append(caption + "\n")
+    for levels, groups in blocks(table):
+        head = ["group"] + [fmt_level(lv) for lv in levels]
+        lines = ["| " + " | ".join(head) + " |",
+                 "|" + "|".join([":---"] + ["---:"] * len(levels)) + "|"]
+        for r in _block_rows(table, levels, groups, "−"):
+            lines.append("| " + " | ".join(r) + " |")
+        parts.append("\n".join(lines) + "\n")
+    return "\n".join(parts)
+
+
+def _tex_escape(s: str) -> str:
+    for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"),
+                 ("#", r"\#"), ("_", r"\_"), ("{", r"\{"), ("}", r"\}"), ("~", r"\textasciitilde{}"),
+                 ("^", r"\textasciicircum{}")):
+        s = s.replace(a, b)
+    return s
+
+
+def to_latex(table: pd.DataFrame, caption: str = "", label: str = "tab:ratings") -> str:
+    """A booktabs table (needs ``\\usepackage{booktabs}``): one header row per
+    block of groups sharing their levels, as in the paper."""
+    bl = blocks(table)
+    ncol = max(len(levels) for levels, _ in bl)
+    lines = [r"\begin{table}[t]", r"  \centering"]
+    if caption:
+        lines.append(f"  \\caption{{{_tex_escape(caption)}}}")
+        lines.append(f"  \\label{{{label}}}")
+    lines.append(f"  \\begin{{tabular}}{{l{'r' * ncol}}}")
+    lines.append(r"    \toprule")
+    for bi, (levels, groups) in enumerate(bl):
+        if bi:
+            lines.append(r"    \midrule")
+        head = ["Error group"] + [_tex_escape(f"{lv:g} %").replace("-", "$-$") for lv in levels]
+        head += [""] * (ncol - len(levels))
+        lines.append("    " + " & ".join(head) + r" \\")
+        lines.append(f"    \\cmidrule(lr){{2-{len(levels) + 1}}}")
+        for r in _block_rows(table, levels, groups, "$-$"):
+            r = [_tex_escape(r[0])] + [c.replace(MISSING, "--") for c in r[1:]]
+            r += [""] * (ncol + 1 - len(r))
+            lines.append("    " + " & ".join(r) + r" \\")
+    lines += [r"    \bottomrule", r"  \end{tabular}", r"\end{table}", ""]
+    return "\n".join(lines)
