@@ -143,6 +143,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="replace an existing STUDY_DIR")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_stimuli)
+
+    from render.cli import add_commands as add_render
+    from study.session_cli import add_commands as add_session
+    from analysis.cli import add_commands as add_analysis
+    add_render(sub)
+    add_session(sub)
+    add_analysis(sub)
     return ap
 
 
