@@ -243,7 +243,7 @@ def align_takeoff(clips, takeoffs, bodies=None) -> tuple[list, np.ndarray]:
     """Clips moved horizontally so each take-off COM (:func:`takeoff_com`) is at
     x = z = 0 (heights are kept: the ground stays at its level).  Returns
     (clips, offsets (K,3))."""
-    bodies = bodies or [Body.from_skeleton(c.skeleton) for c in clips]
+    bodies = bodies or [Body.from_clip(c) for c in clips]
     out, offs = [], []
     for c, t, b in zip(clips, takeoffs, bodies):
         com = takeoff_com(c, b, t)
@@ -328,7 +328,7 @@ def _bodies_for(clips, bodies):
     for c in clips:
         key = id(c.skeleton)
         if key not in cache:
-            cache[key] = Body.from_skeleton(c.skeleton)
+            cache[key] = Body.from_clip(c)
         out.append(cache[key])
     return out
 

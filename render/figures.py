@@ -81,7 +81,7 @@ def prepare(clips, *, bodies=None, takeoffs=None, landings=None, camera: Camera 
         bodies = []
         for c in clips:
             same = [b for c2, b in zip(clips, bodies) if c2.skeleton is c.skeleton]
-            bodies.append(same[0] if same else Body.from_skeleton(c.skeleton))
+            bodies.append(same[0] if same else Body.from_clip(c))
     bodies = list(bodies)
     if takeoffs is None or landings is None:
         from stimuli import analyse

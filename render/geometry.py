@@ -1,12 +1,17 @@
 """The drawn character: the Body's mass ellipsoids as one merged, posable mesh.
 
-Each body piece (``Body.joint/prox/dist/radius``) is drawn as the solid
-ellipsoid the physics weighs: semi-axes ``(max(|dist − prox|/2, 2 cm), radius,
-radius)``, centred at the bone midpoint, long axis along the bone, rigid in the
-frame of the piece's joint.  The template points and normals of every piece
-are computed once in joint-local coordinates; posing a frame is one vectorised
-transform ``world = R_joint @ local + P_joint`` written in place into the VTK
-point array (no new mesh, no new actor).
+Each body segment is drawn as the solid ellipsoid of constant density the
+physics weighs: long semi-axis half the segment's length, short semi-axes its
+``radius``.  A segment on one bone (thigh, forearm...) is exactly its physics
+piece, rigid in its joint's frame.  A segment the physics splits over several
+bones (the trunk over the spine joints, the head over the neck joints, CMU's
+hands and feet) has pieces as short as 5 cm with the segment's 17 cm radius —
+flat discs, if drawn one by one — so it is drawn as one ellipsoid from the
+segment's first to its last end, rigid in the frame of the joint at the middle
+of the chain (the pieces' masses and volumes add up to that ellipsoid's).  The
+template points and normals are computed once in joint-local coordinates;
+posing a frame is one vectorised transform ``world = R_joint @ local + P_joint``
+written in place into the VTK point array (no new mesh, no new actor).
 
 Also here: sampling a clip at display times (:func:`resample`), and the world
 points of the body over frames (:func:`body_points`, used to fit cameras).
@@ -57,26 +62,54 @@ def _perp_basis(axis: np.ndarray) -> np.ndarray:
     return np.stack([axis, e2, e3], axis=-1)
 
 
-def piece_frames(body: Body) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Centre (P,3), rotation (P,3,3) and semi-axes (P,3) of every body piece's
-    ellipsoid in its joint's local frame."""
+def piece_frames(body: Body) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Joint (S,), centre (S,3), rotation (S,3,3) and semi-axes (S,3) of every drawn
+    ellipsoid (one per segment) in its joint's local frame."""
     d = body.dist - body.prox
     L = np.linalg.norm(d, axis=1)
-    axis = np.where(L[:, None] > 1e-12, d / np.maximum(L, 1e-12)[:, None], [0.0, 1.0, 0.0])
-    a = np.maximum(L / 2.0, 0.02)
-    semi = np.stack([a, body.radius, body.radius], axis=1)
-    return (body.prox + body.dist) / 2.0, _perp_basis(axis), semi
+    if body.reference is not None:
+        Pref, Rref = body.reference
+    else:
+        Pref = body.skeleton.rest_positions()[None]
+        Rref = np.broadcast_to(np.eye(3), (1, body.skeleton.num_joints, 3, 3))
+    joints, ends = [], []
+    for s in range(len(body.segment_names)):
+        k = np.flatnonzero(body.segment == s)           # pieces in chain order
+        if k.size == 0:
+            continue
+        if k.size == 1:
+            joints.append(body.joint[k[0]])
+            ends.append((body.prox[k[0]], body.dist[k[0]]))
+            continue
+        cum = np.cumsum(L[k])
+        a = body.joint[k[int(np.searchsorted(cum, cum[-1] / 2.0))]]   # joint mid-chain
+        j0, j1 = body.joint[k[0]], body.joint[k[-1]]
+        x0 = Pref[:, j0] + np.einsum("fab,b->fa", Rref[:, j0], body.prox[k[0]])
+        x1 = Pref[:, j1] + np.einsum("fab,b->fa", Rref[:, j1], body.dist[k[-1]])
+        to_a = lambda x: np.einsum("fba,fb->fa", Rref[:, a], x - Pref[:, a]).mean(axis=0)  # noqa: E731
+        joints.append(a)
+        ends.append((to_a(x0), to_a(x1)))
+    joints = np.array(joints)
+    prox = np.array([e[0] for e in ends])
+    dist = np.array([e[1] for e in ends])
+    radius = np.array([body.radius[body.segment == s].max()
+                       for s in range(len(body.segment_names)) if np.any(body.segment == s)])
+    dd = dist - prox
+    n = np.linalg.norm(dd, axis=1)
+    axis = np.where(n[:, None] > 1e-12, dd / np.maximum(n, 1e-12)[:, None], [0.0, 1.0, 0.0])
+    semi = np.stack([np.maximum(n / 2.0, 0.02), radius, radius], axis=1)
+    return joints, (prox + dist) / 2.0, _perp_basis(axis), semi
 
 
 def piece_templates(body: Body, resolution=(20, 12)):
-    """Joint-local template points (P,V,3), unit normals (P,V,3) and triangles
-    (T,3) of one ellipsoid per piece (triangle indices within one piece)."""
+    """Joints (S,), joint-local template points (S,V,3), unit normals (S,V,3) and
+    triangles (T,3) of one ellipsoid per drawn segment (indices within one)."""
     u, tris = unit_sphere(*resolution)
-    centre, Q, semi = piece_frames(body)
+    joint, centre, Q, semi = piece_frames(body)
     pts = np.einsum("pab,pb,vb->pva", Q, semi, u) + centre[:, None]
     nrm = np.einsum("pab,pb,vb->pva", Q, 1.0 / semi, u)
     nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
-    return pts, nrm, tris
+    return joint, pts, nrm, tris
 
 
 def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = None) -> Clip:
@@ -119,9 +152,9 @@ def poses_at(clip: Clip, times) -> Clip:
 def body_points(clip: Clip, body: Body, resolution=(8, 5), frames=slice(None)) -> np.ndarray:
     """(F, P·V, 3) world points of the body's ellipsoids (a coarse template) in
     every frame: what a camera must keep in view."""
-    pts, _, _ = piece_templates(body, resolution)
-    R = clip.joint_rotations()[frames][:, body.joint]          # (F,P,3,3)
-    P = clip.joint_positions()[frames][:, body.joint]          # (F,P,3)
+    joint, pts, _, _ = piece_templates(body, resolution)
+    R = clip.joint_rotations()[frames][:, joint]               # (F,P,3,3)
+    P = clip.joint_positions()[frames][:, joint]               # (F,P,3)
     w = np.einsum("fpab,pvb->fpva", R, pts) + P[:, :, None]
     return w.reshape(w.shape[0], -1, 3)
 
@@ -136,7 +169,7 @@ class BodyMesh:
     -------
     >>> bm = BodyMesh(body)                                             # doctest: +SKIP
     >>> bm.pose(clip.joint_rotations()[0], clip.joint_positions()[0])   # doctest: +SKIP
-    >>> bm.mesh.n_points == body.num_pieces * bm.points_per_piece       # doctest: +SKIP
+    >>> bm.mesh.n_points == len(bm.joint) * bm.points_per_piece         # doctest: +SKIP
     True
     """
 
@@ -153,11 +186,11 @@ class BodyMesh:
         object stays the same (actors keep drawing it); its arrays are replaced
         only when the number of pieces changes."""
         pv = self._pv
-        pts, nrm, tris = piece_templates(body, self.resolution)
+        joint, pts, nrm, tris = piece_templates(body, self.resolution)
         if self.inflate:
             pts = pts + self.inflate * nrm        # a shell just outside (drawn over a twin)
         self.body = body
-        self.joint = np.asarray(body.joint)
+        self.joint = np.asarray(joint)
         self._local_pts = pts
         self._local_nrm = nrm
         P, V, _ = pts.shape

@@ -77,11 +77,12 @@ class _Bodies:
     def __init__(self):
         self._cache: dict = {}
 
-    def __call__(self, skeleton):
+    def __call__(self, clip):
+        """The body of ``clip``'s skeleton, measured on the first clip seen with it."""
         from stimuli.body import Body
-        k = _skeleton_key(skeleton)
+        k = _skeleton_key(clip.skeleton)
         if k not in self._cache:
-            self._cache[k] = Body.from_skeleton(skeleton)
+            self._cache[k] = Body.from_clip(clip)
         return self._cache[k]
 
 
@@ -124,7 +125,6 @@ def _init_worker(settings: dict) -> None:
     _WORKER["settings"] = settings
     _WORKER["style"] = style
     _WORKER["camera"] = Camera.from_dict(settings["camera"])
-    _WORKER["bodies"] = _Bodies()
     _WORKER["scene"] = Scene(None, style, tuple(settings["size"]), _WORKER["camera"],
                              tuple(settings["ground_bounds"]))
 
@@ -152,7 +152,7 @@ def _render_task(task: dict) -> dict:
     gb = tuple(st["ground_bounds"])
     size = tuple(st["size"])
     clip = _load_placed(task["bvh"], task["offset"], task["yaw"])
-    body = _WORKER["bodies"](clip.skeleton)
+    body = task["body"]            # measured once in the parent: the same in every worker
     out = Path(st["out"])
     common = dict(camera=cam, body=body, takeoff=task["takeoff"], landing=task["landing"],
                   scene=scene, ground_bounds=gb)
@@ -271,7 +271,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     out.mkdir(parents=True, exist_ok=True)
     rows, clips = load_stimuli(study_dir)
     bodies = _Bodies()
-    body_list = [bodies(c.skeleton) for c in clips]
+    body_list = [bodies(c) for c in clips]
     takeoffs = [_int_or_none(r.get("takeoff")) for r in rows]
     landings = [_int_or_none(r.get("landing")) for r in rows]
     st = stage(clips, takeoffs, landings, bodies=body_list, size=size,
@@ -290,12 +290,14 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
             refs.setdefault(r.get("clip", ""),
                             {"bvh": p, "offset": o.tolist(), "yaw": y, "stimulus": r["stimulus"]})
     tasks = []
-    for r, o, p, y, t0, t1 in zip(rows, st.offsets, bvh, st.yaws, takeoffs, landings):
+    for r, o, p, y, t0, t1, body in zip(rows, st.offsets, bvh, st.yaws, takeoffs, landings,
+                                        body_list):
         ref = refs.get(r.get("clip", ""))
         if ref is not None and ref["stimulus"] == r["stimulus"]:
             ref = None
         tasks.append({"stimulus": r["stimulus"], "bvh": p, "offset": o.tolist(), "yaw": y,
-                      "takeoff": t0, "landing": t1, "what": what, "reference": ref})
+                      "takeoff": t0, "landing": t1, "what": what, "reference": ref,
+                      "body": body})
     jobs = max(1, min(int(jobs or os.cpu_count() or 1), len(tasks)))
     bar = Progress(len(tasks), "render", progress)
     t0 = time.perf_counter()

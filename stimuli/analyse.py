@@ -179,7 +179,8 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
 
     Parameters
     ----------
-    body : the segment model; default ``Body.from_skeleton(clip.skeleton, total_mass)``.
+    body : the segment model; default ``Body.from_clip(clip, total_mass)`` (trunk and
+        head measured on the clip's poses).
     estimate : estimate segment masses from the flight (Section 4.2) and use them
         for the momenta; with ``False`` the given/table masses are used.
     W : regularisation weight of the mass fit (m²).
@@ -189,7 +190,7 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
     >>> a = analyse(builtin("backflip"))                        # doctest: +SKIP
     >>> a.takeoff, a.landing, round(a.takeoff_angle)            # doctest: +SKIP
     """
-    body0 = body if body is not None else Body.from_skeleton(clip.skeleton, total_mass)
+    body0 = body if body is not None else Body.from_clip(clip, total_mass)
     m0: Momentum = momentum(clip, body0)
     flights = detect_flights(clip, body0, m0.com)
     warnings = list(clip.meta.get("warnings", []))

@@ -25,6 +25,7 @@ A bone ``a → b`` is rigid in the frame of joint ``a``.
 from __future__ import annotations
 
 import re
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -179,6 +180,9 @@ class Body:
     radius: np.ndarray
     segment: np.ndarray
     landmarks: dict
+    #: (positions (F,J,3), rotations (F,J,3,3)) of the frames the trunk and head
+    #: geometry was measured on (see :meth:`from_clip`); None: the rest pose
+    reference: tuple | None = None
 
     @property
     def num_pieces(self) -> int:
@@ -198,8 +202,24 @@ class Body:
 
     # ------------------------------------------------------------ construction
     @classmethod
+    def from_clip(cls, clip, total_mass: float = 70.0, mapping: dict | None = None,
+                  segment_masses: dict | None = None, max_frames: int = 60) -> "Body":
+        """The body of a clip's skeleton, with the trunk's ends (mid-hip, mid-shoulder)
+        and the shoulder line measured on the clip's own poses (up to ``max_frames``
+        frames spread over the clip) instead of the rest pose.
+
+        Use this for motion capture: some rigs' rest poses are not poses (iClone's
+        rest pose has its clavicles folded, the shoulders 13 cm too high and 12 cm
+        too close together), while every frame of the motion is."""
+        F = clip.num_frames
+        pick = np.unique(np.linspace(0, F - 1, min(F, max_frames)).round().astype(int))
+        ref = (clip.joint_positions()[pick], clip.joint_rotations()[pick])
+        return cls.from_skeleton(clip.skeleton, total_mass, mapping, segment_masses, pose=ref)
+
+    @classmethod
     def from_skeleton(cls, skeleton: Skeleton, total_mass: float = 70.0,
-                      mapping: dict | None = None, segment_masses: dict | None = None) -> "Body":
+                      mapping: dict | None = None, segment_masses: dict | None = None,
+                      pose: tuple | None = None) -> "Body":
         """Build the body of a skeleton.
 
         ``mapping`` overrides landmarks (landmark → joint name); the landmarks are
@@ -236,8 +256,7 @@ class Body:
             else:
                 tips[key] = _farthest_descendant_point(skeleton, idx[start])
         # segment chains: (segment, start joint, end point)
-        chains = [("head", idx["neck"], tips["head_top"]),
-                  ("trunk", idx["pelvis"], (idx["neck"], None))]
+        chains = []
         for s in "lr":
             chains += [(f"upperarm_{s}", idx[f"shoulder_{s}"], (idx[f"elbow_{s}"], None)),
                        (f"forearm_{s}", idx[f"elbow_{s}"], (idx[f"wrist_{s}"], None)),
@@ -257,45 +276,132 @@ class Body:
             if not (np.isfinite(v) and v >= 0):
                 raise ValueError(f"segment_masses[{k!r}] must be a mass >= 0 kg, got {v!r}")
         total_mass = float(sum(masses.values()))
-        rows = []
+        if pose is None:
+            pose = (skeleton.rest_positions()[None], np.broadcast_to(np.eye(3), (1, skeleton.num_joints, 3, 3)))
+        rows = list(_trunk_and_head(skeleton, idx, tips, pose))
         for seg, start, (end_j, end_site) in chains:
             bones = _chain_bones(skeleton, start, end_j, end_site, seg)
             rows.append((seg, bones))
-        return _assemble(skeleton, total_mass, masses, rows,
+        body = _assemble(skeleton, total_mass, masses, rows,
                          {**{k: skeleton.joint_names[v] for k, v in idx.items()},
                           **{k: (skeleton.joint_names[t[0]], t[1]) for k, t in tips.items()}})
+        object.__setattr__(body, "reference", pose)
+        return body
 
     def with_segment_masses(self, masses: dict) -> "Body":
         """The same body with new segment masses (segment name → kg); inertias are
         recomputed at the same densities."""
-        return Body.from_skeleton(self.skeleton, self.total_mass,
-                                  mapping={k: v for k, v in self.landmarks.items()},
-                                  segment_masses=masses)
+        with warnings.catch_warnings():        # the mapping was reported when built
+            warnings.simplefilter("ignore", UserWarning)
+            return Body.from_skeleton(self.skeleton, self.total_mass,
+                                      mapping={k: v for k, v in self.landmarks.items()},
+                                      segment_masses=masses, pose=self.reference)
 
 
-def _chain_bones(sk: Skeleton, start: int, end_j: int, end_site: int | None, seg: str):
-    """Bones (frame joint, prox, dist) along the tree path start → end point."""
+#: Length (m) given to a head/hand/foot with nothing of length beyond its joint:
+#: skull base → vertex, wrist → fingertips, ankle → toe tip.
+_TIP_STUB = {"head": 0.15, "hand": 0.08, "foot": 0.12}
+
+
+def _lca(sk: Skeleton, a: int, b: int) -> int:
+    """Lowest common ancestor of joints a and b."""
+    pa = sk.path_to_root(a)
+    pb = set(sk.path_to_root(b))
+    return next(j for j in pa if j in pb)
+
+
+def _trunk_and_head(sk: Skeleton, idx: dict, tips: dict, pose: tuple):
+    """The trunk and head rows, following de Leva's landmarks: trunk from the
+    mid-hip point to C7 (taken as the mid-shoulder point), head from C7 to the
+    vertex.
+
+    Skeletons put their spine joints anywhere (CMU's ``Neck`` sits at mid-chest,
+    iClone's waist joints near the pelvis), so the segments are not the bones
+    between the ``pelvis`` and ``neck`` joints: the trunk runs from the mid-hip
+    point along the spine joints to the mid-shoulder point, both fixed in the
+    frame of the joint below them on the spine, and the head keeps only the part
+    of its chain above the shoulder line.  Points are measured on ``pose``
+    (positions (F,J,3), rotations (F,J,3,3)): the rest pose, or a clip's frames
+    (then averaged in the joint's frame).  Without this the trunk of a CMU
+    skeleton is 24 cm long, a flat disc 49 cm wide."""
+    P, R = pose
+    hl, hr, sl, sr = idx["hip_l"], idx["hip_r"], idx["shoulder_l"], idx["shoulder_r"]
+    sj = _lca(sk, sl, sr)
+    hj = _lca(sk, _lca(sk, hl, hr), sj)               # on the path root → shoulders
+    mid_hip = (P[:, hl] + P[:, hr]) / 2.0              # (F,3)
+    mid_sh = (P[:, sl] + P[:, sr]) / 2.0
+    axis = mid_sh - mid_hip
+    n = np.linalg.norm(axis, axis=1)
+    if np.any(n < 1e-6):
+        raise BodyMappingError("the shoulders and hips coincide in the reference pose; "
+                               "pass a mapping")
+    u = axis / n[:, None]
+
+    def local(j, x):                                   # x (F,3) world → j's frame, averaged
+        return np.einsum("fba,fb->fa", R[:, j], x - P[:, j]).mean(axis=0)
+
+    path = sk.path_to_root(sj)
+    path = path[: path.index(hj) + 1][::-1]           # hj ... sj
+    trunk = [(hj, local(hj, mid_hip), np.zeros(3))]   # mid-hip → the spine's base joint
+    trunk += [(a, np.zeros(3), sk.offsets[b].copy()) for a, b in zip(path[:-1], path[1:])]
+    trunk.append((sj, np.zeros(3), local(sj, mid_sh)))
+    yield ("trunk", trunk)
+
+    head = _chain_bones(sk, idx["neck"], *tips["head_top"], "head", tip_from=idx["head"])
+
+    def height(j, x):                                  # mean height above the shoulder line
+        w = P[:, j] + np.einsum("fab,b->fa", R[:, j], x)
+        return float(np.mean(np.einsum("fa,fa->f", w - mid_sh, u)))
+
+    clipped = []
+    for j, p, d in head:
+        hp, hd = height(j, p), height(j, d)
+        if hd <= 0.0:
+            continue                                   # below the shoulder line
+        if hp < 0.0:                                   # straddles it: start at the line
+            p = p + (d - p) * (-hp) / (hd - hp)
+        clipped.append((j, p, d))
+    yield ("head", clipped if clipped else head)
+
+
+def _chain_bones(sk: Skeleton, start: int, end_j: int, end_site: int | None, seg: str,
+                 tip_from: int | None = None):
+    """Bones (frame joint, prox, dist) along the tree path start → end point.
+
+    Bones shorter than 1 mm are dropped.  For a head, hand or foot, when less than a
+    quarter of its typical length (``_TIP_STUB``) lies beyond its joint ``tip_from``
+    (default ``start``) — a zero-length End Site, a leaf hand, helper bones of a few
+    mm — those bones are replaced by a stub of the typical length along the bone
+    that leads into that joint; so are bones beyond it longer than 4× that length
+    (a broken End Site), with a warning."""
     if not _is_ancestor(sk, start, end_j):
         raise BodyMappingError(f"segment {seg}: joint {sk.joint_names[end_j]!r} is not below "
                                f"{sk.joint_names[start]!r} in the hierarchy")
     path = sk.path_to_root(end_j)
     path = path[: path.index(start) + 1][::-1]        # start ... end_j
-    bones = []
-    for a, b in zip(path[:-1], path[1:]):
-        bones.append((a, np.zeros(3), sk.offsets[b].copy()))
+    bones = [(a, np.zeros(3), sk.offsets[b].copy()) for a, b in zip(path[:-1], path[1:])]
     if end_site is not None:
         bones.append((end_j, np.zeros(3), sk.end_sites[end_site][1].copy()))
-    if not bones or all(np.linalg.norm(d) < 1e-9 for _, _, d in bones):
-        # a landmark with no length below it (leaf hand, missing head tip): give the
-        # segment a short stub along the parent bone's direction
-        par = sk.parents[start]
-        u = sk.offsets[start] if par >= 0 else np.array([0.0, 1.0, 0.0])
+    bones = [b for b in bones if np.linalg.norm(b[2] - b[1]) >= 1e-3]
+    group = seg.split("_")[0]
+    k = start if tip_from is None else tip_from
+    beyond = [b for b in bones if _is_ancestor(sk, k, b[0])]
+    beyond_len = sum(np.linalg.norm(d - p) for _, p, d in beyond)
+    if group in _TIP_STUB and beyond_len > 4.0 * _TIP_STUB[group]:
+        # e.g. the MASS rig's right-hand End Site, 1.62 m long: a broken tip, not a hand
+        warnings.warn(f"segment {seg}: the bones beyond joint {sk.joint_names[k]!r} are "
+                      f"{beyond_len:.2f} m long, implausible for a {group}; using a "
+                      f"{_TIP_STUB[group]:.2f} m {group} instead (pass mapping= to choose "
+                      f"its tip)", stacklevel=4)
+    if group in _TIP_STUB and not (0.25 * _TIP_STUB[group] <= beyond_len <= 4.0 * _TIP_STUB[group]):
+        # the direction of the bone into k, in k's frame (equal to its parent's at rest)
+        u = sk.offsets[k] if sk.parents[k] >= 0 else np.array([0.0, 1.0, 0.0])
         n = np.linalg.norm(u)
         u = u / n if n > 1e-9 else np.array([0.0, 1.0, 0.0])
-        stub = {"head": 0.20, "hand": 0.08, "foot": 0.12}.get(seg.split("_")[0], 0.05)
-        # the stub is in start's own frame; the parent bone direction is in the
-        # parent's frame, which equals start's frame at rest
-        bones = [(start, np.zeros(3), u * stub)]
+        bones = [b for b in bones if not any(b is x for x in beyond)] + [(k, np.zeros(3), u * _TIP_STUB[group])]
+    if not bones:
+        raise BodyMappingError(f"segment {seg}: the joints from {sk.joint_names[start]!r} to "
+                               f"{sk.joint_names[end_j]!r} have no length; pass a mapping")
     return bones
 
 

@@ -66,3 +66,43 @@ def test_mapping_override_and_errors():
         Body.from_skeleton(sk, mapping={**mapping, "head": "Nope"})
     heavier = body.with_segment_masses({"trunk": 30.0})
     assert heavier.segment_masses()["trunk"] == pytest.approx(30.0)
+
+
+def _segment_shape(body, seg):
+    """(total length along the chain, short semi-axis) of one segment."""
+    m = body.segment == body.segment_names.index(seg)
+    return float(np.linalg.norm(body.dist[m] - body.prox[m], axis=1).sum()), float(body.radius[m].max())
+
+
+@pytest.mark.parametrize("name", ALL_BVH)
+def test_segments_are_body_shaped(name):
+    """Trunk from mid-hip to the shoulder line, head above it, no flat discs: every
+    segment but the hands (flat by nature, and CMU's are 6 cm long) is at least 1.5×
+    as long as it is wide, and the trunk spans the hip-to-shoulder distance of the
+    clip's first frame (iClone's rest pose folds the clavicles: measured on the clip)."""
+    import warnings
+    clip = load_bvh(shared_file(name))
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("always")
+        body = Body.from_clip(clip, total_mass=70.0)
+    for seg in body.segment_names:
+        length, radius = _segment_shape(body, seg)
+        ratio = 1.0 if seg.startswith("hand") else 1.5
+        assert length >= ratio * radius, f"{seg}: {length:.3f} m long, {radius:.3f} m wide"
+        assert length < 0.8, f"{seg}: {length:.3f} m long"
+    P = clip.joint_positions()[0]
+    ix = clip.skeleton.index
+    lm = body.landmarks
+    mid_hip = (P[ix(lm["hip_l"])] + P[ix(lm["hip_r"])]) / 2
+    mid_sh = (P[ix(lm["shoulder_l"])] + P[ix(lm["shoulder_r"])]) / 2
+    trunk_len, _ = _segment_shape(body, "trunk")
+    assert 0.9 * np.linalg.norm(mid_sh - mid_hip) <= trunk_len <= 1.25 * np.linalg.norm(mid_sh - mid_hip)
+
+
+def test_broken_hand_end_site_is_replaced_with_a_warning():
+    """The MASS rig's right hand has a 1.62 m End Site: a hand that long would carry
+    the hand's mass half a body away; the body uses a typical hand and says so."""
+    clip = load_bvh(shared_file("mass_cartwheel.bvh"))
+    with pytest.warns(UserWarning, match=r"hand_r.*1\.62 m long"):
+        body = Body.from_skeleton(clip.skeleton)
+    assert _segment_shape(body, "hand_r")[0] == pytest.approx(_segment_shape(body, "hand_l")[0], rel=0.05)

@@ -141,9 +141,9 @@ class Skeleton:
     def rest_positions(self) -> np.ndarray:
         """(J,3) joint positions of the rest pose (all rotations identity)."""
         P = np.zeros((self.num_joints, 3))
+        P[0] = self.offsets[0]
         for j in range(1, self.num_joints):
             P[j] = P[self.parents[j]] + self.offsets[j]
-        P[0] = self.offsets[0]
         return P
 
     def rest_height(self) -> float:
