@@ -127,7 +127,8 @@ def estimate_masses(clip: Clip, body: Body, takeoff: int, landing: int,
     lb = np.concatenate([np.zeros(Gn), np.full(7, -np.inf)])
     ub = np.full(Gn + 7, np.inf)
     res = lsq_linear(A_all, b_all, bounds=(lb, ub), method="bvls", lsmr_tol=None)
-    m = res.x[:Gn] * (M / res.x[:Gn].sum())
+    m = np.maximum(res.x[:Gn], 0.0)         # bvls may return -1e-16 at the bound
+    m = m * (M / m.sum())
     masses = {g: float(v) for g, v in zip(GROUPS, m)}
     new_body = body.with_segment_masses(masses)
 

@@ -353,5 +353,6 @@ def test_the_analyser_finds_the_flight(name):
     assert a.flight is not None and not a.warnings
     assert clip.meta["takeoff"] <= a.takeoff < a.landing <= clip.meta["landing"]
     assert a.apparent_gravity == pytest.approx(G, rel=0.01)
+    assert clip.fps == 120 and a.flight.rms < 1e-3          # the analyser's own parabola fit
     if name in FLIPS:
         assert a.L_cv_pct < 1.0

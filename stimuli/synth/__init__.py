@@ -15,7 +15,8 @@ from .clips import BUILTIN_NAMES, DESIGNS, PARAMS, SynthError, build
 from .skeleton import make_skeleton
 
 
-def builtin(name: str, fps: float = 120, total_mass: float = 70.0, **params) -> Clip:
+def builtin(name: str, fps: float = 120, total_mass: float = 70.0,
+            segment_masses: dict | None = None, **params) -> Clip:
     """A built-in synthetic clip whose flight is physically exact.
 
     ``name`` is one of :data:`BUILTIN_NAMES`:
@@ -54,6 +55,10 @@ def builtin(name: str, fps: float = 120, total_mass: float = 70.0, **params) -> 
     fps : frames per second (>= 10).  Take-off and touch-down fall on frames,
         so ``flight_time`` is rounded to whole frames.
     total_mass : kg.
+    segment_masses : segment or group name → kg, for a body that is not the de Leva
+        table's (the rest keep their table share of ``total_mass``; the total is then
+        their sum).  The flight is exact for that body: what a mass estimate must
+        recover.  ``meta["segment_masses"]`` records the masses used.
     height : standing height in metres (1.75); all lengths scale with it.
     flight_time : seconds from take-off to touch-down (0.68 flips, 0.50 jump);
         the take-off speed follows from it (COM rise ≈ 0.54 m for the flips).
@@ -90,7 +95,7 @@ def builtin(name: str, fps: float = 120, total_mass: float = 70.0, **params) -> 
     >>> clip.meta["L_flight"][0] > 0          # forward rotation
     True
     """
-    return build(name, fps=fps, total_mass=total_mass, **params)
+    return build(name, fps=fps, total_mass=total_mass, segment_masses=segment_masses, **params)
 
 
 __all__ = ["BUILTIN_NAMES", "PARAMS", "DESIGNS", "SynthError", "builtin", "make_skeleton"]

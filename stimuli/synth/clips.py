@@ -372,7 +372,8 @@ def _check_params(name, fps, total_mass, params):
     return d, H
 
 
-def build(name: str, fps: float = 120.0, total_mass: float = 70.0, **params) -> Clip:
+def build(name: str, fps: float = 120.0, total_mass: float = 70.0,
+          segment_masses: dict | None = None, **params) -> Clip:
     """See :func:`stimuli.synth.builtin`."""
     t_start = time.perf_counter()
     d, H = _check_params(name, fps, total_mass, params)
@@ -380,7 +381,8 @@ def build(name: str, fps: float = 120.0, total_mass: float = 70.0, **params) -> 
     scale = H / REF_HEIGHT
     fps = float(fps)
     sk = make_skeleton(H)
-    body = Body.from_skeleton(sk, total_mass)
+    body = Body.from_skeleton(sk, total_mass, segment_masses=segment_masses)
+    total_mass = body.total_mass                  # the sum, when segment masses are given
     model = PlanarModel(sk, body)
 
     # take-off and touch-down on the frame grid: the flight lasts whole frames
@@ -439,6 +441,7 @@ def build(name: str, fps: float = 120.0, total_mass: float = 70.0, **params) -> 
         "flight_s": float(T),
         "L_flight": [float(fl["L"]), 0.0, 0.0], "v0": [float(v) for v in v0], "g": G,
         "total_mass": float(total_mass), "height": H,
+        "segment_masses": body.segment_masses(),
         "rotation_deg": float(np.degrees(2 * np.pi * turns)),
         "flight_rotation_deg": float(np.degrees(dtheta)),
         "takeoff_pitch_rate": float(fl["Om"][0]), "landing_pitch_rate": float(fl["Om"][-1]),
