@@ -382,7 +382,8 @@ def build(name: str, fps: float = 120.0, total_mass: float = 70.0,
     fps = float(fps)
     sk = make_skeleton(H)
     body = Body.from_skeleton(sk, total_mass, segment_masses=segment_masses)
-    total_mass = body.total_mass                  # the sum, when segment masses are given
+    if segment_masses:
+        total_mass = body.total_mass              # the sum, when segment masses are given
     model = PlanarModel(sk, body)
 
     # take-off and touch-down on the frame grid: the flight lasts whole frames
