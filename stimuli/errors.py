@@ -205,7 +205,10 @@ def measure(original: Analysis, inj: Injected) -> dict:
             full = c[0] + c[1]
             win = slice(int(np.floor(0.9 * (n - 1))), n)
         else:
-            half = int(np.ceil((n - 1) / 2))
+            # the rate switches at half the *original* flight time, which is past the
+            # middle of a shortened (sped-up) flight and before that of a slowed one
+            T0 = (original.landing - original.takeoff) / fps
+            half = min(int(np.ceil(T0 / 2 * fps - 1e-9)), n - 1)
             win = slice(half + 2, n - 2) if n - 4 > half + 2 else slice(half, n)
             full = float(np.mean(ratio[win]))
         out["measured_error_pct"] = 100.0 * (full - 1.0)
