@@ -150,6 +150,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_render(sub)
     add_session(sub)
     add_analysis(sub)
+    from study.reproduce import add_commands as add_reproduce
+    add_reproduce(sub)
     return ap
 
 

@@ -1,0 +1,232 @@
+"""``flipstudy reproduce``: the whole platform on the embedded default, end to end.
+
+The study of Majkowska & Faloutsos 2007 (Section 7) on the built-in, physically
+exact flips:
+
+1. ``design.toml``      the paper's design (what ``flipstudy init`` writes)
+2. ``study/``           52 stimuli, each measured by the analyser (``flipstudy stimuli``)
+3. ``study/render/``    stimulus videos, ghost and marker-trail composites, one
+                        camera and one style for all (``flipstudy render``)
+4. ``study/sessions.sqlite``  a simulated panel of 19 participants answering every
+                        trial through the session runner's storage path
+                        (``flipstudy simulate``), exported to ``responses.csv``
+5. ``analysis/``        mean ratings, d′, GEE tests, psychometric fits, the
+                        Table-2 layout (CSV, Markdown, LaTeX) and the figures,
+                        with a figure sheet beside a ghost and a trail composite
+                        of the original backflip and its strongest error
+
+Everything is built in a hidden folder beside ``OUT`` and moved into place at
+the end, so an interrupted run leaves nothing half-written.  The simulated
+observers follow the paper's Table 2 (see :mod:`study.simulate`): the table that
+comes out should resemble the paper's, within the noise of 19 participants.
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+#: the original and its strongest error shown beside the curves on the sheet
+SHEET_ORIGINAL = "backflip_reference"
+SHEET_ERROR = "backflip_abrupt-decrease_50"
+#: video size of the reproduce run (as ``flipstudy render``'s default)
+SIZE = (640, 480)
+#: the reproduce run renders without anti-aliasing: SSAA (``flipstudy render``'s
+#: default) costs 3-4x the time (52 videos: ~4 min instead of ~1 on 2 cores);
+#: ``flipstudy render OUT/study`` re-renders them at final quality
+STYLE = {"anti_aliasing": "none"}
+
+
+class ReproduceError(RuntimeError):
+    """The reproduce run cannot start or a stage failed (message names which)."""
+
+
+def _say(quiet: bool, text: str) -> None:
+    if not quiet:
+        print(text, file=sys.stderr, flush=True)
+
+
+def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = None,
+              size=SIZE, force: bool = False, quiet: bool = False) -> dict:
+    """Run the whole pipeline into ``out``; returns ``{"files": {...}, "seconds": {...},
+    "table_md": str, "result": analysis Result}``.
+
+    Example
+    -------
+    >>> r = reproduce("paper/")                  # doctest: +SKIP
+    >>> sorted(r["files"])[:3]                   # doctest: +SKIP
+    ['analysis', 'design', 'figure_sheet']
+    """
+    from analysis.pipeline import analyze
+    from analysis.tables import to_markdown
+    from render.study import render_study
+    from stimuli.design import PAPER_DESIGN, load_design
+    from stimuli.stimset import build_stimuli
+
+    from .export import export_responses
+    from .simulate import simulate
+
+    out = Path(out)
+    if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
+        raise ReproduceError(f"{out} exists and is not empty; choose another --out or pass --force "
+                             f"to replace it")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
+    seconds: dict = {}
+    t_all = time.perf_counter()
+    try:
+        n_stages = 5
+
+        def stage(i, name):
+            _say(quiet, f"[{i}/{n_stages}] {name}")
+            return time.perf_counter()
+
+        t = stage(1, "design: the paper's study (Section 7), written to design.toml")
+        design_path = work / "design.toml"
+        design_path.write_text(PAPER_DESIGN, encoding="utf-8")
+        design = load_design(design_path)
+        seconds["design"] = time.perf_counter() - t
+
+        t = stage(2, "stimuli: inject and measure every error")
+        study = work / "study"
+        rows = build_stimuli(design, study, progress=not quiet)
+        worst = max(abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"]))
+                    for r in rows if r["kind"] != "reference")
+        seconds["stimuli"] = time.perf_counter() - t
+
+        t = stage(3, f"render: videos, ghost and trail composites at {size[0]}x{size[1]} "
+                     f"(no anti-aliasing: `flipstudy render` re-renders at final quality)")
+        rec = render_study(study, what=("video", "ghost", "trail"), size=size, jobs=jobs,
+                           style=STYLE, progress=not quiet)
+        seconds["render"] = time.perf_counter() - t
+
+        t = stage(4, f"sessions: {participants} simulated participants (observers of the paper's "
+                     f"Table 2), exported")
+        done = [0]
+
+        def tick(pid, session):
+            done[0] += 1
+            if not quiet:
+                print(f"\r  {done[0]}/{participants} participants", end="", file=sys.stderr, flush=True)
+
+        simulate(study, participants, seed=seed, progress=tick)
+        if not quiet:
+            print(file=sys.stderr)
+        exp = export_responses(study)
+        seconds["sessions"] = time.perf_counter() - t
+
+        t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
+        render_dir = study / "render"
+        images = {"ghost original": render_dir / f"{SHEET_ORIGINAL}_ghost.png",
+                  "ghost strongest error": render_dir / f"{SHEET_ERROR}_ghost.png",
+                  "trail original": render_dir / f"{SHEET_ORIGINAL}_trail.png",
+                  "trail strongest error": render_dir / f"{SHEET_ERROR}_trail.png"}
+        result = analyze(exp["responses"], work / "analysis", images=images, seed=seed)
+        seconds["analysis"] = time.perf_counter() - t
+
+        # move into place: nothing half-written is ever at OUT
+        if out.exists():
+            old = out.with_name(f".{out.name}.old-{os.getpid()}")
+            out.rename(old)
+            work.rename(out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            work.rename(out)
+    except BaseException:
+        shutil.rmtree(work, ignore_errors=True)
+        raise
+    seconds["total"] = time.perf_counter() - t_all
+
+    a = out / "analysis"
+    files = {
+        "design": out / "design.toml",
+        "manifest": out / "study" / "manifest.csv",
+        "stimuli": out / "study",
+        "videos": out / "study" / "render",
+        "render_settings": out / "study" / "render" / "render.json",
+        "sessions": out / "study" / "sessions.sqlite",
+        "responses": out / "study" / "responses.csv",
+        "participants": out / "study" / "participants.csv",
+        "analysis": a,
+        "table": a / "table.csv",
+        "table_paper": a / "table_paper.md",
+        "table_latex": a / "table_paper.tex",
+        "figure_ratings": a / "ratings.png",
+        "figure_dprime": a / "dprime.png",
+        "figure_psychometric": a / "psychometric.png",
+        "figure_sheet": a / "sheet.png",
+        "notes": a / "notes.md",
+    }
+    missing = [str(p) for p in files.values() if not p.exists()]
+    if missing:
+        raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
+    return {"files": files, "seconds": seconds, "n_stimuli": len(rows), "worst_gap_pct": worst,
+            "n_videos": sum(1 for s in rec["stimuli"].values() if "video" in s["files"]),
+            "n_responses": exp["rows"], "table_md": to_markdown(result.table), "result": result}
+
+
+def summary_text(r: dict, out) -> str:
+    """The short summary printed at the end of ``flipstudy reproduce``."""
+    s, f = r["seconds"], r["files"]
+    res = r["result"]
+    lines = [f"flipstudy reproduce: done in {s['total']:.0f} s "
+             f"(stimuli {s['stimuli']:.0f} s, render {s['render']:.0f} s, "
+             f"sessions {s['sessions']:.0f} s, analysis {s['analysis']:.0f} s)", "",
+             r["table_md"].rstrip(), ""]
+    th = res.thresholds
+    if len(th):
+        lines.append("detection thresholds (P(incorrect) halfway from the base rate to 1):")
+        for _, t in th.iterrows():
+            lines.append(f"  {t['group']:18s} " + (f"{t['threshold']:.1f} %" if t["reached"]
+                                                   else "not reached within the tested levels"))
+        lines.append("")
+    lines += [
+        f"outputs in {out}/:",
+        f"  {f['design']}  the paper's design (edit and rerun `flipstudy stimuli`)",
+        f"  {f['manifest']}  {r['n_stimuli']} stimuli, nominal and measured errors "
+        f"(largest gap {r['worst_gap_pct']:.2f} points)",
+        f"  {f['videos']}/  {r['n_videos']} stimulus videos (.mp4), ghost and trail composites (.png), "
+        f"render.json",
+        f"  {f['sessions']}  every simulated answer; {f['responses']} ({r['n_responses']} rows)",
+        f"  {f['table_paper']}  the Table-2 layout (also .csv, .tex; table.csv has every column)",
+        f"  {f['figure_ratings']}, {f['figure_dprime'].name}, {f['figure_psychometric'].name}, "
+        f"{f['figure_sheet'].name}  figures (PNG + PDF)",
+        f"  {f['notes']}  methods: correction, tests, fits",
+        "",
+        f"a real participant: flipstudy run {f['stimuli']} --participant P01",
+    ]
+    return "\n".join(lines)
+
+
+def cmd_reproduce(args) -> int:
+    try:
+        r = reproduce(args.out, participants=args.participants, seed=args.seed, jobs=args.jobs,
+                      force=args.force, quiet=args.quiet)
+    except (ReproduceError, ValueError, OSError) as e:
+        print(f"flipstudy reproduce: error: {e}", file=sys.stderr)
+        return 1
+    print(summary_text(r, args.out.rstrip("/")))
+    return 0
+
+
+def add_commands(subparsers) -> None:
+    p = subparsers.add_parser(
+        "reproduce", help="the whole pipeline on the embedded default: design → stimuli → render → "
+                          "simulated sessions → analysis",
+        description="Reproduce the study of Majkowska & Faloutsos 2007 (Section 7) on the built-in "
+                    "flips: the paper's design, its 52 stimuli (measured), videos and composites, a "
+                    "simulated panel of participants, the analysis, the Table-2 layout and the "
+                    "figures. Built in a hidden folder beside OUT and moved into place at the end.")
+    p.add_argument("--out", default="flipstudy-paper", metavar="OUT",
+                   help="output folder (default: flipstudy-paper)")
+    p.add_argument("--participants", type=int, default=19,
+                   help="simulated participants (default 19, as in the paper)")
+    p.add_argument("--seed", type=int, default=1, help="seed of the simulated answers and bootstraps")
+    p.add_argument("--jobs", type=int, default=None, metavar="N",
+                   help="render worker processes (default: number of CPUs)")
+    p.add_argument("--force", action="store_true", help="replace OUT if it exists")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.set_defaults(func=cmd_reproduce)
