@@ -1,7 +1,6 @@
 """The built-in synthetic clips (stimuli.synth): physics measured the way the
 analyser measures it (physics.momentum on Body.from_skeleton at the clip's
 frame rate), feet, floor, rotation, BVH round trip, parameters."""
-import time
 
 import numpy as np
 import pytest
@@ -319,13 +318,10 @@ def test_parameters_height_mass_flight_time():
     assert still.meta["v0"][2] == 0.0
 
 
-def test_deterministic_and_fast():
-    t0 = time.perf_counter()
+def test_deterministic():
     a = builtin("backflip")
-    elapsed = time.perf_counter() - t0
     b = builtin("backflip")
     assert np.array_equal(a.root_pos, b.root_pos) and np.array_equal(a.rotations, b.rotations)
-    assert elapsed < 1.0
     c = top_builtin("backflip", fps=120)                     # the package entry point
     assert np.array_equal(c.rotations, a.rotations)
 
