@@ -93,3 +93,28 @@ def plot_compare(stim, original, path, title: str | None = None) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+def plot_repair(repair, path, title: str | None = None) -> Path:
+    """The paper's Figure 3: relative |L| error of an animator-edited flight
+    against the original, before and after the momentum repair, over the
+    flight's normalised time."""
+    plt = _mpl()
+    fig, ax = plt.subplots(figsize=(7.0, 3.8), constrained_layout=True)
+    for err, label, colour in ((repair.error_before, "edited, before retiming", "#D55E00"),
+                               (repair.error_after, "after retiming (repaired)", "#0072B2")):
+        x = np.linspace(0.0, 1.0, err.size)
+        ax.plot(x, 100 * err, color=colour, lw=1.8, label=label)
+    ax.axhline(0, color="k", lw=0.8)
+    for y in (-20, 20):
+        ax.axhline(y, color="0.5", lw=0.8, ls=":")
+    ax.set_xlabel("flight time (normalised)")
+    ax.set_ylabel("|L| error vs original (%)")
+    ax.set_title(title or "angular-momentum error of an animator edit")
+    ax.legend(frameon=False)
+    ax.grid(alpha=0.3)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return path

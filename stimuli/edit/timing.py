@@ -77,17 +77,22 @@ def source_times(rate: Callable[[np.ndarray], np.ndarray] | np.ndarray, duration
 
 
 def ratio_retime_frames(ratio: Callable[[float], float], start: float, stop: float,
-                        max_frames: int = 100000) -> np.ndarray:
+                        max_frames: int = 100000, midpoint: bool = False) -> np.ndarray:
     """The paper's rule (Section 5.5): ``next = last + 1/ratio(last)`` from
     ``start`` while below ``stop``; returns the fractional source frames.
+    ``midpoint=True`` takes the step with the ratio half a step ahead,
+    ``next = last + 1/ratio(last + ½/ratio(last))`` (second order: it follows a
+    ratio that changes within a step, e.g. while an edit blends in).
 
     The rule is sequential by nature (each step depends on the previous one), so
-    this is a scalar loop over output frames; ``ratio`` is evaluated once per
-    step."""
+    this is a scalar loop over output frames; ``ratio`` is evaluated once (twice
+    with ``midpoint``) per step."""
     out = [float(start)]
     f = float(start)
     while True:
         r = float(ratio(f))
+        if midpoint and np.isfinite(r) and r > 0:
+            r = float(ratio(f + 0.5 / r))
         if not (np.isfinite(r) and r > 0):
             raise ValueError(f"ratio at frame {f:.2f} must be positive, got {r!r}")
         f = f + 1.0 / r
