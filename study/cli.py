@@ -112,6 +112,74 @@ def cmd_stimuli(args) -> int:
     return 0
 
 
+def cmd_edit(args) -> int:
+    """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit
+    with momentum repair (5.5), measured."""
+    from stimuli import analyse, save_bvh
+    from stimuli.edit.animator import AnimatorEditError, repair_momentum, straighten
+    from stimuli.edit.multiflip import FlipEditError, measure, multiflip
+    if args.flips is None and not args.straighten:
+        print("flipstudy edit: error: nothing to do: give --flips N and/or --straighten legs|arms",
+              file=sys.stderr)
+        return 2
+    clip = load_clip(args.clip, args.scale, args.fps)
+    a = analyse(clip, total_mass=args.mass)
+    if a.flight is None:
+        print(f"flipstudy edit: error: {args.clip}: no flight phase found", file=sys.stderr)
+        return 1
+    out_clip, lines, plot = clip, [], None
+    try:
+        if args.straighten:
+            edited = straighten(a, args.straighten, args.t_from, args.t_to)
+            rep = repair_momentum(a, edited, midpoint=args.midpoint)
+            r = rep.report
+            lines.append(f"straighten {args.straighten}: |L| error {r['max_error_before_pct']:.0f} % before "
+                         f"retiming, {r['max_error_after_pct']:.1f} % after ({r['rule']} rule); flight "
+                         f"{r['flight_s_before']:.3f} → {r['flight_s_after']:.3f} s, height "
+                         f"{r['jump_height_before_m']:.2f} → {r['jump_height_after_m']:.2f} m")
+            out_clip = rep.clip
+            plot = ("repair", rep)
+            if args.flips is not None:
+                a = analyse(out_clip, body=a.body, estimate=False)
+        if args.flips is not None:
+            base = a
+            res = multiflip(base, args.flips, k_ratio=args.k_ratio)
+            m = measure(res, base)
+            r = res.report
+            lines += [
+                f"self-looping sequence  frames {r['self_loop']['m']}–{r['self_loop']['n']} "
+                f"(turn {r['self_loop']['phi_deg']:.1f}°, distance {r['self_loop']['distance']:.3f}), "
+                f"repeated {r['repetitions'] + 1}×; landing join {r['landing_join']['f_source']} → "
+                f"{r['landing_join']['g']} (turn error {r['landing_join']['turn_error_deg']:+.1f}°, spread)",
+                f"retiming              k* = {r['k_star']:.3f}, k = {r['k']:.3f} ({r['k_ratio']:.2f} k*), "
+                f"landing phase {r['k_landing']:.3f}; flight {r['flight_s_before_retiming']:.3f} → "
+                f"{r['flight_s']:.3f} s",
+                f"momentum jump         take-off {r['dp_takeoff_pct']:.1f} %, landing "
+                f"{r['dp_landing_pct']:.1f} % of the take-off momentum",
+                f"measured              turn {m['turn_deg']:.1f}° (frames {m['turn_span'][0]}–"
+                f"{m['turn_span'][1]}), flight |L| mean {m['L_mean']:.2f} kg·m²/s CV {m['L_cv_pct']:.2f} %, "
+                f"COM residual {m['com_rms_mm']:.2f} mm, gravity {m['apparent_gravity']:.2f} m/s²"]
+            out_clip = res.clip
+            plot = plot or ("compare", None)
+    except (FlipEditError, AnimatorEditError) as e:
+        print(f"flipstudy edit: error: {args.clip}: {e}", file=sys.stderr)
+        return 1
+    save_bvh(out_clip, args.out)
+    print(f"{args.clip} → {args.out}: {out_clip.num_frames} frames at {out_clip.fps:g} fps")
+    for ln in lines:
+        print("  " + ln)
+    if args.plot:
+        from render.plots import plot_compare, plot_repair
+        if plot and plot[0] == "repair" and args.flips is None:
+            plot_repair(plot[1], args.plot, title=f"{Path(str(args.clip)).stem}: straight {args.straighten}")
+        else:
+            orig = analyse(clip, total_mass=args.mass)
+            plot_compare(analyse(out_clip, body=orig.body, estimate=False), orig, args.plot,
+                         title=f"{Path(args.out).stem} over {Path(str(args.clip)).stem}")
+        print(f"  plot                  {args.plot}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(prog="flipstudy", description=(
         "Perception studies of ballistic character motion: stimuli, rendering, sessions, analysis."))
@@ -143,6 +211,29 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="replace an existing STUDY_DIR")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_stimuli)
+
+    p = sub.add_parser("edit", help="more flips, or an animator edit in flight, with momentum repaired",
+                       description="Multi-flip editing (Majkowska & Faloutsos 2007, Section 5): turn a single "
+                                   "flip into N flips (self-looping search, sequencing, retiming by k, COM "
+                                   "repositioning), and/or straighten the legs or arms in flight and repair "
+                                   "|L| by non-uniform retiming (5.5). Prints what it did and measured.")
+    _add_clip_args(p)
+    p.add_argument("--flips", type=int, default=None, metavar="N", help="number of flips of the result (1-6)")
+    p.add_argument("--k-ratio", type=float, default=0.7,
+                   help="retiming factor as a fraction of k* (default 0.7, the paper's; 1 = continuous momentum)")
+    p.add_argument("--straighten", choices=["legs", "arms"], help="hold a joint group straight in flight")
+    p.add_argument("--from", dest="t_from", type=float, default=None, metavar="T0",
+                   help="edit start, seconds (default 0.1 s after take-off)")
+    p.add_argument("--to", dest="t_to", type=float, default=None, metavar="T1",
+                   help="edit end, seconds (default 0.1 s before landing)")
+    p.add_argument("--midpoint", action="store_true",
+                   help="second-order variant of the paper's retiming rule for the repair")
+    p.add_argument("--mass", type=float, default=70.0, help="total body mass in kg (default 70)")
+    p.add_argument("--out", required=True, metavar="OUT.bvh")
+    p.add_argument("--plot", metavar="FILE.png",
+                   help="|L|(t) of the result over the original (with --straighten alone: the error "
+                        "before/after repair, the paper's Figure 3)")
+    p.set_defaults(func=cmd_edit)
 
     from render.cli import add_commands as add_render
     from study.session_cli import add_commands as add_session

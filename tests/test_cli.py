@@ -77,3 +77,18 @@ def test_bad_file_gives_a_clear_error_not_a_traceback(capsys, tmp_path):
 def test_console_script_help():
     r = subprocess.run([sys.executable, "-m", "study.cli", "--help"], capture_output=True, text=True)
     assert r.returncode == 0 and "inspect" in r.stdout
+
+
+def test_edit_makes_a_double_flip_and_refuses_a_jump(capsys, tmp_path):
+    from stimuli import analyse, load_bvh
+    out = tmp_path / "double.bvh"
+    code, text, _ = run(capsys, "edit", "backflip", "--flips", "2", "--k-ratio", "1", "--out", str(out),
+                        "--plot", str(tmp_path / "L.png"))
+    assert code == 0 and "k* = " in text and "turn 72" in text
+    clip = load_bvh(out, scale=1.0)
+    assert analyse(clip).flight is not None
+    assert (tmp_path / "L.png").stat().st_size > 10_000
+    code, _, err = run(capsys, "edit", "jump", "--flips", "2", "--out", str(tmp_path / "x.bvh"))
+    assert code == 1 and "not one flip" in err and not (tmp_path / "x.bvh").exists()
+    code, _, err = run(capsys, "edit", "backflip", "--out", str(tmp_path / "y.bvh"))
+    assert code == 2 and "nothing to do" in err
