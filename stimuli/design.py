@@ -33,6 +33,8 @@ class ClipSpec:
     source: str                 # built-in name or BVH path (relative to the design file)
     scale: float | None = None  # metres per file unit (BVH); None: guess
     fps: float | None = None    # override the file's frame rate (BVH)
+    flips: int | None = None    # turn the clip into an N-flip one first (flipstudy edit)
+    k_ratio: float = 0.7        # its retiming factor as a fraction of k*
 
 
 @dataclass
@@ -85,7 +87,9 @@ replay = false            # participants may not replay a motion
 break_every = 40          # a break every 40 trials
 
 # Base clips: a built-in name (backflip, frontflip, jump) or a BVH path relative to
-# this file, with optional scale (metres per file unit) and fps (override the header).
+# this file, with optional scale (metres per file unit) and fps (override the header),
+# and optional flips = N (and k_ratio, default 0.7) to study the multi-flip method's
+# own output: the clip is first made an N-flip one, as `flipstudy edit --flips N` does.
 [[clips]]
 name = "backflip"
 source = "backflip"
@@ -193,7 +197,11 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
             name=_get(c, "name", str, wc, check=_name_ok),
             source=_get(c, "source", str, wc),
             scale=_get(c, "scale", float, wc, None, positive),
-            fps=_get(c, "fps", float, wc, None, positive)))
+            fps=_get(c, "fps", float, wc, None, positive),
+            flips=_get(c, "flips", int, wc, None,
+                       lambda v: None if 1 <= v <= 6 else "expected a whole number of flips from 1 to 6"),
+            k_ratio=_get(c, "k_ratio", float, wc, 0.7,
+                         lambda v: None if 0.2 <= v <= 2 else "expected a fraction of k* from 0.2 to 2")))
     names = [c.name for c in design.clips]
     if len(set(names)) != len(names):
         raise DesignError(f"{src}: clips: duplicate clip names {sorted({n for n in names if names.count(n) > 1})}")

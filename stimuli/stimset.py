@@ -42,14 +42,24 @@ def load_base_clip(spec, design: Design) -> Clip:
     """A design's base clip: a built-in name or a BVH path (relative to the design)."""
     from . import BUILTIN_NAMES, builtin
     if spec.source in BUILTIN_NAMES:
-        return builtin(spec.source, fps=spec.fps or design.fps, total_mass=design.total_mass)
-    p = Path(spec.source)
-    if not p.is_absolute() and design.path is not None:
-        p = design.path.parent / p
-    if not p.exists():
-        raise DesignError(f"clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
-                          f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
-    return load_bvh(p, scale=spec.scale, fps=spec.fps)
+        clip = builtin(spec.source, fps=spec.fps or design.fps, total_mass=design.total_mass)
+    else:
+        p = Path(spec.source)
+        if not p.is_absolute() and design.path is not None:
+            p = design.path.parent / p
+        if not p.exists():
+            raise DesignError(f"clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
+                              f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
+        clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
+    if getattr(spec, "flips", None):
+        from .edit.multiflip import FlipEditError, multiflip
+        try:
+            clip = multiflip(analyse(clip, total_mass=design.total_mass), spec.flips,
+                             k_ratio=spec.k_ratio).clip
+        except FlipEditError as e:
+            raise DesignError(f"clips '{spec.name}': flips = {spec.flips}: {e}") from None
+        clip.meta["name"] = spec.name
+    return clip
 
 
 def derived_seed(seed: int, name: str) -> int:

@@ -204,3 +204,22 @@ def test_tolerance_refuses_noisy_real_stimuli(tmp_path):
     with pytest.raises(StimulusError, match="misses the nominal"):
         build_stimuli(d, tmp_path / "strict", progress=False)
     assert not (tmp_path / "strict").exists()
+
+
+def test_design_with_a_multiflip_base_clip(tmp_path):
+    """The paper's study run on the method's own output: a double backflip base clip."""
+    text = PAPER_DESIGN.replace('source = "backflip"', 'source = "backflip"\nflips = 2\nk_ratio = 1.0')
+    d = parse_design(text)
+    assert d.clips[0].flips == 2 and d.clips[0].k_ratio == 1.0
+    rows = build_stimuli(d, tmp_path / "study", progress=False)
+    ref = next(r for r in rows if r["stimulus"] == "backflip_reference")
+    orig = next(r for r in rows if r["stimulus"] == "frontflip_reference")
+    assert float(ref["flight_s"]) > float(orig["flight_s"])          # a longer flight: two turns
+    for r in rows:
+        if r["kind"] != "reference" and r["clip"] == "backflip":
+            assert abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"])) <= 1.0, r["stimulus"]
+    with pytest.raises(DesignError, match=r"flips.*whole number"):
+        parse_design(PAPER_DESIGN.replace('source = "backflip"', 'source = "backflip"\nflips = 9'))
+    with pytest.raises(DesignError, match="not one flip"):
+        build_stimuli(parse_design(PAPER_DESIGN.replace('source = "backflip"', 'source = "jump"\nflips = 2')),
+                      tmp_path / "s2", progress=False)
