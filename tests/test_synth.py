@@ -352,3 +352,19 @@ def test_the_analyser_finds_the_flight(name):
     assert clip.fps == 120 and a.flight.rms < 1e-3          # the analyser's own parabola fit
     if name in FLIPS:
         assert a.L_cv_pct < 1.0
+
+
+@pytest.mark.parametrize("name", FLIPS)
+def test_body_shapes_tuck_pike_layout(name):
+    """The three somersault shapes are exact too; a straighter body needs more |L|
+    for the same turn (larger inertia)."""
+    L = {}
+    for shape in ("tuck", "pike", "layout"):
+        clip = builtin(name, shape=shape)
+        a = analyse(clip)
+        assert a.L_cv_pct < 1.0 and abs(abs(clip.meta["rotation_deg"]) - 360) < 1e-6
+        L[shape] = abs(clip.meta["L_flight"][0])
+    assert L["tuck"] < L["pike"] < L["layout"]
+    assert L["layout"] > 2 * L["tuck"]
+    with pytest.raises(ValueError, match="shape"):
+        builtin(name, shape="straddle")

@@ -62,6 +62,9 @@ def builtin(name: str, fps: float = 120, total_mass: float = 70.0,
     height : standing height in metres (1.75); all lengths scale with it.
     flight_time : seconds from take-off to touch-down (0.68 flips, 0.50 jump);
         the take-off speed follows from it (COM rise ≈ 0.54 m for the flips).
+    shape : the body shape in flight: ``"tuck"`` (default), ``"pike"`` (hips folded,
+        knees straight) or ``"layout"`` (body straight, the same as tuck = 0); the
+        angular momentum needed for the same turn grows from tuck to layout.
     tuck : 0 (layout, body straight) … 1 (full tuck; the flips' default; 0.3
         for the jump, a slight knee bend).  A shallower tuck needs more angular
         momentum for the same rotation (below ~0.7 the take-off rotation of a

@@ -121,7 +121,10 @@ DESIGNS = {
 }
 
 #: the keyword parameters :func:`builtin` accepts (besides fps and total_mass)
-PARAMS = ("height", "flight_time", "tuck", "horizontal_speed", "crouch_depth", "turns")
+PARAMS = ("height", "flight_time", "tuck", "horizontal_speed", "crouch_depth", "turns", "shape")
+#: body shapes in flight: "tuck" (hips and knees flexed), "pike" (hips flexed, knees
+#: straight), "layout" (body straight; the same as tuck = 0)
+SHAPES = ("tuck", "pike", "layout")
 
 
 class SynthError(ValueError):
@@ -348,6 +351,15 @@ def _check_params(name, fps, total_mass, params):
     for k in ("flight_time", "tuck", "horizontal_speed", "crouch_depth", "turns"):
         if k in params:
             d[k] = params[k]
+    shape = params.get("shape", "tuck")
+    if shape not in SHAPES:
+        raise ValueError(f"shape must be one of {', '.join(SHAPES)}, got {shape!r}")
+    if shape == "pike":                   # hips folded further, knees straight
+        d["tucked"] = d["tucked"].copy()
+        d["tucked"][IX["hip"]] = -2.5
+        d["tucked"][IX["knee"]] = 0.05
+    elif shape == "layout":
+        d["tuck"] = 0.0
     H = float(params.get("height", REF_HEIGHT))
     if not (np.isfinite(H) and 1.0 <= H <= 2.5):
         raise ValueError(f"height must be between 1.0 and 2.5 m, got {H!r}")
