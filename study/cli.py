@@ -118,8 +118,8 @@ def cmd_edit(args) -> int:
     from stimuli import analyse, save_bvh
     from stimuli.edit.animator import AnimatorEditError, repair_momentum, straighten
     from stimuli.edit.multiflip import FlipEditError, measure, multiflip
-    if args.flips is None and not args.straighten:
-        print("flipstudy edit: error: nothing to do: give --flips N and/or --straighten legs|arms",
+    if args.flips is None and not args.straighten and not args.join:
+        print("flipstudy edit: error: nothing to do: give --flips N, --straighten legs|arms or --join OTHER",
               file=sys.stderr)
         return 2
     clip = load_clip(args.clip, args.scale, args.fps)
@@ -129,6 +129,21 @@ def cmd_edit(args) -> int:
         return 1
     out_clip, lines, plot = clip, [], None
     try:
+        if args.join:
+            from stimuli.edit.join import join_in_flight
+            other = load_clip(args.join, args.scale, args.fps)
+            j = join_in_flight(a, other)
+            r = j["report"]
+            lines.append(f"join {args.join}: turned {r['yaw_deg']:.0f}° about the vertical, retimed ×"
+                         f"{r['retime']:.3f} to match |L|; joined at frame {r['join']['first']} → its "
+                         f"frame {r['join']['second']} (distance {r['join']['distance']:.2f})")
+            lines.append(f"measured              turn {r['turn_deg']:.1f}°, flight |L| mean {r['L_mean']:.2f} "
+                         f"(first {r['L_first']:.2f}) CV {r['L_cv_pct']:.1f} %, momentum jump take-off "
+                         f"{r['dp_takeoff_pct']:.1f} %, landing {r['dp_landing_pct']:.1f} %")
+            out_clip = j["clip"]
+            plot = ("compare", None)
+            if args.flips is not None or args.straighten:
+                raise FlipEditError("--join is made on its own (not with --flips or --straighten)")
         if args.straighten:
             edited = straighten(a, args.straighten, args.t_from, args.t_to)
             rep = repair_momentum(a, edited, midpoint=args.midpoint)
@@ -226,6 +241,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="edit start, seconds (default 0.1 s after take-off)")
     p.add_argument("--to", dest="t_to", type=float, default=None, metavar="T1",
                    help="edit end, seconds (default 0.1 s before landing)")
+    p.add_argument("--join", metavar="OTHER",
+                   help="join CLIP's take-off and early flight to OTHER's late flight and landing "
+                        "(same skeleton; |L| matched by retiming)")
     p.add_argument("--midpoint", action="store_true",
                    help="second-order variant of the paper's retiming rule for the repair")
     p.add_argument("--mass", type=float, default=70.0, help="total body mass in kg (default 70)")

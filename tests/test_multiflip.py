@@ -199,3 +199,31 @@ def test_midpoint_rule_follows_a_fast_edit_more_closely(flips):
     paper = repair_momentum(a, edited).report["max_error_after_pct"]
     mid = repair_momentum(a, edited, midpoint=True).report["max_error_after_pct"]
     assert mid < paper
+
+
+# ------------------------------------------------------------------ joining in flight
+def test_join_tuck_take_off_with_pike_landing():
+    """Figure 4c in kind: a tucked backflip's take-off joined in flight to a piked
+    backflip's landing; L is matched by retiming, the joined flight keeps |L|
+    near the first motion's and the character lands upright."""
+    from stimuli.edit.join import join_in_flight
+    a = analyse(builtin("backflip"))
+    r = join_in_flight(a, builtin("backflip", shape="pike"))
+    rep = r["report"]
+    assert abs(rep["turn_deg"] - 360) < 10
+    assert rep["L_mean"] == pytest.approx(rep["L_first"], rel=0.05)
+    assert rep["L_cv_pct"] < 8
+    assert rep["dp_takeoff_pct"] < 2
+    m = analyse(r["clip"], body=a.body, estimate=False)
+    assert m.flight is not None and m.apparent_gravity == pytest.approx(9.81, rel=0.02)
+    # the legs are straight (piked) after the join and bent (tucked) before it
+    knee = a.clip.skeleton.index(a.body.landmarks["knee_l"])
+    bend = lambda f: Rotation.from_quat(r["clip"].rotations[f, knee]).magnitude()   # noqa: E731
+    before, after = rep["join"]["first"] - 3, rep["join"]["first"] + 12
+    assert bend(before) > np.radians(90) and bend(after) < np.radians(30)
+
+
+def test_join_refuses_a_jump():
+    from stimuli.edit.join import join_in_flight
+    with pytest.raises(FlipEditError):
+        join_in_flight(builtin("backflip"), builtin("jump"))

@@ -91,6 +91,41 @@ def _L_on_grid(clip: Clip, body, start: int, stop: int, sub: int) -> tuple[np.nd
     return grid, np.linalg.norm(momentum(fine, body).L, axis=1)
 
 
+def retime_flight(clip: Clip, body, to: int, ld: int, grid: np.ndarray, ratio: np.ndarray,
+                  path: np.ndarray, midpoint: bool = False, keep_landing_point: bool = True):
+    """The flight ``to..ld`` of ``clip`` retimed by ``next = last + 1/ratio(last)``
+    (``ratio`` sampled at fractional frames ``grid``), the rest at rate 1, then the
+    flight's COM put on the exact parabola of the new duration (gravity and
+    horizontal velocity from ``path``, the flight's fitted COM path; with
+    ``keep_landing_point`` the horizontal velocity is scaled so the flight lands
+    where it did).  Returns (clip, source frames, new landing frame, new flight
+    seconds, take-off vertical velocity)."""
+    fps = clip.fps
+
+    def r_of(f):
+        return float(np.interp(f, grid, ratio))
+
+    flight = ratio_retime_frames(r_of, float(to), float(ld), midpoint=midpoint)
+    tail = np.arange(flight[-1] + 1.0, clip.num_frames - 1 + 1e-9, 1.0)
+    src = np.concatenate([np.arange(to, dtype=float), flight, tail])
+    new = sample(clip, src)
+    new.meta.pop("source_frames", None)
+    ld_n = to + flight.size - 1
+    G = -2.0 * path[1, 0]
+    com = center_of_mass(new, body)
+    Tn = (ld_n - to) / fps
+    c0, y_end = com[to].copy(), com[ld_n, 1]
+    vy = (y_end - c0[1] + 0.5 * G * Tn ** 2) / Tn
+    vh = path[[0, 2], 1] * (((ld - to) / fps) / Tn if keep_landing_point else 1.0)
+    target = ballistic_path(c0, np.array([vh[0], vy, vh[1]]), G, np.arange(ld_n - to + 1) / fps)
+    shift = np.zeros_like(new.root_pos)
+    shift[to:ld_n + 1] = target - com[to:ld_n + 1]
+    shift[ld_n + 1:] = shift[ld_n]
+    out = new.replace(root_pos=new.root_pos + shift,
+                      meta={**clip.meta, "takeoff": to, "landing": ld_n})
+    return out, src, ld_n, Tn, vy
+
+
 def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bool = False) -> Repair:
     """Retime the flight of ``edited`` (the original's timing, poses changed by an
     animator) so its |L| follows the original's again, then reposition the COM.
@@ -108,31 +143,10 @@ def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bo
                                 f"too much for retiming (blend the edit in and out more slowly, or "
                                 f"keep it inside the flight)")
 
-    def r_of(f):
-        return float(np.interp(f, g1, ratio))
-
-    flight = ratio_retime_frames(r_of, float(to), float(ld), midpoint=midpoint)
-    tail = np.arange(flight[-1] + 1.0, edited.num_frames - 1 + 1e-9, 1.0)
-    src = np.concatenate([np.arange(to, dtype=float), flight, tail])
-    new = sample(edited, src)
-    new.meta.pop("source_frames", None)
-    ld_n = to + flight.size - 1
-    # the COM on an exact parabola over the new flight duration
-    path = original.path
-    G = -2.0 * path[1, 0]
-    com = center_of_mass(new, body)
-    Tn = (ld_n - to) / fps
-    c0, y_end = com[to].copy(), com[ld_n, 1]
-    vy = (y_end - c0[1] + 0.5 * G * Tn ** 2) / Tn
-    T0 = (ld - to) / fps
-    vh = path[[0, 2], 1] * (T0 / Tn)            # same landing point as the original's flight
-    target = ballistic_path(c0, np.array([vh[0], vy, vh[1]]), G, np.arange(ld_n - to + 1) / fps)
-    shift = np.zeros_like(new.root_pos)
-    shift[to:ld_n + 1] = target - com[to:ld_n + 1]
-    shift[ld_n + 1:] = shift[ld_n]
-    out = new.replace(root_pos=new.root_pos + shift,
-                      meta={**edited.meta, "edit": "animator edit, momentum repaired",
-                            "takeoff": to, "landing": ld_n})
+    out, src, ld_n, Tn, vy = retime_flight(edited, body, to, ld, g1, ratio, original.path,
+                                           midpoint=midpoint)
+    out.meta["edit"] = "animator edit, momentum repaired"
+    path, G, T0 = original.path, -2.0 * original.path[1, 0], (ld - to) / fps
     # errors, per frame, against the original at the same source frame
     L_new = np.linalg.norm(momentum(out, body).L, axis=1)
     k = np.arange(to + 2, ld_n - 1)

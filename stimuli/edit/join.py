@@ -1,0 +1,131 @@
+"""Joining two motions in flight (Majkowska & Faloutsos 2007, end of 5.2 and
+Figure 4c).
+
+The first motion's take-off and early flight are joined to the second motion's
+late flight and landing at a pair of similar frames.  The angular momenta must
+point the same way: the second motion is first turned about the vertical so its
+flight L lies along the first's (refused beyond ``max_axis_deg``), then retimed
+uniformly so |L| matches (retiming by s scales L by s, Section 5.1).  The join
+(i in the first flight, j in the second) minimises the Appendix A distance among
+pairs whose remaining turn about L is within ``max_turn_error`` of a whole turn,
+so the joined motion lands upright (the small error is spread over the second
+part's flight frames); the join is cross-faded with slerp; the flight's COM is
+put on the exact parabola from the first take-off to the second landing height.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from ..analyse import Analysis, analyse
+from ..motion.clip import Clip
+from ..physics import center_of_mass
+from .multiflip import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle
+from .reposition import rotate
+from .similarity import distance_matrix, pose_features
+from .timing import retime, sample
+
+
+def _unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
+    w = clip.angular_velocities()[:, 0] @ u
+    return np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / clip.fps)])
+
+
+def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_deg: float = 30.0,
+                   max_turn_error: float = 15.0, blend_s: float = 0.04) -> dict:
+    """Join ``first``'s take-off and early flight to ``second``'s late flight and
+    landing.  Both need the same skeleton.  Returns ``{"clip", "takeoff",
+    "landing", "report"}``."""
+    a = first if isinstance(first, Analysis) else analyse(first)
+    b0 = second if isinstance(second, Analysis) else analyse(second)
+    for x, label in ((a, "first"), (b0, "second")):
+        if x.flight is None:
+            raise FlipEditError(f"the {label} motion has no flight phase")
+    if a.clip.skeleton.joint_names != b0.clip.skeleton.joint_names:
+        raise FlipEditError("the two motions must share a skeleton (the same joints)")
+    body, fps = a.body, a.clip.fps
+    u = flight_axis(a)
+    ub = flight_axis(b0)
+    # turn the second about the vertical so its L lies along the first's
+    yaw = np.arctan2(u[0], u[2]) - np.arctan2(ub[0], ub[2])
+    Ry = Rotation.from_rotvec([0.0, yaw, 0.0])
+    axis_err = np.degrees(np.arccos(np.clip(Ry.apply(ub) @ u, -1, 1)))
+    if axis_err > max_axis_deg:
+        raise FlipEditError(f"the angular momenta point {axis_err:.0f}° apart even after turning the second "
+                            f"motion about the vertical (at most {max_axis_deg:g}°): they cannot be joined")
+    bc = b0.clip if abs(b0.clip.fps - fps) < 1e-9 else sample(b0.clip, np.arange(
+        0, b0.clip.num_frames - 1 + 1e-9, b0.clip.fps / fps)).with_fps(fps)
+    bc = rotate(bc, Ry, center_of_mass(bc, body)[0])
+    # |L| matched by uniform retiming
+    s = a.L_mean / b0.L_mean
+    if not (0.33 < s < 3.0):
+        raise FlipEditError(f"|L| differs by a factor {s:.2f}: too much to match by retiming (0.33-3)")
+    bc = retime(bc, s)
+    bc.meta.pop("source_frames", None)
+    b = analyse(bc, body=body, estimate=False)
+    if b.flight is None:
+        raise FlipEditError("the second motion has no flight after retiming")
+    th_a, th_b = _unwrapped_turn(a.clip, u), _unwrapped_turn(bc, u)
+    fa = np.arange(a.takeoff + 2, a.landing - 1)
+    fb = np.arange(b.takeoff + 2, b.landing - 1)
+    D, phi = distance_matrix(pose_features(a.clip, body, u, fa), pose_features(bc, body, u, fb))
+    # the second part then turns from j to its standing end; the whole must be one turn
+    s0a, _ = standing_span(a.clip, body, a.takeoff, a.landing)
+    _, s1b = standing_span(bc, body, b.takeoff, b.landing)
+    total = (th_a[fa] - th_a[s0a])[:, None] + (th_b[s1b] - th_b[fb])[None, :]
+    # both motions stand upright at their ends, so a pair whose root orientations
+    # differ by φ about L leaves the joined motion ending φ off upright: keep |φ| small
+    ok = (np.abs(phi) <= np.radians(max_turn_error)) & (total >= np.pi)
+    # a real mix: at least a third of the first flight, and of the second, is used
+    ok &= (fa[:, None] - a.takeoff >= (a.landing - a.takeoff) / 3)
+    ok &= (b.landing - fb[None, :] >= (b.landing - b.takeoff) / 3)
+    if not np.any(ok):
+        raise FlipEditError(f"no pair of flight frames joins with the root orientations within "
+                            f"{max_turn_error:g}° about L")
+    cost = np.where(ok, D, np.inf)
+    i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
+    fi, gj, e = int(fa[i]), int(fb[j]), float(phi[i, j])
+    # the second part is turned back by φ at the join (g_j onto f_i), and the turn
+    # is released over its flight so that it ends upright as it was captured
+    n2 = bc.num_frames - (gj + 1)
+    ramp = np.clip((np.arange(n2) + 1) / max(b.landing - gj, 1), 0.0, 1.0)
+    ang = -e * (1.0 - ramp)
+    part_b = bc.slice(gj + 1, bc.num_frames)
+    com_b = center_of_mass(part_b, body)
+    part_b = rotate(part_b, Rotation.from_rotvec(u[None] * ang[:, None]), com_b)
+    # cross-fade: the first continued past f_i, blended into the second's frames
+    w = max(1, int(round(blend_s * fps)))
+    head = a.clip.slice(0, fi + 1)
+    cont = sample(a.clip, np.arange(fi + 1, fi + 1 + w, dtype=float))
+    x = (np.arange(w) + 0.5) / w
+    al = x * x * (3 - 2 * x)
+    qa = Rotation.from_quat(cont.rotations.reshape(-1, 4))
+    qb = Rotation.from_quat(part_b.rotations[:w].reshape(-1, 4))
+    J = a.clip.skeleton.num_joints
+    blended = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * np.repeat(al, J)[:, None])).as_quat()
+    rot_b = part_b.rotations.copy()
+    rot_b[:w] = blended.reshape(w, J, 4)
+    rot = np.concatenate([head.rotations, rot_b])
+    root = np.concatenate([head.root_pos, part_b.root_pos + (head.root_pos[-1] - part_b.root_pos[0])])
+    joined = Clip(a.clip.skeleton, fps, root, rot, None, {**a.clip.meta, "edit": "joined in flight"})
+    to = a.takeoff
+    ld = fi + 1 + (b.landing - (gj + 1))
+    # the cross-fade changes the pose quickly, so |L| wobbles around the join:
+    # retime the flight with the paper's rule (5.5) towards the first motion's |L|
+    from .animator import _L_on_grid, retime_flight
+    grid, L = _L_on_grid(joined, body, to, ld, 8)
+    ratio = np.clip(L / a.L_mean, 0.2, 5.0)
+    out, _, ld, T, _ = retime_flight(joined, body, to, ld, grid, ratio, a.path, keep_landing_point=False)
+    out.meta["edit"] = "joined in flight"
+    m = analyse(out, body=body, estimate=False)
+    Lm = np.linalg.norm(m.L[to + 2:ld - 1], axis=1)
+    s0, s1 = standing_span(out, body, to, ld)
+    report = {"yaw_deg": float(np.degrees(yaw)), "axis_error_deg": float(axis_err), "retime": float(s),
+              "join": {"first": fi, "second": gj, "distance": float(D[i, j]),
+                       "turn_error_deg": float(np.degrees(e))},
+              "turn_deg": turn_angle(out, u, s0, s1), "L_cv_pct": float(100 * Lm.std() / Lm.mean()),
+              "L_mean": float(Lm.mean()), "L_first": a.L_mean, "L_second_before": b0.L_mean,
+              "flight_s": T, "takeoff": to, "landing": ld,
+              "analyser_flight": [m.takeoff, m.landing] if m.flight is not None else None}
+    report.update(momentum_jumps(out, body, to, ld))
+    return {"clip": out, "takeoff": to, "landing": ld, "report": report}
