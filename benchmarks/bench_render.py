@@ -88,9 +88,9 @@ def _naive_frame(pl, body, R, P, style, ground):
     """One frame the naive way: a new mesh and actor per body piece and a new
     ground actor, then one render and a screenshot (``render=False`` on every
     ``add_mesh``, or PyVista would re-render the scene after each one)."""
-    centre, Q, semi = piece_frames(body)
-    for p in range(body.num_pieces):
-        j = body.joint[p]
+    joint, centre, Q, semi = piece_frames(body)
+    for p in range(len(joint)):
+        j = joint[p]
         e = pv.ParametricEllipsoid(semi[p, 0], semi[p, 1], semi[p, 2], u_res=20, v_res=12, w_res=0)
         M = np.eye(4)
         M[:3, :3] = R[j] @ Q[p]
