@@ -253,6 +253,43 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
         raise BVHError(path, first + n_frames + 1,
                        f"{len(data_lines)} frame lines but 'Frames: {n_frames}' "
                        f"(more data than the header declares)")
+    values = _fast_values(data_lines, n_frames, n_channels)
+    if values is None:
+        values = _checked_values(data_lines, n_frames, n_channels, first, path)
+    finite = np.isfinite(values)
+    if not finite.all():
+        f, c = np.argwhere(~finite)[0]
+        raise BVHError(path, first + int(f) + 1, f"non-finite value {values[f, c]!r} in frame "
+                                                 f"{int(f) + 1}, channel {int(c) + 1} (NaN/inf "
+                                                 f"are not valid motion data)")
+    return n_frames, frame_time, val, values, first
+
+
+def _fast_values(data_lines: list[str], n_frames: int, n_channels: int) -> np.ndarray | None:
+    """The (F, C) frame values through numpy's C text reader, or ``None`` whenever the
+    block is anything but plain ASCII numbers, ``n_channels`` on every one of the
+    ``n_frames`` lines: :func:`_checked_values` then reads it again and names the
+    problem.  ``np.loadtxt`` skips blank lines, so a blank line inside the block shows
+    up as a missing row (and takes the checked path)."""
+    if n_channels == 0:
+        return None
+    block = "\n".join(data_lines)
+    # loadtxt also splits at \x1c-\x1f (and non-ASCII spaces), bytes.split() does not
+    if not block.isascii() or any(c in block for c in "\x1c\x1d\x1e\x1f"):
+        return None
+    try:
+        values = np.loadtxt(data_lines, dtype=np.float64, comments=None, ndmin=2)
+    except ValueError:
+        return None
+    if values.shape != (n_frames, n_channels):
+        return None
+    return values
+
+
+def _checked_values(data_lines: list[str], n_frames: int, n_channels: int, first: int,
+                    path) -> np.ndarray:
+    """The (F, C) frame values, token by token, raising :class:`BVHError` at the first
+    line with the wrong number of values or a non-numeric one."""
     data = "\n".join(data_lines).encode("ascii", "replace")  # one byte per character
     counts = _tokens_per_line(data, len(data_lines))
     bad = np.nonzero(counts != n_channels)[0]
@@ -273,14 +310,7 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
                 raise BVHError(path, line, f"non-numeric value {tok.decode('ascii')!r} in frame "
                                            f"{j // n_channels + 1}, channel {j % n_channels + 1}") from None
         raise
-    values = values.reshape(n_frames, n_channels)
-    finite = np.isfinite(values)
-    if not finite.all():
-        f, c = np.argwhere(~finite)[0]
-        raise BVHError(path, first + int(f) + 1, f"non-finite value {values[f, c]!r} in frame "
-                                                 f"{int(f) + 1}, channel {int(c) + 1} (NaN/inf "
-                                                 f"are not valid motion data)")
-    return n_frames, frame_time, val, values, first
+    return values.reshape(n_frames, n_channels)
 
 
 def guess_scale(skeleton: Skeleton) -> tuple[float, str]:
@@ -325,7 +355,11 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
 
     BVH angles are intrinsic, in the order the CHANNELS line lists them:
     ``Rotation.from_euler(order.upper(), angles, degrees=True)``, one scipy call per
-    distinct order for all frames and joints with that order at once."""
+    distinct order for all frames and joints with that order at once.  The angles go
+    in as an (F, Jg, 3) array, not flattened to (F*Jg, 3): scipy 1.15+ hands
+    N-dimensional input to its vectorised numpy backend, several times faster than its
+    Cython loop over 2-D input, with bit-identical quaternions
+    (``tests/test_bvh.py`` checks both against each other on the shared files)."""
     F = values.shape[0]
     J = len(orders)
     q = np.zeros((F, J, 4))
@@ -337,8 +371,7 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
     for order, joints in groups.items():
         cols = np.array([col_of[j] for j in joints])         # (Jg, 3)
         ang = values[:, cols]                                  # (F, Jg, 3)
-        r = Rotation.from_euler(order.upper(), ang.reshape(-1, 3), degrees=True)
-        q[:, joints] = r.as_quat().reshape(F, len(joints), 4)
+        q[:, joints] = Rotation.from_euler(order.upper(), ang, degrees=True).as_quat()
     return q
 
 

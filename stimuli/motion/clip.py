@@ -127,24 +127,40 @@ class Clip:
 
     # ------------------------------------------------------- forward kinematics
     def _fk(self):
+        """World rotations (F,J,3,3) and positions (F,J,3), one tree level at a time.
+
+        The products run on component-major copies, ``R[a, b]`` of shape (J, F) for
+        each of the nine matrix entries, so every multiply-add is one contiguous numpy
+        operation over the frames of a whole level (a stack of (3,3) ``matmul``/
+        ``einsum`` calls costs several times more); the results are transposed back
+        once.  ``tests/test_fast_paths.py`` checks them against the plain stacked
+        products on the shared files."""
         if "fk" in self._cache:
             return self._cache["fk"]
         sk = self.skeleton
         F, J = self.num_frames, sk.num_joints
-        local_R = Rotation.from_quat(self.rotations.reshape(-1, 4)).as_matrix().reshape(F, J, 3, 3)
+        local = Rotation.from_quat(self.rotations.reshape(-1, 4)).as_matrix()
+        L = local.reshape(F, J, 3, 3).transpose(2, 3, 1, 0).copy()          # (3,3,J,F)
         if self.joint_pos is not None:
             trans = np.where(sk.has_position[None, :, None], self.joint_pos, sk.offsets[None])
+            T = trans.transpose(2, 1, 0).copy()                               # (3,J,F)
         else:
-            trans = np.broadcast_to(sk.offsets[None], (F, J, 3))
-        world_R = np.empty((F, J, 3, 3))
-        world_P = np.empty((F, J, 3))
-        world_R[:, 0] = local_R[:, 0]
-        world_P[:, 0] = self.root_pos
+            T = sk.offsets.T[:, :, None]                                      # (3,J,1)
+        R = np.empty((3, 3, J, F))
+        P = np.empty((3, J, F))
+        R[:, :, 0] = L[:, :, 0]
+        P[:, 0] = self.root_pos.T
         for idx in sk.levels()[1:]:
             par = sk.parents[idx]
-            pR = world_R[:, par]
-            world_R[:, idx] = pR @ local_R[:, idx]
-            world_P[:, idx] = world_P[:, par] + np.einsum("fjab,fjb->fja", pR, trans[:, idx])
+            pR = R[:, :, par]                                                 # (3,3,n,F)
+            Li = L[:, :, idx]
+            # world = parent @ local: sum over b of pR[a, b] * Li[b, c]
+            R[:, :, idx] = (pR[:, 0, None] * Li[None, 0] + pR[:, 1, None] * Li[None, 1]
+                            + pR[:, 2, None] * Li[None, 2])
+            t = T[:, idx]
+            P[:, idx] = P[:, par] + pR[:, 0] * t[0] + pR[:, 1] * t[1] + pR[:, 2] * t[2]
+        world_R = np.ascontiguousarray(R.transpose(3, 2, 0, 1))
+        world_P = np.ascontiguousarray(P.transpose(2, 1, 0))
         world_R.setflags(write=False)
         world_P.setflags(write=False)
         self._cache["fk"] = (world_R, world_P)

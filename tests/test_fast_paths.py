@@ -1,0 +1,159 @@
+"""The fast code paths give the numbers of the plain ones, on the real files.
+
+* BVH reading: the MOTION block through ``np.loadtxt`` against the token-by-token
+  reader (bit for bit), and the checked reader taking over whenever the block is not
+  plain numbers; Euler angles through one N-dimensional ``Rotation.from_euler`` call
+  against one flat call per joint;
+* forward kinematics: the component-major level products of ``Clip._fk`` against
+  stacked ``matmul``/``einsum`` products over (F, J, 3, 3) arrays.
+
+No timings here: ``benchmarks/`` measures speed.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from stimuli.motion import BVHError, Clip, Skeleton, load_bvh
+from stimuli.motion import bvh as bvh_mod
+from stimuli.motion.skeleton import ROTATION_CHANNELS
+
+from _shared import ALL_BVH, shared_file
+
+
+# ------------------------------------------------------------------ helpers
+def _blocks(path):
+    """(hierarchy, data lines, frames, channels, first data line) of a file."""
+    text = path.read_bytes().decode("utf-8-sig")
+    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    h, motion_at = bvh_mod._parse_hierarchy(lines, path)
+    n_ch = sum(len(c) for c in h["channels"])
+    n_frames, _, _, values, first = bvh_mod._parse_motion(lines, motion_at, n_ch, path)
+    return h, lines[first:first + n_frames], n_frames, n_ch, first, values
+
+
+def plain_fk(clip):
+    """Forward kinematics as stacked (3,3) products over frames, one level at a time
+    (the implementation the component-major one replaced)."""
+    sk = clip.skeleton
+    F, J = clip.num_frames, sk.num_joints
+    local_R = Rotation.from_quat(clip.rotations.reshape(-1, 4)).as_matrix().reshape(F, J, 3, 3)
+    if clip.joint_pos is not None:
+        trans = np.where(sk.has_position[None, :, None], clip.joint_pos, sk.offsets[None])
+    else:
+        trans = np.broadcast_to(sk.offsets[None], (F, J, 3))
+    R = np.empty((F, J, 3, 3))
+    P = np.empty((F, J, 3))
+    R[:, 0] = local_R[:, 0]
+    P[:, 0] = clip.root_pos
+    for idx in sk.levels()[1:]:
+        par = sk.parents[idx]
+        pR = R[:, par]
+        R[:, idx] = pR @ local_R[:, idx]
+        P[:, idx] = P[:, par] + np.einsum("fjab,fjb->fja", pR, trans[:, idx])
+    return R, P
+
+
+# --------------------------------------------------------------- BVH reading
+@pytest.mark.parametrize("name", ALL_BVH)
+def test_loadtxt_reads_the_motion_block_bit_for_bit(name):
+    path = shared_file(name)
+    _, data_lines, n_frames, n_ch, first, values = _blocks(path)
+    fast = bvh_mod._fast_values(data_lines, n_frames, n_ch)
+    assert fast is not None, "a plain real file must take the fast path"
+    checked = bvh_mod._checked_values(data_lines, n_frames, n_ch, first, path)
+    assert fast.dtype == checked.dtype and fast.shape == checked.shape
+    assert np.array_equal(fast, checked)
+    assert np.array_equal(values, checked)
+
+
+@pytest.mark.parametrize("lines, why", [
+    (["1 2 3", "", "4 5 6"], "blank line inside the block"),
+    (["1 2 3", "4 5"], "short line"),
+    (["1 2 3 4", "5 6"], "counts that only add up over the block"),
+    (["1 2\x1c3", "4 5 6"], "a separator loadtxt splits at and bytes.split does not"),
+    (["1 2 3", "4 5 6\xa0"], "non-ASCII"),
+    (["1 2 1_0", "4 5 6"], "a number only Python's float reads"),
+    (["1 2 #3", "4 5 6"], "a comment sign"),
+    (["1 2 x", "4 5 6"], "non-numeric"),
+])
+def test_anything_but_plain_numbers_leaves_the_fast_path(lines, why):
+    assert bvh_mod._fast_values(lines, len(lines), 3) is None, why
+
+
+def test_numbers_only_pythons_float_reads_still_load(tmp_path):
+    body = ["HIERARCHY", "ROOT Hips", "{", "OFFSET 0 0 0",
+            "CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation",
+            "End Site", "{", "OFFSET 0 1 0", "}", "}", "MOTION", "Frames: 2",
+            "Frame Time: 0.0333333", "0 1_0 0 0 0 0", "0 1 0 0 0 0"]
+    p = tmp_path / "underscore.bvh"
+    p.write_text("\n".join(body) + "\n")
+    clip = load_bvh(p, scale=1.0, drop_tpose=False)
+    assert clip.root_pos[0, 1] == 10.0
+
+
+@pytest.mark.parametrize("body, line", [
+    (["0 0 0 0 0 0", "", "0 0 0 0 0 0"], 15),
+    (["0 0 0 0 0 0 0", "0 0 0 0 0"], 14),
+    (["0 0 0 0 0 0", "0 0 0 oops 0 0"], 15),
+])
+def test_malformed_blocks_still_name_their_line(tmp_path, body, line):
+    head = ["HIERARCHY", "ROOT Hips", "{", "OFFSET 0 0 0",
+            "CHANNELS 6 Xposition Yposition Zposition Zrotation Yrotation Xrotation",
+            "End Site", "{", "OFFSET 0 1 0", "}", "}", "MOTION", f"Frames: {len(body)}",
+            "Frame Time: 0.0333333"]                       # frame lines start at line 14
+    p = tmp_path / "bad.bvh"
+    p.write_text("\n".join(head + body) + "\n")
+    with pytest.raises(BVHError) as e:
+        load_bvh(p)
+    assert e.value.line == line
+
+
+@pytest.mark.parametrize("name", ALL_BVH)
+def test_nd_from_euler_equals_one_flat_call_per_joint(name):
+    path = shared_file(name)
+    h, _, _, _, _, values = _blocks(path)
+    orders, cols, c0 = [], [], 0
+    for ch in h["channels"]:
+        rot = [k for k, c in enumerate(ch) if c in ROTATION_CHANNELS]
+        orders.append("".join(ch[k][0] for k in rot))
+        cols.append([c0 + k for k in rot])
+        c0 += len(ch)
+    q = bvh_mod._euler_to_quat(values, orders, cols)
+    for j, (order, c) in enumerate(zip(orders, cols)):
+        if not order:
+            assert np.array_equal(q[:, j], np.broadcast_to([0, 0, 0, 1.0], q[:, j].shape))
+            continue
+        ref = Rotation.from_euler(order.upper(), values[:, c], degrees=True).as_quat()
+        np.testing.assert_allclose(q[:, j], ref, rtol=0, atol=1e-15)
+
+
+# -------------------------------------------------------- forward kinematics
+@pytest.mark.parametrize("name", ALL_BVH)
+def test_fk_equals_stacked_products_on_real_files(name):
+    clip = load_bvh(shared_file(name), drop_tpose=False)
+    R, P = clip._fk()
+    R0, P0 = plain_fk(clip)
+    assert R.shape == R0.shape and P.shape == P0.shape
+    assert R.flags.c_contiguous and P.flags.c_contiguous
+    assert not R.flags.writeable and not P.flags.writeable
+    np.testing.assert_allclose(R, R0, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(P, P0, rtol=0, atol=1e-12)
+
+
+def test_fk_with_animated_joint_translations():
+    rng = np.random.default_rng(7)
+    sk = Skeleton(["a", "b", "c", "d", "e"], [-1, 0, 1, 1, 3],
+                  rng.normal(size=(5, 3)),
+                  [("Xposition", "Yposition", "Zposition", "Zrotation", "Yrotation", "Xrotation"),
+                   ("Zrotation", "Xrotation", "Yrotation"),
+                   ("Xposition", "Yposition", "Zposition", "Zrotation", "Yrotation", "Xrotation"),
+                   (), ("Yrotation", "Xrotation", "Zrotation")])
+    F = 17
+    clip = Clip(sk, 30.0, rng.normal(size=(F, 3)), Rotation.random(F * 5, random_state=3)
+                .as_quat().reshape(F, 5, 4), rng.normal(size=(F, 5, 3)))
+    R, P = clip._fk()
+    R0, P0 = plain_fk(clip)
+    np.testing.assert_allclose(R, R0, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(P, P0, rtol=0, atol=1e-12)
