@@ -214,6 +214,11 @@ def test_join_tuck_take_off_with_pike_landing():
     assert rep["L_mean"] == pytest.approx(rep["L_first"], rel=0.05)
     assert rep["L_cv_pct"] < 8
     assert rep["dp_takeoff_pct"] < 2
+    # the flight lasts what the take-off velocity and the landing height give
+    # (to the nearest frame), and the character lands and stands on the floor
+    assert abs(rep["flight_s"] - rep["flight_s_required"]) <= 0.5 / a.clip.fps + 1e-9
+    feet = r["clip"].joint_positions()[-1, :, 1].min()
+    assert abs(feet - a.clip.joint_positions()[-1, :, 1].min()) < 0.005
     m = analyse(r["clip"], body=a.body, estimate=False)
     assert m.flight is not None and m.apparent_gravity == pytest.approx(9.81, rel=0.02)
     # the legs are straight (piked) after the join and bent (tucked) before it

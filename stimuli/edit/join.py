@@ -10,7 +10,15 @@ uniformly so |L| matches (retiming by s scales L by s, Section 5.1).  The join
 pairs whose remaining turn about L is within ``max_turn_error`` of a whole turn,
 so the joined motion lands upright (the small error is spread over the second
 part's flight frames); the join is cross-faded with slerp; the flight's COM is
-put on the exact parabola from the first take-off to the second landing height.
+put on the exact parabola from the first take-off to the second landing height
+(the second part keeps its own heights, so it lands on its floor).
+
+The flight must last what the first take-off's vertical velocity and the landing
+height give, T = (v0 + sqrt(v0² − 2gΔy))/g (Appendix B's reasoning for k*),
+or the parabola would leave the ground faster or slower than the take-off
+delivered.  At the first motion's |L| each candidate pair has its own duration,
+so the pair's duration mismatch enters its cost, and what is left is spread over
+the flight as a small uniform change of |L|.
 """
 from __future__ import annotations
 
@@ -31,11 +39,70 @@ def _unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / clip.fps)])
 
 
+def _assemble(a: Analysis, bc: Clip, b: Analysis, u: np.ndarray, fi: int, gj: int, e: float,
+              blend_s: float) -> tuple[Clip, int]:
+    """``a``'s frames up to ``fi`` followed by ``bc``'s (retimed second) from
+    ``gj + 1``, cross-faded; the second part turned back by ``e`` about ``u`` at the
+    join and released over its flight.  Returns (clip, landing frame)."""
+    body, fps = a.body, a.clip.fps
+    # the second part is turned back by φ at the join (g_j onto f_i), and the turn
+    # is released over its flight so that it ends upright as it was captured
+    n2 = bc.num_frames - (gj + 1)
+    ramp = np.clip((np.arange(n2) + 1) / max(b.landing - gj, 1), 0.0, 1.0)
+    ang = -e * (1.0 - ramp)
+    part_b = bc.slice(gj + 1, bc.num_frames)
+    com_b = center_of_mass(part_b, body)
+    part_b = rotate(part_b, Rotation.from_rotvec(u[None] * ang[:, None]), com_b)
+    # cross-fade: the first continued past f_i, blended into the second's frames
+    w = max(1, int(round(blend_s * fps)))
+    head = a.clip.slice(0, fi + 1)
+    cont = sample(a.clip, np.arange(fi + 1, fi + 1 + w, dtype=float))
+    x = (np.arange(w) + 0.5) / w
+    al = x * x * (3 - 2 * x)
+    qa = Rotation.from_quat(cont.rotations.reshape(-1, 4))
+    qb = Rotation.from_quat(part_b.rotations[:w].reshape(-1, 4))
+    J = a.clip.skeleton.num_joints
+    blended = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * np.repeat(al, J)[:, None])).as_quat()
+    rot_b = part_b.rotations.copy()
+    rot_b[:w] = blended.reshape(w, J, 4)
+    rot = np.concatenate([head.rotations, rot_b])
+    # the second part follows on horizontally, but keeps its own heights: it lands
+    # on its floor (the flight's COM is put on a parabola afterwards, so the step
+    # at the join does not remain; carrying it on would sink the landing and
+    # everything after it by the two flights' height difference at the join)
+    step = head.root_pos[-1] - part_b.root_pos[0]
+    step[1] = 0.0
+    root = np.concatenate([head.root_pos, part_b.root_pos + step])
+    joined = Clip(a.clip.skeleton, fps, root, rot, None, {**a.clip.meta, "edit": "joined in flight"})
+    return joined, fi + 1 + (b.landing - (gj + 1))
+
+
+def _steps_to(ratio_of, start: float, n: int) -> float:
+    """Where the paper's rule ``next = last + 1/ratio(last)`` is after ``n`` steps."""
+    f = float(start)
+    for _ in range(n):
+        f += 1.0 / ratio_of(f)
+    return f
+
+
 def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_deg: float = 30.0,
-                   max_turn_error: float = 15.0, blend_s: float = 0.04) -> dict:
+                   max_turn_error: float = 15.0, blend_s: float = 0.04,
+                   duration_weight: float = 10.0) -> dict:
     """Join ``first``'s take-off and early flight to ``second``'s late flight and
     landing.  Both need the same skeleton.  Returns ``{"clip", "takeoff",
-    "landing", "report"}``."""
+    "landing", "report"}``.
+
+    The joined flight must last what ``first``'s take-off velocity v0 and the
+    landing height (Δy above the take-off) give a ballistic flight,
+    T = (v0 + sqrt(v0² − 2gΔy))/g, or the parabola put on it would take off with
+    another vertical velocity than the ground phase delivered (a momentum jump).
+    At the first motion's |L| every candidate pair gives its own flight duration
+    (the poses after the join, and the turn error released over them, decide how
+    long the body takes to turn): the pair chosen minimises the Appendix A
+    distance plus ``duration_weight`` times the relative duration mismatch, and the
+    mismatch left is spread over the flight as a uniform |L| change (the flight is
+    retimed towards |L| ≈ L_first·(duration at L_first)/T, which lasts T; the
+    report's ``L_spread_pct``)."""
     a = first if isinstance(first, Analysis) else analyse(first)
     b0 = second if isinstance(second, Analysis) else analyse(second)
     for x, label in ((a, "first"), (b0, "second")):
@@ -82,39 +149,58 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     if not np.any(ok):
         raise FlipEditError(f"no pair of flight frames joins with the root orientations within "
                             f"{max_turn_error:g}° about L")
-    cost = np.where(ok, D, np.inf)
-    i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
-    fi, gj, e = int(fa[i]), int(fb[j]), float(phi[i, j])
-    # the second part is turned back by φ at the join (g_j onto f_i), and the turn
-    # is released over its flight so that it ends upright as it was captured
-    n2 = bc.num_frames - (gj + 1)
-    ramp = np.clip((np.arange(n2) + 1) / max(b.landing - gj, 1), 0.0, 1.0)
-    ang = -e * (1.0 - ramp)
-    part_b = bc.slice(gj + 1, bc.num_frames)
-    com_b = center_of_mass(part_b, body)
-    part_b = rotate(part_b, Rotation.from_rotvec(u[None] * ang[:, None]), com_b)
-    # cross-fade: the first continued past f_i, blended into the second's frames
-    w = max(1, int(round(blend_s * fps)))
-    head = a.clip.slice(0, fi + 1)
-    cont = sample(a.clip, np.arange(fi + 1, fi + 1 + w, dtype=float))
-    x = (np.arange(w) + 0.5) / w
-    al = x * x * (3 - 2 * x)
-    qa = Rotation.from_quat(cont.rotations.reshape(-1, 4))
-    qb = Rotation.from_quat(part_b.rotations[:w].reshape(-1, 4))
-    J = a.clip.skeleton.num_joints
-    blended = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * np.repeat(al, J)[:, None])).as_quat()
-    rot_b = part_b.rotations.copy()
-    rot_b[:w] = blended.reshape(w, J, 4)
-    rot = np.concatenate([head.rotations, rot_b])
-    root = np.concatenate([head.root_pos, part_b.root_pos + (head.root_pos[-1] - part_b.root_pos[0])])
-    joined = Clip(a.clip.skeleton, fps, root, rot, None, {**a.clip.meta, "edit": "joined in flight"})
-    to = a.takeoff
-    ld = fi + 1 + (b.landing - (gj + 1))
-    # the cross-fade changes the pose quickly, so |L| wobbles around the join:
-    # retime the flight with the paper's rule (5.5) towards the first motion's |L|
+
+    # the flight the first take-off implies (Appendix B's reasoning for k*: linear
+    # momentum is continuous when the flight lasts what v0 and Δy give)
     from .animator import _L_on_grid, retime_flight
+    to = a.takeoff
+    G = -2.0 * a.path[1, 0]                      # the gravity retime_flight's parabola uses
+    v0 = a.path[1, 1]
+    y_to = center_of_mass(a.clip.slice(to, to + 1), body)[0, 1]
+
+    def required(joined, ld):
+        dy = center_of_mass(joined.slice(ld, ld + 1), body)[0, 1] - y_to
+        disc = v0 * v0 - 2.0 * G * dy
+        if not (v0 > 0 and disc > 0):
+            raise FlipEditError(f"the first take-off (vertical velocity {v0:.2f} m/s) cannot reach the "
+                                f"second landing {dy:+.2f} m above it")
+        T = (v0 + np.sqrt(disc)) / G
+        return T, max(2, int(round(T * fps)))
+
+    # candidates by distance; a pair's cost adds its duration mismatch at |L| = L_first,
+    # which is never negative, so the search stops once D alone exceeds the best cost
+    I, Jx = np.nonzero(ok)
+    order = np.argsort(D[I, Jx], kind="stable")
+    best = None
+    for k in order:
+        i, j = int(I[k]), int(Jx[k])
+        if best is not None and D[i, j] >= best[0]:
+            break
+        fi, gj, e = int(fa[i]), int(fb[j]), float(phi[i, j])
+        joined, ld = _assemble(a, bc, b, u, fi, gj, e, blend_s)
+        grid, L = _L_on_grid(joined, body, to, ld, 2)       # 2 substeps: within 0.02 frames of 8
+        n_free = float(np.trapezoid(np.clip(L / a.L_mean, 0.2, 5.0), grid))   # frames at |L| = L_first
+        T_req, n_req = required(joined, ld)
+        mismatch = n_free / n_req - 1.0
+        cost = float(D[i, j]) + duration_weight * abs(mismatch)
+        if best is None or cost < best[0]:
+            best = (cost, i, j, fi, gj, e, joined, ld, n_free, T_req, n_req)
+    _, i, j, fi, gj, e, joined, ld, n_free, T_req, n_req = best
+
+    # the mismatch left is spread over the flight: |L| towards L_first/c, the rule's
+    # ratio scaled by c (≈ n_req/n_free) so that exactly n_req steps end on the
+    # landing frame (bisection: the end moves back as c grows)
     grid, L = _L_on_grid(joined, body, to, ld, 8)
-    ratio = np.clip(L / a.L_mean, 0.2, 5.0)
+    base = np.clip(L / a.L_mean, 0.2, 5.0)
+    lo, hi = 0.5 * n_free / n_req, 2.0 * n_free / n_req
+    for _ in range(50):
+        c = 0.5 * (lo + hi)
+        if _steps_to(lambda f: float(np.interp(f, grid, c * base)), to, n_req) > ld:
+            lo = c
+        else:
+            hi = c
+    c = hi
+    ratio = c * base
     out, _, ld, T, _ = retime_flight(joined, body, to, ld, grid, ratio, a.path, keep_landing_point=False)
     out.meta["edit"] = "joined in flight"
     m = analyse(out, body=body, estimate=False)
@@ -122,10 +208,12 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     s0, s1 = standing_span(out, body, to, ld)
     report = {"yaw_deg": float(np.degrees(yaw)), "axis_error_deg": float(axis_err), "retime": float(s),
               "join": {"first": fi, "second": gj, "distance": float(D[i, j]),
-                       "turn_error_deg": float(np.degrees(e))},
+                       "turn_error_deg": float(np.degrees(e)),
+                       "flight_frames_at_L_first": n_free},
               "turn_deg": turn_angle(out, u, s0, s1), "L_cv_pct": float(100 * Lm.std() / Lm.mean()),
               "L_mean": float(Lm.mean()), "L_first": a.L_mean, "L_second_before": b0.L_mean,
-              "flight_s": T, "takeoff": to, "landing": ld,
+              "L_target": float(a.L_mean / c), "L_spread_pct": float(100 * (1.0 / c - 1.0)),
+              "flight_s": T, "flight_s_required": float(T_req), "takeoff": to, "landing": ld,
               "analyser_flight": [m.takeoff, m.landing] if m.flight is not None else None}
     report.update(momentum_jumps(out, body, to, ld))
     return {"clip": out, "takeoff": to, "landing": ld, "report": report}
