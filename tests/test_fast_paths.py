@@ -157,3 +157,73 @@ def test_fk_with_animated_joint_translations():
     R0, P0 = plain_fk(clip)
     np.testing.assert_allclose(R, R0, rtol=0, atol=1e-13)
     np.testing.assert_allclose(P, P0, rtol=0, atol=1e-12)
+
+
+# ------------------------------------------------------------------ multi-flip
+def _assert_same_multiflip(r0, r1):
+    c0, c1 = r0.clip, r1.clip
+    assert (r0.flips, r0.takeoff, r0.landing) == (r1.flips, r1.takeoff, r1.landing)
+    assert c0.num_frames == c1.num_frames and c0.meta == c1.meta
+    np.testing.assert_allclose(c1.rotations, c0.rotations, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(c1.root_pos, c0.root_pos, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(c1.joint_positions(), c0.joint_positions(), rtol=0, atol=1e-12)
+    assert r0.report.keys() == r1.report.keys()
+    for key, v in r0.report.items():
+        if isinstance(v, dict):
+            assert v.keys() == r1.report[key].keys()
+            for k2, v2 in v.items():
+                assert r1.report[key][k2] == pytest.approx(v2, rel=1e-9, abs=1e-9), (key, k2)
+        else:
+            assert r1.report[key] == pytest.approx(v, rel=1e-9, abs=1e-9), key
+
+
+@pytest.fixture(scope="module")
+def builtin_flips():
+    from stimuli import analyse, builtin
+    return {name: analyse(builtin(name)) for name in ("backflip", "frontflip")}
+
+
+@pytest.mark.parametrize("name", ["backflip", "frontflip"])
+@pytest.mark.parametrize("kw", [dict(flips=1, k_ratio=1.0), dict(flips=2, k_ratio=1.0),
+                                dict(flips=3, k_ratio=1.0), dict(flips=4, k_ratio=1.0),
+                                dict(flips=2), dict(flips=2, takeoff_height=0.3),
+                                dict(flips=3, k=1.2, blend_s=0.05)])
+def test_multiflip_on_prepared_source_equals_the_plain_implementation(builtin_flips, name, kw):
+    import _multiflip_reference as ref
+    from stimuli.edit.multiflip import multiflip, prepare
+    a = builtin_flips[name]
+    r0 = ref.multiflip(a, **kw)
+    _assert_same_multiflip(r0, multiflip(a, **kw))
+    _assert_same_multiflip(r0, multiflip(prepare(a), **kw))
+
+
+@pytest.mark.parametrize("name", ["88_01.bvh", "87_03.bvh"])
+def test_multiflip_of_real_cmu_equals_the_plain_implementation(name):
+    import _multiflip_reference as ref
+    from stimuli import analyse
+    from stimuli.edit.multiflip import FlipEditError, multiflip, prepare
+    a = analyse(load_bvh(shared_file(name)))
+    pre = prepare(a)
+    for flips in (2, 3):
+        try:
+            r0 = ref.multiflip(a, flips, k_ratio=1.0)
+        except FlipEditError as e:
+            with pytest.raises(FlipEditError, match=str(e)[:30]):
+                multiflip(pre, flips, k_ratio=1.0)
+            continue
+        _assert_same_multiflip(r0, multiflip(pre, flips, k_ratio=1.0))
+
+
+def test_sampling_at_whole_frames_keeps_the_source_quaternions():
+    from stimuli import builtin
+    from stimuli.edit.timing import sample
+    clip = builtin("backflip")
+    s = np.array([0.0, 3.0, 3.25, 7.0, 7.5, clip.num_frames - 1.0])
+    out = sample(clip, s)
+    whole = s == np.floor(s)
+    assert np.array_equal(out.rotations[whole], clip.rotations[s[whole].astype(int)])
+    q0 = Rotation.from_quat(clip.rotations[[3, 7]])
+    q1 = Rotation.from_quat(clip.rotations[[4, 8]])
+    u = np.array([0.25, 0.5])[:, None, None]
+    slerp = (q0 * Rotation.from_rotvec((q0.inv() * q1).as_rotvec() * u)).as_quat()
+    np.testing.assert_allclose(out.rotations[~whole], slerp, rtol=0, atol=1e-15)

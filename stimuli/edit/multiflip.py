@@ -36,7 +36,7 @@ from ..motion.clip import Clip
 from ..physics import center_of_mass
 from .reposition import ballistic_path
 from .similarity import distance_matrix, pose_features
-from .timing import sample
+from .timing import _sample_arrays
 
 
 class FlipEditError(ValueError):
@@ -130,10 +130,61 @@ def _smooth(x):
     return x * x * (3.0 - 2.0 * x)
 
 
-def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, k: float | None = None,
-              blend_s: float = 0.025, max_turn_error: float = 10.0, takeoff_height: float = 0.0,
-              min_turn_deg: float = 45.0) -> MultiFlip:
-    """Make a ``flips``-flip motion from a single flip (a clip or its analysis).
+@dataclass
+class FlipSource:
+    """The pre-processing of a single flip for :func:`multiflip`: what depends on the
+    source alone, computed once (the paper's pre-processing stage, Section 4, plus the
+    per-frame tables its run-time search reads).  Build it with :func:`prepare` and
+    pass it to :func:`multiflip` as often as needed.
+
+    ``D``/``phi`` are the Appendix A distances and turns of every pair of flight
+    frames; ``theta`` the root's unwrapped turn about ``axis`` per frame (radians);
+    ``stand`` the last standing frame before take-off and the first after landing;
+    ``com`` the source's COM per frame; ``path`` the flight's COM parabola."""
+
+    analysis: Analysis
+    axis: np.ndarray
+    frames: np.ndarray
+    D: np.ndarray
+    phi: np.ndarray
+    theta: np.ndarray
+    stand: tuple[int, int]
+    com: np.ndarray
+    path: np.ndarray
+
+
+def prepare(source: Clip | Analysis) -> FlipSource:
+    """Pre-process a single flip (a clip or its analysis) for :func:`multiflip`."""
+    a = source if isinstance(source, Analysis) else analyse(source)
+    if a.flight is None:
+        raise FlipEditError(f"{a.clip.meta.get('name', 'clip')}: no flight phase to add flips to")
+    clip, body, fps = a.clip, a.body, a.clip.fps
+    to, ld = a.takeoff, a.landing
+    u = flight_axis(a)
+    frames = np.arange(to, ld + 1)
+    D, phi = distance_matrix(pose_features(clip, body, u, frames))
+    w_u = clip.angular_velocities()[:, 0] @ u
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_u[1:] + w_u[:-1]) / fps)])   # radians, unwrapped
+    return FlipSource(a, u, frames, D, phi, theta, standing_span(clip, body, to, ld),
+                      center_of_mass(clip, body), a.path)
+
+
+def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
+    """Rotations (n,J,4) and root positions (n,3) of source frames ``s`` (whole
+    numbers), each turned by ``rotvec`` (n,3) about its own COM: the COM stays."""
+    s = np.clip(s, 0, clip.num_frames - 1).astype(np.int64)
+    R = Rotation.from_rotvec(rotvec)
+    rot = clip.rotations[s]
+    rot[:, 0] = (R * Rotation.from_quat(rot[:, 0])).as_quat()
+    cc = com[s]
+    return rot, cc + R.apply(clip.root_pos[s] - cc)
+
+
+def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: float = 0.7,
+              k: float | None = None, blend_s: float = 0.025, max_turn_error: float = 10.0,
+              takeoff_height: float = 0.0, min_turn_deg: float = 45.0) -> MultiFlip:
+    """Make a ``flips``-flip motion from a single flip (a clip, its analysis or its
+    pre-processing from :func:`prepare`, which saves redoing it for every edit).
 
     ``k_ratio``: retiming factor as a fraction of k* (the paper's 0.7 by default;
     1 gives continuous momentum); ``k`` overrides it.  ``blend_s``: half-width of
@@ -144,20 +195,15 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
     """
     if isinstance(flips, bool) or not isinstance(flips, (int, np.integer)) or not 1 <= flips <= 6:
         raise FlipEditError(f"flips must be a whole number from 1 to 6, got {flips!r}")
-    a = source if isinstance(source, Analysis) else analyse(source)
-    if a.flight is None:
-        raise FlipEditError(f"{a.clip.meta.get('name', 'clip')}: no flight phase to add flips to")
+    pre = source if isinstance(source, FlipSource) else prepare(source)
+    a = pre.analysis
     clip, body, fps = a.clip, a.body, a.clip.fps
     to, ld = a.takeoff, a.landing
-    u = flight_axis(a)
-    frames = np.arange(to, ld + 1)
-    feat = pose_features(clip, body, u, frames)
-    D, phi = distance_matrix(feat)
+    u, frames, D, phi, theta = pre.axis, pre.frames, pre.D, pre.phi, pre.theta
+    J = clip.skeleton.num_joints
 
     # the source must be one flip: its root turns about 360° from stand to stand
-    s0, s1 = standing_span(clip, body, to, ld)
-    w_u = clip.angular_velocities()[:, 0] @ u
-    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_u[1:] + w_u[:-1]) / fps)])   # radians, unwrapped
+    s0, s1 = pre.stand
     total = theta[s1] - theta[s0]
     if abs(abs(total) - 2 * np.pi) > np.radians(60):
         raise FlipEditError(f"the source turns {np.degrees(total):.0f}° about its angular momentum "
@@ -170,13 +216,11 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
     phi_S = theta[m] - theta[s0]
     phi_E = theta[s1] - theta[n]
     r = max(1, int(math.ceil((abs(want) - abs(phi_S) - abs(phi_E)) / ph)))
-    L_len = n - m
 
     # 2. second search: f in copies r-1, r (source s_f, copy c) and g in [m+1, ld]
-    pos = {int(f): i for i, f in enumerate(frames)}
     src_f = np.arange(m, n)
     g_idx = np.arange(m + 1, ld + 1)
-    Dg = D[np.ix_([pos[s] for s in src_f], [pos[g] for g in g_idx])]      # (|F_B|, |g|)
+    Dg = D[m - to:n - to, m + 1 - to:]                                   # (|F_B|, |g|)
     best = None
     for c in (r - 1, r):
         if c < 0:
@@ -226,56 +270,45 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
     srcB, angB = src.copy(), ang.copy()
     alpha = np.zeros(N)
     starts = np.cumsum([0] + [s[1] - s[0] + 1 for s in segs])[1:-1]      # first new index of segs 2..
-    for J in starts:
+    for Jn in starts:
         i = np.arange(-w, w)
-        idx = J + i
+        idx = Jn + i
         keep = (idx >= 0) & (idx < N)
         i, idx = i[keep], idx[keep]
-        srcA[idx] = src[J - 1] + 1 + i            # previous segment, continued
-        angA[idx] = ang[J - 1]
-        srcB[idx] = src[J] + i                    # next segment, before its start
-        angB[idx] = ang[J]
+        srcA[idx] = src[Jn - 1] + 1 + i           # previous segment, continued
+        angA[idx] = ang[Jn - 1]
+        srcB[idx] = src[Jn] + i                   # next segment, before its start
+        angB[idx] = ang[Jn]
         alpha[idx] = _smooth((i + w + 0.5) / (2 * w))
-    com_src = center_of_mass(clip, body)
-
-    def posed(s, an):
-        c = sample(clip, s)
-        cc = np.array([np.interp(s, np.arange(clip.num_frames), com_src[:, k]) for k in range(3)]).T
-        R = Rotation.from_rotvec(u[None] * an[:, None])
-        root = Rotation.from_quat(c.rotations[:, 0])
-        rot = c.rotations.copy()
-        rot[:, 0] = (R * root).as_quat()
-        return rot, cc + R.apply(c.root_pos - cc)
-
-    rot, root_pos = posed(srcA, angA)
+    # every sequenced frame is a whole source frame turned about its COM (which the
+    # turn keeps): its COM is the source's; only the cross-fades need their own
+    rot, root_pos = _turned(clip, pre.com, srcA, u[None] * angA[:, None])
+    com_seq = pre.com[np.clip(srcA, 0, clip.num_frames - 1).astype(np.int64)]
     x = np.flatnonzero(alpha > 0)                # the cross-fades: a few frames per join
     if x.size:
-        rB, pB = posed(srcB[x], angB[x])
-        qa, qb = Rotation.from_quat(rot[x].reshape(-1, 4)), Rotation.from_quat(rB.reshape(-1, 4))
-        al = np.repeat(alpha[x], clip.skeleton.num_joints)
-        rot[x] = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * al[:, None])).as_quat() \
-            .reshape(x.size, -1, 4)
+        rB, pB = _turned(clip, pre.com, srcB[x], u[None] * angB[x, None])
+        qa, qb = Rotation.from_quat(rot[x]), Rotation.from_quat(rB)
+        al = alpha[x][:, None, None]
+        rot[x] = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * al)).as_quat()
         root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
-    seq = Clip(clip.skeleton, fps, root_pos, rot, None,
-               {**clip.meta, "edit": f"multiflip {flips}"})
-    seq.meta.pop("source_frames", None)
+        com_seq[x] = center_of_mass(Clip(clip.skeleton, fps, root_pos[x], rot[x]), body)
+    rot /= np.linalg.norm(rot, axis=-1, keepdims=True)    # what Clip() would store
     ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld >= g else int(
         np.flatnonzero(copy == -2)[0])
     T_seq = (ld_seq - to) / fps
 
     # 3. retiming by k over take-off, flight and landing
-    path = a.path
+    path = pre.path
     G = 9.81                                   # the new flight falls at earth's gravity
     v0 = path[1, 1]
-    com_seq = center_of_mass(seq, body)
     dy = com_seq[ld_seq, 1] - (com_seq[to, 1] + takeoff_height)
     kst = k_star(G, T_seq, v0, dy)
     kk = float(k) if k is not None else k_ratio * kst
     if not (0.2 < kk < 5):
         raise FlipEditError(f"retiming factor k = {kk:.3f} is out of range (0.2, 5)")
     vy = np.gradient(com_seq[:, 1], 1.0 / fps)
-    pre = np.flatnonzero(vy[:to + 1] <= 0)
-    p0 = int(pre[-1]) if pre.size else 0                 # bottom of the crouch
+    pre_ = np.flatnonzero(vy[:to + 1] <= 0)
+    p0 = int(pre_[-1]) if pre_.size else 0               # bottom of the crouch
     post = np.flatnonzero(vy[ld_seq:] >= 0)
     p1 = int(ld_seq + post[0]) if post.size else N - 1   # bottom of the landing
     # the flight's rate: a whole number of output frames from take-off to landing
@@ -294,30 +327,36 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
     # number of flight steps before take-off)
     p0 = to - math.floor((to - p0) / k_fl) * k_fl
     out_src = piecewise_source([0, p0, to, ld_seq, p1, N - 1], [1.0, k_fl, k_fl, kL, 1.0])
-    new = sample(seq, out_src)
-    new.meta.pop("source_frames", None)
+    out_src = np.clip(out_src, 0.0, N - 1)
+    rot_n, root_n, _ = _sample_arrays(rot, root_pos, None, out_src)
     to_n = int(np.flatnonzero(np.isclose(out_src, to))[0])
     ld_n = int(np.flatnonzero(np.isclose(out_src, ld_seq))[0])
 
-    # 4. repositioning: the exact parabola, then everything after follows on
-    com_new = center_of_mass(new, body)
+    # 4. repositioning: the exact parabola, then everything after follows on; the COM
+    # is needed from a frame before take-off to a frame after landing only
+    M = out_src.size
+    lo, hi = max(to_n - 1, 0), min(ld_n + 1, M - 1)
+    com_new = np.full((M, 3), np.nan)
+    com_new[lo:hi + 1] = center_of_mass(Clip(clip.skeleton, fps, root_n[lo:hi + 1],
+                                             rot_n[lo:hi + 1]), body)
     Tn = (ld_n - to_n) / fps
     c0 = com_new[to_n].copy()
+    raise_before = np.zeros_like(root_n)
     if takeoff_height:
-        raise_before = np.zeros_like(new.root_pos)
         raise_before[:to_n + 1, 1] = takeoff_height
-        new = new.replace(root_pos=new.root_pos + raise_before)
         c0[1] += takeoff_height
     y_end = com_new[ld_n, 1]
     vh = kk * path[[0, 2], 1]
     vyn = (y_end - c0[1] + 0.5 * G * Tn ** 2) / Tn
     tt = np.arange(ld_n - to_n + 1) / fps
     target = ballistic_path(c0, np.array([vh[0], vyn, vh[1]]), G, tt)
-    shift = np.zeros_like(new.root_pos)
+    shift = np.zeros_like(root_n)
     shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
     shift[ld_n + 1:] = target[-1] - com_new[ld_n]
-    out = new.replace(root_pos=new.root_pos + shift,
-                      meta={**new.meta, "takeoff": to_n, "landing": ld_n, "flips": flips})
+    meta = {**clip.meta, "edit": f"multiflip {flips}"}
+    meta.pop("source_frames", None)
+    out = Clip(clip.skeleton, fps, root_n + raise_before + shift, rot_n, None,
+               {**meta, "takeoff": to_n, "landing": ld_n, "flips": flips})
 
     report = {"self_loop": {"m": m, "n": n, "phi_deg": float(np.degrees(ph)), "distance": loop.distance},
               "phi_S_deg": float(np.degrees(phi_S)), "phi_E_deg": float(np.degrees(phi_E)),
@@ -327,7 +366,8 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
               "flight_s_before_retiming": T_seq, "k_star": kst, "k": kk, "k_ratio": kk / kst,
               "k_landing": kL,
               "flight_s": Tn, "takeoff": to_n, "landing": ld_n, "gravity": G}
-    report.update(momentum_jumps(out, body, to_n, ld_n))
+    # the output's COM: the new frames' moved by the raise and the repositioning
+    report.update(_jumps(com_new + raise_before + shift, fps, body.total_mass, to_n, ld_n))
     return MultiFlip(out, flips, to_n, ld_n, report)
 
 
@@ -350,13 +390,16 @@ def momentum_jumps(clip: Clip, body, takeoff: int, landing: int) -> dict:
     """Linear-momentum discontinuity at take-off and landing: the COM velocity
     one frame either side of each (one-sided differences), as a fraction of the
     take-off momentum."""
-    com = center_of_mass(clip, body)
-    fps = clip.fps
-    M = body.total_mass
+    return _jumps(center_of_mass(clip, body), clip.fps, body.total_mass, takeoff, landing)
+
+
+def _jumps(com: np.ndarray, fps: float, M: float, takeoff: int, landing: int) -> dict:
+    """:func:`momentum_jumps` from the COM (F,3); only the frames next to take-off and
+    landing are read."""
     v_in = (com[takeoff] - com[takeoff - 1]) * fps if takeoff >= 1 else np.zeros(3)
     v_out = (com[takeoff + 1] - com[takeoff]) * fps
     l_in = (com[landing] - com[landing - 1]) * fps
-    l_out = (com[landing + 1] - com[landing]) * fps if landing + 1 < clip.num_frames else l_in
+    l_out = (com[landing + 1] - com[landing]) * fps if landing + 1 < com.shape[0] else l_in
     g = np.array([0.0, -9.81, 0.0])
     # gravity alone changes the velocity by g/fps over a frame; remove that part
     dp_to = M * np.linalg.norm(v_out - v_in - g / fps)

@@ -26,24 +26,35 @@ def sample(clip: Clip, src: np.ndarray) -> Clip:
     >>> half = sample(clip, np.arange(0, clip.num_frames - 1, 0.5))   # 2× slower   # doctest: +SKIP
     """
     src = np.clip(np.asarray(src, dtype=np.float64), 0.0, clip.num_frames - 1)
-    i0 = np.floor(src).astype(np.int64)
-    i0 = np.minimum(i0, clip.num_frames - 2) if clip.num_frames > 1 else i0
-    i1 = np.minimum(i0 + 1, clip.num_frames - 1)
-    u = src - i0
-    q0 = Rotation.from_quat(clip.rotations[i0])
-    q1 = Rotation.from_quat(clip.rotations[i1])
-    rel = (q0.inv() * q1).as_rotvec()
-    rot = (q0 * Rotation.from_rotvec(rel * u[:, None, None])).as_quat()
-    # keep the exact source quaternions where no interpolation happens
-    exact0 = u == 0
-    rot[exact0] = clip.rotations[i0[exact0]]
-    root = clip.root_pos[i0] * (1 - u)[:, None] + clip.root_pos[i1] * u[:, None]
-    jp = None
-    if clip.joint_pos is not None:
-        jp = clip.joint_pos[i0] * (1 - u)[:, None, None] + clip.joint_pos[i1] * u[:, None, None]
+    rot, root, jp = _sample_arrays(clip.rotations, clip.root_pos, clip.joint_pos, src)
     meta = dict(clip.meta)
     meta["source_frames"] = src
     return Clip(clip.skeleton, clip.fps, root, rot, jp, meta)
+
+
+def _sample_arrays(rotations: np.ndarray, root_pos: np.ndarray, joint_pos: np.ndarray | None,
+                   src: np.ndarray):
+    """The arrays of :func:`sample` at source frames ``src`` (already clamped):
+    rotations (slerp), root position and joint translations (linear).  Frames that
+    fall on a source frame take its quaternions as they are, so the slerp runs only
+    on the fractional ones."""
+    F = rotations.shape[0]
+    i0 = np.floor(src).astype(np.int64)
+    i0 = np.minimum(i0, F - 2) if F > 1 else i0
+    i1 = np.minimum(i0 + 1, F - 1)
+    u = src - i0
+    rot = rotations[i0]                       # a copy: the exact source quaternions
+    frac = np.flatnonzero(u != 0)
+    if frac.size:
+        q0 = Rotation.from_quat(rot[frac])
+        q1 = Rotation.from_quat(rotations[i1[frac]])
+        rel = (q0.inv() * q1).as_rotvec()
+        rot[frac] = (q0 * Rotation.from_rotvec(rel * u[frac, None, None])).as_quat()
+    root = root_pos[i0] * (1 - u)[:, None] + root_pos[i1] * u[:, None]
+    jp = None
+    if joint_pos is not None:
+        jp = joint_pos[i0] * (1 - u)[:, None, None] + joint_pos[i1] * u[:, None, None]
+    return rot, root, jp
 
 
 def retime(clip: Clip, factor: float) -> Clip:

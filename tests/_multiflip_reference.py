@@ -1,0 +1,411 @@
+"""Multi-flip editing (Majkowska & Faloutsos 2007, Section 5 and Appendix B).
+
+A single flip becomes a double, triple or quadruple one in four steps:
+
+1. **Search** (5.2): in the flight, a self-looping sequence F_B = f_m … f_n−1
+   whose end pose is its start pose turned by φ about the angular-momentum axis
+   (Appendix A distance, :mod:`stimuli.edit.similarity`).
+2. **Sequencing** (5.2): F_S, then F_B repeated r+1 times, the k-th copy turned
+   by kφ about the axis along L through the COM, r = ⌈(2π·flips − φ_S − φ_E)/φ⌉;
+   a second search joins a frame f of the last copies to a frame g of the rest
+   of the flight so that the character still lands upright (the pair's turn
+   error, at most ``max_turn_error`` degrees, is spread over the copies so the
+   landing is exact); joins are cross-faded with slerp over a few frames.
+3. **Retiming** (5.3, Appendix B): take-off, flight and landing play k times
+   faster, k = ``k_ratio``·k*, k* = sqrt(½ g T / (v0 − Δy/T)), T the sequenced
+   flight's duration before retiming.  With k = k* the linear momentum is
+   continuous at take-off and landing; other k leave a jump, which is measured
+   and reported.
+4. **Repositioning** (5.4): the flight's COM is put on the exact parabola from
+   the take-off point (horizontal velocity k·v_h) to the landing height, and
+   everything after landing follows on from where the flight now ends.
+
+The rotation and angular momentum of the result are then measured by the
+analyser (:func:`measure`).
+"""
+# The implementation of stimuli/edit/multiflip.py before its pre-processing was split
+# out (commit 36cbc1e), kept verbatim as the plain path tests/test_fast_paths.py
+# compares the fast one with.
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from stimuli.analyse import Analysis, analyse
+from stimuli.motion.clip import Clip
+from stimuli.physics import center_of_mass
+from stimuli.edit.reposition import ballistic_path
+from stimuli.edit.similarity import distance_matrix, pose_features
+
+
+def sample(clip: Clip, src: np.ndarray) -> Clip:
+    """stimuli.edit.timing.sample as it was: slerp over every frame and joint."""
+    src = np.clip(np.asarray(src, dtype=np.float64), 0.0, clip.num_frames - 1)
+    i0 = np.floor(src).astype(np.int64)
+    i0 = np.minimum(i0, clip.num_frames - 2) if clip.num_frames > 1 else i0
+    i1 = np.minimum(i0 + 1, clip.num_frames - 1)
+    u = src - i0
+    q0 = Rotation.from_quat(clip.rotations[i0])
+    q1 = Rotation.from_quat(clip.rotations[i1])
+    rel = (q0.inv() * q1).as_rotvec()
+    rot = (q0 * Rotation.from_rotvec(rel * u[:, None, None])).as_quat()
+    exact0 = u == 0
+    rot[exact0] = clip.rotations[i0[exact0]]
+    root = clip.root_pos[i0] * (1 - u)[:, None] + clip.root_pos[i1] * u[:, None]
+    jp = None
+    if clip.joint_pos is not None:
+        jp = clip.joint_pos[i0] * (1 - u)[:, None, None] + clip.joint_pos[i1] * u[:, None, None]
+    meta = dict(clip.meta)
+    meta["source_frames"] = src
+    return Clip(clip.skeleton, clip.fps, root, rot, jp, meta)
+
+
+class FlipEditError(ValueError):
+    """A multi-flip edit that cannot be made; the message says why."""
+
+
+def k_star(g: float, T: float, v0: float, dy: float) -> float:
+    """Appendix B: the retiming factor that keeps linear momentum continuous,
+    k* = sqrt(½ g T / (v0 − Δy/T)), for a flight of T seconds (before retiming)
+    that took off with vertical velocity v0 and lands Δy higher."""
+    den = v0 - dy / T
+    if not (T > 0 and den > 0):
+        raise FlipEditError(f"k*: the flight needs T > 0 and v0 > Δy/T (T={T:.3f} s, v0={v0:.3f} m/s, "
+                            f"Δy={dy:.3f} m)")
+    return math.sqrt(0.5 * g * T / den)
+
+
+def flight_axis(a: Analysis) -> np.ndarray:
+    """Unit direction of the mean angular momentum in flight."""
+    L = a.L[a.takeoff:a.landing + 1].mean(axis=0)
+    n = np.linalg.norm(L)
+    if n < 1e-6:
+        raise FlipEditError("the flight has no angular momentum to turn about (a jump, not a flip)")
+    return L / n
+
+
+def turn_angle(clip: Clip, axis, a: int = 0, b: int | None = None) -> float:
+    """Degrees the root turns about ``axis`` from frame ``a`` to ``b``: the root's
+    angular velocity along the axis, integrated (trapezoid)."""
+    b = clip.num_frames - 1 if b is None else b
+    w = clip.angular_velocities()[a:b + 1, 0] @ (np.asarray(axis, float) / np.linalg.norm(axis))
+    return float(np.degrees(np.trapezoid(w, dx=1.0 / clip.fps))) if w.size > 1 else 0.0
+
+
+def standing_span(clip: Clip, body, takeoff: int, landing: int, still: float = 0.05,
+                  drop: float = 0.05) -> tuple[int, int]:
+    """(last standing frame before take-off, first standing frame after landing).
+    Standing: the COM moves slower than ``still`` m/s and is at most ``drop`` m
+    below its height in the clip's first (before) or last (after) frame — so the
+    bottom of a crouch, where the COM also stops, is not taken for standing.  The
+    clip's ends when no frame qualifies."""
+    from stimuli.physics import momentum
+    m = momentum(clip, body)
+    v = np.linalg.norm(m.v_com, axis=1)
+    y = m.com[:, 1]
+    before = np.flatnonzero((v[:takeoff + 1] < still) & (y[:takeoff + 1] >= y[0] - drop))
+    after = np.flatnonzero((v[landing:] < still) & (y[landing:] >= y[-1] - drop))
+    return (int(before[-1]) if before.size else 0,
+            int(landing + after[0]) if after.size else clip.num_frames - 1)
+
+
+@dataclass
+class SelfLoop:
+    m: int                 # first frame of F_B (source)
+    n: int                 # frame reached after F_B: R(f_m, φ) ≈ f_n
+    phi: float             # radians, about the flight axis
+    distance: float
+
+
+def find_self_loop(D: np.ndarray, phi: np.ndarray, frames: np.ndarray, fps: float, *,
+                   min_turn_deg: float = 45.0, max_turn_deg: float = 300.0,
+                   min_seconds: float = 0.05) -> SelfLoop:
+    """The pair (m, n), m < n, of least distance whose turn φ (about the axis, in
+    the flip's direction) lies in [min_turn, max_turn]; ties go to the larger φ.
+    Raises :class:`FlipEditError` when no pair qualifies."""
+    i, j = np.triu_indices(D.shape[0], k=max(1, int(round(min_seconds * fps))))
+    # unwrap: the turn from i to j, counted along the flip (positive), can exceed π
+    turn = np.mod(phi[i, j], 2.0 * np.pi)
+    ok = (turn >= np.radians(min_turn_deg)) & (turn <= np.radians(max_turn_deg))
+    if not np.any(ok):
+        raise FlipEditError(f"no self-looping sequence: no two flight frames are {min_turn_deg:g}°–"
+                            f"{max_turn_deg:g}° apart about the angular-momentum axis")
+    i, j, turn = i[ok], j[ok], turn[ok]
+    cost = D[i, j] - 1e-6 * turn                 # least distance, then the longest turn
+    k = int(np.argmin(cost))
+    return SelfLoop(int(frames[i[k]]), int(frames[j[k]]), float(turn[k]), float(D[i[k], j[k]]))
+
+
+@dataclass
+class MultiFlip:
+    """The edited clip and what the method did (:func:`multiflip`)."""
+
+    clip: Clip
+    flips: int
+    takeoff: int
+    landing: int
+    report: dict = field(default_factory=dict)
+
+
+def _smooth(x):
+    return x * x * (3.0 - 2.0 * x)
+
+
+def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, k: float | None = None,
+              blend_s: float = 0.025, max_turn_error: float = 10.0, takeoff_height: float = 0.0,
+              min_turn_deg: float = 45.0) -> MultiFlip:
+    """Make a ``flips``-flip motion from a single flip (a clip or its analysis).
+
+    ``k_ratio``: retiming factor as a fraction of k* (the paper's 0.7 by default;
+    1 gives continuous momentum); ``k`` overrides it.  ``blend_s``: half-width of
+    the slerp cross-fade at each join.  ``takeoff_height``: metres added to the
+    take-off (everything before the flight is raised, Figure 4c), the landing
+    height stays.  Returns a :class:`MultiFlip` whose ``report`` holds the
+    search, sequencing, k*, k and the measured momentum jumps.
+    """
+    if isinstance(flips, bool) or not isinstance(flips, (int, np.integer)) or not 1 <= flips <= 6:
+        raise FlipEditError(f"flips must be a whole number from 1 to 6, got {flips!r}")
+    a = source if isinstance(source, Analysis) else analyse(source)
+    if a.flight is None:
+        raise FlipEditError(f"{a.clip.meta.get('name', 'clip')}: no flight phase to add flips to")
+    clip, body, fps = a.clip, a.body, a.clip.fps
+    to, ld = a.takeoff, a.landing
+    u = flight_axis(a)
+    frames = np.arange(to, ld + 1)
+    feat = pose_features(clip, body, u, frames)
+    D, phi = distance_matrix(feat)
+
+    # the source must be one flip: its root turns about 360° from stand to stand
+    s0, s1 = standing_span(clip, body, to, ld)
+    w_u = clip.angular_velocities()[:, 0] @ u
+    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_u[1:] + w_u[:-1]) / fps)])   # radians, unwrapped
+    total = theta[s1] - theta[s0]
+    if abs(abs(total) - 2 * np.pi) > np.radians(60):
+        raise FlipEditError(f"the source turns {np.degrees(total):.0f}° about its angular momentum "
+                            f"from stand to stand, not one flip (360°): multiflip needs a single flip")
+    want = 2.0 * np.pi * flips
+
+    # 1. search
+    loop = find_self_loop(D, phi, frames, fps, min_turn_deg=min_turn_deg)
+    m, n, ph = loop.m, loop.n, loop.phi
+    phi_S = theta[m] - theta[s0]
+    phi_E = theta[s1] - theta[n]
+    r = max(1, int(math.ceil((abs(want) - abs(phi_S) - abs(phi_E)) / ph)))
+    L_len = n - m
+
+    # 2. second search: f in copies r-1, r (source s_f, copy c) and g in [m+1, ld]
+    pos = {int(f): i for i, f in enumerate(frames)}
+    src_f = np.arange(m, n)
+    g_idx = np.arange(m + 1, ld + 1)
+    Dg = D[np.ix_([pos[s] for s in src_f], [pos[g] for g in g_idx])]      # (|F_B|, |g|)
+    best = None
+    for c in (r - 1, r):
+        if c < 0:
+            continue
+        # unwrapped orientation of f (copy c) minus that of g: must be (flips−1) turns
+        err = (theta[src_f][:, None] + c * ph - theta[g_idx][None, :]) - (abs(want) - 2 * np.pi)
+        ok = np.abs(err) <= np.radians(max_turn_error)
+        if not np.any(ok):
+            continue
+        cost = np.where(ok, Dg + 0.5 * np.abs(err), np.inf)
+        i, j = np.unravel_index(int(np.argmin(cost)), cost.shape)
+        if best is None or cost[i, j] < best[0]:
+            best = (float(cost[i, j]), c, int(src_f[i]), int(g_idx[j]), float(err[i, j]), float(Dg[i, j]))
+    if best is None:
+        raise FlipEditError(f"no landing join within {max_turn_error:g}° of {flips} full turns: no frame "
+                            f"of the last repetitions matches the end of the flight (try another "
+                            f"--flips or a larger max_turn_error)")
+    _, c_f, s_f, g, turn_err, d_land = best
+
+    # segments of the new timeline: (first source frame, last source frame, copy index)
+    segs = [(0, m - 1, None)] if m > 0 else []
+    for c in range(c_f):
+        segs.append((m, n - 1, c))
+    segs.append((m, s_f, c_f))
+    segs.append((g + 1, clip.num_frames - 1, "end"))     # f ≈ g, so after f comes g + 1
+    src, cop = [], []
+    for a0, a1, c in segs:
+        src.append(np.arange(a0, a1 + 1, dtype=float))
+        cop.append(np.full(a1 - a0 + 1, -1.0 if c is None else (-2.0 if c == "end" else float(c))))
+    src = np.concatenate(src)
+    copy = np.concatenate(cop)
+    N = src.size
+    # turn of every new frame: copies k·φ, with the landing join's error spread over the copies
+    n_rep = np.flatnonzero(copy >= 0)
+    frac = np.zeros(N)
+    if n_rep.size:
+        frac[n_rep] = np.linspace(0.0, 1.0, n_rep.size)
+        frac[n_rep[-1] + 1:] = 1.0
+    ang = np.where(copy >= 0, copy * ph, 0.0) - turn_err * frac
+    # after the landing join: g's orientation must equal f's, which differs from the
+    # original's by c_f·φ + θ(s_f) − θ(g) − err = (flips − 1) whole turns: no rotation
+    ang[copy == -2] = 0.0
+    # cross-fades at every join: frame J+i blends the previous segment continued (A)
+    # into the next segment run backwards (B)
+    w = max(1, int(round(blend_s * fps)))
+    srcA, angA = src.copy(), ang.copy()
+    srcB, angB = src.copy(), ang.copy()
+    alpha = np.zeros(N)
+    starts = np.cumsum([0] + [s[1] - s[0] + 1 for s in segs])[1:-1]      # first new index of segs 2..
+    for J in starts:
+        i = np.arange(-w, w)
+        idx = J + i
+        keep = (idx >= 0) & (idx < N)
+        i, idx = i[keep], idx[keep]
+        srcA[idx] = src[J - 1] + 1 + i            # previous segment, continued
+        angA[idx] = ang[J - 1]
+        srcB[idx] = src[J] + i                    # next segment, before its start
+        angB[idx] = ang[J]
+        alpha[idx] = _smooth((i + w + 0.5) / (2 * w))
+    com_src = center_of_mass(clip, body)
+
+    def posed(s, an):
+        c = sample(clip, s)
+        cc = np.array([np.interp(s, np.arange(clip.num_frames), com_src[:, k]) for k in range(3)]).T
+        R = Rotation.from_rotvec(u[None] * an[:, None])
+        root = Rotation.from_quat(c.rotations[:, 0])
+        rot = c.rotations.copy()
+        rot[:, 0] = (R * root).as_quat()
+        return rot, cc + R.apply(c.root_pos - cc)
+
+    rot, root_pos = posed(srcA, angA)
+    x = np.flatnonzero(alpha > 0)                # the cross-fades: a few frames per join
+    if x.size:
+        rB, pB = posed(srcB[x], angB[x])
+        qa, qb = Rotation.from_quat(rot[x].reshape(-1, 4)), Rotation.from_quat(rB.reshape(-1, 4))
+        al = np.repeat(alpha[x], clip.skeleton.num_joints)
+        rot[x] = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * al[:, None])).as_quat() \
+            .reshape(x.size, -1, 4)
+        root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
+    seq = Clip(clip.skeleton, fps, root_pos, rot, None,
+               {**clip.meta, "edit": f"multiflip {flips}"})
+    seq.meta.pop("source_frames", None)
+    ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld >= g else int(
+        np.flatnonzero(copy == -2)[0])
+    T_seq = (ld_seq - to) / fps
+
+    # 3. retiming by k over take-off, flight and landing
+    path = a.path
+    G = 9.81                                   # the new flight falls at earth's gravity
+    v0 = path[1, 1]
+    com_seq = center_of_mass(seq, body)
+    dy = com_seq[ld_seq, 1] - (com_seq[to, 1] + takeoff_height)
+    kst = k_star(G, T_seq, v0, dy)
+    kk = float(k) if k is not None else k_ratio * kst
+    if not (0.2 < kk < 5):
+        raise FlipEditError(f"retiming factor k = {kk:.3f} is out of range (0.2, 5)")
+    vy = np.gradient(com_seq[:, 1], 1.0 / fps)
+    pre = np.flatnonzero(vy[:to + 1] <= 0)
+    p0 = int(pre[-1]) if pre.size else 0                 # bottom of the crouch
+    post = np.flatnonzero(vy[ld_seq:] >= 0)
+    p1 = int(ld_seq + post[0]) if post.size else N - 1   # bottom of the landing
+    # the flight's rate: a whole number of output frames from take-off to landing
+    n_fl = max(1, int(round((ld_seq - to) / kk)))
+    k_fl = (ld_seq - to) / n_fl
+    Tn = T_seq / k_fl
+    # landing phase: retimed by k_L so that it continues the vertical velocity the
+    # parabola lands with (k_L = k when take-off and landing are at the same height)
+    vy_land_new = (dy + 0.5 * G * Tn ** 2) / Tn - G * Tn
+    vy_land_old = vy[ld_seq]
+    kL = vy_land_new / vy_land_old if vy_land_old < -1e-6 else kk
+    kL = float(np.clip(kL, 0.5 * kk, 2.0 * kk))
+    # source frame of each output frame: rate 1, k from the crouch's bottom to the
+    # landing, k_L to the bottom of the landing, then 1
+    # (the take-off phase at the flight's exact rate: its start moves to a whole
+    # number of flight steps before take-off)
+    p0 = to - math.floor((to - p0) / k_fl) * k_fl
+    out_src = piecewise_source([0, p0, to, ld_seq, p1, N - 1], [1.0, k_fl, k_fl, kL, 1.0])
+    new = sample(seq, out_src)
+    new.meta.pop("source_frames", None)
+    to_n = int(np.flatnonzero(np.isclose(out_src, to))[0])
+    ld_n = int(np.flatnonzero(np.isclose(out_src, ld_seq))[0])
+
+    # 4. repositioning: the exact parabola, then everything after follows on
+    com_new = center_of_mass(new, body)
+    Tn = (ld_n - to_n) / fps
+    c0 = com_new[to_n].copy()
+    if takeoff_height:
+        raise_before = np.zeros_like(new.root_pos)
+        raise_before[:to_n + 1, 1] = takeoff_height
+        new = new.replace(root_pos=new.root_pos + raise_before)
+        c0[1] += takeoff_height
+    y_end = com_new[ld_n, 1]
+    vh = kk * path[[0, 2], 1]
+    vyn = (y_end - c0[1] + 0.5 * G * Tn ** 2) / Tn
+    tt = np.arange(ld_n - to_n + 1) / fps
+    target = ballistic_path(c0, np.array([vh[0], vyn, vh[1]]), G, tt)
+    shift = np.zeros_like(new.root_pos)
+    shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
+    shift[ld_n + 1:] = target[-1] - com_new[ld_n]
+    out = new.replace(root_pos=new.root_pos + shift,
+                      meta={**new.meta, "takeoff": to_n, "landing": ld_n, "flips": flips})
+
+    report = {"self_loop": {"m": m, "n": n, "phi_deg": float(np.degrees(ph)), "distance": loop.distance},
+              "phi_S_deg": float(np.degrees(phi_S)), "phi_E_deg": float(np.degrees(phi_E)),
+              "repetitions": r, "landing_join": {"f_source": s_f, "f_copy": c_f, "g": g,
+                                                 "distance": d_land,
+                                                 "turn_error_deg": float(np.degrees(turn_err))},
+              "flight_s_before_retiming": T_seq, "k_star": kst, "k": kk, "k_ratio": kk / kst,
+              "k_landing": kL,
+              "flight_s": Tn, "takeoff": to_n, "landing": ld_n, "gravity": G}
+    report.update(momentum_jumps(out, body, to_n, ld_n))
+    return MultiFlip(out, flips, to_n, ld_n, report)
+
+
+def piecewise_source(bounds, rates) -> np.ndarray:
+    """Fractional source frames of an output that plays ``bounds[i]`` →
+    ``bounds[i+1]`` at about ``rates[i]`` source frames per output frame, every
+    bound hit exactly by an output frame (each span takes a whole number of
+    steps, so its rate is rounded: (b − a)/round((b − a)/rate))."""
+    out = []
+    for a, b, r in zip(bounds[:-1], bounds[1:], rates):
+        if b <= a:
+            continue
+        n = max(1, int(round((b - a) / r)))
+        out.append(np.linspace(a, b, n + 1)[:-1])
+    out.append(np.array([float(bounds[-1])]))
+    return np.concatenate(out)
+
+
+def momentum_jumps(clip: Clip, body, takeoff: int, landing: int) -> dict:
+    """Linear-momentum discontinuity at take-off and landing: the COM velocity
+    one frame either side of each (one-sided differences), as a fraction of the
+    take-off momentum."""
+    com = center_of_mass(clip, body)
+    fps = clip.fps
+    M = body.total_mass
+    v_in = (com[takeoff] - com[takeoff - 1]) * fps if takeoff >= 1 else np.zeros(3)
+    v_out = (com[takeoff + 1] - com[takeoff]) * fps
+    l_in = (com[landing] - com[landing - 1]) * fps
+    l_out = (com[landing + 1] - com[landing]) * fps if landing + 1 < clip.num_frames else l_in
+    g = np.array([0.0, -9.81, 0.0])
+    # gravity alone changes the velocity by g/fps over a frame; remove that part
+    dp_to = M * np.linalg.norm(v_out - v_in - g / fps)
+    dp_ld = M * np.linalg.norm(l_out - l_in - g / fps)
+    p_to = M * np.linalg.norm(v_out)
+    return {"dp_takeoff": float(dp_to), "dp_landing": float(dp_ld), "p_takeoff": float(p_to),
+            "dp_takeoff_pct": float(100 * dp_to / p_to), "dp_landing_pct": float(100 * dp_ld / p_to)}
+
+
+def measure(result: MultiFlip, original: Analysis) -> dict:
+    """What the edited clip has, by the analyser (with the original's body): the
+    root's turn about L from the last standing frame before take-off to the first
+    after landing, flight |L| CV, COM residual from a parabola in flight."""
+    clip = result.clip
+    a = analyse(clip, body=original.body, estimate=False)
+    u = flight_axis(original)
+    to, ld = result.takeoff, result.landing
+    s0, s1 = standing_span(clip, original.body, to, ld)
+    Lm = np.linalg.norm(a.L[to + 2:ld - 1], axis=1)
+    from stimuli.flight import fit_path, path_values
+    com = a.com[to:ld + 1]
+    coef = fit_path(com, clip.fps)
+    res = com - path_values(coef, np.arange(com.shape[0]) / clip.fps)
+    return {"turn_deg": turn_angle(clip, u, s0, s1), "turn_span": [s0, s1],
+            "L_mean": float(Lm.mean()), "L_cv_pct": float(100 * Lm.std() / Lm.mean()),
+            "com_rms_mm": float(1000 * np.sqrt(np.mean(np.sum(res ** 2, axis=1)))),
+            "analyser_flight": [a.takeoff, a.landing] if a.flight is not None else None,
+            "apparent_gravity": a.apparent_gravity}
