@@ -261,6 +261,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_analysis(sub)
     from study.reproduce import add_commands as add_reproduce
     add_reproduce(sub)
+    from study.concat_cli import add_commands as add_concat
+    add_concat(sub)
     return ap
 
 
