@@ -36,7 +36,6 @@ from ..motion.clip import Clip
 from ..physics import center_of_mass
 from .reposition import ballistic_path
 from .similarity import distance_matrix, pose_features
-from .timing import _sample_arrays
 
 
 class FlipEditError(ValueError):
@@ -140,7 +139,9 @@ class FlipSource:
     ``D``/``phi`` are the Appendix A distances and turns of every pair of flight
     frames; ``theta`` the root's unwrapped turn about ``axis`` per frame (radians);
     ``stand`` the last standing frame before take-off and the first after landing;
-    ``com`` the source's COM per frame; ``path`` the flight's COM parabola."""
+    ``com`` the source's COM per frame; ``path`` the flight's COM parabola;
+    ``step`` (F−1, J−1, 3) the rotation vector log(q_f⁻¹ q_f+1) of every joint but
+    the root from each frame to the next (what a slerp between them needs)."""
 
     analysis: Analysis
     axis: np.ndarray
@@ -151,6 +152,7 @@ class FlipSource:
     stand: tuple[int, int]
     com: np.ndarray
     path: np.ndarray
+    step: np.ndarray
 
 
 def prepare(source: Clip | Analysis) -> FlipSource:
@@ -165,19 +167,73 @@ def prepare(source: Clip | Analysis) -> FlipSource:
     D, phi = distance_matrix(pose_features(clip, body, u, frames))
     w_u = clip.angular_velocities()[:, 0] @ u
     theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_u[1:] + w_u[:-1]) / fps)])   # radians, unwrapped
+    q = clip.rotations[:, 1:]
+    q0 = Rotation.from_quat(q[:-1])
+    step = (q0.inv() * Rotation.from_quat(q[1:])).as_rotvec()
     return FlipSource(a, u, frames, D, phi, theta, standing_span(clip, body, to, ld),
-                      center_of_mass(clip, body), a.path)
+                      center_of_mass(clip, body), a.path, step)
 
 
 def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
     """Rotations (n,J,4) and root positions (n,3) of source frames ``s`` (whole
-    numbers), each turned by ``rotvec`` (n,3) about its own COM: the COM stays."""
+    numbers), each turned by ``rotvec`` (n,3) about its own COM: the COM stays.
+    Frames turned by nothing keep the source's numbers."""
     s = np.clip(s, 0, clip.num_frames - 1).astype(np.int64)
-    R = Rotation.from_rotvec(rotvec)
     rot = clip.rotations[s]
-    rot[:, 0] = (R * Rotation.from_quat(rot[:, 0])).as_quat()
-    cc = com[s]
-    return rot, cc + R.apply(clip.root_pos[s] - cc)
+    pos = clip.root_pos[s]
+    t = np.flatnonzero(np.any(rotvec != 0, axis=1))
+    if t.size:
+        R = Rotation.from_rotvec(rotvec[t])
+        # (n, 1) shapes: scipy's vectorised backend, faster than its loop for products
+        rot[t, 0] = (Rotation.from_rotvec(rotvec[t, None]) *
+                     Rotation.from_quat(rot[t, :1])).as_quat()[:, 0]
+        cc = com[s[t]]
+        pos[t] = cc + R.apply(pos[t] - cc)
+    return rot, pos
+
+
+def _slerp(q0: np.ndarray, q1: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Slerp (..., 4) quaternions by ``u`` (n,), as :func:`~stimuli.edit.timing.sample`."""
+    a = Rotation.from_quat(q0)
+    b = Rotation.from_quat(q1)
+    return (a * Rotation.from_rotvec((a.inv() * b).as_rotvec() * u[:, None, None])).as_quat()
+
+
+def _retimed(pre: "FlipSource", rot: np.ndarray, root_pos: np.ndarray, s_src: np.ndarray,
+             plain: np.ndarray, src: np.ndarray):
+    """:func:`~stimuli.edit.timing.sample` of the sequenced frames (``rot``,
+    ``root_pos``) at fractional frames ``src``.  A sequenced frame i is ``plain``
+    when it is source frame ``s_src[i]`` with only its root turned; between two
+    plain frames that are consecutive source frames, the joints below the root
+    slerp with the source's prepared steps log(q⁻¹q').  The root, and every joint
+    elsewhere (cross-fades, joins), slerps from scratch."""
+    N, J = rot.shape[:2]
+    i0 = np.minimum(np.floor(src).astype(np.int64), N - 2)
+    i1 = i0 + 1
+    u = src - i0
+    out = rot[i0]
+    f = np.flatnonzero(u != 0)
+    a0, a1 = i0[f], i1[f]
+    quick = plain[a0] & plain[a1] & (s_src[a1] == s_src[a0] + 1)
+    fq, ff = f[quick], f[~quick]
+    if f.size:
+        # log(q0⁻¹ q1) from scratch for the root of the quick frames and every joint of
+        # the others; then one batch q0 · exp(u · log) for all of them
+        a = np.concatenate([rot[i0[fq], 0], rot[i0[ff]].reshape(-1, 4)])
+        b = np.concatenate([rot[i1[fq], 0], rot[i1[ff]].reshape(-1, 4)])
+        ra = Rotation.from_quat(a[:, None])
+        log = (ra.inv() * Rotation.from_quat(b[:, None])).as_rotvec()[:, 0]
+        nq = fq.size * (J - 1)
+        q0 = np.concatenate([rot[i0[fq], 1:].reshape(-1, 4), a])
+        step = np.concatenate([pre.step[s_src[i0[fq]]].reshape(-1, 3), log])
+        uu = np.concatenate([np.repeat(u[fq], J - 1), u[fq], np.repeat(u[ff], J)])
+        q = (Rotation.from_quat(q0[:, None]) * Rotation.from_rotvec((step * uu[:, None])[:, None])
+             ).as_quat()[:, 0]
+        out[fq, 1:] = q[:nq].reshape(fq.size, J - 1, 4)
+        out[fq, 0] = q[nq:nq + fq.size]
+        out[ff] = q[nq + fq.size:].reshape(ff.size, J, 4)
+    root = root_pos[i0] * (1 - u)[:, None] + root_pos[i1] * u[:, None]
+    return out, root
 
 
 def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: float = 0.7,
@@ -282,20 +338,27 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
         alpha[idx] = _smooth((i + w + 0.5) / (2 * w))
     # every sequenced frame is a whole source frame turned about its COM (which the
     # turn keeps): its COM is the source's; only the cross-fades need their own
-    rot, root_pos = _turned(clip, pre.com, srcA, u[None] * angA[:, None])
-    com_seq = pre.com[np.clip(srcA, 0, clip.num_frames - 1).astype(np.int64)]
     x = np.flatnonzero(alpha > 0)                # the cross-fades: a few frames per join
-    if x.size:
-        rB, pB = _turned(clip, pre.com, srcB[x], u[None] * angB[x, None])
-        qa, qb = Rotation.from_quat(rot[x]), Rotation.from_quat(rB)
-        al = alpha[x][:, None, None]
-        rot[x] = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * al)).as_quat()
-        root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
-        com_seq[x] = center_of_mass(Clip(clip.skeleton, fps, root_pos[x], rot[x]), body)
-    rot /= np.linalg.norm(rot, axis=-1, keepdims=True)    # what Clip() would store
+    # A (every frame) and B (the cross-fades) turned in one batch
+    rot, root_pos = _turned(clip, pre.com, np.concatenate([srcA, srcB[x]]),
+                            u[None] * np.concatenate([angA, angB[x]])[:, None])
+    rot, rB = rot[:N], rot[N:]
+    root_pos, pB = root_pos[:N], root_pos[N:]
+    s_src = np.clip(srcA, 0, clip.num_frames - 1).astype(np.int64)
     ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld >= g else int(
         np.flatnonzero(copy == -2)[0])
     T_seq = (ld_seq - to) / fps
+    # the COM of the sequenced frames is read up to take-off and from landing on (the
+    # retiming's bounds); a turned source frame has the source's COM; a cross-fade
+    # there needs its own (NaN marks what is never read)
+    com_seq = pre.com[s_src]
+    if x.size:
+        rot[x] = _slerp(rot[x], rB, alpha[x])
+        root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
+        com_seq[x] = np.nan
+        xr = x[(x <= to + 1) | (x >= ld_seq - 1)]
+        if xr.size:
+            com_seq[xr] = center_of_mass(Clip(clip.skeleton, fps, root_pos[xr], rot[xr]), body)
 
     # 3. retiming by k over take-off, flight and landing
     path = pre.path
@@ -328,7 +391,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     p0 = to - math.floor((to - p0) / k_fl) * k_fl
     out_src = piecewise_source([0, p0, to, ld_seq, p1, N - 1], [1.0, k_fl, k_fl, kL, 1.0])
     out_src = np.clip(out_src, 0.0, N - 1)
-    rot_n, root_n, _ = _sample_arrays(rot, root_pos, None, out_src)
+    rot_n, root_n = _retimed(pre, rot, root_pos, s_src, alpha == 0, out_src)
     to_n = int(np.flatnonzero(np.isclose(out_src, to))[0])
     ld_n = int(np.flatnonzero(np.isclose(out_src, ld_seq))[0])
 
