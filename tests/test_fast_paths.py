@@ -197,21 +197,24 @@ def test_multiflip_on_prepared_source_equals_the_plain_implementation(builtin_fl
     _assert_same_multiflip(r0, multiflip(prepare(a), **kw))
 
 
-@pytest.mark.parametrize("name", ["88_01.bvh", "87_03.bvh"])
+@pytest.mark.parametrize("name", ["88_01.bvh", "87_03.bvh", "90_11.bvh"])
 def test_multiflip_of_real_cmu_equals_the_plain_implementation(name):
+    """Real clips also put cross-fades next to take-off or landing, where the
+    sequenced clip's COM is read (and computed for them alone)."""
     import _multiflip_reference as ref
     from stimuli import analyse
     from stimuli.edit.multiflip import FlipEditError, multiflip, prepare
     a = analyse(load_bvh(shared_file(name)))
     pre = prepare(a)
     for flips in (2, 3):
-        try:
-            r0 = ref.multiflip(a, flips, k_ratio=1.0)
-        except FlipEditError as e:
-            with pytest.raises(FlipEditError, match=str(e)[:30]):
-                multiflip(pre, flips, k_ratio=1.0)
-            continue
-        _assert_same_multiflip(r0, multiflip(pre, flips, k_ratio=1.0))
+        for kw in (dict(k_ratio=1.0), dict(blend_s=0.1), dict(takeoff_height=0.2)):
+            try:
+                r0 = ref.multiflip(a, flips, **kw)
+            except ref.FlipEditError as e:
+                with pytest.raises(FlipEditError, match=str(e)[:30]):
+                    multiflip(pre, flips, **kw)
+                continue
+            _assert_same_multiflip(r0, multiflip(pre, flips, **kw))
 
 
 def test_sampling_at_whole_frames_keeps_the_source_quaternions():
