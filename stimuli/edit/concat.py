@@ -162,37 +162,49 @@ def optimal_timing(L1, L2, r1, r2, m, frames1, frames2, f_start: int | None = No
     ``frames2`` the blendable frames of each motion; ``f_start`` the first frame of
     motion 1's blendable period (default ``frames1[0]``).  ``allowed`` (n1, n2)
     bool masks pairs out (e.g. facing too different).  Every frame pair (f, g) is
-    one cell of an (n1 × n2) array; the offset T = f − g is its diagonal, and
-    f_T, F_dm, F_inertia and F_time are read off per diagonal — no loop over T."""
+    one cell of an (n1 × n2) array; the offset T = f − g is its diagonal, sheared
+    into a column, and f_T, F_dm, F_inertia and F_time are read off per column —
+    no loop over T or f."""
     L1, L2 = np.asarray(L1, float), np.asarray(L2, float)
     f1, f2 = np.asarray(frames1, int), np.asarray(frames2, int)
     if f1.size == 0 or f2.size == 0:
         raise ConcatError("an empty blendable period: nothing to blend")
     f_start = int(f1[0]) if f_start is None else int(f_start)
-    D = np.sum((L1[f1][:, None, :] - L2[f2][None, :, :]) ** 2, axis=-1)       # (n1, n2) eq. 5
+    A, B = L1[f1], L2[f2]
+    D = ((A[:, 0, None] - B[None, :, 0]) ** 2 + (A[:, 1, None] - B[None, :, 1]) ** 2
+         + (A[:, 2, None] - B[None, :, 2]) ** 2)                                # (n1, n2) eq. 5
     if allowed is not None:
         D = np.where(allowed, D, np.inf)
-    Tm = f1[:, None] - f2[None, :]                                              # (n1, n2) offsets
-    # per offset T: the cell of least D on its diagonal (ties: the earliest f)
-    order = np.lexsort((np.broadcast_to(f1[:, None], D.shape).ravel(), D.ravel(), Tm.ravel()))
-    Ts = Tm.ravel()[order]
-    first = np.concatenate([[True], Ts[1:] != Ts[:-1]])
-    best = order[first]
-    best = best[np.isfinite(D.ravel()[best])]
-    if best.size == 0:
+    # shear the pairs onto a grid whose columns are the offsets: frame f1[i] (row
+    # r = f1[i] − a1) and f2[j] (s = f2[j] − a2) go to column r − s + n2 − 1, so
+    # T = a1 − a2 + column − (n2 − 1); the least D down each column is f_T (the
+    # first, i.e. the earliest f, on ties — as the loop finds it)
+    a1, a2 = int(f1.min()), int(f2.min())
+    n1, n2 = int(f1.max()) - a1 + 1, int(f2.max()) - a2 + 1
+    rr = (f1 - a1)[:, None]
+    cc = rr - (f2 - a2)[None, :] + n2 - 1
+    S = np.full((n1, n1 + n2 - 1), np.inf)
+    S[np.broadcast_to(rr, D.shape), cc] = D
+    row = np.argmin(S, axis=0)
+    col = np.arange(S.shape[1])
+    ok = np.isfinite(S[row, col])
+    if not ok.any():
         raise ConcatError("no frame pair of the blendable periods is allowed (torso facing directions "
                           "differ by more than π/4 everywhere)")
-    i, j = np.unravel_index(best, D.shape)
-    F_dm = D[i, j]
+    row, col = row[ok], col[ok]
+    fa = a1 + row                                   # f_T per offset
+    Ts = a1 - a2 + col - (n2 - 1)
+    fb = fa - Ts
+    F_dm = S[row, col]
     F_in = np.einsum("p,kp->k", np.asarray(m, float),
-                     (np.einsum("kpa,kpa->kp", r1[f1[i]], r2[f2[j]])
-                      - np.einsum("kpa,kpa->kp", r1[f1[i]], r1[f1[i]])) ** 2)
-    F_t = np.sum((L1[f1[i]] - L1[f_start]) ** 2, axis=-1)
+                     (np.einsum("kpa,kpa->kp", r1[fa], r2[fb])
+                      - np.einsum("kpa,kpa->kp", r1[fa], r1[fa])) ** 2)
+    F_t = np.sum((L1[fa] - L1[f_start]) ** 2, axis=-1)
     F = F_dm + F_in + F_t
     k = int(np.argmin(F))
-    return Timing(T=int(f1[i[k]] - f2[j[k]]), fT=int(f1[i[k]]), F=float(F[k]), F_dm=float(F_dm[k]),
+    return Timing(T=int(Ts[k]), fT=int(fa[k]), F=float(F[k]), F_dm=float(F_dm[k]),
                   F_inertia=float(F_in[k]), F_time=float(F_t[k]),
-                  costs={int(f1[a] - f2[b]): float(c) for a, b, c in zip(i, j, F)})
+                  costs={int(t): float(c) for t, c in zip(Ts, F)})
 
 
 def optimal_timing_bruteforce(L1, L2, r1, r2, m, frames1, frames2, f_start: int | None = None,
