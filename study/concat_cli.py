@@ -70,10 +70,16 @@ def cmd_concat(args) -> int:
         import numpy as np
         from render.camera import fit_camera
         from stimuli.physics import momentum
-        L = momentum(a, body).L
-        Lm = L[r["phases_a"]["main"][0]:r["phases_a"]["main"][1] + 1].mean(axis=0)
-        d = np.cross([0.0, 1.0, 0.0], Lm)
+        from stimuli.edit.concat import torso_facing
         f0, f1 = int(t0 * fps), int(np.ceil(t1 * fps)) + 1
+        if args.ghost_view == "across-L":
+            L = momentum(a, body).L
+            d = np.cross([0.0, 1.0, 0.0], L[r["phases_a"]["main"][0]:r["phases_a"]["main"][1] + 1].mean(axis=0))
+        else:
+            # the performer's profile (side) or three-quarter front view at the blend
+            d = torso_facing(res.clip, body)[r["blend_out"][0]]
+            if args.ghost_view == "three-quarter":
+                d = np.array([[0.7071, 0, -0.7071], [0, 1, 0], [0.7071, 0, 0.7071]]) @ d
         cam = fit_camera(res.clip.joint_positions()[f0:f1], direction=d if np.linalg.norm(d) > 1e-6 else (0, 0, 1))
         ghost_image(res.clip, args.ghost, span=(t0, t1), interval=args.ghost_interval, body=body, camera=cam)
         out["ghost"] = str(args.ghost)
@@ -158,5 +164,8 @@ def add_commands(subparsers) -> None:
                    help="seconds between ghosts (default 0.15)")
     p.add_argument("--ghost-margin", type=float, default=0.4, metavar="S",
                    help="seconds shown before and after the blend (default 0.4)")
+    p.add_argument("--ghost-view", choices=["across-L", "side", "three-quarter"], default="across-L",
+                   help="ghost camera: across the first motion's angular momentum (default: a flip or "
+                        "cartwheel seen in profile), the performer's side, or three-quarter front")
     p.add_argument("--json", action="store_true", help="print the report as JSON")
     p.set_defaults(func=cmd_concat)
