@@ -154,6 +154,15 @@ def _fk(clip: Clip, times) -> tuple[np.ndarray, np.ndarray, Clip]:
     return pc.joint_rotations(), pc.joint_positions(), pc
 
 
+def _placed_boxes(boxes, clip: Clip, placed: Clip) -> list:
+    """Boxes (lo, hi) moved like the clip was when staged (a translation: one
+    clip is never turned)."""
+    if not boxes:
+        return []
+    o = placed.root_pos[0] - clip.root_pos[0]
+    return [(np.asarray(lo, float) + o, np.asarray(hi, float) + o) for lo, hi in boxes]
+
+
 def _save(img: np.ndarray, path) -> np.ndarray:
     if path is not None:
         write_png(path, img)
@@ -451,7 +460,7 @@ def strip_image(clip: Clip, path=None, *, every: int | None = None, dt: float | 
                 columns: int | None = None, track: bool = True, label: str = "t = {t:.2f} s",
                 time_origin: str = "clip", style: Style | None = None, camera: Camera | None = None,
                 body: Body | None = None, takeoff=None, landing=None, scene: Scene | None = None,
-                ground_bounds=None, debug=()) -> np.ndarray:
+                ground_bounds=None, debug=(), boxes=()) -> np.ndarray:
     """An animation strip: the pose every ``every``-th source frame (or every
     ``dt`` seconds, or at ``times``) over ``span``, panels side by side
     (wrapped after ``columns``), each labelled with its time (``label`` format;
@@ -459,6 +468,8 @@ def strip_image(clip: Clip, path=None, *, every: int | None = None, dt: float | 
     panel's camera follows the COM horizontally (same zoom in all panels; the
     ground shows the travel).  Panels are pasted with OpenImageIO; labels use
     OIIO ``render_text`` when a font file exists, else VTK's built-in font.
+    ``boxes``: axis-aligned boxes ``[(lo, hi), ...]`` in the clip's coordinates
+    (moved with it when it is staged), drawn with the ground.
 
     Example
     -------
@@ -502,6 +513,7 @@ def strip_image(clip: Clip, path=None, *, every: int | None = None, dt: float | 
     texts = [label.format(t=t - t_ref) for t in ts]
     panels = []
     with _scene(scene, prep, style, (pw, rh)) as sc:
+        sc.set_boxes(_placed_boxes(boxes, clip, c))
         st = sc.style
         bg = rgb8(st.background)
         gz = _gizmos(debug, c, b)
@@ -530,12 +542,13 @@ def composite_image(clip: Clip, path=None, *, interval: float = 0.2, span="fligh
                     times=None, opacity: float | None = None, size=(640, 480),
                     style: Style | None = None, camera: Camera | None = None, body: Body | None = None,
                     takeoff=None, landing=None, scene: Scene | None = None, ground_bounds=None,
-                    debug=()) -> np.ndarray:
+                    debug=(), boxes=()) -> np.ndarray:
     """Composited frames (Ooi, Fig. 4.3): each pose rendered alone with a
     transparent background (the renderer's alpha channel is the matte), layered
     with ``ImageBufAlgo.over`` over a background plate — the first opaque, the
     rest at ``opacity`` (default ``style.layer_opacity`` = 75 %), later poses
-    on top.  The matte painting Ooi did by hand, automated.
+    on top.  The matte painting Ooi did by hand, automated.  ``boxes`` (see
+    :func:`strip_image`) are part of the background plate.
 
     Example
     -------
@@ -547,6 +560,7 @@ def composite_image(clip: Clip, path=None, *, interval: float = 0.2, span="fligh
     ts = np.asarray(times, float) if times is not None else _regular_times(t0, t1, interval)
     R, P, _ = _fk(c, ts)
     with _scene(scene, prep, style, size) as sc:
+        sc.set_boxes(_placed_boxes(boxes, clip, c))
         st = sc.style
         op = st.layer_opacity if opacity is None else float(opacity)
         plate = sc.grab()                                   # ground and background only

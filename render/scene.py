@@ -23,6 +23,10 @@ from .geometry import BodyMesh
 from .style import DEFAULT_STYLE, Style, rgb
 
 
+#: colour of the boxes of :meth:`Scene.set_boxes` (light wood)
+BOX_COLOR = "#cdb793"
+
+
 class Character:
     """A posable body drawn by one actor (created once per scene slot)."""
 
@@ -197,6 +201,8 @@ class Scene:
         self._overlay = None
         self.ground_actor = None
         self._ground_key = None
+        self.boxes_actor = None
+        self._boxes_key = ()
         self.camera: Camera | None = None
         if camera is not None:
             self.set_camera(camera)
@@ -256,6 +262,31 @@ class Scene:
         self.ground_actor = self.plotter.add_mesh(grid, scalars="rgb", rgb=True, name="ground",
                                                   reset_camera=False, ambient=0.5, diffuse=0.5,
                                                   specular=0.0, show_scalar_bar=False)
+
+    def set_boxes(self, boxes=(), color=BOX_COLOR) -> None:
+        """Axis-aligned boxes standing in the scene (``[(lo, hi), ...]``, corners
+        (x, y, z) in metres), drawn with the ground and hidden with it; ``()``
+        removes them.  Used for the box and jump-over scenes of the jump
+        controller."""
+        key = tuple(tuple(float(v) for v in np.ravel(b)) for b in boxes)
+        if key == self._boxes_key:
+            return
+        self._boxes_key = key
+        if self.boxes_actor is not None:
+            self.plotter.remove_actor(self.boxes_actor)
+            self.boxes_actor = None
+        if not key:
+            return
+        mesh = None
+        for b in key:
+            x0, y0, z0, x1, y1, z1 = b
+            m = pv.Box(bounds=(x0, x1, y0, y1, z0, z1))
+            mesh = m if mesh is None else mesh.merge(m)
+        self.boxes_actor = self.plotter.add_mesh(mesh, color=color, name="boxes", reset_camera=False,
+                                                 ambient=0.35, diffuse=0.7, specular=0.05,
+                                                 show_edges=True, edge_color="#7a6a52", line_width=1.0)
+        if self.ground_actor is not None:
+            self.boxes_actor.SetVisibility(self.ground_actor.GetVisibility())
 
     def set_body(self, body: Body) -> None:
         """Switch every character to another body (another skeleton)."""
@@ -419,8 +450,11 @@ class Scene:
         self.clear_legend()
 
     def show_ground(self, visible: bool = True) -> None:
+        """Show or hide the ground (and the boxes standing on it)."""
         if self.ground_actor is not None:
             self.ground_actor.SetVisibility(bool(visible))
+        if self.boxes_actor is not None:
+            self.boxes_actor.SetVisibility(bool(visible))
 
     # --------------------------------------------------------------- output
     def _filter(self, alpha: bool):

@@ -389,3 +389,57 @@ def test_uneven_legs_load_the_stronger_leg(jumps):
     assert shares["uneven-varying-normal"] < 0.45         # left leg stronger
     assert hips["global-normal"][0] == pytest.approx(hips["global-normal"][1], abs=0.05)
     assert abs(hips["uneven-global-normal"][0] - hips["uneven-global-normal"][1]) > 1.0
+
+
+# ------------------------------------------------------------------------ CLI
+def _cli(argv):
+    import argparse
+
+    from study.jump_cli import add_commands
+    ap = argparse.ArgumentParser(prog="flipstudy")
+    sub = ap.add_subparsers(dest="command")
+    add_commands(sub)
+    args = ap.parse_args(argv)
+    return args.func(args)
+
+
+def test_cli_jump_writes_bvh_and_reports(tmp_path, capsys):
+    import json
+    out = tmp_path / "j.bvh"
+    assert _cli(["jump", "--to=-1.0,0,0", "--scene", "sideways", "--k", "varying-normal",
+                 "--out", str(out), "--json"]) == 0
+    rep = json.loads(capsys.readouterr().out)
+    assert rep["landing_error_m"] < 0.05 and rep["target"] == [-1.0, 0.0, 0.0]
+    assert rep["k"] == [20000, 24000, 16000, 20000, 24000, 16000]
+    clip = load_bvh(out)
+    assert clip.num_frames > 300 and clip.fps == pytest.approx(120)
+    a = _feet_at(clip, rep["touchdown"])
+    assert abs(a[0] + 1.0) < 0.05
+
+
+def test_cli_jump_errors(tmp_path, capsys):
+    assert _cli(["jump", "--to", "0,0,1", "--k", "weak", "--out", str(tmp_path / "x.bvh")]) == 1
+    assert "k: unknown preset 'weak'" in capsys.readouterr().err
+    assert _cli(["jump", "--to", "0,0,1", "--air", "0", "--out", str(tmp_path / "x.bvh")]) == 1
+    assert "air: expected a positive time" in capsys.readouterr().err
+    assert _cli(["jump", "--to", "0,0,4", "--out", str(tmp_path / "x.bvh")]) == 1
+    assert "target unreachable" in capsys.readouterr().err
+    assert not (tmp_path / "x.bvh").exists()
+
+
+def test_boxes_are_drawn(jumps):
+    """The renderer draws the scene's boxes (with the ground, in the plate of a
+    composite) and nothing of them without."""
+    pytest.importorskip("pyvista")
+    from render.figures import composite_image
+    res, _ = jumps[("box", 0.5)]
+    clip = res.clip
+    kw = dict(size=(160, 120), interval=0.25, takeoff=clip.meta["takeoff"], landing=clip.meta["touchdown"] - 1)
+    with_boxes = composite_image(clip, boxes=clip.meta["boxes"], **kw)
+    without = composite_image(clip, **kw)
+
+    def warm(img):          # the light-wood boxes: red well above blue (ground grey, body blue)
+        img = img.astype(int)
+        return int((img[..., 0] - img[..., 2] > 30).sum())
+    assert warm(with_boxes) > 200
+    assert warm(without) == 0
