@@ -129,6 +129,22 @@ def test_nd_from_euler_equals_one_flat_call_per_joint(name):
         np.testing.assert_allclose(q[:, j], ref, rtol=0, atol=1e-15)
 
 
+@pytest.mark.parametrize("orders", [["ZYX", "ZYX", "ZYX"], ["ZXY", "", "XYZ", "ZXY", "YZX"]])
+def test_nd_from_euler_with_mixed_orders_and_joints_without_rotations(orders):
+    rng = np.random.default_rng(5)
+    cols, c0 = [], 0
+    for o in orders:
+        cols.append(list(range(c0, c0 + len(o))))
+        c0 += len(o)
+    values = rng.uniform(-400, 400, size=(23, c0))
+    q = bvh_mod._euler_to_quat(values, orders, cols)
+    assert q.shape == (23, len(orders), 4)
+    for j, (order, c) in enumerate(zip(orders, cols)):
+        ref = (Rotation.from_euler(order, values[:, c], degrees=True).as_quat() if order
+               else np.broadcast_to([0, 0, 0, 1.0], (23, 4)))
+        np.testing.assert_allclose(q[:, j], ref, rtol=0, atol=1e-15)
+
+
 # -------------------------------------------------------- forward kinematics
 @pytest.mark.parametrize("name", ALL_BVH)
 def test_fk_equals_stacked_products_on_real_files(name):

@@ -362,12 +362,16 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
     (``tests/test_bvh.py`` checks both against each other on the shared files)."""
     F = values.shape[0]
     J = len(orders)
-    q = np.zeros((F, J, 4))
-    q[..., 3] = 1.0
     groups: dict[str, list[int]] = {}
     for j, o in enumerate(orders):
         if o:
             groups.setdefault(o, []).append(j)
+    if len(groups) == 1 and len(next(iter(groups.values()))) == J:   # one order for all
+        order, joints = next(iter(groups.items()))
+        return Rotation.from_euler(order.upper(), values[:, np.array([col_of[j] for j in joints])],
+                                   degrees=True).as_quat()
+    q = np.zeros((F, J, 4))
+    q[..., 3] = 1.0
     for order, joints in groups.items():
         cols = np.array([col_of[j] for j in joints])         # (Jg, 3)
         ang = values[:, cols]                                  # (F, Jg, 3)

@@ -141,6 +141,7 @@ class Clip:
         F, J = self.num_frames, sk.num_joints
         local = Rotation.from_quat(self.rotations.reshape(-1, 4)).as_matrix()
         L = local.reshape(F, J, 3, 3).transpose(2, 3, 1, 0).copy()          # (3,3,J,F)
+        del local      # (arrays are freed as soon as they are done with: less memory to map)
         if self.joint_pos is not None:
             trans = np.where(sk.has_position[None, :, None], self.joint_pos, sk.offsets[None])
             T = trans.transpose(2, 1, 0).copy()                               # (3,J,F)
@@ -159,7 +160,9 @@ class Clip:
                             + pR[:, 2, None] * Li[None, 2])
             t = T[:, idx]
             P[:, idx] = P[:, par] + pR[:, 0] * t[0] + pR[:, 1] * t[1] + pR[:, 2] * t[2]
+        del L, T
         world_R = np.ascontiguousarray(R.transpose(3, 2, 0, 1))
+        del R
         world_P = np.ascontiguousarray(P.transpose(2, 1, 0))
         world_R.setflags(write=False)
         world_P.setflags(write=False)
