@@ -356,10 +356,10 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
     BVH angles are intrinsic, in the order the CHANNELS line lists them:
     ``Rotation.from_euler(order.upper(), angles, degrees=True)``, one scipy call per
     distinct order for all frames and joints with that order at once.  The angles go
-    in as an (F, Jg, 3) array, not flattened to (F*Jg, 3): scipy 1.15+ hands
-    N-dimensional input to its vectorised numpy backend, several times faster than its
-    Cython loop over 2-D input, with bit-identical quaternions
-    (``tests/test_bvh.py`` checks both against each other on the shared files)."""
+    in as an (F, Jg, 3) array, not flattened to (F*Jg, 3): scipy (1.17+, N-d
+    rotations) hands N-dimensional input to its vectorised numpy backend, several times
+    faster than its Cython loop over 2-D input, with the same quaternions
+    (``tests/test_fast_paths.py`` checks both against each other on the shared files)."""
     F = values.shape[0]
     J = len(orders)
     groups: dict[str, list[int]] = {}
@@ -368,15 +368,25 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
             groups.setdefault(o, []).append(j)
     if len(groups) == 1 and len(next(iter(groups.values()))) == J:   # one order for all
         order, joints = next(iter(groups.items()))
-        return Rotation.from_euler(order.upper(), values[:, np.array([col_of[j] for j in joints])],
-                                   degrees=True).as_quat()
+        return _from_euler(order.upper(), values[:, np.array([col_of[j] for j in joints])])
     q = np.zeros((F, J, 4))
     q[..., 3] = 1.0
     for order, joints in groups.items():
         cols = np.array([col_of[j] for j in joints])         # (Jg, 3)
-        ang = values[:, cols]                                  # (F, Jg, 3)
-        q[:, joints] = Rotation.from_euler(order.upper(), ang, degrees=True).as_quat()
+        q[:, joints] = _from_euler(order.upper(), values[:, cols])   # angles (F, Jg, 3)
     return q
+
+
+def _from_euler(order: str, ang: np.ndarray) -> np.ndarray:
+    """(..., 4) quaternions of (..., 3) intrinsic Euler angles in degrees, one scipy
+    call; flattened to (N, 3) for a scipy without N-d rotations (before 1.17)."""
+    try:
+        return Rotation.from_euler(order, ang, degrees=True).as_quat()
+    except ValueError:
+        if ang.ndim <= 2:
+            raise
+        flat = Rotation.from_euler(order, ang.reshape(-1, 3), degrees=True).as_quat()
+        return flat.reshape(ang.shape[:-1] + (4,))
 
 
 def _detect_tpose(values: np.ndarray, rot_cols: np.ndarray, q: np.ndarray) -> bool:
