@@ -195,6 +195,9 @@ def solve_legs(jumper: Jumper, root, quats, ankles: dict, pitch: dict | None = N
         hip = root + jumper.hip_offset[s]
         tgt = np.broadcast_to(np.asarray(ankles[s], float), (N, 3))
         w = (warm or {}).get(s)
+        # start from the previous solution when given, else from the seed (knee from
+        # the hip–target distance, chain aimed at the target): CCD then polishes it
+        # within the limits in a few iterations (it is slow near a straight knee)
         sol = ccd_leg(hip, tgt, jumper.thigh, jumper.shank, None if w is None else w[0],
                       None if w is None else w[1], iterations=iterations, stop=stop)
         new_warm[s] = (sol.hip.copy(), sol.knee.copy())

@@ -196,19 +196,21 @@ def _axis(a: float, b: float, d: float) -> np.ndarray:
     return 0.5 * (a + b) + d * np.arange(-half, half + 1)
 
 
-def sample_field_naive(jumper: Jumper, spacing=SPACING) -> dict:
-    """The same field one sample at a time (the baseline of the benchmark):
-    a Python loop over pelvis positions, CCD and FK per sample.  Returns the
-    arrays ``pelvis``, ``ok``, ``s``."""
+def sample_field_naive(jumper: Jumper, spacing=SPACING, limit: int | None = None) -> dict:
+    """The same field one sample at a time (the baseline of the benchmark): a
+    Python loop over pelvis positions, CCD, FK and COM per sample, on the first
+    ``limit`` samples (all by default).  Returns ``pelvis``, ``ok``, ``s``, ``com``."""
     f = sample_field(jumper, spacing)
     feet = jumper.feet()
-    ok, S = [], []
-    for p in f.pelvis:
+    ok, S, C = [], [], []
+    P = f.pelvis if limit is None else f.pelvis[:limit]
+    for p in P:
         st = solve_legs(jumper, p[None], jumper.rest_quats(1), feet)
         pos = jumper.positions(p[None], st.quats)
         S.append(spring_displacement(jumper.muscle_angles(pos))[0])
+        C.append(jumper.com(p[None], st.quats)[0])
         ok.append(bool(st.ok[0]))
-    return {"pelvis": f.pelvis, "ok": np.array(ok), "s": np.array(S)}
+    return {"pelvis": P, "ok": np.array(ok), "s": np.array(S), "com": np.array(C)}
 
 
 # ------------------------------------------------------------------ choice
@@ -333,8 +335,7 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
         Q = jumper.rest_quats(1)
         lq = jumper.lean_quats(lean[None])
         Q[0, jumper.idx["spine"]] = Q[0, jumper.idx["spine1"]] = lq[0]
-        st = solve_legs(jumper, p[None], Q, feet, warm=warm)
-        warm = st.warm
+        st = solve_legs(jumper, p[None], Q, feet)
         pos = jumper.positions(p[None], st.quats)
         E = float(0.5 * (spring_displacement(jumper.muscle_angles(pos))[0] ** 2) @ k)
         com = jumper.com(p[None], st.quats)[0]
