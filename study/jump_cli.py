@@ -6,7 +6,7 @@ energy-based controller of Ooi 2016 (``stimuli.control``), written as BVH::
 
 ``flipstudy jump --to X,Y,Z [--air 0.5] [--windup 0.2] [--k PRESET|VALUES]
 [--scene forward|sideways|box|over] --out JUMP.bvh [--strip STRIP.png]
-[--composite COMP.png] [--strength 5] [--mass 70] [--height 1.75] [--gravity 9.81]
+[--composite COMP.png] [--strength 3] [--mass 70] [--height 1.75] [--gravity 9.81]
 [--fps 120] [--json]``
 """
 from __future__ import annotations

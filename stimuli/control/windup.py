@@ -371,12 +371,12 @@ class Assignment:
 
     pelvis: np.ndarray
     energy: float
-    balance: float
+    balance: float                # m, upper body upright
     success: bool
     message: str
     sampled_pelvis: np.ndarray
     sampled_energy: float
-    sampled_balance: float
+    sampled_balance: float        # m, upper body upright
     qcqp_s: np.ndarray            # the literal QCQP's answer (6,) spring displacements
     qcqp_energy: float
 
@@ -444,6 +444,7 @@ def assign_energy(field: SampleField, k, required: float, choice: Choice, travel
                     bounds=list(zip(lo * scale, hi * scale)), constraints=cons,
                     options={"maxiter": 60, "ftol": 1e-10, "eps": 1e-4})
     p, E, b, _ = state(res2.x)
+    b_sampled = float(np.linalg.norm(field.balanced(k).balance[choice.index]))   # upright, like b(p)
     return Assignment(p, E, float(np.linalg.norm(b)), bool(res2.success), str(res2.message),
-                      choice.pelvis.copy(), choice.energy, choice.balance, s_q,
+                      choice.pelvis.copy(), choice.energy, b_sampled, s_q,
                       float(0.5 * s_q @ Q @ s_q))
