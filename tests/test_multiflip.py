@@ -232,3 +232,16 @@ def test_join_refuses_a_jump():
     from stimuli.edit.join import join_in_flight
     with pytest.raises(FlipEditError):
         join_in_flight(builtin("backflip"), builtin("jump"))
+
+
+def test_landing_join_on_the_landing_frame_itself():
+    """90_11 (a handspring, 60 Hz) with loops of at least 90°: the landing join's g
+    is the landing frame; the double is made and its flight is where it says."""
+    from _shared import shared_file
+    from stimuli import load_bvh
+    a = analyse(load_bvh(shared_file("90_11.bvh")))
+    r = multiflip(a, 2, min_turn_deg=90)
+    assert r.report["landing_join"]["g"] == a.landing
+    m = measure(r, a)
+    assert m["analyser_flight"] == [r.takeoff, r.landing]
+    assert m["turn_deg"] > 600

@@ -345,8 +345,10 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     rot, rB = rot[:N], rot[N:]
     root_pos, pB = root_pos[:N], root_pos[N:]
     s_src = np.clip(srcA, 0, clip.num_frames - 1).astype(np.int64)
-    ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld >= g else int(
-        np.flatnonzero(copy == -2)[0])
+    end0 = int(np.flatnonzero(copy == -2)[0])        # the end segment starts at g + 1
+    # landing after the join: found in the end segment; on the join frame g itself:
+    # the frame before the end segment (the last copy's f, which is g)
+    ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld > g else (end0 - 1 if ld == g else end0)
     T_seq = (ld_seq - to) / fps
     # the COM of the sequenced frames is read up to take-off and from landing on (the
     # retiming's bounds); a turned source frame has the source's COM; a cross-fade
