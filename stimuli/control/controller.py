@@ -15,8 +15,10 @@ Stages (continuous time, sampled at ``fps``):
 3. **flight** (``t_air``): the COM on the exact parabola c_to + v0 t + ½ g t²
    — the root is the desired COM minus the pose's COM offset, so whatever the
    legs do the COM path is exact; the legs tuck and reach forward for the
-   landing.  Contact is found by casting rays down from the soles onto the
-   surfaces (floor and box tops).
+   landing while the whole body turns (pitches back as the legs come forward)
+   so that the angular momentum about the COM stays constant and the body is
+   upright again at touch-down.  Contact is found by casting rays down from
+   the soles onto the surfaces (floor and box tops).
 4. **landing** (the windup reversed): the feet stop where they touch; the COM
    decelerates to rest along c_td + v_L T/3 (1 − (1 − τ)³) into the crouch the
    sample field picks for the landing's kinetic energy; then the jumper stands
@@ -326,6 +328,46 @@ def _solve_com(jumper, com, lean, feet, heel: bool, root0, iterations: int = 10,
                      f"{1000 * np.max(np.abs(err)):.2f} mm after {iterations} rounds)")
 
 
+def _cumtrapz0(y, t):
+    """Cumulative trapezoid integral of y (N,3) at times t (N,), from t[0]."""
+    out = np.zeros_like(y)
+    out[1:] = np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t)[:, None], axis=0)
+    return out
+
+
+def _conserve_momentum(jumper, Qf, com, tf, T, fps, rounds: int = 3):
+    """Turn the whole body in flight (the root's rotation) so that its angular
+    momentum about the COM is constant while the legs tuck and reach: ω(t) =
+    I(t)⁻¹ (L0 − L_joints(t)), with L0 the constant for which the body ends the
+    flight upright again (∫ω dt = 0 from take-off to touch-down, so the landing
+    pose is the planned one).  A few rounds, each measured with
+    :func:`stimuli.physics.momentum` on the posed frames."""
+    from ..physics import momentum
+    n = len(tf)
+    if n < 4:
+        return Qf
+    tg = np.concatenate([[0.0], tf, [T]])            # take-off … touch-down
+    rv = np.zeros((n, 3))
+    for _ in range(rounds):
+        Q = Qf.copy()
+        Q[:, 0] = Rotation.from_rotvec(rv).as_quat()
+        off = jumper.com(np.zeros((n, 3)), Q)
+        mo = momentum(jumper.clip(com - off, Q, fps), jumper.body)
+        Iinv = np.linalg.inv(mo.inertia)                               # (n,3,3)
+        w_now = np.gradient(rv, tf, axis=0, edge_order=2)
+        ext = lambda a: np.concatenate([a[:1], a, a[-1:]])            # noqa: E731
+        A = _cumtrapz0(ext(Iinv.reshape(n, 9)), tg)[-1].reshape(3, 3)   # ∫ I⁻¹ dt
+        b = _cumtrapz0(ext(np.einsum("nab,nb->na", Iinv, mo.L)), tg)[-1] - rv[-1] * 0.0
+        c = _cumtrapz0(ext(w_now), tg)[-1]
+        L0 = np.linalg.solve(A, b - c)
+        w = w_now + np.einsum("nab,nb->na", Iinv, L0[None] - mo.L)
+        acc = _cumtrapz0(ext(w), tg)
+        rv = acc[1:-1] - (tg[1:-1] / T)[:, None] * acc[-1][None]       # exactly upright at touch-down
+    Q = Qf.copy()
+    Q[:, 0] = Rotation.from_rotvec(rv).as_quat()
+    return Q
+
+
 def _slerp_pose(qa, qb, w):
     """Per-joint slerp of two poses (J,4) at weights w (N,) or (N,J) → (N,J,4)."""
     J = qa.shape[0]
@@ -462,6 +504,7 @@ def _build(jumper: Jumper, sc: Scene, pl: Plan, k, fps: float, T_c: float, check
     w2 = _smooth((tf - t_mid) / (0.92 * t_air - t_mid))      # feet set for the landing before it
     Qf = np.where((tf < t_mid)[:, None, None], _slerp_pose(q_to, q_tk, w1), _slerp_pose(q_tk, q_td, w2))
     c_f = pl.takeoff_com[None] + path.position(tf)
+    Qf = _conserve_momentum(jumper, Qf, c_f, tf, t_air, fps)
     off = jumper.com(np.zeros((len(tf), 3)), Qf)
     root[m], Q[m] = c_f - off, Qf
     # 5. landing: absorb (feet fixed), recover, hold
