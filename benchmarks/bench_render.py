@@ -11,13 +11,15 @@ Prints, in one run:
 * the ratios reused / naive (target ≥ 5×), with SSAA (the default style) and
   without anti-aliasing;
 * the time to render all videos of a 10-stimulus study (``render_study``,
-  640x480, 60 fps, all CPUs), with and without SSAA.
+  640x480, 60 fps, all CPUs), with and without SSAA, and of the default study
+  (the paper's design, 52 stimuli; without anti-aliasing as ``reproduce``
+  renders it, ``--default-study-aa ssaa|both`` for the final quality).
 
 On a software rasteriser (Mesa llvmpipe, no GPU) SSAA makes the render itself
 cost 5-8× more, so with SSAA every path is render-bound and the ratios shrink;
 without anti-aliasing they show the per-frame overhead that reuse removes.
 
-Usage: ``python benchmarks/bench_render.py [--frames N] [--quick]``.
+Usage: ``python benchmarks/bench_render.py [--frames N] [--quick] [--default-study-aa none|ssaa|both]``.
 The clip is the built-in backflip when ``stimuli/synth`` exists, else the
 CMU flip 88_01 (at 60 fps) from ``../shared``, else a synthetic jumper.
 """
@@ -184,10 +186,28 @@ def bench_study(clip, n_stimuli=10, jobs=None, size=(640, 480), style=None):
     return dt, frames, rec["jobs"]
 
 
+def bench_default_study(style, jobs=None, size=(640, 480)):
+    """All videos of the default study: the paper's design (`flipstudy init`), its
+    stimuli built and measured, every stimulus rendered (render time only)."""
+    from render.study import render_study
+    from stimuli.design import PAPER_DESIGN, load_design
+    from stimuli.stimset import build_stimuli
+    with tempfile.TemporaryDirectory() as d:
+        d = Path(d)
+        (d / "design.toml").write_text(PAPER_DESIGN, encoding="utf-8")
+        rows = build_stimuli(load_design(d / "design.toml"), d / "study", progress=False)
+        t = time.perf_counter()
+        rec = render_study(d / "study", what=["video"], size=size, jobs=jobs, fps=60.0, progress=False,
+                           style=style)
+        return time.perf_counter() - t, len(rows), rec["jobs"]
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--frames", type=int, default=60, help="frames per measurement (reused path)")
     ap.add_argument("--quick", action="store_true", help="fewer frames, no study")
+    ap.add_argument("--default-study-aa", choices=["none", "ssaa", "both"], default="none",
+                    help="anti-aliasing for the default-study timing (ssaa takes several minutes)")
     args = ap.parse_args(argv)
     n = 20 if args.quick else args.frames
     clip, what = load_clip()
@@ -211,6 +231,11 @@ def main(argv=None):
             dt, frames, jobs = bench_study(clip, style=Style(anti_aliasing=aa))
             print(f"study: 10 stimuli, all videos at 640x480 / 60 fps, AA {aa} ({frames} frames, "
                   f"H.264) in {dt:.1f} s with {jobs} worker(s) = {frames / dt:.1f} frames/s overall")
+        aas = ("none", "ssaa") if args.default_study_aa == "both" else (args.default_study_aa,)
+        for aa in aas:
+            dt, n_st, jobs = bench_default_study(Style(anti_aliasing=aa))
+            print(f"default study (the paper's design, `flipstudy init`): all {n_st} videos at 640x480 / "
+                  f"60 fps, AA {aa}, in {dt:.1f} s with {jobs} worker(s) ({dt / n_st:.2f} s per stimulus)")
 
 
 if __name__ == "__main__":
