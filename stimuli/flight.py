@@ -64,7 +64,7 @@ def effector_points(clip: Clip, body: Body) -> tuple[np.ndarray, list[str]]:
 
 
 def contact_mask(clip: Clip, body: Body, v_thr: float = 1.0, margin: float = 0.10,
-                 touch: float = 0.03) -> np.ndarray:
+                 touch: float = 0.03, min_stand: float = 0.3) -> np.ndarray:
     """(F,E) bool contact of the effectors of :func:`effector_points`.
 
     An effector is in contact when it is nearly still (speed < ``v_thr`` m/s)
@@ -72,7 +72,9 @@ def contact_mask(clip: Clip, body: Body, v_thr: float = 1.0, margin: float = 0.1
     height over the frames where it is still), or — at any speed — within
     ``touch`` metres of it (a foot landing or pushing off touches the floor
     before it stops or after it starts moving).  The touch rule applies to hands
-    only when they rest on the floor somewhere in the clip."""
+    only when they rest on the floor somewhere in the clip.  Feet standing still
+    for ``min_stand`` seconds on something higher than their resting level (a
+    box top) are in contact there too (see :func:`_raised_contact`)."""
     P, names = effector_points(clip, body)
     speed = np.linalg.norm(finite_difference(P, clip.fps), axis=-1)
     still = speed < v_thr
@@ -84,7 +86,39 @@ def contact_mask(clip: Clip, body: Body, v_thr: float = 1.0, margin: float = 0.1
     feet = np.array([n.startswith(("toe", "ankle")) for n in names])
     floor = rest[feet].min()
     touches = feet | (rest < floor + 0.35)
-    return (still & (h < rest[None] + margin)) | (touches[None] & (h < rest[None] + touch))
+    contact = (still & (h < rest[None] + margin)) | (touches[None] & (h < rest[None] + touch))
+    return contact | _raised_contact(h, still, feet, rest, clip.fps, margin, touch, min_stand)
+
+
+def _raised_contact(h, still, feet, rest, fps, margin, touch, min_stand):
+    """Contact of feet on a raised surface (a box top): a foot that stands still
+    for ``min_stand`` seconds higher than its resting level + ``margin`` stands on
+    something; during such a stand and 0.15 s either side it is in contact when
+    still within ``margin`` of that level, or at any speed within ``touch`` of it
+    (landing on the box, pushing off it)."""
+    F, E = h.shape
+    out = np.zeros((F, E), bool)
+    n_min = max(2, int(round(min_stand * fps)))
+    for e in np.flatnonzero(feet):
+        stands = [(a, b, float(np.percentile(h[a:b + 1, e], 5))) for a, b in _runs(still[:, e])
+                  if b - a + 1 >= n_min]
+        stands = [(a, b, lv) for a, b, lv in stands if lv > rest[e] + margin]
+        if not stands:
+            continue
+        # the stand's own frames and a short time either side (stepping off, landing
+        # on): a foot passing that height elsewhere (falling past a box) is not on it
+        w = max(1, int(round(0.15 * fps)))
+        prev = np.full(F, np.nan)
+        nxt = np.full(F, np.nan)
+        for a, b, lv in stands:
+            prev[a:min(F, b + 1 + w)] = lv
+        for a, b, lv in reversed(stands):
+            nxt[max(0, a - w):b + 1] = lv
+        for lv in (prev, nxt):
+            ok = np.isfinite(lv)
+            d = np.where(ok, h[:, e] - lv, np.inf)
+            out[:, e] |= ok & ((still[:, e] & (np.abs(d) < margin)) | (np.abs(d) < touch))
+    return out
 
 
 def _runs(mask: np.ndarray) -> list[tuple[int, int]]:

@@ -17,8 +17,6 @@ from stimuli.control.balance import inside, polygon_centre, support_polygon
 from stimuli.control.controller import STRENGTH
 from stimuli.control.ik import ccd_leg
 from stimuli.control.windup import EPSILON, approach
-from stimuli.flight import fit_path
-from stimuli.massfit import estimate_masses
 from stimuli.physics import center_of_mass
 
 
@@ -293,17 +291,18 @@ def test_lands_on_target(jumps, key):
         assert lo[0] < a[0] < hi[0] and lo[2] < a[2] - j.heel_back and a[2] + 0.2 < hi[2]
 
 
-@pytest.mark.parametrize("key", [k for k in SCENES if k[0] in ("forward", "sideways")],
-                         ids=lambda k: f"{k[0]}-{k[1]}")
+@pytest.mark.parametrize("key", SCENES, ids=lambda k: f"{k[0]}-{k[1]}")
 def test_inspect_measures_takeoff_and_gravity(jumps, key):
-    """`flipstudy inspect` (stimuli.analyse) on the BVH: flight found, gravity
-    within 2 %, the take-off velocity within 2 % of the path estimate at the
-    analyser's take-off frame (its first airborne frame; the feet leave a
-    fraction of a frame earlier), at most two frames after the planned one."""
+    """`flipstudy inspect` (stimuli.analyse) on the BVH, every scene (box tops and
+    the 1 m start box included: the analyser's contact rule knows raised stands):
+    flight found, gravity within 2 %, the take-off velocity within 2 % of the path
+    estimate at the analyser's take-off frame (its first airborne frame; the feet
+    leave a fraction of a frame earlier), at most two frames after the planned one."""
     res, bvh = jumps[key]
     m = res.clip.meta
     a = analyse(bvh)
     assert a.flight is not None
+    assert len(a.flights) == 1
     assert abs(a.apparent_gravity / 9.81 - 1) < 0.02
     lag = a.takeoff / bvh.fps - m["takeoff_s"]
     assert 0 < lag <= 2.0 / bvh.fps
@@ -312,25 +311,6 @@ def test_inspect_measures_takeoff_and_gravity(jumps, key):
     assert a.landing < m["touchdown"]
     # the body turns in the air so that the tuck keeps the angular momentum constant
     assert a.L_cv_pct < 10
-
-
-@pytest.mark.parametrize("key", [k for k in SCENES if k[0] in ("box", "over")],
-                         ids=lambda k: f"{k[0]}-{k[1]}")
-def test_flight_path_between_levels(jumps, key):
-    """Box and jump-over scenes start and end at different heights, where the
-    analyser's contact rule (one resting level per foot) does not find the
-    flight; the same fit on the planned flight frames measures it."""
-    res, bvh = jumps[key]
-    m = res.clip.meta
-    body = Body.from_clip(bvh)
-    to, land = m["takeoff"], m["touchdown"] - 1
-    fit = estimate_masses(bvh, body, to, land, W=1e-4)
-    com = center_of_mass(bvh, fit.body)
-    coef = fit_path(com[to:land + 1], bvh.fps)
-    assert abs(-2 * coef[1, 0] / 9.81 - 1) < 0.02
-    lag = to / bvh.fps - m["takeoff_s"]
-    v_plan = np.array(m["v0"]) + np.array([0.0, -9.81, 0.0]) * lag
-    assert np.linalg.norm(coef[:, 1] - v_plan) / np.linalg.norm(v_plan) < 0.02
 
 
 def test_jump_over_clears_the_obstacle(jumps):
