@@ -263,6 +263,8 @@ def build_parser() -> argparse.ArgumentParser:
     add_reproduce(sub)
     from study.concat_cli import add_commands as add_concat
     add_concat(sub)
+    from study.jump_cli import add_commands as add_jump
+    add_jump(sub)
     return ap
 
 
