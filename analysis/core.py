@@ -191,8 +191,8 @@ def summarize(df: pd.DataFrame, correction: str = "loglinear", n_boot: int = 200
     table["correction"] = correction
     table["corrected"] = corr
 
-    notes = [f"d′ = z(P(incorrect | modified)) − z(P(incorrect | original)), the original being "
-             f"level 0 of the same group; criterion c = −(z(H) + z(F))/2.",
+    notes = ["d′ = z(P(incorrect | modified)) − z(P(incorrect | original)), the original being "
+             "level 0 of the same group; criterion c = −(z(H) + z(F))/2.",
              f"Rates of 0 or 1: {CORRECTION_TEXT[correction]}; the pooled rates of "
              f"{int(corr.sum())} of {K} rows were corrected (column 'corrected'), and "
              f"{int(_n_corrected_participant_cells(cnt, correction))} participant × cell d′ values.",

@@ -37,7 +37,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from analysis import load_responses, summarize  # noqa: E402
-from analysis.core import bootstrap_counts, count_cells, expanded_level  # noqa: E402
+from analysis.core import bootstrap_counts, expanded_level  # noqa: E402
 from analysis.simulate import paper_panel  # noqa: E402
 
 N_BOOT = 2000

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .analyse import Analysis, analyse
-from .edit.reposition import ballistic_path, move_com
+from .edit.reposition import ballistic_path
 from .edit.timing import sample
 from .flight import path_values
 from .motion.clip import Clip

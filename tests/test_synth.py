@@ -49,7 +49,6 @@ def root_pitch(clip):
 def test_skeleton_proportions_names_and_body_mapping():
     H = 1.75
     sk = make_skeleton(H)
-    names = sk.joint_names
     for n in ("Hips", "LeftUpLeg", "LeftLeg", "LeftFoot", "LeftToeBase", "RightToeBase", "Spine",
               "Spine1", "Neck", "Head", "LeftShoulder", "LeftArm", "LeftForeArm", "LeftHand",
               "RightHand"):

@@ -460,7 +460,6 @@ def _build(jumper: Jumper, sc: Scene, pl: Plan, k, fps: float, T_c: float, check
     t_rec = t_ab + T_RECOVER
     F = int(np.floor((t_rec + T_HOLD) * fps)) + 1
     t = np.arange(F) / fps
-    J = jumper.J
     root = np.zeros((F, 3))
     Q = jumper.rest_quats(F)
     # 1. stand
@@ -553,7 +552,6 @@ def _build(jumper: Jumper, sc: Scene, pl: Plan, k, fps: float, T_c: float, check
 
 def _sole_points(jumper, clip):
     """(F,6,3) heel, ball and toe tip of both feet."""
-    sk = clip.skeleton
     j = jumper
     pts, loc = [], []
     for s in SIDES:
@@ -584,7 +582,6 @@ def _check(jumper, sc, clip, i_to, i_td, feet0, feet1, F1) -> dict:
     E = clip.end_site_positions()
     pts = np.concatenate([P, E, soles], axis=1)[i_to:i_td]
     clear = np.inf
-    land_xz = np.array([[F1[0], F1[2]]])
     for b in sc.boxes:
         if np.any(b.contains(pts, margin=0.005)):
             fr = i_to + int(np.nonzero(b.contains(pts, 0.005).any(1))[0][0])

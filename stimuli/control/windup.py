@@ -328,7 +328,6 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
     e_prev = goal - p
     lean = np.asarray(lean0, float).copy()
     b_prev = None
-    warm = None
     rec = {n: [] for n in ("pelvis", "lean", "energy", "balance", "com", "quats")}
     met = None
     for i in range(max_iter + 1):
@@ -412,7 +411,6 @@ def assign_energy(field: SampleField, k, required: float, choice: Choice, travel
     s_q = res1.x * 2 * r
     Q = np.diag(k)
     # (2) over the pelvis position
-    L_ext = reach(j.thigh, j.shank, np.radians(2.0))
     L_min = reach(j.thigh, j.shank, np.pi - np.arccos(2 * EXTENDED_UTILISATION - 1.0))
     lo = field.pelvis.min(0)
     hi = field.pelvis.max(0)

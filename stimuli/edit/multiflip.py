@@ -256,7 +256,6 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     clip, body, fps = a.clip, a.body, a.clip.fps
     to, ld = a.takeoff, a.landing
     u, frames, D, phi, theta = pre.axis, pre.frames, pre.D, pre.phi, pre.theta
-    J = clip.skeleton.num_joints
 
     # the source must be one flip: its root turns about 360° from stand to stand
     s0, s1 = pre.stand
