@@ -526,6 +526,7 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
     size = body_size(clip) / 1.7
     out = clip
     pinned, released = [], []
+    air = np.zeros(F, bool)
     P = clip.joint_positions()
     lat = P[:, _lm_index(body, "hip_l")] - P[:, _lm_index(body, "hip_r")]
     lat = lat / np.linalg.norm(lat, axis=1, keepdims=True)
@@ -575,6 +576,16 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
                 released.append(f"in the air ({100 * np.linalg.norm(corr[idx.size - 1][[0, 2]]):.1f} cm)")
             out = two_bone_ik(out, hip, knee, ankle, frames, ank[frames] + corr, lat[frames])
             pinned.append((side, idx))
+            air[frames[idx.size:]] = True
+    # a leg moved in the air must not move the body's COM off its path there: where
+    # no foot touches, the root is shifted so the COM is where it was before the IK
+    air &= ~(fl | fr)
+    if air.any():
+        from ..physics import center_of_mass
+        d = center_of_mass(clip, body)[air] - center_of_mass(out, body)[air]
+        root = out.root_pos.copy()
+        root[air] += d
+        out = out.replace(root_pos=root)
     # measured: the slide of the pinned points, and the floor clearance
     E = effector_points(out, body)[0]
     slide = 0.0
