@@ -24,12 +24,11 @@ The rotation and angular momentum of the result are then measured by the
 analyser (:func:`measure`).
 """
 # The implementation of stimuli/edit/multiflip.py before its pre-processing was split
-# out (commit 36cbc1e), kept verbatim as the plain path tests/test_fast_paths.py
-# compares the fast one with.
+# out (commit 36cbc1e): the functions the fast path changed, kept verbatim as the plain
+# path tests/test_fast_paths.py compares the fast one with; the rest is imported.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -39,6 +38,9 @@ from stimuli.motion.clip import Clip
 from stimuli.physics import center_of_mass
 from stimuli.edit.reposition import ballistic_path
 from stimuli.edit.similarity import distance_matrix, pose_features
+# unchanged by the fast path: shared with the module rather than copied
+from stimuli.edit.multiflip import (FlipEditError, MultiFlip, SelfLoop, _smooth, find_self_loop,  # noqa: F401
+                                    flight_axis, k_star, piecewise_source, turn_angle)
 
 
 def sample(clip: Clip, src: np.ndarray) -> Clip:
@@ -63,38 +65,6 @@ def sample(clip: Clip, src: np.ndarray) -> Clip:
     return Clip(clip.skeleton, clip.fps, root, rot, jp, meta)
 
 
-class FlipEditError(ValueError):
-    """A multi-flip edit that cannot be made; the message says why."""
-
-
-def k_star(g: float, T: float, v0: float, dy: float) -> float:
-    """Appendix B: the retiming factor that keeps linear momentum continuous,
-    k* = sqrt(½ g T / (v0 − Δy/T)), for a flight of T seconds (before retiming)
-    that took off with vertical velocity v0 and lands Δy higher."""
-    den = v0 - dy / T
-    if not (T > 0 and den > 0):
-        raise FlipEditError(f"k*: the flight needs T > 0 and v0 > Δy/T (T={T:.3f} s, v0={v0:.3f} m/s, "
-                            f"Δy={dy:.3f} m)")
-    return math.sqrt(0.5 * g * T / den)
-
-
-def flight_axis(a: Analysis) -> np.ndarray:
-    """Unit direction of the mean angular momentum in flight."""
-    L = a.L[a.takeoff:a.landing + 1].mean(axis=0)
-    n = np.linalg.norm(L)
-    if n < 1e-6:
-        raise FlipEditError("the flight has no angular momentum to turn about (a jump, not a flip)")
-    return L / n
-
-
-def turn_angle(clip: Clip, axis, a: int = 0, b: int | None = None) -> float:
-    """Degrees the root turns about ``axis`` from frame ``a`` to ``b``: the root's
-    angular velocity along the axis, integrated (trapezoid)."""
-    b = clip.num_frames - 1 if b is None else b
-    w = clip.angular_velocities()[a:b + 1, 0] @ (np.asarray(axis, float) / np.linalg.norm(axis))
-    return float(np.degrees(np.trapezoid(w, dx=1.0 / clip.fps))) if w.size > 1 else 0.0
-
-
 def standing_span(clip: Clip, body, takeoff: int, landing: int, still: float = 0.05,
                   drop: float = 0.05) -> tuple[int, int]:
     """(last standing frame before take-off, first standing frame after landing).
@@ -110,48 +80,6 @@ def standing_span(clip: Clip, body, takeoff: int, landing: int, still: float = 0
     after = np.flatnonzero((v[landing:] < still) & (y[landing:] >= y[-1] - drop))
     return (int(before[-1]) if before.size else 0,
             int(landing + after[0]) if after.size else clip.num_frames - 1)
-
-
-@dataclass
-class SelfLoop:
-    m: int                 # first frame of F_B (source)
-    n: int                 # frame reached after F_B: R(f_m, φ) ≈ f_n
-    phi: float             # radians, about the flight axis
-    distance: float
-
-
-def find_self_loop(D: np.ndarray, phi: np.ndarray, frames: np.ndarray, fps: float, *,
-                   min_turn_deg: float = 45.0, max_turn_deg: float = 300.0,
-                   min_seconds: float = 0.05) -> SelfLoop:
-    """The pair (m, n), m < n, of least distance whose turn φ (about the axis, in
-    the flip's direction) lies in [min_turn, max_turn]; ties go to the larger φ.
-    Raises :class:`FlipEditError` when no pair qualifies."""
-    i, j = np.triu_indices(D.shape[0], k=max(1, int(round(min_seconds * fps))))
-    # unwrap: the turn from i to j, counted along the flip (positive), can exceed π
-    turn = np.mod(phi[i, j], 2.0 * np.pi)
-    ok = (turn >= np.radians(min_turn_deg)) & (turn <= np.radians(max_turn_deg))
-    if not np.any(ok):
-        raise FlipEditError(f"no self-looping sequence: no two flight frames are {min_turn_deg:g}°–"
-                            f"{max_turn_deg:g}° apart about the angular-momentum axis")
-    i, j, turn = i[ok], j[ok], turn[ok]
-    cost = D[i, j] - 1e-6 * turn                 # least distance, then the longest turn
-    k = int(np.argmin(cost))
-    return SelfLoop(int(frames[i[k]]), int(frames[j[k]]), float(turn[k]), float(D[i[k], j[k]]))
-
-
-@dataclass
-class MultiFlip:
-    """The edited clip and what the method did (:func:`multiflip`)."""
-
-    clip: Clip
-    flips: int
-    takeoff: int
-    landing: int
-    report: dict = field(default_factory=dict)
-
-
-def _smooth(x):
-    return x * x * (3.0 - 2.0 * x)
 
 
 def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, k: float | None = None,
@@ -353,21 +281,6 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
               "flight_s": Tn, "takeoff": to_n, "landing": ld_n, "gravity": G}
     report.update(momentum_jumps(out, body, to_n, ld_n))
     return MultiFlip(out, flips, to_n, ld_n, report)
-
-
-def piecewise_source(bounds, rates) -> np.ndarray:
-    """Fractional source frames of an output that plays ``bounds[i]`` →
-    ``bounds[i+1]`` at about ``rates[i]`` source frames per output frame, every
-    bound hit exactly by an output frame (each span takes a whole number of
-    steps, so its rate is rounded: (b − a)/round((b − a)/rate))."""
-    out = []
-    for a, b, r in zip(bounds[:-1], bounds[1:], rates):
-        if b <= a:
-            continue
-        n = max(1, int(round((b - a) / r)))
-        out.append(np.linspace(a, b, n + 1)[:-1])
-    out.append(np.array([float(bounds[-1])]))
-    return np.concatenate(out)
 
 
 def momentum_jumps(clip: Clip, body, takeoff: int, landing: int) -> dict:
