@@ -25,6 +25,7 @@ from scipy.spatial.transform import Rotation
 from .model import LIMITS, SIDES, Jumper
 
 EX = np.array([1.0, 0.0, 0.0])
+EZ = np.array([0.0, 0.0, 1.0])
 
 
 def clamp_euler(rot: Rotation, spec) -> tuple[Rotation, np.ndarray]:
@@ -179,21 +180,33 @@ class Stance:
 
 
 def solve_legs(jumper: Jumper, root, quats, ankles: dict, pitch: dict | None = None, warm: dict | None = None,
-               iterations: int = 100, stop: float = 1e-3) -> Stance:
-    """Place both legs of N poses: CCD from the hips (pelvis at ``root``, upright)
-    to the ankle targets ``ankles[side]`` (N,3), the feet pitched by
-    ``pitch[side]`` (N,) about the ball (0 = flat) and the toes flat on the
-    ground.  ``quats`` (N,J,4) supplies the other joints; ``warm`` is a previous
-    result's ``warm`` to start CCD from."""
+               iterations: int = 100, stop: float = 1e-3, roll=None) -> Stance:
+    """Place both legs of N poses: CCD from the hips (pelvis at ``root``, upright,
+    or rolled by ``roll`` (N,) rad about the forward axis Z — positive lowers the
+    right hip, see :func:`.windup.pelvis_roll`) to the ankle targets
+    ``ankles[side]`` (N,3), the feet pitched by ``pitch[side]`` (N,) about the
+    ball (0 = flat) and the toes flat on the ground.  ``quats`` (N,J,4) supplies
+    the other joints (its root rotation is replaced when ``roll`` is given);
+    ``warm`` is a previous result's ``warm`` to start CCD from.  A rolled
+    pelvis is solved in the pelvis's frame, so the hip limits stay the hip's."""
     root = np.atleast_2d(np.asarray(root, float))
     N = root.shape[0]
     Q = np.array(quats, float, copy=True).reshape(N, jumper.J, 4)
+    Rp = None
+    if roll is not None:
+        r = np.broadcast_to(np.asarray(roll, float), (N,))
+        if np.any(r != 0.0):
+            Rp = Rotation.from_rotvec(r[:, None] * EZ)
+            Q[:, 0] = Rp.as_quat()
     err = np.zeros((N, 2))
     aok = np.zeros((N, 2), bool)
     new_warm = {}
     for k, s in enumerate(SIDES):
         hip = root + jumper.hip_offset[s]
         tgt = np.broadcast_to(np.asarray(ankles[s], float), (N, 3))
+        if Rp is not None:                  # the chain in the pelvis's frame
+            hip = np.broadcast_to(jumper.hip_offset[s], (N, 3))
+            tgt = Rp.inv().apply(tgt - root)
         w = (warm or {}).get(s)
         # start from the previous solution when given, else from the seed (knee from
         # the hip–target distance, chain aimed at the target): CCD then polishes it
@@ -204,8 +217,8 @@ def solve_legs(jumper: Jumper, root, quats, ankles: dict, pitch: dict | None = N
         Rh = Rotation.from_quat(sol.hip)
         Rk = Rotation.from_rotvec(sol.knee[:, None] * EX)
         p = np.zeros(N) if pitch is None else np.broadcast_to(np.asarray(pitch[s], float), (N,))
-        Rf = foot_rotation(p)
-        Ra = (Rh * Rk).inv() * Rf
+        Rf = foot_rotation(p)                               # the foot in the world
+        Ra = (Rh * Rk).inv() * (Rf if Rp is None else Rp.inv() * Rf)
         aok[:, k] = within_limits(Ra, LIMITS["ankle"])
         Q[:, jumper.idx[f"hip_{s}"]] = sol.hip
         Q[:, jumper.idx[f"knee_{s}"]] = Rk.as_quat()
