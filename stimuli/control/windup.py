@@ -5,14 +5,19 @@ and its approach by the PD controller.
 — above the support polygon's bounding rectangle, from low down up to the
 standing pelvis height — each with both legs solved by CCD (feet flat where
 they stand), its six spring displacements, its COM (the project's de Leva
-body, upper body upright) and the balance error.  The geometry does not
-depend on k: the field is computed once per jumper (height, mass) and grid
-and cached; the energies E_el = Σ ½ k_i s_i² are computed once per k and
-cached on the field.
+body, upper body upright) and the balance error.  Equal legs crouch with the
+pelvis level; uneven legs (Table 5.1's uneven trials) with the pelvis rolled
+down on the stronger side in proportion to the depth, up to 8°, so that each
+leg's compression follows its own spring and the stronger leg bends more
+(:func:`pelvis_roll` gives the physics).  The geometry depends on k only
+through that roll (the legs' asymmetry): the field is computed once per jumper
+(height, mass), grid and asymmetry and cached; the energies E_el = Σ ½ k_i s_i²
+are computed once per k and cached on the field.
 
 **Choice.**  Candidates satisfy E_k − E_el ≤ ε E_k (ε = 0.05), bend the
 knees at least as far as the thesis's minimum limb usage (utilisation ≥ ε),
-keep the COM over the support polygon, and leave room for the thrust: after
+keep the COM over the support polygon (its balance target the centre of
+pressure of the legs' springs, :func:`balance_target`), and leave room for the thrust: after
 the planned ½ v0 t_windup of travel the legs must be extended (utilisation
 below the thesis's 0.1) yet still reach the ground, on the balls of the feet
 if need be.  Of those, the one with the least balance error is chosen — the
@@ -36,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import minimize
+from scipy.spatial.transform import Rotation
 
 from .balance import balance_error, inside, lean_limits, pd_lean, polygon_centre, support_polygon
 from .ik import heel_pitch, reach, solve_legs
@@ -51,15 +57,16 @@ SPACING = (0.02, 0.01, 0.02)   # grid of the field (x, y, z), metres
 LOWEST_PELVIS = 0.35           # fraction of the standing pelvis height
 BALANCE_BIN = 0.005            # m: balance errors this close count as equal (then the smaller lean)
 REACH_MARGIN = 0.012           # m kept in hand when testing the thrust's reach (the estimate's error)
+PELVIS_ROLL_LIMIT = np.radians(8.0)   # the pelvis's frontal tilt (obliquity, a hip hike) in a crouch
 
 
 @dataclass
 class Balanced:
-    """The field balanced for one set of spring constants: the balance target
-    (the support polygon's centre shifted toward the stronger leg, see
-    :func:`balance_target`), per sample the upright error from it (N,2), the
-    best lean within limits (N,2), the COM with it (N,3), the error left
-    (N,2) and whether that COM is over the support polygon (2 cm inside)."""
+    """The field balanced for one set of spring constants: per sample the
+    balance target (N,2) (the centre of pressure of the legs' springs, over
+    the stronger leg, see :func:`balance_target`), the upright error from it
+    (N,2), the best lean within limits (N,2), the COM with it (N,3), the error
+    left (N,2) and whether that COM is over the support polygon (2 cm inside)."""
 
     target: np.ndarray
     balance: np.ndarray
@@ -85,6 +92,9 @@ class SampleField:
     centre: np.ndarray      # (2,)
     spacing: tuple
     lean_table: tuple       # (leans (L,2), COM shifts (L,3)): the upper body's effect
+    roll: np.ndarray | None = None        # (N,) pelvis roll, rad (see :func:`pelvis_roll`)
+    compression: np.ndarray | None = None  # (N,2) each hip's drop below standing (left, right), m
+    asymmetry: float = 0.0                # the legs' c of :func:`leg_asymmetry` the field is for
     seconds: float = 0.0
     _energy: dict = field(default_factory=dict, repr=False)
     _balanced: dict = field(default_factory=dict, repr=False)
@@ -105,8 +115,9 @@ class SampleField:
         """The balance of every sample for spring constants k (computed once per k)."""
         key = _key(k)
         if key not in self._balanced:
-            target = balance_target(self.jumper, np.asarray(key))
-            b = self.com[:, [0, 2]] - target[None]
+            target = balance_target(self.jumper, np.asarray(key), compression=self.compression)
+            target = np.broadcast_to(target, (self.size, 2))
+            b = self.com[:, [0, 2]] - target
             L, D = self.lean_table
             best = np.empty(b.shape[0], int)
             for a in range(0, b.shape[0], 2048):
@@ -114,7 +125,7 @@ class SampleField:
                 cost = np.einsum("nlc,nlc->nl", r, r) + 1e-8 * np.einsum("lc,lc->l", L, L)[None]
                 best[a:a + 2048] = np.argmin(cost, axis=1)
             com_bal = self.com + D[best]
-            self._balanced[key] = Balanced(target, b, L[best], com_bal, com_bal[:, [0, 2]] - target[None],
+            self._balanced[key] = Balanced(target, b, L[best], com_bal, com_bal[:, [0, 2]] - target,
                                            inside(self.polygon, com_bal[:, [0, 2]], margin=0.02))
         return self._balanced[key]
 
@@ -128,26 +139,89 @@ def _key(k) -> tuple:
     return tuple(float(v) for v in np.asarray(k, float).reshape(6))
 
 
-def balance_target(jumper: Jumper, k, centre=(0.0, 0.0)) -> np.ndarray:
-    """(2,) where the balance controller puts the COM (x, z), relative to the
-    feet's midpoint: the centre of pressure the legs' springs would make —
-    each foot's centre weighted by its leg's total spring constant (hip +
-    knee + ankle).  Equal legs: the support polygon's centre (the thesis);
-    a stronger leg draws the COM over itself and so carries more load."""
+def balance_target(jumper: Jumper, k, centre=(0.0, 0.0), compression=None) -> np.ndarray:
+    """Where the balance controller puts the COM (x, z), relative to the feet's
+    midpoint: the centre of pressure of the legs' springs.  Each leg is a
+    spring of stiffness K = k_hip + k_knee + k_ankle compressed by its hip's
+    drop δ below standing (``compression`` (N,2), left and right); it pushes
+    with F = K δ, and the COM must be over the point where those forces act.
+    Without ``compression`` (or where the legs stand straight) the legs are
+    taken as compressed alike, F ∝ K: (2,).  Equal legs: the support
+    polygon's centre (the thesis); a stronger leg draws the COM over itself
+    and so carries more load — the more so as it bends more (:func:`pelvis_roll`)."""
     k = np.asarray(k, float).reshape(6)
-    w = np.array([k[:3].sum(), k[3:].sum()])
+    K = np.array([k[:3].sum(), k[3:].sum()])
     feet = jumper.feet()
     mid = np.array([jumper.foot_corners(feet[s])[:, [0, 2]].mean(0) for s in SIDES])
-    return (w[:, None] * mid).sum(0) / w.sum() + np.asarray(centre)
+    if compression is None:
+        return (K[:, None] * mid).sum(0) / K.sum() + np.asarray(centre)
+    d = np.atleast_2d(np.asarray(compression, float))
+    w = K[None] * (np.maximum(d, 0.0) + 1e-6)                 # F = K δ (straight legs: F ∝ K)
+    return (w @ mid) / w.sum(1, keepdims=True) + np.asarray(centre)[None]
+
+
+def leg_asymmetry(k) -> float:
+    """c = (K_r − K_l) / (K_r + K_l) of the legs' stiffnesses K (each the sum of
+    its hip, knee and ankle springs): 0 for equal legs, > 0 when the right
+    leg is the stronger.  Table 5.1's uneven presets: ±0.2."""
+    k = np.asarray(k, float).reshape(6)
+    Kl, Kr = k[:3].sum(), k[3:].sum()
+    return float((Kr - Kl) / (Kr + Kl))
+
+
+def pelvis_roll(jumper: Jumper, asymmetry: float, depth) -> np.ndarray:
+    """(N,) roll of the pelvis (rad, about the forward axis Z; positive lowers
+    the right hip) in a crouch ``depth`` (N,) metres below the standing
+    pelvis height, for legs of asymmetry c (:func:`leg_asymmetry`).
+
+    Why.  The legs are two springs in parallel under one body.  A pelvis that
+    only translates compresses both by the same δ, so the stiffer leg pushes
+    harder (F = K δ) and carries more weight, but both knees bend alike.
+    Statics does not fix how the bend is shared — the crouch is the store of
+    the take-off energy, E = Σ ½ K δ², and the jumper chooses it.  Per unit
+    of bend a stiffer spring stores more (dE/dδ = K δ): lowering the hip of the
+    stronger leg by a and raising the weaker one's by a changes the energy of
+    a crouch of depth D by (K_s − K_w) D a + ½ (K_s + K_w) a², a gain at first
+    order, so the same energy is stored with the pelvis higher (the thesis's
+    "minimal change in flexion"); the opposite tilt — the weaker leg sagging,
+    which equal forces F_l = F_r would give — loses energy at first order and
+    puts the load on the leg least able to return it.  So the pelvis rolls
+    down on the stronger side.  The energy gives the direction, not the
+    amount (the gain keeps growing with the tilt); the amount is a rule: each
+    leg's compression follows its own spring, δ_i ∝ K_i, i.e. δ_s,w =
+    D (1 ± c), as far as the pelvis's obliquity allows
+    (:data:`PELVIS_ROLL_LIMIT`, reached below D ≈ 6 cm for c = 0.2).  The
+    stronger leg bends more and, its force K δ larger, carries still more of
+    the weight (the balance target follows, :func:`balance_target`); the
+    weaker leg straightens — the thesis's "dangling" weaker leg (5.4).  Equal
+    legs (c = 0): no roll, mirror-image legs.  Standing (D ≤ 0): no roll."""
+    D = np.maximum(np.atleast_1d(np.asarray(depth, float)), 0.0)
+    if asymmetry == 0.0:
+        return np.zeros(D.shape)
+    w = abs(float(jumper.hip_offset["r"][0]))
+    a = np.arcsin(np.clip(abs(asymmetry) * D / w, 0.0, 1.0))
+    return np.sign(asymmetry) * np.minimum(a, PELVIS_ROLL_LIMIT)
+
+
+def hip_compression(jumper: Jumper, roll) -> np.ndarray:
+    """(N,2) how far a roll (N,) lowers each hip (left, right) relative to the
+    pelvis's centre (m; negative: raised) — add the crouch depth for each
+    hip's drop below standing, the leg's compression δ."""
+    r = np.atleast_1d(np.asarray(roll, float))
+    R = Rotation.from_rotvec(r[:, None] * np.array([0.0, 0.0, 1.0]))
+    return np.stack([-(R.apply(jumper.hip_offset[s])[:, 1] - jumper.hip_offset[s][1]) for s in SIDES], 1)
 
 
 _CACHE: dict = {}
 
 
-def sample_field(jumper: Jumper, spacing=SPACING) -> SampleField:
-    """The sample field of a jumper (cached per height, mass and spacing)."""
+def sample_field(jumper: Jumper, spacing=SPACING, k=None) -> SampleField:
+    """The sample field of a jumper (cached per height, mass and spacing, and
+    per the legs' asymmetry of ``k``: uneven legs crouch with the pelvis
+    rolled, :func:`pelvis_roll`; equal legs or no ``k``: upright)."""
     import time
-    key = (round(jumper.height, 9), round(jumper.mass, 9), tuple(spacing))
+    c = 0.0 if k is None else round(leg_asymmetry(k), 9)
+    key = (round(jumper.height, 9), round(jumper.mass, 9), tuple(spacing)) + ((c,) if c else ())
     if key in _CACHE:
         return _CACHE[key]
     t0 = time.perf_counter()
@@ -161,13 +235,16 @@ def sample_field(jumper: Jumper, spacing=SPACING) -> SampleField:
     ys = np.arange(jumper.standing_pelvis, LOWEST_PELVIS * jumper.standing_pelvis - 1e-9, -dy)[::-1]
     X, Y, Z = np.meshgrid(xs, ys, zs, indexing="ij")
     P = np.stack([X.ravel(), Y.ravel(), Z.ravel()], 1)
-    st = solve_legs(jumper, P, jumper.rest_quats(P.shape[0]), feet)
+    depth = jumper.standing_pelvis - P[:, 1]
+    roll = pelvis_roll(jumper, c, depth)
+    st = solve_legs(jumper, P, jumper.rest_quats(P.shape[0]), feet, roll=roll)
     pos = jumper.positions(P, st.quats)
     theta = jumper.muscle_angles(pos)
     com = jumper.com(P, st.quats)
     centre = polygon_centre(poly)
     f = SampleField(jumper, P, st.ok, spring_displacement(theta), theta, com,
-                    balance_error(com, centre), poly, centre, tuple(spacing), _lean_table(jumper))
+                    balance_error(com, centre), poly, centre, tuple(spacing), _lean_table(jumper),
+                    roll, depth[:, None] + hip_compression(jumper, roll), c)
     f.seconds = time.perf_counter() - t0
     _CACHE[key] = f
     return f
@@ -324,6 +401,8 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
     """Run the windup PD controller from pelvis ``start`` to ``goal`` (world),
     the balance PD controller bending the upper body every iteration."""
     k = np.asarray(k, float)
+    c = leg_asymmetry(k)
+    floor = float(np.mean([feet[s_][1] for s_ in SIDES])) - jumper.ankle_height
     p = np.asarray(start, float).copy()
     e_prev = goal - p
     lean = np.asarray(lean0, float).copy()
@@ -334,7 +413,7 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
         Q = jumper.rest_quats(1)
         lq = jumper.lean_quats(lean[None])
         Q[0, jumper.idx["spine"]] = Q[0, jumper.idx["spine1"]] = lq[0]
-        st = solve_legs(jumper, p[None], Q, feet)
+        st = solve_legs(jumper, p[None], Q, feet, roll=pelvis_roll(jumper, c, jumper.standing_pelvis - (p[1] - floor)))
         pos = jumper.positions(p[None], st.quats)
         E = float(0.5 * (spring_displacement(jumper.muscle_angles(pos))[0] ** 2) @ k)
         com = jumper.com(p[None], st.quats)[0]
@@ -418,10 +497,11 @@ def assign_energy(field: SampleField, k, required: float, choice: Choice, travel
 
     def state(x):
         p = np.asarray(x, float) / scale
-        st = solve_legs(j, p[None], j.rest_quats(1), feet, iterations=200, stop=1e-5)
+        st = solve_legs(j, p[None], j.rest_quats(1), feet, iterations=200, stop=1e-5,
+                        roll=pelvis_roll(j, field.asymmetry, j.standing_pelvis - p[1]))
         pos = j.positions(p[None], st.quats)
         E = float(0.5 * (spring_displacement(j.muscle_angles(pos))[0] ** 2) @ k)
-        b = balance_error(j.com(p[None], st.quats), field.balanced(k).target)[0]
+        b = balance_error(j.com(p[None], st.quats), field.balanced(k).target[choice.index])[0]
         return p, E, b, float(st.error.max())
 
     def room(x):
