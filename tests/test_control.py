@@ -350,24 +350,37 @@ def test_windup_feet_still_and_balanced(jumps, key):
     assert inside(poly, com[:, [0, 2]]).all()
 
 
-def test_uneven_legs_load_the_stronger_leg(jumps):
-    """Table 5.1's uneven presets: the balance target moves over the stronger
-    leg, which then carries more of the weight; the legs' frontal-plane angles
-    differ (one hip abducts, the other adducts), while equal legs are mirror
+def _bones_angle(a, c, b):
+    u, w = a - c, b - c
+    return math.degrees(math.acos(np.clip(np.dot(u, w) / np.linalg.norm(u) / np.linalg.norm(w), -1, 1)))
+
+
+def test_uneven_legs_load_the_stronger_leg(tmp_path):
+    """Table 5.1's uneven presets, measured on the written BVH at the bottom of
+    the windup (its last frame): the COM is over the stronger leg, which
+    carries more of the weight; the pelvis rolls down on the stronger side, so
+    the stronger leg's knee bends more (the angle between thigh and shank is
+    smaller) and the weaker leg is straighter — the thesis's "dangling"
+    weaker leg; the hips' frontal-plane angles differ.  Equal legs are mirror
     images."""
-    j = Jumper()
-    shares, hips = {}, {}
+    shares, hips, knees = {}, {}, {}
     for name in ("global-normal", "uneven-global-normal", "uneven-varying-normal"):
         res = jump((0.0, 0.0, 1.6), k=name)
-        q = res.plan.approach.quats[-1]
-        com = res.plan.approach.com[-1]
-        xl, xr = j.feet()["l"][0], j.feet()["r"][0]
+        path = tmp_path / f"{name}.bvh"
+        save_bvh(res.clip, path)
+        bvh = load_bvh(path)
+        sk = bvh.skeleton
+        w1 = res.clip.meta["windup_frames"][1]
+        P = bvh.joint_positions()[w1]
+        com = center_of_mass(bvh, Body.from_clip(bvh))[w1]
+        J = {s: [P[sk.index(f"{s}{n}")] for n in ("UpLeg", "Leg", "Foot")] for s in ("Left", "Right")}
+        xl, xr = J["Left"][2][0], J["Right"][2][0]
         shares[name] = (xl - com[0]) / (xl - xr)                    # share of the right foot
+        knees[name] = [_bones_angle(*J[s]) for s in ("Left", "Right")]
         # abduction (thigh away from the midline) of each hip, degrees
-        P = j.positions(res.plan.crouch_pelvis[None], q[None])[0]
         ab = []
-        for s, side in (("l", 1.0), ("r", -1.0)):
-            th = P[j.idx[f"knee_{s}"]] - P[j.idx[f"hip_{s}"]]
+        for s, side in (("Left", 1.0), ("Right", -1.0)):
+            th = J[s][1] - J[s][0]
             ab.append(np.degrees(np.arctan2(side * th[0], -th[1])))
         hips[name] = ab
     assert shares["global-normal"] == pytest.approx(0.5, abs=0.01)
@@ -375,6 +388,12 @@ def test_uneven_legs_load_the_stronger_leg(jumps):
     assert shares["uneven-varying-normal"] < 0.45         # left leg stronger
     assert hips["global-normal"][0] == pytest.approx(hips["global-normal"][1], abs=0.05)
     assert abs(hips["uneven-global-normal"][0] - hips["uneven-global-normal"][1]) > 1.0
+    # knees: equal legs alike; the stronger leg bent more by a visible amount
+    assert knees["global-normal"][0] == pytest.approx(knees["global-normal"][1], abs=0.05)
+    assert knees["uneven-global-normal"][0] - knees["uneven-global-normal"][1] > 3.0    # right stronger
+    assert knees["uneven-varying-normal"][1] - knees["uneven-varying-normal"][0] > 3.0  # left stronger
+    for name in ("uneven-global-normal", "uneven-varying-normal"):
+        assert 60.0 < min(knees[name]) and max(knees[name]) < 170.0                      # both bent
 
 
 # ------------------------------------------------------------------------ CLI
