@@ -57,6 +57,7 @@ SPACING = (0.02, 0.01, 0.02)   # grid of the field (x, y, z), metres
 LOWEST_PELVIS = 0.35           # fraction of the standing pelvis height
 BALANCE_BIN = 0.005            # m: balance errors this close count as equal (then the smaller lean)
 REACH_MARGIN = 0.012           # m kept in hand when testing the thrust's reach (the estimate's error)
+BEST_EFFORT_BALANCE = 0.02     # m: a best-effort (landing) crouch is chosen among those balanced this well
 PELVIS_ROLL_LIMIT = np.radians(8.0)   # the pelvis's frontal tilt (obliquity, a hip hike) in a crouch
 
 
@@ -339,6 +340,7 @@ def choose(field: SampleField, k, required: float, travel=None, eps: float = EPS
     """The least-balance-error sample with E_k − E_el ≤ ε E_k (and room for a
     thrust of ``travel`` when given).  ``best_effort``: when no sample stores
     enough, take the most energetic one (landings that must dissipate the rest)
+    of those the upper body balances within :data:`BEST_EFFORT_BALANCE`,
     instead of raising ``ValueError``."""
     E = field.energy(k)
     bal = field.balanced(k)
@@ -352,7 +354,12 @@ def choose(field: SampleField, k, required: float, travel=None, eps: float = EPS
     cand = pre & room
     if not cand.any():
         if best_effort:
-            i = int(np.argmax(np.where(usable, E, -np.inf)))
+            # the most energetic of the well-balanced ones (the rolled field of
+            # uneven legs stores most far off to the side, where the upper body
+            # cannot balance the COM), else of all
+            res = np.linalg.norm(bal.residual, axis=1)
+            good = usable & (res <= BEST_EFFORT_BALANCE)
+            i = int(np.argmax(np.where(good if good.any() else usable, E, -np.inf)))
             return Choice(i, field.pelvis[i].copy(), float(E[i]), float(required),
                           float(np.linalg.norm(bal.residual[i])), 0, False)
         emax = float(E[usable].max()) if usable.any() else 0.0
