@@ -8,8 +8,10 @@ Stages (continuous time, sampled at ``fps``):
    iteration per equal time step, eased in and out over ``crouch_time``; the
    balance PD controller bends the upper body; feet flat and fixed.  Uneven
    legs: the pelvis rolls down on the stronger side as it sinks, so the
-   stronger leg bends more (:func:`.windup.pelvis_roll`); level again when
-   the legs are extended.
+   stronger leg bends more (:func:`.windup.pelvis_roll`; the roll grows in
+   proportion to the depth); it unwinds with the lean over the thrust (level
+   at take-off), comes back over the landing's absorption (level at
+   touch-down) and unwinds again as the jumper stands up.
 2. **thrust** (``t_windup``): explicit Euler of the planned acceleration
    a = v0 / t_windup from rest; the whole-body COM follows c_c + ½ a τ² (the
    root solved from it each frame, legs by CCD, heels rising about the balls
@@ -20,8 +22,7 @@ Stages (continuous time, sampled at ``fps``):
    legs do the COM path is exact; the legs tuck and reach forward for the
    landing while the whole body turns (pitches back as the legs come forward)
    so that the angular momentum about the COM stays constant and the body is
-   turned as the touch-down pose is at touch-down (upright; for uneven legs
-   the small roll their landing crouch starts with).  Contact is found by casting rays down from
+   upright again at touch-down.  Contact is found by casting rays down from
    the soles onto the surfaces (floor and box tops).
 4. **landing** (the windup reversed): the feet stop where they touch; the COM
    decelerates to rest along c_td + v_L T/3 (1 − (1 − τ)³) into the crouch the
@@ -183,19 +184,15 @@ class Plan:
     iterations: int
 
 
-def _pose(jumper, pelvis, lean, feet, pitch=None, warm=None, roll_for=None):
+def _pose(jumper, pelvis, lean, feet, pitch=None, warm=None, roll=None):
     """Legs solved for pelvis positions (N,3) with leans (N,2); returns (quats,
-    stance).  ``roll_for`` = (asymmetry c, floor height): the pelvis rolls with
-    the crouch's depth below standing on that floor (:func:`.windup.pelvis_roll`)."""
+    stance); ``roll`` (N,): the pelvis's roll (:func:`.windup.pelvis_roll`)."""
     pelvis = np.atleast_2d(pelvis)
     N = pelvis.shape[0]
     Q = jumper.rest_quats(N)
     lq = jumper.lean_quats(np.broadcast_to(np.atleast_2d(lean), (N, 2)))
     Q[:, jumper.idx["spine"]] = lq
     Q[:, jumper.idx["spine1"]] = lq
-    roll = None
-    if roll_for is not None and roll_for[0] != 0.0:
-        roll = pelvis_roll(jumper, roll_for[0], jumper.standing_pelvis - (pelvis[:, 1] - roll_for[1]))
     st = solve_legs(jumper, pelvis, Q, {s: np.broadcast_to(feet[s], (N, 3)) for s in SIDES}, pitch, warm,
                     stop=IK_STOP, roll=roll)
     return st.quats, st
@@ -207,7 +204,7 @@ def _balanced(jumper, pelvis, feet, centre, k, required):
     return ap.lean[-1], ap.com[-1]
 
 
-def _touchdown(jumper, feet1, F1, delta, lean, c=0.0):
+def _touchdown(jumper, feet1, F1, delta, lean):
     """Pelvis of the touch-down pose: ``delta`` (2,) horizontal offset from the
     feet's midpoint, height such that the legs are TOUCHDOWN_EXTENSION of their
     length; and its COM."""
@@ -218,14 +215,13 @@ def _touchdown(jumper, feet1, F1, delta, lean, c=0.0):
                          f"{dh:.2f} m ahead of the hips; use a longer --air or a shorter jump")
     y = F1[1] + jumper.ankle_height + np.sqrt(L ** 2 - dh ** 2) - jumper.hip_offset["l"][1]
     p = np.array([F1[0] + delta[0], y, F1[2] + delta[1]])
-    Q, st = _pose(jumper, p, lean, feet1, roll_for=(c, F1[1]))
+    Q, st = _pose(jumper, p, lean, feet1)
     return p, jumper.com(p[None], Q)[0]
 
 
 def plan(jumper: Jumper, scene: Scene, k, t_air: float, t_windup: float, g, max_iter: int = 12) -> Plan:
     """Solve the jump's fixed point (see the module docstring)."""
     field_ = sample_field(jumper, k=k)                # uneven legs: the pelvis rolls in a crouch
-    c = leg_asymmetry(k)
     gv = gravity_vector(g)
     F0, F1 = np.asarray(scene.start, float), np.asarray(scene.target, float)
     feet0, feet1 = jumper.feet(F0), jumper.feet(F1)
@@ -258,7 +254,7 @@ def plan(jumper: Jumper, scene: Scene, k, t_air: float, t_windup: float, g, max_
         c_s = p_s + field_.balanced(k).com_bal[lc.index] - lc.pelvis
         lean_td = np.zeros(2)
         for _ in range(30):
-            p_td, c_td = _touchdown(jumper, feet1, F1, delta, lean_td, c)
+            p_td, c_td = _touchdown(jumper, feet1, F1, delta, lean_td)
             o = c_td - p_td
             vLy = (c_td[1] - c_to[1]) / t_air + gv[1] * t_air / 2.0
             if vLy >= -0.05:
@@ -304,7 +300,7 @@ def _smooth(x):
 
 
 def _solve_com(jumper, com, lean, feet, heel: bool, root0, iterations: int = 10, tol: float = 3e-4,
-               roll_for=None):
+               roll=None):
     """Root (N,3) and quats so the COM is ``com`` (N,3), legs to ``feet`` (flat,
     or heels raised when ``heel`` and the flat foot is out of reach): the root
     moves by the COM error until it is below ``tol`` (the legs' share of the
@@ -317,9 +313,8 @@ def _solve_com(jumper, com, lean, feet, heel: bool, root0, iterations: int = 10,
         if heel:
             pitch = {}
             Rp = None
-            if roll_for is not None and roll_for[0] != 0.0:      # the hips of a rolled pelvis
-                r = pelvis_roll(jumper, roll_for[0], jumper.standing_pelvis - (root[:, 1] - roll_for[1]))
-                Rp = Rotation.from_rotvec(r[:, None] * np.array([0.0, 0.0, 1.0]))
+            if roll is not None:                                  # the hips of a rolled pelvis
+                Rp = Rotation.from_rotvec(np.asarray(roll, float)[:, None] * np.array([0.0, 0.0, 1.0]))
             for s in SIDES:
                 hip = root + (jumper.hip_offset[s] if Rp is None else Rp.apply(jumper.hip_offset[s]))
                 ball = np.broadcast_to(feet[s] + jumper.ball_offset, hip.shape)
@@ -335,7 +330,7 @@ def _solve_com(jumper, com, lean, feet, heel: bool, root0, iterations: int = 10,
                 ankles[s] = feet[s] + jumper.ball_offset - R.apply(jumper.ball_offset)
             else:
                 ankles[s] = np.broadcast_to(feet[s], root.shape)
-        Q, st = _pose(jumper, root, lean, ankles, pitch, roll_for=roll_for)
+        Q, st = _pose(jumper, root, lean, ankles, pitch, roll=roll)
         err = com - jumper.com(root, Q)
         if np.max(np.abs(err)) < tol:
             return root, Q, st
@@ -351,19 +346,17 @@ def _cumtrapz0(y, t):
     return out
 
 
-def _conserve_momentum(jumper, Qf, com, tf, T, fps, rv_end=None, rounds: int = 3):
+def _conserve_momentum(jumper, Qf, com, tf, T, fps, rounds: int = 3):
     """Turn the whole body in flight (the root's rotation) so that its angular
     momentum about the COM is constant while the legs tuck and reach: ω(t) =
     I(t)⁻¹ (L0 − L_joints(t)), with L0 the constant for which the body ends the
-    flight turned as the touch-down pose is, ``rv_end`` (a rotation vector:
-    upright, or the small roll of uneven legs; ∫ω dt = rv_end from take-off to
-    touch-down, so the landing pose is the planned one).  A few rounds, each measured with
+    flight upright again (∫ω dt = 0 from take-off to touch-down, so the landing
+    pose is the planned one).  A few rounds, each measured with
     :func:`stimuli.physics.momentum` on the posed frames."""
     from ..physics import momentum
     n = len(tf)
     if n < 4:
         return Qf
-    rv_end = np.zeros(3) if rv_end is None else np.asarray(rv_end, float)
     tg = np.concatenate([[0.0], tf, [T]])            # take-off … touch-down
     rv = np.zeros((n, 3))
     for _ in range(rounds):
@@ -377,10 +370,10 @@ def _conserve_momentum(jumper, Qf, com, tf, T, fps, rv_end=None, rounds: int = 3
         A = _cumtrapz0(ext(Iinv.reshape(n, 9)), tg)[-1].reshape(3, 3)   # ∫ I⁻¹ dt
         b = _cumtrapz0(ext(np.einsum("nab,nb->na", Iinv, mo.L)), tg)[-1] - rv[-1] * 0.0
         c = _cumtrapz0(ext(w_now), tg)[-1]
-        L0 = np.linalg.solve(A, b - c + rv_end)
+        L0 = np.linalg.solve(A, b - c)
         w = w_now + np.einsum("nab,nb->na", Iinv, L0[None] - mo.L)
         acc = _cumtrapz0(ext(w), tg)
-        rv = acc[1:-1] - (tg[1:-1] / T)[:, None] * (acc[-1] - rv_end)[None]   # the touch-down pose's turn
+        rv = acc[1:-1] - (tg[1:-1] / T)[:, None] * acc[-1][None]       # exactly upright at touch-down
     Q = Qf.copy()
     Q[:, 0] = Rotation.from_rotvec(rv).as_quat()
     return Q
@@ -492,7 +485,8 @@ def _build(jumper: Jumper, sc: Scene, pl: Plan, k, fps: float, T_c: float, check
     pel = np.stack([np.interp(u, it, ap.pelvis[:, a]) for a in range(3)], 1)
     lean = np.stack([np.interp(u, it, ap.lean[:, a]) for a in range(2)], 1)
     c = leg_asymmetry(k)
-    Qw, st_w = _pose(jumper, pel, lean, feet0, roll_for=(c, F0[1]))
+    roll_w = np.interp(u, it, ap.roll) if c else None
+    Qw, st_w = _pose(jumper, pel, lean, feet0, roll=roll_w)
     root[m], Q[m] = pel, Qw
     # 3. thrust: explicit Euler of a from rest (exact for constant a) — the COM path
     m = (t >= t_c1) & (t < t_to)
@@ -504,11 +498,13 @@ def _build(jumper: Jumper, sc: Scene, pl: Plan, k, fps: float, T_c: float, check
     w = _smooth(tau / t_w)[:, None]
     lean_th = (1 - w) * pl.crouch_lean[None] + w * lean_to[None]
     root0 = com_th - (pl.crouch_com - pl.crouch_pelvis)[None]
-    r_th, Q_th, st_th = _solve_com(jumper, com_th, lean_th, feet0, True, root0, roll_for=(c, F0[1]))
+    # uneven legs: the crouch's roll unwinds with the lean, level at take-off
+    roll_th = ap.roll[-1] * (1 - w[:, 0]) if c else None
+    r_th, Q_th, st_th = _solve_com(jumper, com_th, lean_th, feet0, True, root0, roll=roll_th)
     root[m], Q[m] = r_th[:-1], Q_th[:-1]
     q_to = Q_th[-1]
     # 4. flight: exact parabola of the whole-body COM; legs tuck, then reach for the landing
-    Q_td, _ = _pose(jumper, pl.touchdown_pelvis, pl.touchdown_lean, feet1, roll_for=(c, F1[1]))
+    Q_td, _ = _pose(jumper, pl.touchdown_pelvis, pl.touchdown_lean, feet1)
     q_td = Q_td[0]
     q_tk = _tuck_pose(jumper, q_to, sc.tuck, lean_to)
     m = (t >= t_to) & (t < t_td)
@@ -522,7 +518,7 @@ def _build(jumper: Jumper, sc: Scene, pl: Plan, k, fps: float, T_c: float, check
     w2 = _smooth((tf - t_mid) / (0.92 * t_air - t_mid))      # feet set for the landing before it
     Qf = np.where((tf < t_mid)[:, None, None], _slerp_pose(q_to, q_tk, w1), _slerp_pose(q_tk, q_td, w2))
     c_f = pl.takeoff_com[None] + path.position(tf)
-    Qf = _conserve_momentum(jumper, Qf, c_f, tf, t_air, fps, Rotation.from_quat(q_td[0]).as_rotvec())
+    Qf = _conserve_momentum(jumper, Qf, c_f, tf, t_air, fps)
     off = jumper.com(np.zeros((len(tf), 3)), Qf)
     root[m], Q[m] = c_f - off, Qf
     # 5. landing: absorb (feet fixed), recover, hold
@@ -533,14 +529,17 @@ def _build(jumper: Jumper, sc: Scene, pl: Plan, k, fps: float, T_c: float, check
     w = _smooth(s)[:, None]
     lean_ab = (1 - w) * pl.touchdown_lean[None] + w * pl.stop_lean[None]
     root0 = com_ab - (pl.touchdown_com - pl.touchdown_pelvis)[None]
-    r_ab, Q_ab, st_ab = _solve_com(jumper, com_ab, lean_ab, feet1, False, root0, roll_for=(c, F1[1]))
+    # uneven legs: level at touch-down, rolling into the landing crouch's roll
+    roll_s = pelvis_roll(jumper, c, jumper.standing_pelvis - (pl.stop_pelvis[1] - F1[1]))[0]
+    roll_ab = roll_s * w[:, 0] if c else None
+    r_ab, Q_ab, st_ab = _solve_com(jumper, com_ab, lean_ab, feet1, False, root0, roll=roll_ab)
     root[m], Q[m] = r_ab[1:], Q_ab[1:]
     m = t >= t_ab
     w = _smooth((t[m] - t_ab) / T_RECOVER)[:, None]
     stand1 = F1 + up * jumper.standing_pelvis
     pel = (1 - w) * pl.stop_pelvis[None] + w * stand1[None]
     lean = (1 - w) * pl.stop_lean[None]
-    Qr, st_r = _pose(jumper, pel, lean, feet1, roll_for=(c, F1[1]))
+    Qr, st_r = _pose(jumper, pel, lean, feet1, roll=roll_s * (1 - w[:, 0]) if c else None)
     root[m], Q[m] = pel, Qr
     # the whole motion, checked
     i_to = int(np.ceil(t_to * fps - 1e-9))

@@ -391,7 +391,9 @@ def choose(field: SampleField, k, required: float, travel=None, eps: float = EPS
 @dataclass
 class Approach:
     """The windup controller's iterations: pelvis (K,3), lean (K,2), energy
-    (K,), balance error (K,2), COM (K,3), leg quaternions (K,J,4)."""
+    (K,), balance error (K,2), COM (K,3), leg quaternions (K,J,4), pelvis
+    roll (K,) (uneven legs: growing in proportion to the depth, to the
+    goal's :func:`pelvis_roll`)."""
 
     pelvis: np.ndarray
     lean: np.ndarray
@@ -399,6 +401,7 @@ class Approach:
     balance: np.ndarray
     com: np.ndarray
     quats: np.ndarray
+    roll: np.ndarray
     energy_met_at: int | None
 
 
@@ -410,23 +413,28 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
     k = np.asarray(k, float)
     c = leg_asymmetry(k)
     floor = float(np.mean([feet[s_][1] for s_ in SIDES])) - jumper.ankle_height
+    # the goal's roll, reached in proportion to the depth on the way down
+    d_goal = jumper.standing_pelvis - (float(goal[1]) - floor)
+    r_goal = float(pelvis_roll(jumper, c, d_goal)[0])
     p = np.asarray(start, float).copy()
     e_prev = goal - p
     lean = np.asarray(lean0, float).copy()
     b_prev = None
-    rec = {n: [] for n in ("pelvis", "lean", "energy", "balance", "com", "quats")}
+    rec = {n: [] for n in ("pelvis", "lean", "energy", "balance", "com", "quats", "roll")}
     met = None
     for i in range(max_iter + 1):
         Q = jumper.rest_quats(1)
         lq = jumper.lean_quats(lean[None])
         Q[0, jumper.idx["spine"]] = Q[0, jumper.idx["spine1"]] = lq[0]
-        st = solve_legs(jumper, p[None], Q, feet, roll=pelvis_roll(jumper, c, jumper.standing_pelvis - (p[1] - floor)))
+        d = jumper.standing_pelvis - (p[1] - floor)
+        roll = r_goal * float(np.clip(d / d_goal, 0.0, 1.0)) if r_goal else 0.0
+        st = solve_legs(jumper, p[None], Q, feet, roll=np.array([roll]))
         pos = jumper.positions(p[None], st.quats)
         E = float(0.5 * (spring_displacement(jumper.muscle_angles(pos))[0] ** 2) @ k)
         com = jumper.com(p[None], st.quats)[0]
         b = balance_error(com, centre)[0]
         for n, v in (("pelvis", p.copy()), ("lean", lean.copy()), ("energy", E), ("balance", b),
-                     ("com", com), ("quats", st.quats[0])):
+                     ("com", com), ("quats", st.quats[0]), ("roll", roll)):
             rec[n].append(v)
         if met is None and required - E <= eps * required:
             met = i
@@ -445,7 +453,7 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
                          f"(pelvis error {np.linalg.norm(goal - p) * 1000:.1f} mm, balance error "
                          f"{np.linalg.norm(b) * 1000:.1f} mm, lean {np.degrees(lean).round(1).tolist()}°, "
                          f"energy {E:.0f} of {required:.0f} J)")
-    return Approach(*(np.array(rec[n]) for n in ("pelvis", "lean", "energy", "balance", "com", "quats")),
+    return Approach(*(np.array(rec[n]) for n in ("pelvis", "lean", "energy", "balance", "com", "quats", "roll")),
                     energy_met_at=met)
 
 
