@@ -7,9 +7,10 @@ standing pelvis height — each with both legs solved by CCD (feet flat where
 they stand), its six spring displacements, its COM (the project's de Leva
 body, upper body upright) and the balance error.  Equal legs crouch with the
 pelvis level; uneven legs (Table 5.1's uneven trials) with the pelvis rolled
-down on the stronger side in proportion to the depth, up to 8°, so that each
-leg's compression follows its own spring and the stronger leg bends more
-(:func:`pelvis_roll` gives the physics).  The geometry depends on k only
+down on the stronger side, each leg's compression following its own spring up
+to 8° of pelvic obliquity (which crouches deeper than ~6 cm reach), so that
+the stronger leg bends more (:func:`pelvis_roll` gives the physics).  The
+geometry depends on k only
 through that roll (the legs' asymmetry): the field is computed once per jumper
 (height, mass), grid and asymmetry and cached; the energies E_el = Σ ½ k_i s_i²
 are computed once per k and cached on the field.
@@ -17,10 +18,10 @@ are computed once per k and cached on the field.
 **Choice.**  Candidates satisfy E_k − E_el ≤ ε E_k (ε = 0.05), bend the
 knees at least as far as the thesis's minimum limb usage (utilisation ≥ ε),
 keep the COM over the support polygon (its balance target the centre of
-pressure of the legs' springs, :func:`balance_target`), and leave room for the thrust: after
-the planned ½ v0 t_windup of travel the legs must be extended (utilisation
-below the thesis's 0.1) yet still reach the ground, on the balls of the feet
-if need be.  Of those, the one with the least balance error is chosen — the
+pressure of the legs' springs, :func:`balance_target`), and leave room for
+the thrust: after the planned ½ v0 t_windup of travel the legs must be
+extended (utilisation below the thesis's 0.1) yet still reach the ground, on
+the balls of the feet if need be.  Of those, the one with the least balance error is chosen — the
 error left once the upper body has leaned as far as its limits allow (the
 field stores that lean; in 5 mm bins, then the smaller lean, then the
 shallower crouch).
@@ -29,7 +30,9 @@ shallower crouch).
 the pelvis toward the chosen sample, u(i) = k_p e(i−1) + k_d (e(i−1) − e(i−2)),
 the legs solved by CCD each iteration, while the balance PD controller bends
 the upper body; it stops when the pelvis is within 1 mm of the sample, the
-energy criterion holds and the balance error is below 1 mm.
+energy criterion holds and the balance error is below 1 mm.  The pelvis of
+uneven legs rolls on the way down in proportion to the depth, reaching the
+sample's roll there.
 
 **Energy assignment (3.6.2).**  :func:`assign_energy` solves the problem the
 sampling approximates directly with ``scipy.optimize`` (SLSQP over the pelvis
@@ -175,18 +178,21 @@ def pelvis_roll(jumper: Jumper, asymmetry: float, depth) -> np.ndarray:
     the right hip) in a crouch ``depth`` (N,) metres below the standing
     pelvis height, for legs of asymmetry c (:func:`leg_asymmetry`).
 
-    Why.  The legs are two springs in parallel under one body.  A pelvis that
-    only translates compresses both by the same δ, so the stiffer leg pushes
+    Why.  The legs are two springs in parallel under one body (here each a
+    linear spring K in its hip's drop δ below standing).  A pelvis that only
+    translates compresses both by the same δ, so the stiffer leg pushes
     harder (F = K δ) and carries more weight, but both knees bend alike.
-    Statics does not fix how the bend is shared — the crouch is the store of
-    the take-off energy, E = Σ ½ K δ², and the jumper chooses it.  Per unit
-    of bend a stiffer spring stores more (dE/dδ = K δ): lowering the hip of the
-    stronger leg by a and raising the weaker one's by a changes the energy of
-    a crouch of depth D by (K_s − K_w) D a + ½ (K_s + K_w) a², a gain at first
-    order, so the same energy is stored with the pelvis higher (the thesis's
-    "minimal change in flexion"); the opposite tilt — the weaker leg sagging,
-    which equal forces F_l = F_r would give — loses energy at first order and
-    puts the load on the leg least able to return it.  So the pelvis rolls
+    Statics ties the share of the weight to where the COM is, and that is the
+    controller's choice, so it does not fix how the bend is shared: the
+    crouch is the store of the take-off energy, E = Σ ½ K δ², and the jumper
+    chooses it.  Per unit of bend a stiffer spring stores more (dE/dδ = K δ):
+    lowering the hip of the stronger leg by a and raising the weaker one's by
+    a changes the energy of a crouch of depth D by (K_s − K_w) D a +
+    ½ (K_s + K_w) a², a gain at first order, so the same energy is stored in
+    a shallower crouch (which the choice prefers); the opposite tilt — the
+    weaker leg sagging, as equal forces F_l = F_r would make it — loses
+    energy (−½ (K_s + K_w) c² D² at a = −c D) and puts the load on the leg
+    least able to return it.  So the pelvis rolls
     down on the stronger side.  The energy gives the direction, not the
     amount (the gain keeps growing with the tilt); the amount is a rule: each
     leg's compression follows its own spring, δ_i ∝ K_i, i.e. δ_s,w =
@@ -453,7 +459,8 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
                          f"(pelvis error {np.linalg.norm(goal - p) * 1000:.1f} mm, balance error "
                          f"{np.linalg.norm(b) * 1000:.1f} mm, lean {np.degrees(lean).round(1).tolist()}°, "
                          f"energy {E:.0f} of {required:.0f} J)")
-    return Approach(*(np.array(rec[n]) for n in ("pelvis", "lean", "energy", "balance", "com", "quats", "roll")),
+    return Approach(*(np.array(rec[n]) for n in ("pelvis", "lean", "energy", "balance", "com", "quats",
+                                                  "roll")),
                     energy_met_at=met)
 
 
