@@ -39,8 +39,9 @@ from stimuli.physics import center_of_mass
 from stimuli.edit.reposition import ballistic_path
 from stimuli.edit.similarity import distance_matrix, pose_features
 # unchanged by the fast path: shared with the module rather than copied
-from stimuli.edit.multiflip import (FlipEditError, MultiFlip, SelfLoop, _smooth, find_self_loop,  # noqa: F401
+from stimuli.edit.multiflip import (FlipEditError, MultiFlip, SelfLoop, find_self_loop,  # noqa: F401
                                     flight_axis, k_star, piecewise_source, turn_angle)
+from stimuli.edit.timing import smoothstep as _smooth
 
 
 def sample(clip: Clip, src: np.ndarray) -> Clip:

@@ -40,7 +40,9 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
+from scipy.spatial.transform import Rotation
+
+from ..edit.timing import slerp
 
 from .ik import EX, heel_pitch, reach, solve_legs
 from .model import SIDES, Jumper
@@ -381,14 +383,9 @@ def _conserve_momentum(jumper, Qf, com, tf, T, fps, rounds: int = 3):
 
 def _slerp_pose(qa, qb, w):
     """Per-joint slerp of two poses (J,4) at weights w (N,) or (N,J) → (N,J,4)."""
-    J = qa.shape[0]
-    w = np.asarray(w, float)
-    w = np.broadcast_to(w[:, None] if w.ndim == 1 else w, (w.shape[0], J))
-    out = np.empty((w.shape[0], J, 4))
-    for j in range(J):
-        s = Slerp([0.0, 1.0], Rotation.from_quat(np.stack([qa[j], qb[j]])))
-        out[:, j] = s(np.clip(w[:, j], 0, 1)).as_quat()
-    return out
+    w = np.clip(np.asarray(w, float), 0.0, 1.0)
+    w = np.broadcast_to(w[:, None] if w.ndim == 1 else w, (w.shape[0], qa.shape[0]))
+    return slerp(np.broadcast_to(qa, w.shape + (4,)), np.broadcast_to(qb, w.shape + (4,)), w)
 
 
 def _tuck_pose(jumper, q_to, amount, lean):

@@ -53,7 +53,8 @@ from ..body import Body
 from ..flight import _runs, contact_mask, effector_points
 from ..motion.clip import Clip
 from ..physics import momentum, piece_positions
-from .timing import ratio_retime_frames, sample
+from .reposition import rotate
+from .timing import ratio_retime_frames, sample, slerp, smoothstep
 
 UP = np.array([0.0, 1.0, 0.0])
 
@@ -320,9 +321,8 @@ def prepare(clip: Clip, body: Body | None = None, *, tm: int | None = None,
 def transformed(mo: Motion, theta: float, shift: np.ndarray) -> Motion:
     """Motion 2 turned by θ about the vertical through the origin, then shifted."""
     R = yaw(theta)
-    rot = mo.clip.rotations.copy()
-    rot[:, 0] = (R * Rotation.from_quat(mo.clip.rotations[:, 0])).as_quat()
-    clip = mo.clip.replace(root_pos=R.apply(np.array(mo.clip.root_pos)) + shift, rotations=rot)
+    turned = rotate(mo.clip, R, np.zeros(3))
+    clip = turned.replace(root_pos=turned.root_pos + shift)
     F, P = mo.arms.shape[:2]
     return Motion(clip, mo.body, R.apply(np.array(mo.L)), R.apply(np.array(mo.com)) + shift,
                   R.apply(np.array(mo.arms).reshape(-1, 3)).reshape(F, P, 3), mo.foot_l, mo.foot_r,
@@ -382,15 +382,6 @@ def _truncate(m1: Motion, m2: Motion, f1: np.ndarray, f2: np.ndarray):
 
 
 # ------------------------------------------------------------------- blending
-def _slerp_poses(q1: np.ndarray, q2: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Per-joint slerp from q1 (n,J,4) to q2 (n,J,4) by w (n,) (0: q1, 1: q2)."""
-    n, J = q1.shape[:2]
-    a = Rotation.from_quat(q1.reshape(-1, 4))
-    b = Rotation.from_quat(q2.reshape(-1, 4))
-    rel = (a.inv() * b).as_rotvec() * np.repeat(w, J)[:, None]
-    return (a * Rotation.from_rotvec(rel)).as_quat().reshape(n, J, 4)
-
-
 def blend(c1: Clip, c2: Clip, T: int, f0: int, f1: int, ease: bool = True) -> Clip:
     """Eq. 8: motion 1 up to f0, the blend over [f0, f1] (α from 1 to 0, motion
     2's frame f − T), then motion 2.  ``c2`` is already aligned.  The paper's α
@@ -400,8 +391,8 @@ def blend(c1: Clip, c2: Clip, T: int, f0: int, f1: int, ease: bool = True) -> Cl
     F2 = c2.num_frames
     f = np.arange(f0, f1 + 1)
     x = (f - f0) / max(f1 - f0, 1)
-    alpha = 1.0 - (x * x * (3.0 - 2.0 * x) if ease else x)
-    q = _slerp_poses(c1.rotations[f], c2.rotations[f - T], 1.0 - alpha)
+    alpha = 1.0 - (smoothstep(x) if ease else x)
+    q = slerp(c1.rotations[f], c2.rotations[f - T], (1.0 - alpha)[:, None])
     root = alpha[:, None] * c1.root_pos[f] + (1 - alpha)[:, None] * c2.root_pos[f - T]
     rot = np.concatenate([c1.rotations[:f0], q, c2.rotations[f1 - T + 1:F2]])
     pos = np.concatenate([c1.root_pos[:f0], root, c2.root_pos[f1 - T + 1:F2]])
@@ -561,7 +552,7 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
                 # unloading), so the airborne frames stay as they were
                 n = min(int(round(0.1 * clip.fps)), max(1, idx.size // 3))
                 x = (np.arange(n) + 1) / (n + 1)
-                corr[-n:] *= (1.0 - x * x * (3 - 2 * x))[:, None]
+                corr[-n:] *= (1.0 - smoothstep(x))[:, None]
                 frames = idx
                 released.append("in contact")
             else:
@@ -570,7 +561,7 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
                 # so no supporting foot slides
                 tail = np.arange(e + 1, min(nxt, e + 1 + fade))
                 x = (np.arange(tail.size) + 1) / (tail.size + 1)
-                w = 1.0 - x * x * (3 - 2 * x)
+                w = 1.0 - smoothstep(x)
                 frames = np.concatenate([idx, tail])
                 corr = np.concatenate([corr, w[:, None] * corr[-1][None]])
                 released.append(f"in the air ({100 * np.linalg.norm(corr[idx.size - 1][[0, 2]]):.1f} cm)")
@@ -688,42 +679,44 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     ok2 = np.zeros(m2r.clip.num_frames, bool)
     ok2[s2] = True
     thr = (trace_frac * peak) ** 2
+    # frames f where both motions exist (motion 2 at f − T), and which of them lie
+    # in both blendable periods ("both") with ‖ΔL‖² under the threshold ("close")
+    lo, hi = max(0, T), min(ok1.size - 1, ok2.size - 1 + T)
+    fr = np.arange(lo, hi + 1)
+    both = ok1[fr] & ok2[fr - T]
+    close = both & (np.sum((m1.L[fr] - m2r.L[fr - T]) ** 2, axis=1) <= thr)
+    close[fT - lo] = True
 
-    def inside(f):
-        g = f - T
-        return (0 <= f < ok1.size and 0 <= g < ok2.size and ok1[f] and ok2[g]
-                and float(np.sum((m1.L[f] - m2r.L[g]) ** 2)) <= thr)
-    f0 = fT
-    while inside(f0 - 1):
-        f0 -= 1
-    f1 = fT
-    while inside(f1 + 1):
-        f1 += 1
+    def run_at(mask):
+        """The frames (first, last) of the run of ``mask`` that holds f_T."""
+        s, e = next((s, e) for s, e in _runs(mask) if s <= fT - lo <= e)
+        return lo + s, lo + e
+
+    f0, f1 = run_at(close)                      # eq. 8's tracing rule, outwards from f_T
     want = int(round(min_blend_s * a.fps))
+
+    def grow(f0, f1, a_, b_):
+        """[f0, f1] widened towards ``want`` frames inside [a_, b_], half on each side."""
+        need = want - (f1 - f0)
+        if need <= 0:
+            return f0, f1
+        left = min(f0 - a_, (need + 1) // 2)
+        right = min(b_ - f1, need - left)
+        left = min(f0 - a_, need - right)
+        return f0 - left, f1 + right
+
     widened = None
     if f1 - f0 < want:
         # a window this short would be a cut: widen it, inside the blendable
         # periods first, then beyond them (reported)
-        for inside_only in (True, False):
-            while f1 - f0 < want:
-                grew = False
-                for side in (0, 1):
-                    g0, g1 = (f0 - 1, f1) if side == 0 else (f0, f1 + 1)
-                    if f1 - f0 >= want or g0 < 0 or g0 - T < 0 or g1 >= ok1.size or g1 - T >= ok2.size:
-                        continue
-                    if inside_only and not (ok1[g0] and ok1[g1] and ok2[g0 - T] and ok2[g1 - T]):
-                        continue
-                    f0, f1, grew = g0, g1, True
-                if not grew:
-                    break
-            if f1 - f0 >= want:
-                break
+        f0, f1 = grow(f0, f1, *run_at(both))
+        f0, f1 = grow(f0, f1, lo, hi)
         widened = "inside the blendable periods" if (ok1[f0] and ok1[f1] and ok2[f0 - T] and ok2[f1 - T]) \
             else "beyond the blendable periods"
     # translate motion 2 so the centres of the feet coincide at the first blended frame
     # (the first blended frame in both blendable periods, i.e. in support, if the
     # window was widened beyond them)
-    fa = next(f for f in range(f0, f1 + 1) if ok1[f] and ok2[f - T]) if ok1[fT] else f0
+    fa = f0 + int(np.flatnonzero(both[f0 - lo:f1 - lo + 1])[0])
     shift = m1.feet_centre[fa] - m2r.feet_centre[fa - T]
     shift[1] = 0.0
     m2 = transformed(m2_raw, theta, shift)
@@ -761,7 +754,7 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
             # jump where the window meets the motions
             x = np.minimum(np.arange(ratio.size), np.arange(ratio.size)[::-1]) / ease_frames
             x = np.clip(x, 0.0, 1.0)
-            ratio = 1.0 + (ratio - 1.0) * x * x * (3 - 2 * x)
+            ratio = 1.0 + (ratio - 1.0) * smoothstep(x)
             ratios.append((float(ratio.min()), float(ratio.max())))
             if np.all(np.abs(ratio - 1.0) < tol):
                 break
@@ -869,12 +862,11 @@ def motion_graph_join(a: Clip, b: Clip, *, body: Body | None = None, window_s: f
     mb_rot = mb[jj] * np.exp(1j * theta)
     d = ma[ii] - mb_rot
     shift = np.array([d.imag, 0.0, d.real])
-    rot2 = b.rotations.copy()
-    rot2[:, 0] = (R * Rotation.from_quat(b.rotations[:, 0])).as_quat()
-    b2 = b.replace(root_pos=R.apply(np.array(b.root_pos)) + shift, rotations=rot2)
+    b2 = rotate(b, R, np.zeros(3))
+    b2 = b2.replace(root_pos=b2.root_pos + shift)
     p = (np.arange(k) + 1) / k
     alpha = 2 * p ** 3 - 3 * p ** 2 + 1                    # 1 → 0 (Kovar et al. 2002)
-    q = _slerp_poses(a.rotations[i:i + k], b2.rotations[j:j + k], 1 - alpha)
+    q = slerp(a.rotations[i:i + k], b2.rotations[j:j + k], (1 - alpha)[:, None])
     root = alpha[:, None] * a.root_pos[i:i + k] + (1 - alpha)[:, None] * b2.root_pos[j:j + k]
     rot = np.concatenate([a.rotations[:i], q, b2.rotations[j + k:]])
     pos = np.concatenate([a.root_pos[:i], root, b2.root_pos[j + k:]])

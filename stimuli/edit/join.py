@@ -31,7 +31,7 @@ from ..physics import center_of_mass
 from .multiflip import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle
 from .reposition import rotate
 from .similarity import distance_matrix, pose_features
-from .timing import retime, sample
+from .timing import retime, sample, slerp, smoothstep
 
 
 def _unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
@@ -58,13 +58,8 @@ def _assemble(a: Analysis, bc: Clip, b: Analysis, u: np.ndarray, fi: int, gj: in
     head = a.clip.slice(0, fi + 1)
     cont = sample(a.clip, np.arange(fi + 1, fi + 1 + w, dtype=float))
     x = (np.arange(w) + 0.5) / w
-    al = x * x * (3 - 2 * x)
-    qa = Rotation.from_quat(cont.rotations.reshape(-1, 4))
-    qb = Rotation.from_quat(part_b.rotations[:w].reshape(-1, 4))
-    J = a.clip.skeleton.num_joints
-    blended = (qa * Rotation.from_rotvec((qa.inv() * qb).as_rotvec() * np.repeat(al, J)[:, None])).as_quat()
     rot_b = part_b.rotations.copy()
-    rot_b[:w] = blended.reshape(w, J, 4)
+    rot_b[:w] = slerp(cont.rotations, part_b.rotations[:w], smoothstep(x)[:, None])
     rot = np.concatenate([head.rotations, rot_b])
     # the second part follows on horizontally, but keeps its own heights: it lands
     # on its floor (the flight's COM is put on a parabola afterwards, so the step

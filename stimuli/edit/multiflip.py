@@ -36,6 +36,7 @@ from ..motion.clip import Clip
 from ..physics import center_of_mass
 from .reposition import ballistic_path
 from .similarity import distance_matrix, pose_features
+from .timing import slerp, smoothstep
 
 
 class FlipEditError(ValueError):
@@ -125,10 +126,6 @@ class MultiFlip:
     report: dict = field(default_factory=dict)
 
 
-def _smooth(x):
-    return x * x * (3.0 - 2.0 * x)
-
-
 @dataclass
 class FlipSource:
     """The pre-processing of a single flip for :func:`multiflip`: what depends on the
@@ -190,13 +187,6 @@ def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
         cc = com[s[t]]
         pos[t] = cc + R.apply(pos[t] - cc)
     return rot, pos
-
-
-def _slerp(q0: np.ndarray, q1: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Slerp (..., 4) quaternions by ``u`` (n,), as :func:`~stimuli.edit.timing.sample`."""
-    a = Rotation.from_quat(q0)
-    b = Rotation.from_quat(q1)
-    return (a * Rotation.from_rotvec((a.inv() * b).as_rotvec() * u[:, None, None])).as_quat()
 
 
 def _retimed(pre: "FlipSource", rot: np.ndarray, root_pos: np.ndarray, s_src: np.ndarray,
@@ -334,7 +324,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
         angA[idx] = ang[Jn - 1]
         srcB[idx] = src[Jn] + i                   # next segment, before its start
         angB[idx] = ang[Jn]
-        alpha[idx] = _smooth((i + w + 0.5) / (2 * w))
+        alpha[idx] = smoothstep((i + w + 0.5) / (2 * w))
     # every sequenced frame is a whole source frame turned about its COM (which the
     # turn keeps): its COM is the source's; only the cross-fades need their own
     x = np.flatnonzero(alpha > 0)                # the cross-fades: a few frames per join
@@ -354,7 +344,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     # there needs its own (NaN marks what is never read)
     com_seq = pre.com[s_src]
     if x.size:
-        rot[x] = _slerp(rot[x], rB, alpha[x])
+        rot[x] = slerp(rot[x], rB, alpha[x, None])
         root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
         com_seq[x] = np.nan
         xr = x[(x <= to + 1) | (x >= ld_seq - 1)]

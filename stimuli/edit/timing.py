@@ -46,15 +46,26 @@ def _sample_arrays(rotations: np.ndarray, root_pos: np.ndarray, joint_pos: np.nd
     rot = rotations[i0]                       # a copy: the exact source quaternions
     frac = np.flatnonzero(u != 0)
     if frac.size:
-        q0 = Rotation.from_quat(rot[frac])
-        q1 = Rotation.from_quat(rotations[i1[frac]])
-        rel = (q0.inv() * q1).as_rotvec()
-        rot[frac] = (q0 * Rotation.from_rotvec(rel * u[frac, None, None])).as_quat()
+        rot[frac] = slerp(rot[frac], rotations[i1[frac]], u[frac, None])
     root = root_pos[i0] * (1 - u)[:, None] + root_pos[i1] * u[:, None]
     jp = None
     if joint_pos is not None:
         jp = joint_pos[i0] * (1 - u)[:, None, None] + joint_pos[i1] * u[:, None, None]
     return rot, root, jp
+
+
+def slerp(q0: np.ndarray, q1: np.ndarray, u) -> np.ndarray:
+    """Spherical interpolation of quaternions (..., 4) (scipy's x, y, z, w) by
+    ``u`` (broadcastable to their leading shape; 0 gives q0, 1 gives q1):
+    q0 · exp(u · log(q0⁻¹ q1))."""
+    a = Rotation.from_quat(q0)
+    rel = (a.inv() * Rotation.from_quat(q1)).as_rotvec()
+    return (a * Rotation.from_rotvec(rel * np.asarray(u, float)[..., None])).as_quat()
+
+
+def smoothstep(x):
+    """3x² − 2x³: an ease from 0 to 1 on [0, 1] with zero slope at both ends."""
+    return x * x * (3.0 - 2.0 * x)
 
 
 def retime(clip: Clip, factor: float) -> Clip:
