@@ -1,6 +1,7 @@
 """Reading and checking response tables (the long format of DESIGN.md)."""
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +17,7 @@ IGNORED_GROUPS = ("reference",)
 EXPORT_HINT = "flipstudy export {d} --out {d}/responses.csv"
 
 
-class ResponsesError(ValueError):
+class ResponsesError(FlipstudyError, ValueError):
     """A response table that cannot be analysed; the message says where and what was expected."""
 
 

@@ -11,6 +11,7 @@ per-stimulus offsets and files) to ``STUDY_DIR/render/render.json``.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
 import json
 import math
 import multiprocessing as mp
@@ -34,7 +35,7 @@ RENDER_KINDS = {
 }
 
 
-class StudyRenderError(ValueError):
+class StudyRenderError(FlipstudyError, ValueError):
     pass
 
 

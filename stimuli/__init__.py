@@ -4,6 +4,7 @@ Stable entry points::
 
     from stimuli import load_bvh, save_bvh, builtin, analyse
 """
+from .exceptions import FlipstudyError
 from .motion import BVHError, Clip, Skeleton, load_bvh, save_bvh
 from .body import Body
 from .analyse import Analysis, analyse
@@ -19,5 +20,5 @@ def builtin(name: str, **params) -> Clip:
     return _builtin(name, **params)
 
 
-__all__ = ["BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh", "Body", "Analysis",
+__all__ = ["FlipstudyError", "BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh", "Body", "Analysis",
            "analyse", "builtin", "BUILTIN_NAMES"]

@@ -24,6 +24,7 @@ A bone ``a → b`` is rigid in the frame of joint ``a``.
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyError
 import re
 import warnings
 from dataclasses import dataclass
@@ -87,7 +88,7 @@ def _split_name(name: str) -> tuple[str | None, str]:
     return None, re.sub(r"[^a-z0-9]", "", low)
 
 
-class BodyMappingError(ValueError):
+class BodyMappingError(FlipstudyError, ValueError):
     pass
 
 

@@ -12,6 +12,7 @@ Every invalid field raises :class:`DesignError` naming the field.
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyError
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -23,7 +24,7 @@ except ModuleNotFoundError:  # Python 3.10
 from .errors import COM_POLICIES, KINDS, PROFILES
 
 
-class DesignError(ValueError):
+class DesignError(FlipstudyError, ValueError):
     """An invalid study design; the message names the file and field."""
 
 

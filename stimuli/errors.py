@@ -22,6 +22,7 @@ Every stimulus is then *measured* by the analyser (:func:`measure`), and
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyError
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,7 +39,7 @@ PROFILES = ("smooth", "abrupt")
 COM_POLICIES = ("angle", "landing")
 
 
-class StimulusError(ValueError):
+class StimulusError(FlipstudyError, ValueError):
     """A stimulus that cannot be made or whose measured error misses the nominal."""
 
 

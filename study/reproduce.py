@@ -22,6 +22,7 @@ comes out should resemble the paper's, within the noise of 19 participants.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
 import os
 import shutil
 import sys
@@ -40,7 +41,7 @@ SIZE = (640, 480)
 STYLE = {"anti_aliasing": "none"}
 
 
-class ReproduceError(RuntimeError):
+class ReproduceError(FlipstudyError, RuntimeError):
     """The reproduce run cannot start or a stage failed (message names which)."""
 
 

@@ -16,6 +16,7 @@ Example
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
 import hashlib
 import re
 import threading
@@ -31,7 +32,7 @@ VIDEO_EXT = ".mp4"
 STIMULUS_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,200}")
 
 
-class SessionError(ValueError):
+class SessionError(FlipstudyError, ValueError):
     """A session that cannot be opened; the message tells the experimenter what to do."""
 
 

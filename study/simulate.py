@@ -33,6 +33,7 @@ Example
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
 import hashlib
 import json
 import math
@@ -61,7 +62,7 @@ PAPER_RATINGS = {
 DEFAULT_SIGMA = 0.3
 
 
-class ModelError(ValueError):
+class ModelError(FlipstudyError, ValueError):
     """An invalid observer model; the message names the file and field."""
 
 

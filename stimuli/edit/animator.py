@@ -14,6 +14,7 @@ after landing follows on.
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyError
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +31,7 @@ GROUPS = {"legs": ("hip_l", "knee_l", "hip_r", "knee_r"),
           "arms": ("shoulder_l", "elbow_l", "shoulder_r", "elbow_r")}
 
 
-class AnimatorEditError(ValueError):
+class AnimatorEditError(FlipstudyError, ValueError):
     """An edit that cannot be made (bad joints or times)."""
 
 

@@ -43,6 +43,7 @@ Units are the library's: metres, seconds, kg; L in kg·m²/s.
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyError
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,7 +60,7 @@ from .timing import ratio_retime_frames, sample, slerp, smoothstep
 UP = np.array([0.0, 1.0, 0.0])
 
 
-class ConcatError(ValueError):
+class ConcatError(FlipstudyError, ValueError):
     """Two motions that cannot be concatenated; the message says why."""
 
 

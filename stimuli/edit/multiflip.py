@@ -25,6 +25,7 @@ analyser (:func:`measure`).
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyError
 import math
 from dataclasses import dataclass, field
 
@@ -39,7 +40,7 @@ from .similarity import distance_matrix, pose_features
 from .timing import slerp, smoothstep
 
 
-class FlipEditError(ValueError):
+class FlipEditError(FlipstudyError, ValueError):
     """A multi-flip edit that cannot be made; the message says why."""
 
 

@@ -21,6 +21,7 @@ input raises :class:`BVHError` naming the file, the line and what was expected.
 
 from __future__ import annotations
 
+from ..exceptions import FlipstudyError
 import os
 import tempfile
 from decimal import Decimal, InvalidOperation
@@ -47,7 +48,7 @@ UNIT_CANDIDATES = (
 STANDING_HEIGHT_M = 1.70
 
 
-class BVHError(ValueError):
+class BVHError(FlipstudyError, ValueError):
     """A malformed BVH file: the message names the file, the line and what was expected."""
 
     def __init__(self, path, line: int | None, message: str):

@@ -50,6 +50,8 @@ the ankle rises only while the heel does, before take-off.
 
 from __future__ import annotations
 
+from ..exceptions import FlipstudyError
+
 import time
 
 import numpy as np
@@ -127,7 +129,7 @@ PARAMS = ("height", "flight_time", "tuck", "horizontal_speed", "crouch_depth", "
 SHAPES = ("tuck", "pike", "layout")
 
 
-class SynthError(ValueError):
+class SynthError(FlipstudyError, ValueError):
     """Parameters for which no consistent motion exists (the message says which)."""
 
 
