@@ -274,9 +274,16 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         ap.print_help()
         return 2
+    from stimuli.exceptions import FlipstudyError
     try:
         return args.func(args)
-    except (ValueError, OSError, KeyError) as e:   # BVHError, DesignError...: no traceback
+    except KeyboardInterrupt:                       # Ctrl-C: one line, the shell's 128 + SIGINT
+        print(f"flipstudy {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except FlipstudyError as e:                     # a user error: one line, no traceback
+        print(f"flipstudy {args.command}: error: {e}", file=sys.stderr)
+        return 1
+    except (ValueError, OSError, KeyError) as e:   # legacy: to be narrowed to FlipstudyError
         print(f"flipstudy {args.command}: error: {e}", file=sys.stderr)
         return 1
 
