@@ -39,7 +39,7 @@ from .motion.skeleton import Skeleton
 SEGMENT_TABLE = {
     #  group       mass     com_frac  density
     "head":     (0.0694, 0.4998, 1110.0),   # head+neck, C7 → vertex (CM 50.02 % from vertex)
-    "trunk":    (0.4346, 0.4862, 1030.0),   # mid-hip → C7 (CM 51.38 % from C7)
+    "trunk":    (0.4346, 0.5690, 1030.0),   # mid-hip → mid-shoulder (CM 43.10 % from MIDS; see below)
     "upperarm": (0.0271, 0.5772, 1070.0),   # shoulder → elbow joint centre
     "forearm":  (0.0162, 0.4574, 1130.0),   # elbow → wrist joint centre
     "hand":     (0.0061, 0.7900, 1160.0),   # wrist → 3rd metacarpal
@@ -48,6 +48,17 @@ SEGMENT_TABLE = {
     "foot":     (0.0137, 0.4415, 1100.0),   # heel → toe tip (here: ankle → toe tip)
 }
 GROUPS = list(SEGMENT_TABLE)
+
+#: The trunk's COM (its com_frac above).  De Leva (1996) Table 4 (males) gives it for two pairs of
+#: endpoints of the same segment: CERV (C7) → MIDH, 603.3 mm, CM 51.38 % from
+#: CERV (48.62 % from MIDH), and MIDS (the midpoint of the shoulder joint
+#: centres) → MIDH, 515.5 mm, CM 43.10 % from MIDS (56.90 % from MIDH); both put
+#: it 293 mm above the mid-hip point.  The trunk here ends at the shoulder joints
+#: (MIDS), so its COM is at 56.90 % of the mid-hip → mid-shoulder distance,
+#: measured along that line in the reference pose (the trunk is a chain of spine
+#: bones; every piece's COM sits at the same fraction of its bone, chosen so the
+#: segment's COM lands there; see ``_trunk_and_head``).  Other segments made of
+#: several bones put each piece's COM at its bone's midpoint.
 SEGMENTS = ["head", "trunk",
             "upperarm_l", "upperarm_r", "forearm_l", "forearm_r", "hand_l", "hand_r",
             "thigh_l", "thigh_r", "shank_l", "shank_r", "foot_l", "foot_r"]
@@ -346,7 +357,7 @@ def _trunk_and_head(sk: Skeleton, idx: dict, tips: dict, pose: tuple):
     trunk = [(hj, local(hj, mid_hip), np.zeros(3))]   # mid-hip → the spine's base joint
     trunk += [(a, np.zeros(3), sk.offsets[b].copy()) for a, b in zip(path[:-1], path[1:])]
     trunk.append((sj, np.zeros(3), local(sj, mid_sh)))
-    yield ("trunk", trunk)
+    yield ("trunk", trunk, _chain_com_fraction(trunk, P, R, mid_hip, u, n, SEGMENT_TABLE["trunk"][1]))
 
     head = _chain_bones(sk, idx["neck"], *tips["head_top"], "head", tip_from=idx["head"])
 
@@ -363,6 +374,29 @@ def _trunk_and_head(sk: Skeleton, idx: dict, tips: dict, pose: tuple):
             p = p + (d - p) * (-hp) / (hd - hp)
         clipped.append((j, p, d))
     yield ("head", clipped if clipped else head)
+
+
+def _chain_com_fraction(bones, P, R, start, u, length, frac) -> float:
+    """The fraction f of its bone at which every piece of a chain puts its COM so
+    that the chain's COM (pieces weighted by length, as ``_assemble`` shares the
+    mass) lies at ``frac`` of ``length`` from ``start`` along ``u``, averaged over
+    the reference frames (positions P (F,J,3), rotations R (F,J,3,3); start (F,3),
+    u (F,3) unit, length (F,)).  The projection of the chain's COM on u is linear
+    in f: Σ w (a + f b) with a the piece start's and b the piece's own projection."""
+    lengths = np.array([np.linalg.norm(d - p) for _, p, d in bones])
+    w = lengths / lengths.sum()
+    j = np.array([b[0] for b in bones])
+    prox = np.array([b[1] for b in bones])
+    dist = np.array([b[2] for b in bones])
+    wp = P[:, j] + np.einsum("fpab,pb->fpa", R[:, j], prox)      # (F,pieces,3)
+    wd = P[:, j] + np.einsum("fpab,pb->fpa", R[:, j], dist)
+    a = np.einsum("fpa,fa->fp", wp - start[:, None], u) @ w
+    b = np.einsum("fpa,fa->fp", wd - wp, u) @ w
+    f = float(np.mean(frac * length - a) / np.mean(b))
+    if not 0.0 <= f <= 1.0:
+        warnings.warn(f"the trunk's bones cannot put its COM at {100 * frac:.1f} % of its length "
+                      f"(each piece would need {100 * f:.0f} % of its bone); clipped", stacklevel=4)
+    return float(np.clip(f, 0.0, 1.0))
 
 
 def _chain_bones(sk: Skeleton, start: int, end_j: int, end_site: int | None, seg: str,
@@ -417,7 +451,7 @@ def ellipsoid_inertia(mass: np.ndarray, a: np.ndarray, b: np.ndarray, axis: np.n
 
 def _assemble(sk, total_mass, masses, rows, landmarks) -> Body:
     joint, prox, dist, com, mass, seg_idx, dens = [], [], [], [], [], [], []
-    for seg, bones in rows:
+    for seg, bones, *piece_frac in rows:
         group = seg.split("_")[0]
         _, frac, rho = SEGMENT_TABLE[group]
         lengths = np.array([np.linalg.norm(d - p) for _, p, d in bones])
@@ -426,7 +460,7 @@ def _assemble(sk, total_mass, masses, rows, landmarks) -> Body:
         bones = [b for b, k in zip(bones, keep) if k]
         share = lengths / lengths.sum()
         for (j, p, d), w in zip(bones, share):
-            f = frac if len(bones) == 1 else 0.5
+            f = piece_frac[0] if piece_frac else frac if len(bones) == 1 else 0.5
             joint.append(j)
             prox.append(p)
             dist.append(d)

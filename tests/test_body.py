@@ -106,3 +106,32 @@ def test_broken_hand_end_site_is_replaced_with_a_warning():
     with pytest.warns(UserWarning, match=r"hand_r.*1\.62 m long"):
         body = Body.from_skeleton(clip.skeleton)
     assert _segment_shape(body, "hand_r")[0] == pytest.approx(_segment_shape(body, "hand_l")[0], rel=0.05)
+
+
+@pytest.mark.parametrize("name", ["builtin", "88_01.bvh", "01_01_iclone-retarget.bvh", "mass_kick.bvh"])
+def test_trunk_com_at_de_levas_fraction(name):
+    """De Leva (1996) Table 4: the trunk's COM is 43.10 % of MIDS → MIDH from the
+    mid-shoulder point (the same place as 51.38 % of CERV → MIDH from C7): with the
+    trunk ending at the shoulder joints it sits at 56.90 % from the mid-hip, not at
+    the 50 % of a chain of spine bones each weighed at its midpoint.  Measured with
+    the physics' own piece positions on the clip's frames, along the mid-hip →
+    mid-shoulder line of each frame."""
+    import warnings
+    from stimuli import builtin
+    from stimuli.physics import piece_positions
+    clip = builtin("backflip") if name == "builtin" else load_bvh(shared_file(name))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        body = Body.from_clip(clip, total_mass=70.0)
+    t = body.segment == body.segment_names.index("trunk")
+    assert t.sum() > 1                                         # a chain of spine bones
+    c = piece_positions(clip, body)[:, t]
+    com = np.einsum("fpa,p->fa", c, body.mass[t]) / body.mass[t].sum()
+    P, ix, lm = clip.joint_positions(), clip.skeleton.index, body.landmarks
+    mid_hip = (P[:, ix(lm["hip_l"])] + P[:, ix(lm["hip_r"])]) / 2
+    axis = (P[:, ix(lm["shoulder_l"])] + P[:, ix(lm["shoulder_r"])]) / 2 - mid_hip
+    n = np.linalg.norm(axis, axis=1)
+    frac = np.einsum("fa,fa->f", com - mid_hip, axis) / n ** 2
+    assert SEGMENT_TABLE["trunk"][1] == pytest.approx(1 - 0.4310)
+    # the spine bends during the motion: the frames' median within 1 % of the length
+    assert np.median(frac) == pytest.approx(0.5690, abs=0.01)
