@@ -15,13 +15,12 @@ import numpy as np
 
 from .body import Body
 from .flight import Flight, detect_flights, fit_path
-from .massfit import G, MassFit, estimate_masses
+from .massfit import DEFAULT_W, G, MassFit, estimate_masses
 from .motion.clip import Clip
 from .physics import Momentum, momentum
 
 #: apparent gravity further than this (relative) from 9.81 m/s² raises a warning
 GRAVITY_TOLERANCE = 0.25
-DEFAULT_W = 1e-4
 
 
 @dataclass
@@ -143,6 +142,13 @@ class Analysis:
                 "com_rms_prior_mm": round(self.mass_fit.com_rms_prior * 1000, 2),
                 "com_rms_mm": round(self.mass_fit.com_rms * 1000, 2),
                 "p_dev_reduction_pct": round(self.mass_fit.p_dev_reduction_pct, 1),
+                "p_dev_prior": round(self.mass_fit.p_dev_prior, 4),
+                "p_dev": round(self.mass_fit.p_dev, 4),
+                "status": self.mass_fit.status,
+                "message": self.mass_fit.message,
+                "band_pct": None if self.mass_fit.band is None else 100 * self.mass_fit.band,
+                "prior": {k: round(v, 3) for k, v in self.mass_fit.prior.items()},
+                "fitted": {k: round(v, 3) for k, v in (self.mass_fit.fitted or {}).items()},
             },
             "warnings": list(self.warnings),
         }
@@ -183,7 +189,8 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
         head measured on the clip's poses).
     estimate : estimate segment masses from the flight (Section 4.2) and use them
         for the momenta; with ``False`` the given/table masses are used.
-    W : regularisation weight of the mass fit (m²).
+    W : regularisation weight of the mass fit, W‖m − m⁰‖² (m²/kg²; see
+        ``stimuli.massfit.DEFAULT_W``).
 
     Example
     -------
