@@ -13,6 +13,18 @@ part's flight frames); the join is cross-faded with slerp; the flight's COM is
 put on the exact parabola from the first take-off to the second landing height
 (the second part keeps its own heights, so it lands on its floor).
 
+Turning the second motion so the angular momenta agree can leave its body
+facing another way than the first's (a frontflip turned 180° about the vertical
+to join a backflip faces backwards): a cross-fade between them would turn the
+body about an axis ⟂ L that no angular momentum explains, a half twist in
+mid-air.  So the pairs are also limited to root orientations that agree up to
+``max_swing_deg`` once the turn about L is removed, and the joined motion is
+measured: over the cross-fade the root's rotation about the axes ⟂ L must be
+what the flight's angular momentum explains (∫ I(t)⁻¹ L dt, L the first
+flight's mean angular momentum, I(t) the joined body's inertia) within
+``max_unexplained_deg``, and the joined flight's |L| CV must stay within
+``max_L_cv_pct``; otherwise the join is refused with the numbers.
+
 The flight must last what the first take-off's vertical velocity and the landing
 height give, T = (v0 + sqrt(v0² − 2gΔy))/g (Appendix B's reasoning for k*),
 or the parabola would leave the ground faster or slower than the take-off
@@ -27,10 +39,10 @@ from scipy.spatial.transform import Rotation
 
 from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
-from ..physics import center_of_mass
+from ..physics import center_of_mass, momentum
 from .multiflip import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle
 from .reposition import rotate
-from .similarity import distance_matrix, pose_features
+from .similarity import distance_matrix, pose_features, twist_angles
 from .timing import retime, sample, slerp, smoothstep
 
 
@@ -82,7 +94,8 @@ def _steps_to(ratio_of, start: float, n: int) -> float:
 
 def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_deg: float = 30.0,
                    max_turn_error: float = 15.0, blend_s: float = 0.04,
-                   duration_weight: float = 10.0) -> dict:
+                   duration_weight: float = 10.0, max_swing_deg: float = 30.0,
+                   max_unexplained_deg: float = 20.0, max_L_cv_pct: float = 10.0) -> dict:
     """Join ``first``'s take-off and early flight to ``second``'s late flight and
     landing.  Both need the same skeleton.  Returns ``{"clip", "takeoff",
     "landing", "report"}``.
@@ -130,7 +143,9 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     th_a, th_b = _unwrapped_turn(a.clip, u), _unwrapped_turn(bc, u)
     fa = np.arange(a.takeoff + 2, a.landing - 1)
     fb = np.arange(b.takeoff + 2, b.landing - 1)
-    D, phi = distance_matrix(pose_features(a.clip, body, u, fa), pose_features(bc, body, u, fb))
+    pf_a, pf_b = pose_features(a.clip, body, u, fa), pose_features(bc, body, u, fb)
+    D, phi = distance_matrix(pf_a, pf_b)
+    _, swing = twist_angles(pf_a.root_q, pf_b.root_q, u)       # what is left ⟂ L
     # the second part then turns from j to its standing end; the whole must be one turn
     s0a, _ = standing_span(a.clip, body, a.takeoff, a.landing)
     _, s1b = standing_span(bc, body, b.takeoff, b.landing)
@@ -144,6 +159,19 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     if not np.any(ok):
         raise FlipEditError(f"no pair of flight frames joins with the root orientations within "
                             f"{max_turn_error:g}° about L")
+    # and the orientations must agree about the axes ⟂ L: a cross-fade cannot turn
+    # the body there (no angular momentum about them)
+    agree = ok & (swing <= np.radians(max_swing_deg))
+    if not np.any(agree):
+        k = np.unravel_index(np.argmin(np.where(ok, swing, np.inf)), swing.shape)
+        raise FlipEditError(
+            f"the two motions face different ways in flight: after turning the second by "
+            f"{np.degrees(yaw):.0f}° about the vertical so the angular momenta agree, the root "
+            f"orientations of every candidate pair differ by {np.degrees(swing[ok].min()):.0f}° or more "
+            f"about an axis ⟂ L (at most {max_swing_deg:g}°; closest pair: frame {fa[k[0]]} → its frame "
+            f"{fb[k[1]]}, distance {D[k]:.2f}); a cross-fade would twist the body by that much with no "
+            f"angular momentum about that axis: they cannot be joined")
+    ok = agree
 
     # the flight the first take-off implies (Appendix B's reasoning for k*: linear
     # momentum is continuous when the flight lasts what v0 and Δy give)
@@ -181,6 +209,13 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
         if best is None or cost < best[0]:
             best = (cost, i, j, fi, gj, e, joined, ld, n_free, T_req, n_req)
     _, i, j, fi, gj, e, joined, ld, n_free, T_req, n_req = best
+    xf = crossfade_rotation(joined, body, fi, max(1, int(round(blend_s * fps))), u * a.L_mean)
+    if xf["unexplained_deg"] > max_unexplained_deg:
+        raise FlipEditError(
+            f"the cross-fade at frame {fi} → its frame {gj} (distance {D[i, j]:.2f}) turns the body "
+            f"{xf['turned_perp_deg']:.0f}° about the axes ⟂ L (about the vertical {xf['turned_vertical_deg']:+.0f}°), "
+            f"of which the flight's angular momentum explains {xf['explained_perp_deg']:.0f}° "
+            f"({xf['unexplained_deg']:.0f}° unexplained, at most {max_unexplained_deg:g}°): they cannot be joined")
 
     # the mismatch left is spread over the flight: |L| towards L_first/c, the rule's
     # ratio scaled by c (≈ n_req/n_free) so that exactly n_req steps end on the
@@ -210,5 +245,42 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
               "L_target": float(a.L_mean / c), "L_spread_pct": float(100 * (1.0 / c - 1.0)),
               "flight_s": T, "flight_s_required": float(T_req), "takeoff": to, "landing": ld,
               "analyser_flight": [m.takeoff, m.landing] if m.flight is not None else None}
+    report["join"].update({"swing_deg": float(np.degrees(swing[i, j])), "crossfade": xf})
     report.update(momentum_jumps(out, body, to, ld))
+    if report["L_cv_pct"] > max_L_cv_pct:
+        raise FlipEditError(
+            f"the joined flight's |L| varies by CV {report['L_cv_pct']:.1f} % (at most {max_L_cv_pct:g} %; "
+            f"join at frame {fi} → its frame {gj}, distance {D[i, j]:.2f}, cross-fade turning "
+            f"{xf['turned_perp_deg']:.0f}° ⟂ L of which {xf['explained_perp_deg']:.0f}° explained): "
+            f"the angular momentum is not conserved; they cannot be joined")
     return {"clip": out, "takeoff": to, "landing": ld, "report": report}
+
+
+def crossfade_rotation(clip: Clip, body, f: int, w: int, L: np.ndarray, pad: int = 1) -> dict:
+    """How far the body turns about the axes ⟂ L over the frames ``f − pad`` …
+    ``f + w + pad`` (a cross-fade of ``w`` frames after frame ``f``), against what
+    the angular momentum ``L`` (a conserved flight value, world axes) explains.
+
+    Turned: ∫ ω_root dt, the root's world angular velocity from the clip's own
+    rotations.  Explained: ∫ I(t)⁻¹ L dt with I(t) the body's inertia about its
+    COM in each frame (the composite angular velocity a body with that L must
+    have).  Both are split along u = L/|L| and the plane ⟂ u; the vertical part
+    is the component along the vertical projected ⟂ u.  Returns degrees."""
+    lo, hi = max(0, f - pad), min(clip.num_frames - 1, f + w + pad)
+    part = clip.slice(lo, hi + 1)
+    u = L / np.linalg.norm(L)
+    w_root = part.angular_velocities()[:, 0]
+    w_L = np.linalg.solve(momentum(part, body).inertia, np.broadcast_to(L, w_root.shape)[..., None])[..., 0]
+    dt = 1.0 / clip.fps
+    turned = np.trapezoid(w_root, dx=dt, axis=0)
+    explained = np.trapezoid(w_L, dx=dt, axis=0)
+    perp = lambda x: x - (x @ u) * u              # noqa: E731
+    ev = perp(np.array([0.0, 1.0, 0.0]))
+    ev = ev / np.linalg.norm(ev) if np.linalg.norm(ev) > 1e-6 else np.zeros(3)
+    deg = np.degrees
+    return {"frames": [int(lo), int(hi)],
+            "turned_about_L_deg": float(deg(turned @ u)), "explained_about_L_deg": float(deg(explained @ u)),
+            "turned_perp_deg": float(deg(np.linalg.norm(perp(turned)))),
+            "explained_perp_deg": float(deg(np.linalg.norm(perp(explained)))),
+            "turned_vertical_deg": float(deg(turned @ ev)), "explained_vertical_deg": float(deg(explained @ ev)),
+            "unexplained_deg": float(deg(np.linalg.norm(perp(turned) - perp(explained))))}
