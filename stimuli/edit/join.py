@@ -23,7 +23,11 @@ measured: over the cross-fade the root's rotation about the axes ⟂ L must be
 what the flight's angular momentum explains (∫ I(t)⁻¹ L dt, L the first
 flight's mean angular momentum, I(t) the joined body's inertia) within
 ``max_unexplained_deg``, and the joined flight's |L| CV must stay within
-``max_L_cv_pct``; otherwise the join is refused with the numbers.
+``max_L_cv_pct`` (or the larger CV of the two motions it is made of: real
+captures have 14–19 %); otherwise the join is refused with the numbers.  The
+30° default: the CMU flights themselves turn 3–8° ⟂ L unexplained (median; up
+to 40° at a glitch of 87_03) over such a window at 60 fps, their joins 8–19°;
+the frontflip-onto-backflip join turned 179°.
 
 The flight must last what the first take-off's vertical velocity and the landing
 height give, T = (v0 + sqrt(v0² − 2gΔy))/g (Appendix B's reasoning for k*),
@@ -95,7 +99,7 @@ def _steps_to(ratio_of, start: float, n: int) -> float:
 def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_deg: float = 30.0,
                    max_turn_error: float = 15.0, blend_s: float = 0.04,
                    duration_weight: float = 10.0, max_swing_deg: float = 30.0,
-                   max_unexplained_deg: float = 20.0, max_L_cv_pct: float = 10.0) -> dict:
+                   max_unexplained_deg: float = 30.0, max_L_cv_pct: float = 10.0) -> dict:
     """Join ``first``'s take-off and early flight to ``second``'s late flight and
     landing.  Both need the same skeleton.  Returns ``{"clip", "takeoff",
     "landing", "report"}``.
@@ -247,9 +251,12 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
               "analyser_flight": [m.takeoff, m.landing] if m.flight is not None else None}
     report["join"].update({"swing_deg": float(np.degrees(swing[i, j])), "crossfade": xf})
     report.update(momentum_jumps(out, body, to, ld))
-    if report["L_cv_pct"] > max_L_cv_pct:
+    cv_bound = max(max_L_cv_pct, a.L_cv_pct, b0.L_cv_pct)
+    report["L_cv_bound_pct"] = float(cv_bound)
+    if report["L_cv_pct"] > cv_bound:
         raise FlipEditError(
-            f"the joined flight's |L| varies by CV {report['L_cv_pct']:.1f} % (at most {max_L_cv_pct:g} %; "
+            f"the joined flight's |L| varies by CV {report['L_cv_pct']:.1f} % (at most {cv_bound:.3g} %: "
+            f"{max_L_cv_pct:g} % or the two motions' own, {a.L_cv_pct:.1f} % and {b0.L_cv_pct:.1f} %; "
             f"join at frame {fi} → its frame {gj}, distance {D[i, j]:.2f}, cross-fade turning "
             f"{xf['turned_perp_deg']:.0f}° ⟂ L of which {xf['explained_perp_deg']:.0f}° explained): "
             f"the angular momentum is not conserved; they cannot be joined")
