@@ -46,8 +46,8 @@ G = 9.81
 #: the residual that real motion capture keeps whatever the masses (87_03 at
 #: 60 fps: 7.7 mm with the prior, 3.2 mm unregularised).  Chosen on a
 #: half-decade grid as the smallest W at which the fits of the CMU flips 87_03
-#: and 90_11 stay in the band (at 3e-6 87_03's hands and feet leave it; 88_01
-#: and 88_05 leave it at every W below 1e-4 and keep the prior).  It is a prior
+#: and 90_11 stay in the band (at 3e-6 87_03's hands and feet leave it; 88_05
+#: needs 5e-5 and 88_01 1e-4, and below that they keep the prior).  It is a prior
 #: for real data: an exact built-in flight would need W ≤ 1e-10 to recover its
 #: trunk and thighs (the COM path of a flip moves < 1 mm per kg between them),
 #: and at 1e-5 reduces its momentum deviation by 24–31 % without recovering them.

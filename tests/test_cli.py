@@ -91,3 +91,17 @@ def test_edit_makes_a_double_flip_and_refuses_a_jump(capsys, tmp_path):
     assert code == 1 and "not one flip" in err and not (tmp_path / "x.bvh").exists()
     code, _, err = run(capsys, "edit", "backflip", "--out", str(tmp_path / "y.bvh"))
     assert code == 2 and "nothing to do" in err
+
+
+def test_edit_join_refuses_a_twist_and_inspect_names_the_mass_fit(capsys, tmp_path):
+    """`edit backflip --join frontflip` is refused with the numbers and writes
+    nothing; `inspect` says whether the mass fit was kept."""
+    code, _, err = run(capsys, "edit", "backflip", "--join", "frontflip", "--out", str(tmp_path / "j.bvh"))
+    assert code == 1 and "face different ways" in err and "⟂ L" in err and "180°" in err
+    assert "Traceback" not in err and not (tmp_path / "j.bvh").exists()
+    code, out, _ = run(capsys, "inspect", "backflip")
+    line = next(x for x in out.splitlines() if "mass fit" in x)
+    assert code == 0 and "fitted (W = 1e-05 m²/kg²" in line and "±35 %" in line
+    code, out, _ = run(capsys, "inspect", "backflip", "--json")
+    mf = json.loads(out)["mass_fit"]
+    assert mf["status"] == "fitted" and set(mf["prior"]) == set(mf["fitted"]) and mf["W"] == 1e-5
