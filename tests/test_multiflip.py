@@ -165,7 +165,10 @@ def test_double_backflip_from_real_cmu(name):
     # one more turn than the performer made (real flips are not exactly 360°)
     assert abs(m["turn_deg"] - src["turn_deg"] - 360) < 20
     assert m["com_rms_mm"] < 1.0
-    assert m["L_cv_pct"] < src["L_cv_pct"] + 3.0           # no worse than the capture's own noise
+    # no worse than the capture's own noise: 88_01 with the de Leva masses (its fit
+    # leaves the band, the prior is kept) 16.9 % against 13.8 %; the old over-fitted
+    # masses (head 8.9 kg) gave 14.0 % against 12.7 %
+    assert m["L_cv_pct"] < src["L_cv_pct"] + 3.5
     assert m["analyser_flight"] is not None
 
 
@@ -296,15 +299,15 @@ def test_join_refuses_a_jump():
 
 
 def test_landing_join_on_the_landing_frame_itself():
-    """90_11 (a handspring, 60 Hz) with loops of at least 90°: the landing join's g
-    is at (or next to) the landing frame; the double is made and its flight is where it says."""
+    """90_11 (a handspring, 60 Hz): the landing join's g is the landing frame; the
+    double is made and its flight is where it says.  (With the trunk's COM at de
+    Leva's 56.9 % the analyser lands at frame 45 and the default loops join there;
+    with the trunk at 50 % it took loops of at least 90° to join on its landing, 44.)"""
     from _shared import shared_file
     from stimuli import load_bvh
     a = analyse(load_bvh(shared_file("90_11.bvh")))
-    r = multiflip(a, 2, min_turn_deg=90)
-    # (with the trunk's COM at de Leva's 56.9 % the analyser lands at 45 and the join
-    # is at 44; it was 44 = 44 with the trunk at 50 %): the join is at the landing
-    assert a.landing - 2 <= r.report["landing_join"]["g"] <= a.landing
+    r = multiflip(a, 2)
+    assert r.report["landing_join"]["g"] == a.landing
     m = measure(r, a)
     assert m["analyser_flight"] == [r.takeoff, r.landing]
     assert m["turn_deg"] > 600
