@@ -287,3 +287,20 @@ def test_cli_concat(tmp_path, capsys):
     assert len(a.flights) == 2
     assert main(["concat", "backflip", "backflip", "--range-a", "9:3", "--out", str(out)]) == 1
     assert "F0 < F1" in capsys.readouterr().err
+
+
+def test_facing_rule_refuses_the_half_twist_and_blends_turn_only_about_L(backflip):
+    """The join's twist (a frontflip turned 180° so its L lies along a backflip's)
+    cannot happen here: the π/4 facing rule refuses it, naming the 180°; and the
+    blend concat makes (in double support) turns the body about the axes ⟂ L only
+    by what L explains (measured with the join's cross-fade measure)."""
+    from stimuli.edit.join import crossfade_rotation
+    from stimuli.physics import momentum
+    c, body = backflip
+    with pytest.raises(C.ConcatError, match=r"facing directions differ by at least 180°"):
+        C.concatenate(c, builtin("frontflip"), rule="forward", body=body)
+    r = C.concatenate(c, c, body=body)
+    w0, w1 = r.report["blend_out"]
+    L = momentum(r.clip, body).L[w0:w1 + 1].mean(0)
+    x = crossfade_rotation(r.clip, body, w0, w1 - w0, L, pad=0)
+    assert x["unexplained_deg"] < 1.0 and x["turned_about_L_deg"] > 20
