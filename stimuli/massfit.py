@@ -137,6 +137,8 @@ def estimate_masses(clip: Clip, body: Body, takeoff: int, landing: int,
     """
     if not (np.isfinite(W) and W >= 0):
         raise ValueError(f"W must be a weight >= 0 (m²/kg²), got {W!r}")
+    if band is not None and not (np.isfinite(band) and band > 0):
+        raise ValueError(f"band must be a fraction > 0 of the prior (0.35: ±35 %) or None, got {band!r}")
     frames = slice(takeoff, landing + 1)
     pos = group_positions(clip, body, frames)                 # (F,G,3)
     F, Gn, _ = pos.shape

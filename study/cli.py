@@ -74,9 +74,9 @@ def cmd_inspect(args) -> int:
         print(f"  |L| in flight   mean {d['L_mean']:.2f} kg·m²/s, CV {d['L_cv_pct']:.2f} %")
         mf = d["mass_fit"]
         if mf and mf["status"] == "fitted":
-            print(f"  mass fit        fitted (W = {mf['W']:g} m²/kg², every group within ±{mf['band_pct']:.0f} % "
-                  f"of de Leva): COM residual {mf['com_rms_prior_mm']:.1f} → {mf['com_rms_mm']:.1f} mm, "
-                  f"momentum deviation {mf['p_dev_prior']:.2f} → {mf['p_dev']:.2f} kg·m/s "
+            band = "no band" if mf["band_pct"] is None else f"every group within ±{mf['band_pct']:.0f} % of de Leva"
+            print(f"  mass fit        fitted (W = {mf['W']:g} m²/kg², {band}): COM residual {mf['com_rms_prior_mm']:.1f} → {mf['com_rms_mm']:.1f} mm, "
+                  f"momentum deviation {mf['p_dev_prior']:.3g} → {mf['p_dev']:.3g} kg·m/s "
                   f"(−{mf['p_dev_reduction_pct']:.1f} %); " +
                   ", ".join(f"{k} {mf['prior'][k]:.1f} → {v:.1f}" for k, v in mf["fitted"].items()) + " kg")
         elif mf:
