@@ -315,7 +315,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         wc = f"{src}: clips[{i}]"
         if not isinstance(c, dict):
             raise DesignError(f"{wc}: expected a table")
-        _check_keys(c, CLIP_KEYS, wc)
+        _check_keys(c, CLIP_KEYS, wc + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
         spec = ClipSpec(
             name=_get(c, "name", str, wc, check=_name_ok),
             source=_get(c, "source", str, wc, check=lambda v: None if 0 < len(v) <= 4096 else
@@ -345,7 +345,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         wg = f"{src}: groups[{i}]"
         if not isinstance(g, dict):
             raise DesignError(f"{wg}: expected a table")
-        _check_keys(g, GROUP_KEYS, wg)
+        _check_keys(g, GROUP_KEYS, wg + (f" ({g['name']})" if isinstance(g.get("name"), str) else ""))
         gname = _get(g, "name", str, wg, check=_name_ok)
         if gname in RESERVED_GROUP_NAMES:
             raise DesignError(f"{wg}.name: '{gname}' is reserved (the manifest's reference and "
