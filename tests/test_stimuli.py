@@ -122,7 +122,7 @@ def test_default_design_on_builtin_flips_is_exact(tmp_path):
     d = parse_design(PAPER_DESIGN)
     build_stimuli(d, tmp_path / "study", progress=False)
     man = read_manifest(tmp_path / "study")
-    assert len(man) == 2 + 2 * 25
+    assert len(man) == 2 + 2 * (4 * 4 + 1 + 5)      # the AM groups share one original per clip
     kinds = {r["kind"] for r in man}
     assert {"angular-momentum", "takeoff-angle"} <= kinds
     for r in man:
@@ -145,7 +145,7 @@ def test_default_design_from_real_cmu_flips(tmp_path):
     d = _real_design(tmp_path)
     rows = build_stimuli(d, tmp_path / "study", progress=False)
     man = read_manifest(tmp_path / "study")
-    assert len(man) == len(rows) == 2 + 2 * 25
+    assert len(man) == len(rows) == 2 + 2 * (4 * 4 + 1 + 5)   # shared AM original per clip
     for r in man:
         assert (tmp_path / "study" / r["bvh"]).exists() and (tmp_path / "study" / r["npz"]).exists()
         got = float(r["measured_error_pct"])
