@@ -137,7 +137,14 @@ def test_default_design_on_builtin_flips_is_exact(tmp_path):
     # both signs and both profiles are there, up to ±50 %
     am = [float(r["nominal_error_pct"]) for r in man if r["kind"] == "angular-momentum"]
     assert min(am) == -50.0 and max(am) == 50.0
-    assert {r["profile"] for r in man if r["kind"] == "angular-momentum"} == {"smooth", "abrupt"}
+    assert {r["profile"] for r in man if r["kind"] == "angular-momentum"
+            and r["group"] != "original"} == {"smooth", "abrupt"}
+    # the shared originals: one per clip, unmodified (no profile, level 0), and every AM
+    # stimulus names it as the original its d' is computed against
+    orig = [r for r in man if r["group"] == "original"]
+    assert [r["stimulus"] for r in orig] == ["backflip_original", "frontflip_original"]
+    assert all(r["profile"] == "" and float(r["level"]) == 0 for r in orig)
+    assert {r["original"] for r in man if r["kind"] == "angular-momentum"} == {r["stimulus"] for r in orig}
 
 
 def test_default_design_from_real_cmu_flips(tmp_path):
