@@ -265,6 +265,9 @@ def gravity_warning(g_app: float, clip: Clip) -> str | None:
     if adv is None:
         return None
     fix = adv.options()
+    if adv.scale is not None and clip.meta.get("scale_source") == "given" and \
+            adv.scale_unit and "1.70 m" not in adv.scale_unit:
+        fix += " (or without --scale: it is guessed from the skeleton)"
     return f"{adv.problem[0].upper()}{adv.problem[1:]} Rerun with {fix}." if fix else adv.problem
 
 

@@ -238,13 +238,18 @@ def _show(v) -> str:
     if isinstance(v, bool):
         return "true" if v else "false"
     if isinstance(v, float):
-        return "nan" if v != v else ("inf" if v > 0 else "-inf") if math.isinf(v) else f"{v:g}"
+        return "nan" if v != v else ("inf" if v > 0 else "-inf") if math.isinf(v) else repr(v)
     if isinstance(v, str):
         return repr(v if len(v) <= 60 else v[:57] + "...")
     if isinstance(v, (list, dict)):
         r = repr(v)
         return r if len(r) <= 60 else r[:57] + "..."
     return repr(v)
+
+
+def _pct(v) -> str:
+    """A level as written, in percent: 200, 17.5, inf."""
+    return _show(v) if isinstance(v, float) and not math.isfinite(v) else f"{v:g}"
 
 
 def _between(lo, hi, unit: str = ""):
@@ -371,12 +376,12 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
             if isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise DesignError(f"{wg}.levels: each level is a number (percent), got {_show(v)}")
             if not math.isfinite(v) or v < 0:
-                raise DesignError(f"{wg}.levels: {_show(v)} %: each level is the size of the error in "
+                raise DesignError(f"{wg}.levels: {_pct(v)} %: each level is the size of the error in "
                                   f"percent, 0 or more (the direction is the group's sign = {sign})")
             if v > top or (excluded and v >= top):
                 limit = f"below {top:g} %" if excluded else f"at most {top:g} %"
                 why = " (it stops the rotation)" if kind == "angular-momentum" and sign < 0 else ""
-                raise DesignError(f"{wg}.levels: {_show(v)} % is out of range: {what} must be "
+                raise DesignError(f"{wg}.levels: {_pct(v)} % is out of range: {what} must be "
                                   f"{limit}{why}")
             lv.append(float(v))
         if len(set(lv)) != len(lv):

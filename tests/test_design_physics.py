@@ -304,3 +304,18 @@ def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
     from analysis.sdt import dprime
     row = t.loc[("abrupt-decrease", 50.0)]
     assert row["dprime"] == pytest.approx(dprime(row["n_incorrect"], row["n"], k_orig, 10))
+
+
+def test_a_session_refuses_a_manifest_with_duplicate_or_too_many_trials(tmp_path):
+    from study.demo import make_demo_study
+    from study.session import SessionError, load_study
+    d = make_demo_study(tmp_path / "s", videos=False)
+    man = (d / "manifest.csv").read_text().splitlines()
+    (d / "manifest.csv").write_text("\n".join(man + [man[-1]]) + "\n")
+    with pytest.raises(SessionError, match="listed more than once"):
+        load_study(d)
+    row = man[-1].split(",")
+    extra = [",".join([f"x{i}"] + row[1:]) for i in range(1600)]
+    (d / "manifest.csv").write_text("\n".join(man + extra) + "\n")
+    with pytest.raises(SessionError, match="at most 3000"):
+        load_study(d)
