@@ -235,21 +235,41 @@ def physics_advice(g_app: float | None, clip: Clip) -> PhysicsAdvice | None:
             g = g * s_new / scale
     new_fps = None
     if g is not None and abs(g / G - 1.0) > GRAVITY_TOLERANCE:
-        cands = [fps * 2.0 ** k for k in (-2, -1, 1, 2)]
-        best = min(cands, key=lambda f: abs(np.log(g * (f / fps) ** 2 / G)))
-        if abs(g * (best / fps) ** 2 / G - 1.0) > GRAVITY_TOLERANCE:
-            best = float(np.round(fps * np.sqrt(G / g), 2)) if g > 0 else None
         head = (f"apparent gravity in flight is {g_app:.1f} m/s², not 9.81"
                 + (f" ({g:.1f} at the right scale)" if new_scale is not None else "") + ": ")
-        if best is None:
+        if g <= 0:
             problem.append(head + "the flight does not fall; the clip's time axis is wrong.")
         else:
+            factor = lambda f: abs(np.log(g * (f / fps) ** 2 / G))    # noqa: E731
+            best = min((fps * 2.0 ** k for k in (-2, -1, 1, 2)), key=factor)
             g_best = g * (best / fps) ** 2
-            problem.append(head + f"at {best:g} fps instead of {fps:g} it would be {g_best:.1f} m/s², "
-                           f"so the frame time is wrong (header says "
-                           f"{clip.meta.get('header_fps', fps):g} fps).")
-            g = g_best
-        new_fps = best
+            if abs(g_best / G - 1.0) <= GRAVITY_TOLERANCE:
+                problem.append(head + f"at {best:g} fps instead of {fps:g} it would be {g_best:.1f} "
+                               f"m/s², so the frame time is wrong (header says "
+                               f"{clip.meta.get('header_fps', fps):g} fps).")
+                new_fps, g = best, g_best
+            else:
+                # no factor of two is enough: the lengths are scaled too (a retargeted or
+                # resized skeleton) if the body stays an adult at the scale that fixes
+                # gravity; else the frame time is simply another rate
+                near = min((fps * 2.0 ** k for k in (-2, -1, 0, 1, 2)), key=factor)
+                g_near = g * (near / fps) ** 2
+                s_fix = G / g_near
+                h_now = h if new_scale is None else h * new_scale / scale
+                if lo <= h_now * s_fix <= hi:
+                    new_scale = (new_scale if new_scale is not None else scale) * s_fix
+                    unit = "lengths scaled to make gravity 9.81"
+                    new_fps = near if near != fps else None
+                    at = f"at {near:g} fps it would be {g_near:.1f} m/s², still" if new_fps else "that is"
+                    problem.append(head + f"{at} {100 * (g_near / G - 1):+.0f} % off, so the lengths "
+                                   f"are probably scaled too (a retargeted or resized skeleton; at "
+                                   f"{new_scale:.4g} m per file unit the body is {h_now * s_fix:.2f} m, "
+                                   f"still an adult).")
+                else:
+                    new_fps = float(np.round(fps * np.sqrt(G / g), 2))
+                    problem.append(head + f"the body's height ({h_now:.2f} m) rules out a scale "
+                                   f"error, so the frame rate is {new_fps:g} fps, not {fps:g}.")
+                g = G
     if not problem:
         return None
     return PhysicsAdvice(" ".join(problem), new_fps, new_scale, unit, h,
@@ -268,7 +288,7 @@ def gravity_warning(g_app: float, clip: Clip) -> str | None:
     if adv.scale is not None and clip.meta.get("scale_source") == "given" and \
             adv.scale_unit and "1.70 m" not in adv.scale_unit:
         fix += " (or without --scale: it is guessed from the skeleton)"
-    return f"{adv.problem[0].upper()}{adv.problem[1:]} Rerun with {fix}." if fix else adv.problem
+    return f"{adv.problem} Rerun with {fix}." if fix else adv.problem
 
 
 def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
