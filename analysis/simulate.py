@@ -66,7 +66,9 @@ def _assemble(participant, group, level, clip, rep, incorrect, rng, n_part, per_
         "participant": pid,
         "session": np.char.add(pid, "-S1"),
         "trial": trial,
-        "stimulus": np.char.add(np.char.add(np.char.add(np.char.add(clip, "_"), group), "_"), lv_txt),
+        "stimulus": np.where(group == "original", np.char.add(clip, "_original"),  # as in the manifest
+                             np.char.add(np.char.add(np.char.add(np.char.add(clip, "_"), group), "_"),
+                                         lv_txt)),
         "group": group,
         "level": level,
         "repetition": rep,

@@ -319,3 +319,40 @@ def test_a_session_refuses_a_manifest_with_duplicate_or_too_many_trials(tmp_path
     (d / "manifest.csv").write_text("\n".join(man + extra) + "\n")
     with pytest.raises(SessionError, match="at most 3000"):
         load_study(d)
+
+
+def test_a_group_may_keep_its_own_original():
+    """original = "own" in one AM group: that group has its level 0, the other three
+    share; plan() and Design.stimulus_names() agree."""
+    text = PAPER_DESIGN.replace('name = "abrupt-decrease"', 'name = "abrupt-decrease"\noriginal = "own"')
+    d = parse_design(text)
+    names = [n for n, *_ in plan(d)]
+    assert names == d.stimulus_names() and len(set(names)) == len(names)
+    assert "backflip_abrupt-decrease_0" in names and "backflip_smooth-increase_0" not in names
+    assert "backflip_original" in names and len(names) == 2 + 2 * (3 * 4 + 1 + 5 + 5)
+    for variant in (PAPER_DESIGN, PAPER_DESIGN.replace('original = "shared"', 'original = "per-group"')):
+        dv = parse_design(variant)
+        assert [n for n, *_ in plan(dv)] == dv.stimulus_names()
+    with pytest.raises(DesignError, match="only angular-momentum groups share"):
+        parse_design(PAPER_DESIGN.replace('kind = "takeoff-angle"', 'kind = "takeoff-angle"\noriginal = "shared"'))
+
+
+def test_shared_answers_go_only_to_groups_of_their_kind():
+    import pandas as pd
+
+    from analysis.io import ResponsesError, load_responses
+    rows = []
+    for p in ("P1", "P2"):
+        for g, kind, lv in [("original", "angular-momentum", 0), ("am", "angular-momentum", 25),
+                            ("to", "takeoff-angle", 10), ("to", "takeoff-angle", 20)]:
+            rows.append({"participant": p, "group": g, "kind": kind, "level": lv, "response": "correct"})
+    df = load_responses(pd.DataFrame(rows))
+    assert sorted(df.loc[df["level"] == 0, "group"].unique()) == ["am"]     # not the take-off group
+    assert len(df) == len(rows) and not df["shared_copy"].any()
+    # without a kind column every group lacking a level 0 shares it
+    df2 = load_responses(pd.DataFrame(rows).drop(columns="kind"))
+    assert sorted(df2.loc[df2["level"] == 0, "group"].unique()) == ["am", "to"]
+    assert int((~df2["shared_copy"]).sum()) == len(rows)
+    bad = [dict(r, level=5) if r["group"] == "original" else r for r in rows]
+    with pytest.raises(ResponsesError, match="level 0"):
+        load_responses(pd.DataFrame(bad))
