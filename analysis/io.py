@@ -14,6 +14,8 @@ DESIGN_COLUMNS = ("participant", "session", "trial", "stimulus", "group", "level
 DEFAULT_GROUP_ORDER = ("smooth-increase", "smooth-decrease", "abrupt-increase",
                        "abrupt-decrease", "takeoff-increase")
 IGNORED_GROUPS = ("reference",)
+#: the group of the shared originals (stimuli.design.SHARED_ORIGINAL_GROUP)
+SHARED_ORIGINAL = "original"
 EXPORT_HINT = "flipstudy export {d} --out {d}/responses.csv"
 
 
@@ -48,7 +50,9 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
     ``participant`` (str), ``group`` (str), ``level`` (float, nominal error in
     percent), ``response`` (``"correct"``/``"incorrect"``), ``incorrect`` (0/1)
     and every other column as read.  Rows of the ``reference`` group are
-    dropped.  Raises :class:`ResponsesError` naming the file, the line and what
+    dropped.  Answers to a shared original (group ``original``, see
+    :func:`expand_shared_originals`) become the level 0 of every group that shares
+    it, marked ``shared_copy`` beyond the first.  Raises :class:`ResponsesError` naming the file, the line and what
     was expected.
     """
     if isinstance(source, pd.DataFrame):
@@ -100,7 +104,52 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
                    incorrect=(resp == "incorrect").astype(np.int8)).reset_index(drop=True)
     if df.empty:
         raise ResponsesError(f"{where}: no trials to analyse (after dropping 'reference' rows)")
-    return df
+    return expand_shared_originals(df, where)
+
+
+def expand_shared_originals(df: pd.DataFrame, where: str = "responses table") -> pd.DataFrame:
+    """The answers to the shared originals as level 0 of each group that shares them.
+
+    Rows of group ``original`` (one original per base clip, shown ``repetitions``
+    times, which the angular-momentum groups of the paper's design compare with)
+    are copied, as level 0, into every group without a level 0 of its own — of the
+    originals' ``kind`` when the table has a ``kind`` column (so a take-off group
+    keeps its own original).  Every group's d′ is then computed against those
+    same answers, and each sharing group's level-0 cell shows them (the paper's
+    Table 2: 72 in all four angular-momentum groups).  The copies carry
+    ``shared_original = True`` and, beyond the first, ``shared_copy = True`` (count
+    trials with ``~shared_copy``); the ``original``
+    group itself is not a row of the tables.  A table without such rows is
+    returned as it is (``shared_copy`` all False)."""
+    is_orig = (df["group"] == SHARED_ORIGINAL).to_numpy()
+    df = df.assign(shared_copy=False, shared_original=False)
+    if not is_orig.any():
+        return df
+    orig = df[is_orig]
+    bad = orig["level"] != 0
+    if bad.any():
+        raise ResponsesError(f"{where}: group '{SHARED_ORIGINAL}' holds the shared originals, level 0; "
+                             f"found level {orig.loc[bad, 'level'].iloc[0]:g}")
+    rest = df[~is_orig]
+    has0 = set(rest.loc[rest["level"] == 0, "group"])
+    kinds = None
+    if "kind" in df.columns:
+        kinds = set(orig["kind"].dropna().astype(str))
+    targets = []
+    for g in dict.fromkeys(rest["group"]):
+        if g in has0:
+            continue
+        if kinds is not None:
+            gk = set(rest.loc[rest["group"] == g, "kind"].dropna().astype(str))
+            if gk and not gk & kinds:
+                continue
+        targets.append(g)
+    if not targets:
+        raise ResponsesError(f"{where}: answers to shared originals (group '{SHARED_ORIGINAL}') but "
+                             f"every group has its own level 0; nothing shares them")
+    copies = [orig.assign(group=g, shared_copy=i > 0, shared_original=True)
+              for i, g in enumerate(targets)]
+    return pd.concat([rest] + copies, ignore_index=True)
 
 
 def group_order(groups) -> list[str]:

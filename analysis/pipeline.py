@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from .core import summarize
-from .io import load_responses
+from .io import group_order, load_responses
 from .sdt import CORRECTION_TEXT, normalise_correction
 from .stats import fit_psychometric, gee_levels
 from .tables import paper_layout, to_latex, to_markdown
@@ -106,6 +106,11 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     correction = normalise_correction(correction)
     df = load_responses(responses)
     table, participants, notes = summarize(df, correction=correction, n_boot=n_boot, seed=seed, ci=ci)
+    if df["shared_original"].any():
+        shared = set(df.loc[df["shared_original"], "group"])
+        notes.append("Shared original: the groups " + ", ".join(group_order(shared)) + " share one "
+                     "original per base clip (shown `repetitions` times); its answers are the "
+                     "level-0 cell of each of them, and their d′ are computed against it.")
 
     if gee:
         g = gee_levels(df, ci=ci)
@@ -146,7 +151,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                     settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
                               "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
                               "n_participants": int(df["participant"].nunique()),
-                              "n_trials": int(len(df)),
+                              "n_trials": int((~df["shared_copy"]).sum()),
                               "groups": list(dict.fromkeys(table["group"]))})
     if out_dir is None:
         return result

@@ -66,7 +66,9 @@ def _assemble(participant, group, level, clip, rep, incorrect, rng, n_part, per_
         "participant": pid,
         "session": np.char.add(pid, "-S1"),
         "trial": trial,
-        "stimulus": np.char.add(np.char.add(np.char.add(np.char.add(clip, "_"), group), "_"), lv_txt),
+        "stimulus": np.where(group == "original", np.char.add(clip, "_original"),  # as in the manifest
+                             np.char.add(np.char.add(np.char.add(np.char.add(clip, "_"), group), "_"),
+                                         lv_txt)),
         "group": group,
         "level": level,
         "repetition": rep,
@@ -91,10 +93,20 @@ def _design(groups_levels, n_participants, clips, repetitions):
             np.tile(base_r, P))
 
 
+def _kind(group: str) -> str:
+    return "takeoff-angle" if "takeoff" in group else "angular-momentum"
+
+
 def paper_panel(n_participants: int = 19, *, clips=("backflip", "frontflip"), repetitions: int = 2,
-                participant_sd: float = 0.5, seed=0, ratings: pd.DataFrame | None = None) -> pd.DataFrame:
-    """A simulated panel of the paper's study (Section 7): 5 groups × 5 levels,
-    each motion (2 clips) shown twice, i.e. 100 trials per participant.
+                participant_sd: float = 0.5, seed=0, ratings: pd.DataFrame | None = None,
+                original: str = "shared") -> pd.DataFrame:
+    """A simulated panel of the paper's study (Section 7), each motion (2 clips)
+    shown twice.  ``original="shared"`` (the paper's design and the default
+    design's): the four angular-momentum groups share one original per clip
+    (group ``original``, answered with their level-0 rating, 72) and the take-off
+    group has its own (63): 22 motions per clip, 88 trials per participant.
+    ``"per-group"``: every group its own level 0, 100 trials.  The table has a
+    ``kind`` column (groups named ``takeoff…`` are take-off groups).
 
     Each answer is "correct" with the probability of the paper's Table 2 rating
     for its cell (the missing smooth-increase 37 % cell filled with
@@ -106,8 +118,17 @@ def paper_panel(n_participants: int = 19, *, clips=("backflip", "frontflip"), re
     rng = np.random.default_rng(seed)
     tab = paper_ratings() if ratings is None else ratings
     col = "rating_sim" if "rating_sim" in tab.columns else "rating_pct"
+    if original not in ("shared", "per-group"):
+        raise ValueError(f"original: expected 'shared' or 'per-group', got {original!r}")
     groups_levels = [(g, list(sub["level"])) for g, sub in tab.groupby("group", sort=False)]
     prob = {(g, float(lv)): r / 100.0 for g, lv, r in zip(tab["group"], tab["level"], tab[col])}
+    if original == "shared":
+        am0 = [prob[(g, 0.0)] for g, lvs in groups_levels
+               if _kind(g) == "angular-momentum" and 0.0 in map(float, lvs)]
+        if am0:
+            groups_levels = [(g, [lv for lv in lvs if not (float(lv) == 0 and _kind(g) == "angular-momentum")])
+                             for g, lvs in groups_levels] + [("original", [0.0])]
+            prob[("original", 0.0)] = float(np.mean(am0))
     cells, per_part, participant, group, level, clip, rep = _design(
         groups_levels, n_participants, tuple(clips), repetitions)
     p_cell = np.array([prob[c] for c in cells])
@@ -115,7 +136,9 @@ def paper_panel(n_participants: int = 19, *, clips=("backflip", "frontflip"), re
     bias = rng.normal(0.0, participant_sd, n_participants) if participant_sd > 0 else np.zeros(n_participants)
     p_correct = expit(logit(np.clip(p_cell[cell_idx], 1e-6, 1 - 1e-6)) + bias[participant - 1])
     incorrect = rng.random(len(participant)) >= p_correct
-    return _assemble(participant, group, level, clip, rep, incorrect, rng, n_participants, per_part)
+    df = _assemble(participant, group, level, clip, rep, incorrect, rng, n_participants, per_part)
+    df["kind"] = [_kind(g) for g in df["group"]]
+    return df
 
 
 def sdt_observers(dprimes: dict, *, n_participants: int = 40, trials_per_level: int = 40,

@@ -155,28 +155,146 @@ class Analysis:
         return out
 
 
-def gravity_warning(g_app: float, clip: Clip) -> str | None:
-    """A sentence when the apparent gravity contradicts 9.81 m/s², naming the
-    likely frame rate (frame-time errors are factors of two) and, when that is
-    not enough, the length scale."""
-    ratio = g_app / G
-    if abs(ratio - 1.0) <= GRAVITY_TOLERANCE:
+#: the body height of an adult as :func:`body_height` measures it, metres.  The joints
+#: stop short of the soles and the top of the head, so a skeleton measures less than
+#: its stature (CMU's 88_01: 1.31 m from toe to head joint, 1.56 m from its hip height);
+#: unit errors are factors of 2.2 (inch vs CMU units) to 100, far outside either bound.
+BODY_HEIGHT_RANGE = (1.2, 2.2)
+#: standing hip (greater trochanter) height / stature (Drillis & Contini 1966)
+HIP_HEIGHT_RATIO = 0.530
+
+
+def body_height(clip: Clip) -> float:
+    """The body's height in metres from the rest skeleton alone: the larger of its
+    largest extent (height, or span in a T-pose) and its hip height above the
+    lowest point divided by :data:`HIP_HEIGHT_RATIO`.  Lengths only: a wrong length
+    scale shows here, a wrong frame time does not."""
+    from .flight import body_size
+    sk = clip.skeleton
+    P = sk.rest_positions()
+    pts = np.concatenate([P, np.array([P[p] + o for p, o in sk.end_sites])]) if sk.end_sites else P
+    hip = float(P[0, 1] - pts[:, 1].min())
+    return max(body_size(clip), hip / HIP_HEIGHT_RATIO)
+
+
+@dataclass
+class PhysicsAdvice:
+    """What contradicts physics in a clip and the fix: a frame rate, a length
+    scale, or both (``None`` where that one is right)."""
+
+    problem: str                # the measurements, one or two sentences
+    fps: float | None           # the frame rate to read the clip at (its own rate, before resampling)
+    scale: float | None         # metres per file unit to read it with
+    scale_unit: str | None      # what that scale is ("CMU/ASF length units (1/0.45 in)")
+    height_m: float             # the body's height at the scale read
+    g_fixed: float              # the apparent gravity after the fix
+
+    def options(self) -> str:
+        """The fix as command-line options (``--fps 60 --scale 0.0564``)."""
+        out = []
+        if self.fps is not None:
+            out.append(f"--fps {self.fps:g}")
+        if self.scale is not None:
+            out.append(f"--scale {self.scale:.4g}")
+        return " ".join(out)
+
+    def keys(self) -> str:
+        """The fix as design keys (``fps = 60``, ``scale = 0.0564``)."""
+        out = []
+        if self.fps is not None:
+            out.append(f"fps = {self.fps:g}")
+        if self.scale is not None:
+            out.append(f"scale = {self.scale:.4g}")
+        return ", ".join(out)
+
+
+def physics_advice(g_app: float | None, clip: Clip) -> PhysicsAdvice | None:
+    """Weigh frame time against length scale; None when the clip agrees with physics.
+
+    Two measurements that do not share an assumption: the body's height from the
+    skeleton (lengths only) and the apparent gravity of the flight (lengths / time²).
+    A height outside :data:`BODY_HEIGHT_RANGE` means the length scale is wrong; the
+    scale that makes the body an adult (the file unit closest to 1.70 m, as
+    ``load_bvh`` guesses it) is proposed, and gravity is judged after that fix
+    (gravity is proportional to the scale).  Whatever gravity is still off is the
+    frame time: a factor of two when one fits (frame-time errors are), else the
+    exact rate.  ``g_app`` None (no flight): the height alone is judged.
+    """
+    from .motion.bvh import STANDING_HEIGHT_M, UNIT_CANDIDATES
+    fps = float(clip.meta.get("fps_read", clip.fps))       # the rate the file was read at
+    scale = float(clip.meta.get("scale", 1.0))
+    h = body_height(clip)
+    lo, hi = BODY_HEIGHT_RANGE
+    new_scale = unit = None
+    problem = []
+    g = g_app
+    if not lo <= h <= hi:
+        extent_file = h / scale
+        s_new, unit = min(UNIT_CANDIDATES, key=lambda u: abs(np.log(extent_file * u[0] / STANDING_HEIGHT_M)))
+        if not lo <= extent_file * s_new <= hi:            # no unit fits: make it 1.70 m
+            s_new, unit = STANDING_HEIGHT_M / extent_file, "a 1.70 m body"
+        new_scale = s_new
+        problem.append(f"the body is {h:.2f} m tall at {scale:.4g} m per file unit (its skeleton), "
+                       f"not an adult's {lo:g}–{hi:g} m: the length scale is wrong (at {s_new:.4g}, {unit}, it is "
+                       f"{extent_file * s_new:.2f} m).")
+        if g is not None:
+            g = g * s_new / scale
+    new_fps = None
+    if g is not None and abs(g / G - 1.0) > GRAVITY_TOLERANCE:
+        head = (f"apparent gravity in flight is {g_app:.1f} m/s², not 9.81"
+                + (f" ({g:.1f} at the right scale)" if new_scale is not None else "") + ": ")
+        if g <= 0:
+            problem.append(head + "the flight does not fall; the clip's time axis is wrong.")
+        else:
+            factor = lambda f: abs(np.log(g * (f / fps) ** 2 / G))    # noqa: E731
+            best = min((fps * 2.0 ** k for k in (-2, -1, 1, 2)), key=factor)
+            g_best = g * (best / fps) ** 2
+            if abs(g_best / G - 1.0) <= GRAVITY_TOLERANCE:
+                problem.append(head + f"at {best:g} fps instead of {fps:g} it would be {g_best:.1f} "
+                               f"m/s², so the frame time is wrong (header says "
+                               f"{clip.meta.get('header_fps', fps):g} fps).")
+                new_fps, g = best, g_best
+            else:
+                # no factor of two is enough: the lengths are scaled too (a retargeted or
+                # resized skeleton) if the body stays an adult at the scale that fixes
+                # gravity; else the frame time is simply another rate
+                near = min((fps * 2.0 ** k for k in (-2, -1, 0, 1, 2)), key=factor)
+                g_near = g * (near / fps) ** 2
+                s_fix = G / g_near
+                h_now = h if new_scale is None else h * new_scale / scale
+                if lo <= h_now * s_fix <= hi:
+                    new_scale = (new_scale if new_scale is not None else scale) * s_fix
+                    unit = "lengths scaled to make gravity 9.81"
+                    new_fps = near if near != fps else None
+                    at = f"at {near:g} fps it would be {g_near:.1f} m/s², still" if new_fps else "that is"
+                    problem.append(head + f"{at} {100 * (g_near / G - 1):+.0f} % off, so the lengths "
+                                   f"are probably scaled too (a retargeted or resized skeleton; at "
+                                   f"{new_scale:.4g} m per file unit the body is {h_now * s_fix:.2f} m, "
+                                   f"still an adult).")
+                else:
+                    new_fps = float(np.round(fps * np.sqrt(G / g), 2))
+                    problem.append(head + f"the body's height ({h_now:.2f} m) rules out a scale "
+                                   f"error, so the frame rate is {new_fps:g} fps, not {fps:g}.")
+                g = G
+    if not problem:
         return None
-    fps = clip.fps
-    cands = [fps * 2.0 ** k for k in (-2, -1, 1, 2)]
-    best = min(cands, key=lambda f: abs(np.log(g_app * (f / fps) ** 2 / G)))
-    g_best = g_app * (best / fps) ** 2
-    head = (f"apparent gravity in flight is {g_app:.1f} m/s², not 9.81: the clip's time or "
-            f"length scale is wrong.")
-    if abs(g_best / G - 1.0) <= GRAVITY_TOLERANCE:
-        return (f"{head} At {best:g} fps instead of {fps:g} it would be {g_best:.1f} m/s², so the "
-                f"frame time is probably wrong (header says {clip.meta.get('header_fps', fps):g} fps): "
-                f"rerun with --fps {best:g}.")
-    s = g_best / G
-    scale = clip.meta.get("scale", 1.0)
-    return (f"{head} At {best:g} fps it would be {g_best:.1f} m/s², still {100 * (s - 1):+.0f} % off, "
-            f"so the lengths are probably scaled too (a retargeted or resized skeleton): try "
-            f"--fps {best:g} --scale {scale / s:.4g} (now {scale:.4g} m per file unit).")
+    return PhysicsAdvice(" ".join(problem), new_fps, new_scale, unit, h,
+                         float("nan") if g is None else float(g))
+
+
+def gravity_warning(g_app: float, clip: Clip) -> str | None:
+    """A sentence when the apparent gravity or the body's height contradicts
+    physics, naming the fix (``--fps`` and/or ``--scale``) that the body's height
+    picks: a height outside an adult's says the scale is wrong, gravity that
+    is still off after that says the frame time is (see :func:`physics_advice`)."""
+    adv = physics_advice(g_app, clip)
+    if adv is None:
+        return None
+    fix = adv.options()
+    if adv.scale is not None and clip.meta.get("scale_source") == "given" and \
+            adv.scale_unit and "1.70 m" not in adv.scale_unit:
+        fix += " (or without --scale: it is guessed from the skeleton)"
+    return f"{adv.problem} Rerun with {fix}." if fix else adv.problem
 
 
 def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,

@@ -5,16 +5,25 @@ how often each motion is shown, the reference (practice) clips, the frame rate
 and the seed.  ``PAPER_DESIGN`` is the study of Majkowska & Faloutsos 2007,
 Section 7: forward and backward somersaults; smooth and abrupt angular-momentum
 increases and decreases at 0/17/25/37/50 %; take-off angle increases at
-0/10/20/30/40 %; each motion shown twice.
+0/10/20/30/40 %; each motion shown twice.  As in the paper (its Table 2 gives the
+one original 72 % in all four angular-momentum groups and 63 % in the take-off
+group), the angular-momentum groups share one original per base clip
+(``original = "shared"``) and the take-off group has its own.
 
-Every invalid field raises :class:`DesignError` naming the field.
+Designs are strict: an unknown key (``repetitons``) is refused with a
+did-you-mean, every number is bounded, names, clips, references and levels are
+not repeated; every invalid field raises :class:`DesignError` naming the file,
+section and key and the value as written (levels in percent).
 """
 
 from __future__ import annotations
 
-from .exceptions import FlipstudyError
+import difflib
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
+
+from .exceptions import FlipstudyError
 
 try:
     import tomllib
@@ -36,6 +45,7 @@ class ClipSpec:
     fps: float | None = None    # override the file's frame rate (BVH)
     flips: int | None = None    # turn the clip into an N-flip one first (flipstudy edit)
     k_ratio: float = 0.7        # its retiming factor as a fraction of k*
+    accept_unphysical: bool = False  # build it although its gravity or height contradicts physics
 
 
 @dataclass
@@ -45,6 +55,7 @@ class Group:
     profile: str | None         # "smooth" | "abrupt" (angular momentum only)
     sign: int                   # +1 increase, -1 decrease
     levels: list[float]         # nominal error in percent (magnitude; 0 = original)
+    original: str = "own"       # "shared": its level 0 is the clip's shared original
 
 
 @dataclass
@@ -61,6 +72,8 @@ class Design:
     tolerance_pct: float = 1.0        # refuse stimuli whose measured error misses by more
     replay: bool = False              # may a participant replay a motion (sessions)
     break_every: int = 40             # trials between breaks (sessions)
+    original: str = "shared"          # "shared": AM groups share one original per clip
+    fps_given: bool = True            # [study] fps written: BVH clips are resampled to it
     path: Path | None = None
 
     def clip(self, name: str) -> ClipSpec:
@@ -68,6 +81,25 @@ class Design:
             if c.name == name:
                 return c
         raise KeyError(name)
+
+    @property
+    def shares_original(self) -> bool:
+        """Do some groups show the clip's shared original as their level 0?"""
+        return any(g.original == "shared" and 0.0 in g.levels for g in self.groups)
+
+    def stimulus_names(self) -> list[str]:
+        """Every stimulus name, in manifest order (see :func:`stimuli.stimset.plan`)."""
+        out = [f"{r}_reference" for r in self.reference]
+        for c in self.clips:
+            if self.shares_original:
+                out.append(f"{c.name}_{SHARED_ORIGINAL_GROUP}")
+            for g in self.groups:
+                out += [f"{c.name}_{g.name}_{lv:g}" for lv in g.levels
+                        if not (lv == 0 and g.original == "shared")]
+        return out
+
+    def n_test_stimuli(self) -> int:
+        return len(self.stimulus_names()) - len(self.reference)
 
 
 PAPER_DESIGN = """\
@@ -79,18 +111,24 @@ PAPER_DESIGN = """\
 [study]
 name = "flipping-with-physics-2007"
 seed = 20070803
-fps = 120                 # frame rate of the generated stimuli
-repetitions = 2           # each motion shown twice
+fps = 120                 # frame rate of the stimuli (BVH clips are resampled to it)
+repetitions = 2           # each motion shown twice (1 to 20)
 total_mass = 70.0         # kg, for the body model
 com_policy = "angle"      # AM errors keep the take-off angle ("landing": keep the landing point)
 tolerance_pct = 1.0       # refuse a stimulus whose measured error misses the nominal by more
 replay = false            # participants may not replay a motion
 break_every = 40          # a break every 40 trials
+original = "shared"       # the angular-momentum groups share one original per clip, shown
+                          # `repetitions` times; the take-off group has its own ("per-group":
+                          # every group its own level 0, as a [[groups]] original = "own" does)
 
 # Base clips: a built-in name (backflip, frontflip, jump) or a BVH path relative to
 # this file, with optional scale (metres per file unit) and fps (override the header),
 # and optional flips = N (and k_ratio, default 0.7) to study the multi-flip method's
 # own output: the clip is first made an N-flip one, as `flipstudy edit --flips N` does.
+# A clip whose apparent gravity or body height contradicts physics (wrong fps or scale)
+# is refused, naming the fix; accept_unphysical = true builds it anyway (the manifest
+# records it).
 [[clips]]
 name = "backflip"
 source = "backflip"
@@ -139,6 +177,43 @@ levels = [0, 10, 20, 30, 40]
 """
 
 
+#: the keys each section may hold (anything else is refused with a did-you-mean)
+STUDY_KEYS = ("name", "seed", "fps", "repetitions", "total_mass", "com_policy", "tolerance_pct",
+              "replay", "break_every", "original")
+CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
+GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original")
+REFERENCE_KEYS = ("clips",)
+SECTIONS = ("study", "clips", "groups", "reference")
+ORIGINAL_MODES = ("shared", "per-group")   # [study] original
+GROUP_ORIGINAL = ("shared", "own")         # [[groups]] original
+#: the group name of the shared original in the manifest and the responses
+SHARED_ORIGINAL_GROUP = "original"
+RESERVED_GROUP_NAMES = ("reference", SHARED_ORIGINAL_GROUP)
+
+#: bounds of every number of a design (inclusive unless said otherwise)
+MAX_SEED = 2 ** 63 - 1
+FPS_RANGE = (10.0, 1000.0)
+REPETITIONS_MAX = 20
+MASS_RANGE = (20.0, 200.0)            # kg
+TOLERANCE_MAX = 50.0                  # percent; the lower bound 0 is excluded
+BREAK_EVERY_MAX = 10000
+SCALE_RANGE = (1e-4, 100.0)           # metres per file unit (mm is 0.001, m is 1)
+TRIALS_MAX = 3000                     # test trials per participant (repetitions × stimuli)
+LEVELS_MAX = 20                       # levels per group
+#: level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
+LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the original
+                ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
+                ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
+                ("takeoff-angle", -1): (100.0, True)}       # −100 % leaves no horizontal velocity
+MAX_DESIGN_BYTES = 1_000_000
+
+
+def _typename(typ) -> str:
+    names = {"str": "a string", "int": "a whole number", "float": "a number", "bool": "true or false",
+             "list": "an array", "dict": "a table"}
+    return names.get(typ.__name__, typ.__name__)
+
+
 def _get(d: dict, key: str, typ, where: str, default=..., check=None):
     if key not in d:
         if default is ...:
@@ -148,61 +223,123 @@ def _get(d: dict, key: str, typ, where: str, default=..., check=None):
     if typ is float and isinstance(v, int) and not isinstance(v, bool):
         v = float(v)
     if not isinstance(v, typ) or isinstance(v, bool) and typ is not bool:
-        tname = typ.__name__ if isinstance(typ, type) else "/".join(t.__name__ for t in typ)
-        raise DesignError(f"{where}.{key}: expected {tname}, got {v!r}")
+        raise DesignError(f"{where}.{key}: expected {_typename(typ)}, got {_show(v)}")
+    if typ is float and not math.isfinite(v):
+        raise DesignError(f"{where}.{key}: expected a finite number, got {_show(v)}")
     if check is not None:
         msg = check(v)
         if msg:
-            raise DesignError(f"{where}.{key}: {msg}, got {v!r}")
+            raise DesignError(f"{where}.{key}: {msg}, got {_show(v)}")
     return v
 
 
+def _show(v) -> str:
+    """A value as the user wrote it in TOML (short)."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return "nan" if v != v else ("inf" if v > 0 else "-inf") if math.isinf(v) else repr(v)
+    if isinstance(v, str):
+        return repr(v if len(v) <= 60 else v[:57] + "...")
+    if isinstance(v, (list, dict)):
+        r = repr(v)
+        return r if len(r) <= 60 else r[:57] + "..."
+    return repr(v)
+
+
+def _pct(v) -> str:
+    """A level as written, in percent: 200, 17.5, inf."""
+    return _show(v) if isinstance(v, float) and not math.isfinite(v) else f"{v:g}"
+
+
+def _between(lo, hi, unit: str = ""):
+    return lambda v: None if lo <= v <= hi else f"expected {lo:g} to {hi:g}{unit}"
+
+
+def _check_keys(table: dict, allowed, where: str) -> None:
+    """Refuse keys a section does not know, suggesting the closest known one."""
+    for k in table:
+        if k in allowed:
+            continue
+        close = difflib.get_close_matches(str(k), allowed, n=1, cutoff=0.6)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        raise DesignError(f"{where}: unknown key '{k}'{hint} (known keys: {', '.join(allowed)})")
+
+
 def parse_design(text: str, path: Path | str = "<design>") -> Design:
-    """Parse and validate a design (TOML text)."""
+    """Parse and validate a design (TOML text).
+
+    Every key must be one the section knows, every number lies in its bounds,
+    names, clips, references and levels are not repeated; anything else raises
+    :class:`DesignError` naming the file, section, key and the value as written."""
     src = str(path)
     try:
         d = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise DesignError(f"{src}: not valid TOML: {e}") from None
-    unknown = set(d) - {"study", "clips", "groups", "reference"}
-    if unknown:
-        raise DesignError(f"{src}: unknown section(s) {sorted(unknown)}; expected study, clips, "
-                          f"groups, reference")
+    except RecursionError:
+        raise DesignError(f"{src}: not a usable design: its arrays or tables are nested too deeply "
+                          f"to read (a design nests at most a few levels)") from None
+    for k in d:
+        if k not in SECTIONS:
+            close = difflib.get_close_matches(str(k), SECTIONS, n=1, cutoff=0.6)
+            hint = f"; did you mean [{close[0]}]?" if close else ""
+            raise DesignError(f"{src}: unknown section [{k}]{hint} (expected study, clips, groups, "
+                              f"reference)")
     st = d.get("study")
     if not isinstance(st, dict):
         raise DesignError(f"{src}: missing [study] section")
     w = f"{src}: [study]"
-    positive = lambda v: None if v > 0 else "must be positive"  # noqa: E731
+    _check_keys(st, STUDY_KEYS, w)
     design = Design(
-        name=_get(st, "name", str, w),
-        seed=_get(st, "seed", int, w, check=lambda v: None if v >= 0 else "must be >= 0"),
-        fps=_get(st, "fps", float, w, 120.0, positive),
-        repetitions=_get(st, "repetitions", int, w, 2, positive),
-        total_mass=_get(st, "total_mass", float, w, 70.0, positive),
+        name=_get(st, "name", str, w, check=lambda v: None if 0 < len(v) <= 200 else
+                  "expected 1 to 200 characters"),
+        seed=_get(st, "seed", int, w, check=_between(0, MAX_SEED)),
+        fps=_get(st, "fps", float, w, 120.0, _between(*FPS_RANGE, " frames per second")),
+        repetitions=_get(st, "repetitions", int, w, 2, _between(1, REPETITIONS_MAX,
+                                                                " presentations of each motion")),
+        total_mass=_get(st, "total_mass", float, w, 70.0, _between(*MASS_RANGE, " kg")),
         clips=[], groups=[],
         com_policy=_get(st, "com_policy", str, w, "angle",
                         lambda v: None if v in COM_POLICIES else f"must be one of {list(COM_POLICIES)}"),
-        tolerance_pct=_get(st, "tolerance_pct", float, w, 1.0, positive),
+        tolerance_pct=_get(st, "tolerance_pct", float, w, 1.0,
+                           lambda v: None if 0 < v <= TOLERANCE_MAX else
+                           f"expected more than 0 and at most {TOLERANCE_MAX:g} (percent)"),
         replay=_get(st, "replay", bool, w, False),
-        break_every=_get(st, "break_every", int, w, 40, positive),
+        break_every=_get(st, "break_every", int, w, 40, _between(1, BREAK_EVERY_MAX, " trials")),
+        original=_get(st, "original", str, w, "shared",
+                      lambda v: None if v in ORIGINAL_MODES else f"must be one of {list(ORIGINAL_MODES)}"),
+        fps_given="fps" in st,
         path=Path(path) if str(path) != "<design>" else None,
     )
     clips = d.get("clips")
     if not isinstance(clips, list) or not clips:
         raise DesignError(f"{src}: [[clips]]: at least one base clip is needed")
+    seen_sources: dict[tuple, str] = {}
     for i, c in enumerate(clips):
         wc = f"{src}: clips[{i}]"
         if not isinstance(c, dict):
             raise DesignError(f"{wc}: expected a table")
-        design.clips.append(ClipSpec(
+        _check_keys(c, CLIP_KEYS, wc + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
+        spec = ClipSpec(
             name=_get(c, "name", str, wc, check=_name_ok),
-            source=_get(c, "source", str, wc),
-            scale=_get(c, "scale", float, wc, None, positive),
-            fps=_get(c, "fps", float, wc, None, positive),
+            source=_get(c, "source", str, wc, check=lambda v: None if 0 < len(v) <= 4096 else
+                        "expected a built-in name or a path"),
+            scale=_get(c, "scale", float, wc, None,
+                       _between(*SCALE_RANGE, " metres per file unit")),
+            fps=_get(c, "fps", float, wc, None, _between(*FPS_RANGE, " frames per second")),
             flips=_get(c, "flips", int, wc, None,
                        lambda v: None if 1 <= v <= 6 else "expected a whole number of flips from 1 to 6"),
             k_ratio=_get(c, "k_ratio", float, wc, 0.7,
-                         lambda v: None if 0.2 <= v <= 2 else "expected a fraction of k* from 0.2 to 2")))
+                         lambda v: None if 0.2 <= v <= 2 else "expected a fraction of k* from 0.2 to 2"),
+            accept_unphysical=_get(c, "accept_unphysical", bool, wc, False))
+        wc = f"{src}: clips[{i}] ({spec.name})"
+        key = (spec.source, spec.scale, spec.fps, spec.flips, spec.k_ratio if spec.flips else None)
+        if key in seen_sources:
+            raise DesignError(f"{wc}: the same source {spec.source!r} with the same options as clip "
+                              f"'{seen_sources[key]}'; each base clip is listed once")
+        seen_sources[key] = spec.name
+        design.clips.append(spec)
     names = [c.name for c in design.clips]
     if len(set(names)) != len(names):
         raise DesignError(f"{src}: clips: duplicate clip names {sorted({n for n in names if names.count(n) > 1})}")
@@ -213,6 +350,12 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         wg = f"{src}: groups[{i}]"
         if not isinstance(g, dict):
             raise DesignError(f"{wg}: expected a table")
+        _check_keys(g, GROUP_KEYS, wg + (f" ({g['name']})" if isinstance(g.get("name"), str) else ""))
+        gname = _get(g, "name", str, wg, check=_name_ok)
+        if gname in RESERVED_GROUP_NAMES:
+            raise DesignError(f"{wg}.name: '{gname}' is reserved (the manifest's reference and "
+                              f"shared-original rows); choose another name")
+        wg = f"{src}: groups[{i}] ({gname})"
         kind = _get(g, "kind", str, wg, check=lambda v: None if v in KINDS else f"must be one of {list(KINDS)}")
         profile = None
         if kind == "angular-momentum":
@@ -224,26 +367,57 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         levels = _get(g, "levels", list, wg)
         if not levels:
             raise DesignError(f"{wg}.levels: at least one level is needed")
+        if len(levels) > LEVELS_MAX:
+            raise DesignError(f"{wg}.levels: {len(levels)} levels; at most {LEVELS_MAX} per group")
+        top, excluded = LEVEL_BOUNDS[(kind, sign)]
+        what = f"{'an increase' if sign > 0 else 'a decrease'} of the {kind.replace('-', ' ')}"
         lv = []
         for v in levels:
-            if isinstance(v, bool) or not isinstance(v, (int, float)) or v < 0:
-                raise DesignError(f"{wg}.levels: each level is a percentage >= 0, got {v!r}")
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise DesignError(f"{wg}.levels: each level is a number (percent), got {_show(v)}")
+            if not math.isfinite(v) or v < 0:
+                raise DesignError(f"{wg}.levels: {_pct(v)} %: each level is the size of the error in "
+                                  f"percent, 0 or more (the direction is the group's sign = {sign})")
+            if v > top or (excluded and v >= top):
+                limit = f"below {top:g} %" if excluded else f"at most {top:g} %"
+                why = " (it stops the rotation)" if kind == "angular-momentum" and sign < 0 else ""
+                raise DesignError(f"{wg}.levels: {_pct(v)} % is out of range: {what} must be "
+                                  f"{limit}{why}")
             lv.append(float(v))
         if len(set(lv)) != len(lv):
             raise DesignError(f"{wg}.levels: duplicate levels in {levels}")
-        if kind == "angular-momentum" and sign < 0 and max(lv) >= 90:
-            raise DesignError(f"{wg}.levels: a decrease of 90 % or more stops the rotation")
-        design.groups.append(Group(_get(g, "name", str, wg, check=_name_ok), kind, profile, sign, sorted(lv)))
+        default_orig = "shared" if design.original == "shared" and kind == "angular-momentum" else "own"
+        orig = _get(g, "original", str, wg, default_orig,
+                    lambda v: None if v in GROUP_ORIGINAL else f"must be one of {list(GROUP_ORIGINAL)}")
+        if orig == "shared" and kind != "angular-momentum":
+            raise DesignError(f"{wg}.original: only angular-momentum groups share their original "
+                              f"(the paper's take-off group had its own); use original = \"own\"")
+        design.groups.append(Group(gname, kind, profile, sign, sorted(lv), orig))
     gnames = [g.name for g in design.groups]
     if len(set(gnames)) != len(gnames):
-        raise DesignError(f"{src}: groups: duplicate group names")
+        raise DesignError(f"{src}: groups: duplicate group names "
+                          f"{sorted({n for n in gnames if gnames.count(n) > 1})}")
     ref = d.get("reference", {})
     if not isinstance(ref, dict):
         raise DesignError(f"{src}: [reference]: expected a table with 'clips'")
+    _check_keys(ref, REFERENCE_KEYS, f"{src}: [reference]")
     design.reference = _get(ref, "clips", list, f"{src}: [reference]", [])
     for r in design.reference:
         if r not in names:
-            raise DesignError(f"{src}: [reference].clips: {r!r} is not one of the clips {names}")
+            raise DesignError(f"{src}: [reference].clips: {_show(r)} is not one of the clips {names}")
+    if len(set(design.reference)) != len(design.reference):
+        raise DesignError(f"{src}: [reference].clips: {sorted({r for r in design.reference if design.reference.count(r) > 1})} "
+                          f"listed more than once; each reference clip is shown once")
+    stimuli = design.stimulus_names()
+    if len(set(stimuli)) != len(stimuli):
+        dup = sorted({s for s in stimuli if stimuli.count(s) > 1})
+        raise DesignError(f"{src}: clip and group names give the same stimulus name twice ({dup[:3]}); "
+                          f"rename a clip or group")
+    n_trials = design.repetitions * design.n_test_stimuli()
+    if n_trials > TRIALS_MAX:
+        raise DesignError(f"{src}: [study].repetitions = {design.repetitions} × {design.n_test_stimuli()} "
+                          f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "
+                          f"(fewer repetitions, clips, groups or levels)")
     return design
 
 
@@ -256,7 +430,13 @@ def _name_ok(v: str):
 def load_design(path) -> Design:
     p = Path(path)
     try:
+        size = p.stat().st_size
+        if size > MAX_DESIGN_BYTES:
+            raise DesignError(f"{p}: {size} bytes; a design is a short text file (at most "
+                              f"{MAX_DESIGN_BYTES} bytes)")
         text = p.read_text()
     except OSError as e:
         raise DesignError(f"{p}: cannot read design: {e.strerror}") from None
+    except UnicodeDecodeError:
+        raise DesignError(f"{p}: not a text file (a design is TOML, UTF-8)") from None
     return parse_design(text, p)

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from .analyse import analyse
-from .design import Design, DesignError
+from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
 from .errors import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
 from .motion.bvh import bvh_text, load_bvh
 from .motion.clip import Clip
@@ -35,11 +35,18 @@ MANIFEST_COLUMNS = [
     "seed", "sha256",
     "L_ratio_window", "L_change_pct", "flight_s", "jump_height_m", "jump_length_m",
     "dp_takeoff", "dp_landing", "frames", "fps", "bvh", "npz",
+    "original", "accept_unphysical",
 ]
 
 
 def load_base_clip(spec, design: Design) -> Clip:
-    """A design's base clip: a built-in name or a BVH path (relative to the design)."""
+    """A design's base clip: a built-in name or a BVH path (relative to the design).
+
+    A BVH clip is read at its entry's ``fps`` (else the header's) and, when the
+    design writes ``[study] fps``, resampled to that rate with the project's slerp
+    sampler (:func:`stimuli.edit.timing.sample`); ``meta["fps_read"]`` keeps the rate
+    it was read at.  With ``flips``, the base clip passes the physics gate
+    (:func:`physics_gate`) before it is made an N-flip one."""
     from . import BUILTIN_NAMES, builtin
     if spec.source in BUILTIN_NAMES:
         clip = builtin(spec.source, fps=spec.fps or design.fps, total_mass=design.total_mass)
@@ -51,15 +58,47 @@ def load_base_clip(spec, design: Design) -> Clip:
             raise DesignError(f"clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
                               f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
         clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
+        if getattr(design, "fps_given", False) and abs(clip.fps - design.fps) > 1e-9 * design.fps:
+            clip = resample(clip, design.fps)
     if getattr(spec, "flips", None):
         from .edit.multiflip import FlipEditError, multiflip
+        a = analyse(clip, total_mass=design.total_mass)
+        physics_gate(spec, a, design)
         try:
-            clip = multiflip(analyse(clip, total_mass=design.total_mass), spec.flips,
-                             k_ratio=spec.k_ratio).clip
+            clip = multiflip(a, spec.flips, k_ratio=spec.k_ratio).clip
         except FlipEditError as e:
             raise DesignError(f"clips '{spec.name}': flips = {spec.flips}: {e}") from None
         clip.meta["name"] = spec.name
     return clip
+
+
+def resample(clip: Clip, fps: float) -> Clip:
+    """``clip`` at ``fps`` frames per second, the same motion in time (slerp of the
+    rotations, linear root): frame k is the source at time k / fps."""
+    from .edit.timing import sample
+    n = int(np.floor((clip.num_frames - 1) * fps / clip.fps + 1e-9)) + 1
+    out = sample(clip, np.arange(n) * (clip.fps / fps))
+    meta = dict(out.meta)
+    meta.pop("source_frames", None)
+    meta["fps_read"] = clip.meta.get("fps_read", clip.fps)
+    meta["fps_source"] = f"{clip.meta.get('fps_source', 'read')}, resampled to {fps:g} ([study] fps)"
+    return Clip(out.skeleton, float(fps), out.root_pos, out.rotations, out.joint_pos, meta)
+
+
+def physics_gate(spec, a, design: Design | None = None) -> None:
+    """Refuse a base clip that physics contradicts (apparent gravity, or the body's
+    height from the skeleton; see :func:`stimuli.analyse.physics_advice`), naming
+    the fix as design keys, unless its entry says ``accept_unphysical = true``."""
+    from .analyse import physics_advice
+    adv = physics_advice(a.apparent_gravity, a.clip)
+    if adv is None or getattr(spec, "accept_unphysical", False):
+        return
+    where = f"{design.path}: " if design is not None and design.path is not None else ""
+    fix = adv.keys()
+    extra = " or omit scale (it is guessed from the skeleton)" if adv.scale is not None and \
+        spec.scale is not None and adv.scale_unit and "1.70 m" not in adv.scale_unit else ""
+    raise DesignError(f"{where}clips '{spec.name}' ({spec.source}): {adv.problem} Fix its [[clips]] "
+                      f"entry: {fix}{extra}; or set accept_unphysical = true to build it as it is.")
 
 
 def derived_seed(seed: int, name: str) -> int:
@@ -109,15 +148,35 @@ class _Progress:
         sys.stderr.flush()
 
 
+#: the pseudo-group of a clip's shared original (level 0 of every sharing group)
+SHARED_ORIGINAL = Group(SHARED_ORIGINAL_GROUP, "angular-momentum", None, 1, [0.0], "shared")
+
+
 def plan(design: Design) -> list[tuple]:
     """(stimulus name, clip spec, group or None, level) for every stimulus, in
-    manifest order: reference clips first, then clip × group × level."""
+    manifest order: reference clips first, then per clip its shared original
+    (group ``original``, when groups share it) and group × level, the sharing
+    groups without a level 0 of their own."""
     rows = [(f"{r}_reference", design.clip(r), None, 0.0) for r in design.reference]
     for c in design.clips:
+        if design.shares_original:
+            rows.append((f"{c.name}_{SHARED_ORIGINAL_GROUP}", c, SHARED_ORIGINAL, 0.0))
         for g in design.groups:
             for lv in g.levels:
+                if lv == 0 and g.original == "shared":
+                    continue
                 rows.append((f"{c.name}_{g.name}_{lv:g}", c, g, lv))
     return rows
+
+
+def original_of(design: Design, clip_name: str, group) -> str:
+    """The stimulus a row's d′ compares with: the clip's shared original, or its
+    group's own level 0 ("" for reference rows and groups without one)."""
+    if group is None:
+        return ""
+    if group.original == "shared" and (group is SHARED_ORIGINAL or design.shares_original):
+        return f"{clip_name}_{SHARED_ORIGINAL_GROUP}"
+    return f"{clip_name}_{group.name}_0" if 0.0 in group.levels else ""
 
 
 def build_stimuli(design: Design, out, force: bool = False, progress: bool = True) -> list[dict]:
@@ -134,6 +193,8 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
         for c in design.clips:
             clip = load_base_clip(c, design)
             a = analyse(clip, total_mass=design.total_mass)
+            if not c.flips:                      # an N-flip clip's base passed it before the edit
+                physics_gate(c, a, design)
             if a.flight is None:
                 raise StimulusError(f"clips '{c.name}' ({c.source}): the analyser finds no flight "
                                     f"phase, so it cannot carry the study's errors")
@@ -180,6 +241,8 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
                 "jump_length_m": m["jump_length_m"], "dp_takeoff": m["dp_takeoff"],
                 "dp_landing": m["dp_landing"], "frames": inj.clip.num_frames, "fps": inj.clip.fps,
                 "bvh": f"{name}.bvh", "npz": f"{name}.npz",
+                "original": original_of(design, spec.name, group),
+                "accept_unphysical": "true" if spec.accept_unphysical else "false",
             })
             bar.step(name)
         write_manifest(tmp / "manifest.csv", rows)

@@ -43,9 +43,13 @@ def write_test_video(path, *, size=(64, 48), frames: int = 30, fps: float = 30.0
 
 def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_every=40,
                      clips=("backflip",), levels=(0, 25), groups=DEMO_GROUPS,
-                     reference=True) -> str:
+                     reference=True, original: str | None = "per-group") -> str:
+    """A demo design.  ``original``: written as ``[study] original`` — the demo keeps
+    every group's own level 0 ("per-group") so its trial counts stay simple;
+    "shared" (or None: the default) gives the paper's shared original."""
     lines = ["[study]", f'name = "{name}"', f"seed = {seed}", f"repetitions = {repetitions}",
-             f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}", ""]
+             f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}"]
+    lines += ([f'original = "{original}"'] if original else []) + [""]
     for c in clips:
         lines += ["[[clips]]", f'name = "{c}"', f'source = "{c}"', ""]
     if reference:
@@ -63,7 +67,7 @@ def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, siz
     """Write ``design.toml``, ``manifest.csv`` and ``render/<stimulus>.mp4`` into ``out``
     (keyword arguments go to :func:`demo_design_text`)."""
     from stimuli.design import parse_design
-    from stimuli.stimset import MANIFEST_COLUMNS, plan, write_manifest
+    from stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     text = demo_design_text(**design)
@@ -77,7 +81,8 @@ def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, siz
                  profile=(group.profile or "") if group else "", level=level,
                  nominal_error_pct=(group.sign * level) if group else 0.0, takeoff=10, landing=20,
                  seed=0, sha256="0" * 64, frames=video_frames, fps=video_fps,
-                 bvh=f"{name}.bvh", npz=f"{name}.npz")
+                 bvh=f"{name}.bvh", npz=f"{name}.npz",
+                 original=original_of(d, spec.name, group), accept_unphysical="false")
         rows.append(r)
     write_manifest(out / "manifest.csv", rows)
     if videos:

@@ -8,7 +8,10 @@ learning effect. Each motion was shown twice."
 stimulus of every non-reference group appears once: each group's stimuli (all
 clips × levels, level 0 — the original — included) are shuffled, and the groups
 are interleaved round by round, one stimulus of each group per round, the
-groups' order shuffled again in every round.  A block never starts with the
+groups' order shuffled again in every round.  The angular-momentum groups'
+shared originals (group ``original``, one per clip) form a group of their own
+whose few rows are placed in rounds drawn at random, so each original is shown
+``repetitions`` times, not once per group.  A block never starts with the
 motion the previous one ended with.  The random generator is seeded
 from the design seed and the participant ID through SHA-256
 (:func:`participant_seed`), never Python's ``hash()``, so the same participant
@@ -108,15 +111,21 @@ def trial_order(design, manifest: list[dict], participant: str, session: int = 1
 
 def _block(groups: dict[str, list[dict]], rng: random.Random) -> list[tuple[dict, str]]:
     """One repetition: each group's rows shuffled, then one row of each group per
-    round, the groups' order shuffled in every round."""
+    round, the groups' order shuffled in every round.  A group with fewer rows
+    than the largest (the shared originals: one per clip) takes part in rounds
+    drawn at random, so its rows are spread over the block, not bunched at its
+    start."""
     queues = {}
     for g, rows in groups.items():
         rows = list(rows)
         rng.shuffle(rows)
         queues[g] = rows
+    R = max(len(q) for q in queues.values())
+    rounds = {g: (set(range(R)) if len(q) == R else set(rng.sample(range(R), len(q))))
+              for g, q in queues.items()}
     block = []
-    while any(queues.values()):
-        names = [g for g, q in queues.items() if q]
+    for r in range(R):
+        names = [g for g in queues if r in rounds[g]]
         rng.shuffle(names)
         for g in names:
             block.append((queues[g].pop(), g))

@@ -4,7 +4,7 @@ The study of Majkowska & Faloutsos 2007 (Section 7) on the built-in, physically
 exact flips:
 
 1. ``design.toml``      the paper's design (what ``flipstudy init`` writes)
-2. ``study/``           52 stimuli, each measured by the analyser (``flipstudy stimuli``)
+2. ``study/``           46 stimuli, each measured by the analyser (``flipstudy stimuli``)
 3. ``study/render/``    stimulus videos, ghost and marker-trail composites, one
                         camera and one style for all (``flipstudy render``)
 4. ``study/sessions.sqlite``  a simulated panel of 19 participants answering every
@@ -36,7 +36,7 @@ SHEET_ERROR = "backflip_abrupt-decrease_50"
 #: video size of the reproduce run (as ``flipstudy render``'s default)
 SIZE = (640, 480)
 #: the reproduce run renders without anti-aliasing: SSAA (``flipstudy render``'s
-#: default) costs 3-4x the time (52 videos: ~4 min instead of ~1 on 2 cores);
+#: default) costs 3-4x the time (46 videos: ~4 min instead of ~1 on 2 cores);
 #: ``flipstudy render OUT/study`` re-renders them at final quality
 STYLE = {"anti_aliasing": "none"}
 
@@ -218,7 +218,7 @@ def add_commands(subparsers) -> None:
         "reproduce", help="the whole pipeline on the embedded default: design → stimuli → render → "
                           "simulated sessions → analysis",
         description="Reproduce the study of Majkowska & Faloutsos 2007 (Section 7) on the built-in "
-                    "flips: the paper's design, its 52 stimuli (measured), videos and composites, a "
+                    "flips: the paper's design, its 46 stimuli (measured), videos and composites, a "
                     "simulated panel of participants, the analysis, the Table-2 layout and the "
                     "figures. Built in a hidden folder beside OUT and moved into place at the end.")
     p.add_argument("--out", default="flipstudy-paper", metavar="OUT",

@@ -78,6 +78,17 @@ def load_study(study_dir) -> Study:
         if not STIMULUS_RE.fullmatch(name or ""):
             raise SessionError(f"{d / 'manifest.csv'}: line {i}: stimulus name {name!r} is not a "
                                f"plain file name")
+    from stimuli.design import TRIALS_MAX
+    names = [r.get("stimulus", "") for r in manifest]
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        raise SessionError(f"{d / 'manifest.csv'}: stimulus {dup[0]!r} is listed more than once; "
+                           f"rebuild the stimuli with `flipstudy stimuli`")
+    n_tests = sum(1 for r in manifest if r.get("group") != "reference")
+    if n_tests * design.repetitions > TRIALS_MAX:
+        raise SessionError(f"{d / 'manifest.csv'}: {n_tests} test stimuli × repetitions = "
+                           f"{design.repetitions} is {n_tests * design.repetitions} trials per "
+                           f"participant; at most {TRIALS_MAX}")
     sha = hashlib.sha256((d / "manifest.csv").read_bytes()).hexdigest()
     return Study(d, design, manifest, sha, {r["stimulus"]: r for r in manifest})
 

@@ -11,7 +11,11 @@ the model's ratings in expectation.
 
 The default model is Table 2 of Majkowska & Faloutsos 2007 (mean ratings, % of
 "correct" answers); its empty smooth-increase 37 % cell is interpolated
-between 25 % (72) and 50 % (41).
+between 25 % (72) and 50 % (41).  The shared original of the angular-momentum
+groups (group ``original``) is answered "correct" with their level-0 72 %, the
+take-off group's own original with 63 %.  A model without an ``original``
+group answers the shared original with the mean of the level-0 probabilities
+of the groups that share it.
 
 Model file (TOML)::
 
@@ -58,6 +62,8 @@ PAPER_RATINGS = {
     "abrupt-increase": ((0, 17, 25, 37, 50), (72, 76, 78, 48, 44)),
     "abrupt-decrease": ((0, 17, 25, 37, 50), (72, 83, 68, 33, 22)),
     "takeoff-increase": ((0, 10, 20, 30, 40), (63, 81, 50, 63, 18)),
+    # the angular-momentum groups' shared original (the 72 of their level-0 column)
+    "original": ((0,), (72,)),
 }
 DEFAULT_SIGMA = 0.3
 
@@ -183,6 +189,23 @@ def load_model(path) -> ObserverModel:
     return parse_model(text, str(p))
 
 
+def _with_shared_original(model: ObserverModel, manifest: list[dict]) -> ObserverModel:
+    """``model`` with an ``original`` group when the manifest has shared originals
+    and the model lacks one: the mean level-0 probability of the sharing groups."""
+    from stimuli.design import SHARED_ORIGINAL_GROUP as SO
+    if SO in model.groups or not any(r.get("group") == SO for r in manifest):
+        return model
+    sharing = sorted({r["group"] for r in manifest
+                      if r.get("group") not in (SO, "reference") and r.get("original", "").endswith(f"_{SO}")})
+    if not sharing:
+        raise ModelError(f"observer model ({model.source}) has no group {SO!r} for the shared "
+                         f"originals; add [groups.{SO}] levels = [0] p_correct = [...]")
+    p = float(np.mean([model.p_correct(g, 0.0) for g in sharing]))
+    groups = dict(model.groups)
+    groups[SO] = (np.array([0.0]), np.array([p]))
+    return ObserverModel(groups, model.sigma, model.source)
+
+
 def sim_ids(n: int) -> list[str]:
     width = max(3, len(str(n)))
     return [f"sim{i:0{width}d}" for i in range(1, n + 1)]
@@ -214,6 +237,7 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
         model = load_model(model)
     study = load_study(study_dir)
     rows = study.by_name
+    model = _with_shared_original(model, study.manifest)
     groups = {r["group"] for r in study.manifest if r["group"] != "reference"}
     for g in sorted(groups):                   # fail before anything is stored
         for r in study.manifest:

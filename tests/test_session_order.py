@@ -31,28 +31,57 @@ def test_participant_seed_is_sha256_of_design_seed_and_id():
 
 
 def test_paper_design_order_blocks_groups_and_levels():
+    """The paper's design: the four angular-momentum groups share one original per
+    clip (group "original"), the take-off group has its own level 0; each motion
+    file is shown `repetitions` (2) times — before, each original was shown 10 times."""
     d, rows = paper_manifest()
     trials = trial_order(d, rows, "P01")
     tests = [r for r in rows if r["group"] != "reference"]
-    assert len(tests) == 2 * 5 * 5
-    assert len(trials) == d.repetitions * len(tests) == 100
-    assert [t.trial for t in trials] == list(range(1, 101))
+    assert len(tests) == 2 * (4 * 4 + 1 + 5)
+    assert len(trials) == d.repetitions * len(tests) == 88
+    assert [t.trial for t in trials] == list(range(1, 89))
+    assert set(collections.Counter(t.stimulus for t in trials).values()) == {d.repetitions}
     G = len(d.groups)
     for rep in (1, 2):
         block = [t for t in trials if t.repetition == rep]
         # every stimulus of every non-reference group exactly once per block
         assert collections.Counter(t.stimulus for t in block) == collections.Counter(
             r["stimulus"] for r in tests)
-        # groups interleaved: every consecutive round of G trials holds each group once
-        for k in range(0, len(block), G):
-            assert sorted(t.group for t in block[k:k + G]) == sorted(g.name for g in d.groups)
-    # level-0 originals are trials too, in every group
-    assert {(t.group, t.level) for t in trials if t.level == 0} == {(g.name, 0.0) for g in d.groups}
+        # groups interleaved round by round: the take-off group (10 rows, the most) is in
+        # every round, every other group at most once a round, so in every prefix of the
+        # block no group is more than one ahead of it
+        seen = collections.Counter()
+        for t in block:
+            seen[t.group] += 1
+            assert seen[t.group] <= seen["takeoff-increase"] + 1, (rep, t)
+        assert set(seen) == {g.name for g in d.groups} | {"original"} and len(d.groups) == G
+    # level-0 trials: the shared original of each clip and the take-off group's own
+    assert {(t.group, t.clip, t.level) for t in trials if t.level == 0} == {
+        (g, c, 0.0) for g in ("original", "takeoff-increase") for c in ("backflip", "frontflip")}
     # the trials are rows of the manifest, with its condition
     by = {r["stimulus"]: r for r in rows}
     for t in trials:
         assert (t.group, t.clip, t.level) == (by[t.stimulus]["group"], by[t.stimulus]["clip"],
                                               float(by[t.stimulus]["level"]))
+
+
+def test_shared_originals_spread_over_the_block():
+    """The two shared originals are not bunched at the start of every block: over
+    many participants their positions cover the block."""
+    d, rows = paper_manifest()
+    pos = []
+    for i in range(60):
+        trials = trial_order(d, rows, f"P{i:02d}")
+        pos += [t.trial - (t.repetition - 1) * 44 for t in trials if t.group == "original"]
+    assert min(pos) <= 6 and max(pos) >= 38
+
+
+def test_per_group_originals_as_before():
+    """original = "per-group": every group has its own level 0 (100 trials)."""
+    d = parse_design(PAPER_DESIGN.replace('original = "shared"', 'original = "per-group"'))
+    names = [n for n, _, g, _ in plan(d) if g is not None]
+    assert len(names) == 50 and not any(n.endswith("_original") for n in names)
+    assert sum(n.endswith("_0") for n in names) == 10
 
 
 def test_order_is_random_within_group_and_seeded_per_participant():
@@ -70,7 +99,9 @@ def test_order_is_random_within_group_and_seeded_per_participant():
     assert sorted(within) == sorted(manifest_order) and within != manifest_order
     # over many participants every group leads a block about equally often
     firsts = collections.Counter(trial_order(d, rows, f"P{i:03d}")[0].group for i in range(200))
-    assert len(firsts) == 5 and min(firsts.values()) > 20
+    # (the shared originals, 2 rows in 10 rounds, lead about 1 block in 20)
+    assert set(firsts) == {g.name for g in d.groups} | {"original"}
+    assert min(firsts[g.name] for g in d.groups) > 20 and firsts["original"] < 25
 
 
 def test_order_does_not_depend_on_python_hash_seed():
@@ -122,7 +153,7 @@ def test_timeline_screens_and_breaks():
     assert types[:3] == ["instructions", "demographics", "examples"]
     assert types[-1] == "end" and tl["start"] == 0
     trials = [x for x in tl["timeline"] if x["type"] == "trial"]
-    assert [x["trial"] for x in trials] == list(range(1, 101))
+    assert [x["trial"] for x in trials] == list(range(1, 89))
     assert [x["stimulus"] for x in trials] == [t.stimulus for t in s.trials]
     assert all(x["video"] == f"/stimuli/{x['stimulus']}.mp4" and x["replay"] is False for x in trials)
     # a break after every 40 trials (not after the last)

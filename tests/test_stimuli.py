@@ -122,7 +122,7 @@ def test_default_design_on_builtin_flips_is_exact(tmp_path):
     d = parse_design(PAPER_DESIGN)
     build_stimuli(d, tmp_path / "study", progress=False)
     man = read_manifest(tmp_path / "study")
-    assert len(man) == 2 + 2 * 25
+    assert len(man) == 2 + 2 * (4 * 4 + 1 + 5)      # the AM groups share one original per clip
     kinds = {r["kind"] for r in man}
     assert {"angular-momentum", "takeoff-angle"} <= kinds
     for r in man:
@@ -137,7 +137,14 @@ def test_default_design_on_builtin_flips_is_exact(tmp_path):
     # both signs and both profiles are there, up to ±50 %
     am = [float(r["nominal_error_pct"]) for r in man if r["kind"] == "angular-momentum"]
     assert min(am) == -50.0 and max(am) == 50.0
-    assert {r["profile"] for r in man if r["kind"] == "angular-momentum"} == {"smooth", "abrupt"}
+    assert {r["profile"] for r in man if r["kind"] == "angular-momentum"
+            and r["group"] != "original"} == {"smooth", "abrupt"}
+    # the shared originals: one per clip, unmodified (no profile, level 0), and every AM
+    # stimulus names it as the original its d' is computed against
+    orig = [r for r in man if r["group"] == "original"]
+    assert [r["stimulus"] for r in orig] == ["backflip_original", "frontflip_original"]
+    assert all(r["profile"] == "" and float(r["level"]) == 0 for r in orig)
+    assert {r["original"] for r in man if r["kind"] == "angular-momentum"} == {r["stimulus"] for r in orig}
 
 
 def test_default_design_from_real_cmu_flips(tmp_path):
@@ -145,7 +152,7 @@ def test_default_design_from_real_cmu_flips(tmp_path):
     d = _real_design(tmp_path)
     rows = build_stimuli(d, tmp_path / "study", progress=False)
     man = read_manifest(tmp_path / "study")
-    assert len(man) == len(rows) == 2 + 2 * 25
+    assert len(man) == len(rows) == 2 + 2 * (4 * 4 + 1 + 5)   # shared AM original per clip
     for r in man:
         assert (tmp_path / "study" / r["bvh"]).exists() and (tmp_path / "study" / r["npz"]).exists()
         got = float(r["measured_error_pct"])
