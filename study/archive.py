@@ -42,7 +42,7 @@ def _db_answers(path: Path) -> tuple[dict, dict]:
     """(real, simulated): participant → number of answers, from ``sessions.sqlite``."""
     real: dict = {}
     sim: dict = {}
-    uri = f"file:{path}?mode=ro"
+    uri = f"file:{path}?mode=rw"           # never creates; as the last reader it removes the -wal/-shm it made
     conn = sqlite3.connect(uri, uri=True, timeout=30.0)
     try:
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
