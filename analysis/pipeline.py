@@ -234,8 +234,11 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
 
 
 def _labelled(fig, label: str):
-    """The participants the figure shows, in small type under it."""
-    fig.text(0.5, 0.0, label, ha="center", va="top", fontsize=7, color="#444444")
+    """The participants the figure shows, in small type under everything else
+    (legends below the axes included)."""
+    from .figures import style
+    with style():
+        fig.supxlabel(label, fontsize=7, color="#444444")
     return fig
 
 
