@@ -253,9 +253,9 @@ from stimuli.stimset import build_stimuli
 
 def slow(fn):                             # widen every folder step, so that kills land there too
     def f(*a, **k):
-        time.sleep(0.03)
+        time.sleep(0.1)
         r = fn(*a, **k)
-        time.sleep(0.03)
+        time.sleep(0.1)
         return r
     return f
 ss._renameat2, os.rename, shutil.rmtree = slow(ss._renameat2), slow(os.rename), slow(shutil.rmtree)
@@ -272,15 +272,19 @@ while True:
 def test_sigkilled_builds_never_leave_out_without_a_complete_study(tmp_path):
     out = tmp_path / "study"
     d3, d4 = design_file(tmp_path, 3), design_file(tmp_path, 4)
+    t0 = time.perf_counter()
     build_stimuli(parse_design(d3.read_text(), d3), out, progress=False)
+    span = 3.0 * (time.perf_counter() - t0) + 0.4        # a few builds' time on this machine now
     rng = random.Random(15)
     seen, builds = set(), 0
     for k in range(10):
-        p = subprocess.Popen([sys.executable, "-c", LOOP_BUILD, str(out), str(d3), str(d4)],
+        now = d3 if (out / "design.toml").read_text() == d3.read_text() else d4
+        order = [d4, d3] if now == d3 else [d3, d4]     # the first build changes the study
+        p = subprocess.Popen([sys.executable, "-c", LOOP_BUILD, str(out), *map(str, order)],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env())
         try:
             assert p.stdout.readline().strip() == "ready", p.stderr.read()
-            time.sleep(rng.uniform(0.1, 1.2))           # inside some build, swap or clean-up
+            time.sleep(rng.uniform(0.1, span))          # inside some build, swap or clean-up
         finally:
             p.send_signal(signal.SIGKILL)
             p.wait()
