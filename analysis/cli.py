@@ -40,6 +40,11 @@ def add_commands(subparsers) -> None:
     p.add_argument("--psychometric", choices=("psignifit", "mle", "none"), default="psignifit",
                    help="psychometric fit: psignifit (Bayesian, default), mle (maximum likelihood "
                         "with parametric bootstrap) or none")
+    p.add_argument("--include-simulated", action="store_true",
+                   help="keep simulated participants (column simulated=true; left out by default)")
+    p.add_argument("--include-incomplete", action="store_true",
+                   help="keep sessions that did not answer every trial (column complete=false; left "
+                        "out by default)")
     p.add_argument("--no-gee", action="store_true", help="skip the GEE tests")
     p.add_argument("--no-figures", action="store_true", help="tables only")
     p.add_argument("--image", action="append", default=[], metavar="[LABEL=]PNG",
@@ -70,7 +75,9 @@ def handler(args) -> int:
         out = Path(args.out) if args.out else src.parent / "analysis"
         res = analyze(src, out, correction=args.correction, images=_images(args.image) or None,
                       seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
-                      gee=not args.no_gee, figures=not args.no_figures)
+                      gee=not args.no_gee, figures=not args.no_figures,
+                      include_simulated=args.include_simulated,
+                      include_incomplete=args.include_incomplete)
     except NeedsExport as e:
         print(f"flipstudy analyze: {e}", file=sys.stderr)
         return 2
@@ -81,8 +88,19 @@ def handler(args) -> int:
         print(json.dumps(res.to_dict(), indent=2, ensure_ascii=False))
         return 0
     s = res.settings
-    print(f"analysed {s['n_trials']} trials of {s['n_participants']} participants "
+    who = s["participants"]
+    print(f"analysed {s['n_trials']} trials of {s['participants_label']} "
           f"({len(s['groups'])} groups); correction for rates of 0 or 1: {s['correction']}")
+    if who["simulated_left_out"]:
+        print(f"left out {len(who['simulated_left_out'])} simulated participant(s) "
+              f"(--include-simulated to keep them)")
+    if who["incomplete_left_out"]:
+        print(f"left out {len(who['incomplete_left_out'])} incomplete session(s) "
+              f"(--include-incomplete to keep them): {', '.join(who['incomplete_left_out'][:8])}"
+              + (", ..." if len(who["incomplete_left_out"]) > 8 else ""))
+    if who["n"] < 5:
+        print(f"note: with {who['n']} participant(s), intervals and tests over participants are "
+              f"not meaningful (notes.md)")
     print()
     from .tables import to_markdown
     print(to_markdown(res.table))

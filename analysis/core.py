@@ -196,9 +196,13 @@ def summarize(df: pd.DataFrame, correction: str = "loglinear", n_boot: int = 200
              f"Rates of 0 or 1: {CORRECTION_TEXT[correction]}; the pooled rates of "
              f"{int(corr.sum())} of {K} rows were corrected (column 'corrected'), and "
              f"{int(_n_corrected_participant_cells(cnt, correction))} participant × cell d′ values.",
-             f"Confidence intervals: {ci:.0%} expanded-percentile bootstrap over participants "
-             f"(Hesterberg 2015: the {level:.2%} percentile interval, which has {ci:.0%} coverage "
-             f"with {P} participants; {n_boot} resamples, seed {seed}).",
+             (f"Confidence intervals: {ci:.0%} expanded-percentile bootstrap over participants "
+              f"(Hesterberg 2015: the {level:.2%} percentile interval, which has {ci:.0%} coverage "
+              f"with {P} participants; {n_boot} resamples, seed {seed})." if P >= 5 else
+              f"Intervals: percentile bootstrap over participants ({n_boot} resamples, seed {seed}); "
+              f"with {P} participant{'s' if P != 1 else ''} a bootstrap over participants has no "
+              f"known coverage (it needs at least 5), so these intervals are not {ci:.0%} "
+              f"confidence intervals."),
              "Levels with negative d′ (modified motions judged correct more often than the "
              "original) are kept as they are."]
     missing = [g for g in cnt.groups if cnt.orig[(cnt.cells["group"] == g).to_numpy()][0] < 0]

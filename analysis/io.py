@@ -162,3 +162,77 @@ def group_order(groups) -> list[str]:
 def level_order(levels) -> list[float]:
     """Levels by magnitude, then sign (0, 10, −10, 20, …)."""
     return sorted(set(float(x) for x in levels), key=lambda v: (abs(v), v < 0))
+
+
+_TRUE = {"1", "true", "yes", "y", "t"}
+
+
+def _truthy(col: pd.Series) -> pd.Series:
+    if col.dtype == bool:
+        return col
+    return col.astype(str).str.strip().str.lower().isin(_TRUE)
+
+
+def select_participants(df: pd.DataFrame, *, include_simulated: bool = False,
+                        include_incomplete: bool = False) -> tuple[pd.DataFrame, dict]:
+    """Leave out simulated participants and incomplete sessions (unless asked to
+    keep them) and say who was used.
+
+    A participant is simulated when the table says so: column ``simulated``
+    true, or (tables exported before that column) ``input`` = ``simulated``.  A
+    session is incomplete when column ``complete`` is false.  Tables without
+    these columns cannot tell, and the returned ``marked`` says so.  Returns the
+    selected rows and ``{"n": used participants, "real": [...], "simulated":
+    [...used], "simulated_left_out": [...], "incomplete_left_out": ["P07/1 (6
+    answers)", ...], "incomplete_kept": [...], "marked": {"simulated": bool,
+    "complete": bool}}``.
+    """
+    if "simulated" in df.columns:
+        sim_row = _truthy(df["simulated"])
+    elif "input" in df.columns:
+        sim_row = df["input"].astype(str).str.strip() == "simulated"
+    else:
+        sim_row = pd.Series(False, index=df.index)
+    sim_ids = set(df.loc[sim_row, "participant"])
+    marked = {"simulated": "simulated" in df.columns or "input" in df.columns,
+              "complete": "complete" in df.columns}
+    keep = pd.Series(True, index=df.index)
+    left_sim = []
+    if not include_simulated:
+        left_sim = sorted(sim_ids)
+        keep &= ~df["participant"].isin(sim_ids)
+    inc_left, inc_kept = [], []
+    if marked["complete"]:
+        inc = ~_truthy(df["complete"])
+        session = df["session"].astype(str) if "session" in df.columns else pd.Series("1", index=df.index)
+        for (p, s), n in df[inc & keep].groupby([df["participant"], session]).size().items():
+            (inc_kept if include_incomplete else inc_left).append(f"{p}/{s} ({n} answers)")
+        if not include_incomplete:
+            keep &= ~inc
+    out = df[keep].reset_index(drop=True)
+    used = sorted(set(out["participant"]))
+    info = {"n": len(used), "real": [p for p in used if p not in sim_ids],
+            "simulated": [p for p in used if p in sim_ids], "simulated_left_out": left_sim,
+            "incomplete_left_out": inc_left, "incomplete_kept": inc_kept, "marked": marked}
+    return out, info
+
+
+def participants_label(info: dict) -> str:
+    """One line for every table and figure: which participants it used, e.g.
+    ``"N = 12 participants (12 real, 0 simulated); left out: 19 simulated, 2
+    incomplete sessions"``."""
+    s = (f"N = {info['n']} participant{'s' if info['n'] != 1 else ''} "
+         f"({len(info['real'])} real, {len(info['simulated'])} simulated)")
+    left = []
+    if info["simulated_left_out"]:
+        left.append(f"{len(info['simulated_left_out'])} simulated")
+    if info["incomplete_left_out"]:
+        n = len(info["incomplete_left_out"])
+        left.append(f"{n} incomplete session{'s' if n != 1 else ''}")
+    if left:
+        s += "; left out: " + ", ".join(left)
+    if info["incomplete_kept"]:
+        s += f"; {len(info['incomplete_kept'])} incomplete session(s) kept"
+    if not info["marked"]["simulated"]:
+        s += "; the table does not mark simulated participants"
+    return s

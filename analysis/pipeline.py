@@ -10,13 +10,16 @@ import numpy as np
 import pandas as pd
 
 from .core import summarize
-from .io import group_order, load_responses
+from .io import ResponsesError, group_order, load_responses, participants_label, select_participants
 from .sdt import CORRECTION_TEXT, normalise_correction
 from .stats import fit_psychometric, gee_levels
 from .tables import paper_layout, to_latex, to_markdown
 
 #: the default figure-sheet image slots, in display order
 IMAGE_SLOTS = ("ghost original", "ghost strongest error", "trail original", "trail strongest error")
+
+#: below this many participants, intervals and tests over participants are not meaningful
+MIN_PARTICIPANTS = 5
 
 PAPER_CAPTION = ("Mean ratings (percent of answers \"correct\") and sensitivity d′ (in parentheses) "
                  "per error group and level.")
@@ -80,7 +83,8 @@ def _normalise_images(images) -> dict:
 
 def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=None, seed=0,
             n_boot: int = 2000, ci: float = 0.95, psychometric: str = "psignifit",
-            gee: bool = True, figures: bool = True) -> Result:
+            gee: bool = True, figures: bool = True, include_simulated: bool = False,
+            include_incomplete: bool = False) -> Result:
     """Run the whole analysis and write its outputs.
 
     ``responses``: a DataFrame, a responses CSV or a study folder (its
@@ -91,6 +95,11 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     ghost strongest error, trail original, trail strongest error).
     ``seed``: every random draw (bootstrap, posterior samples).
     ``psychometric``: ``"psignifit"``, ``"mle"`` or ``"none"``.
+    ``include_simulated`` / ``include_incomplete``: keep simulated participants
+    (column ``simulated``) / sessions marked ``complete`` = false, which are
+    left out by default (:func:`analysis.io.select_participants`); which
+    participants were used is in ``settings["participants"]``, in every table
+    caption, figure, ``notes.md`` and ``summary.json``.
 
     Files (in ``out_dir``): ``table.csv``, ``table_paper.csv``,
     ``table_paper.md``, ``table_paper.tex``, ``participants.csv``,
@@ -105,6 +114,19 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     """
     correction = normalise_correction(correction)
     df = load_responses(responses)
+    df, who = select_participants(df, include_simulated=include_simulated,
+                                  include_incomplete=include_incomplete)
+    if df.empty:
+        why = []
+        if who["simulated_left_out"]:
+            why.append(f"{len(who['simulated_left_out'])} simulated participant(s) are left out "
+                       f"(pass --include-simulated to analyse them)")
+        if who["incomplete_left_out"]:
+            why.append(f"{len(who['incomplete_left_out'])} incomplete session(s) are left out "
+                       f"(--include-incomplete)")
+        raise ResponsesError(f"{responses if not isinstance(responses, pd.DataFrame) else 'responses'}: "
+                             f"no trials to analyse: " + "; ".join(why or ["no participants"]))
+    label = participants_label(who)
     table, participants, notes = summarize(df, correction=correction, n_boot=n_boot, seed=seed, ci=ci)
     if df["shared_original"].any():
         shared = set(df.loc[df["shared_original"], "group"])
@@ -112,6 +134,18 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                      "original per base clip (shown `repetitions` times); its answers are the "
                      "level-0 cell of each of them, and their d′ are computed against it.")
 
+    notes.insert(0, "Participants: " + label + "."
+                 + (f" Simulated participants left out: {', '.join(who['simulated_left_out'])}."
+                    if who["simulated_left_out"] else "")
+                 + (f" Incomplete sessions left out: {', '.join(who['incomplete_left_out'])}."
+                    if who["incomplete_left_out"] else "")
+                 + (" Simulated participants (flipstudy simulate) are included: these results "
+                    "describe the observer model, not people." if who["simulated"] else ""))
+    if who["n"] < MIN_PARTICIPANTS:
+        notes.insert(1, f"With {who['n']} participant{'s' if who['n'] != 1 else ''} (fewer than "
+                        f"{MIN_PARTICIPANTS}), the intervals over participants (bootstrap), the GEE "
+                        f"tests (participants as clusters) and the thresholds are not meaningful: "
+                        f"read them as descriptions of these answers only.")
     if gee:
         g = gee_levels(df, ci=ci)
         table = table.merge(g, on=["group", "level"], how="left")
@@ -151,6 +185,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                     settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
                               "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
                               "n_participants": int(df["participant"].nunique()),
+                              "participants": who, "participants_label": label,
                               "n_trials": int((~df["shared_copy"]).sum()),
                               "groups": list(dict.fromkeys(table["group"]))})
     if out_dir is None:
@@ -162,7 +197,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     table.to_csv(files["table.csv"], index=False)
     files["table_paper.csv"] = out / "table_paper.csv"
     paper.to_csv(files["table_paper.csv"], index=False)
-    caption = PAPER_CAPTION + f" Correction for rates of 0 or 1: {correction}."
+    caption = PAPER_CAPTION + f" Correction for rates of 0 or 1: {correction}. {label}."
     files["table_paper.md"] = out / "table_paper.md"
     files["table_paper.md"].write_text(to_markdown(table, caption), encoding="utf-8")
     files["table_paper.tex"] = out / "table_paper.tex"
@@ -181,17 +216,18 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
         ci_label = f"{ci:.0%} CI"
         for name, fig in (("ratings", ratings_figure(table, ci_label)),
                           ("dprime", dprime_figure(table, ci_label))):
-            for p in save(fig, out / name):
+            for p in save(_labelled(fig, label), out / name):
                 files[p.name] = p
         if fits:
             method_note = ("psignifit 4 (Bayesian, MAP)" if any(f.method == "psignifit" for f in fits)
                            else "maximum likelihood")
-            for p in save(psychometric_figure(fits, table, method_note), out / "psychometric"):
+            for p in save(_labelled(psychometric_figure(fits, table, method_note), label),
+                          out / "psychometric"):
                 files[p.name] = p
         imgs = _normalise_images(images)
         fig, sheet_notes = sheet_figure(fits, table, imgs)
         notes += sheet_notes
-        for p in save(fig, out / "sheet"):
+        for p in save(_labelled(fig, label), out / "sheet"):
             files[p.name] = p
 
     files["notes.md"] = out / "notes.md"
@@ -202,14 +238,23 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     return result
 
 
+def _labelled(fig, label: str):
+    """The participants the figure shows, in small type under everything else
+    (legends below the axes included)."""
+    from .figures import style
+    with style():
+        fig.supxlabel(label, fontsize=7, color="#444444")
+    return fig
+
+
 def _notes_md(r: Result) -> str:
     s = r.settings
     lines = ["# Analysis notes", "",
-             f"{s['n_participants']} participants, {s['n_trials']} trials, groups: "
+             f"{s['participants_label']}; {s['n_trials']} trials, groups: "
              f"{', '.join(s['groups'])}.", "",
              f"Correction for rates of 0 or 1: **{s['correction']}** — {s['correction_text']}.", ""]
     lines += [f"- {n}" for n in r.notes]
-    lines += ["", "## Table (paper layout)", "", to_markdown(r.table)]
+    lines += ["", "## Table (paper layout)", "", to_markdown(r.table, s["participants_label"] + ".")]
     if len(r.thresholds):
         lines += ["## Detection thresholds", "",
                   "| group | x* (%) | interval | P(reached) | γ | λ | note |", "|:--|--:|:--|--:|--:|--:|:--|"]

@@ -2,15 +2,36 @@
 
 ``build_stimuli(design, out)`` writes every stimulus as ``.bvh`` (metres) and
 ``.npz``, a copy of the design, and ``manifest.csv`` (one row per stimulus: the
-nominal error beside the error the analyser measures).  The set is built in a
-temporary folder next to ``out`` and renamed into place at the end, so an
-interrupted run leaves no half-written study.  The same design and seed give a
-byte-identical manifest (content hashes included).
+nominal error beside the error the analyser measures).  The same design and
+seed give a byte-identical manifest (content hashes included).
+
+The folder ``out`` is handled so that a study is never lost:
+
+- A build holds an exclusive lock (``fcntl.flock`` on ``.NAME.lock`` beside
+  ``out``) from start to end; a second build into the same ``out`` fails at once
+  with :class:`StudyLocked`.
+- The set is built in ``.NAME.tmp-PID-*`` beside ``out`` and swapped into place
+  with one atomic ``renameat2(RENAME_EXCHANGE)`` (Linux), so a build killed at
+  any moment (even SIGKILL) leaves at ``out`` either the previous complete study
+  or the new complete one.  Where the exchange is unavailable the previous study
+  is renamed to ``.NAME.old-PID`` first and the next build restores it if
+  ``out`` is missing.  Leftovers of killed builds are removed by the next build.
+- ``force=True`` replaces only a folder holding nothing but what a build writes
+  (``manifest.csv``, ``design.toml`` and the files the manifest lists).  A folder
+  holding anything else (``sessions.sqlite``, ``render/``, ``responses.csv``, ...)
+  is replaced only if the caller passes ``replace_check``, a function
+  ``replace_check(folder, foreign_names)`` that raises to refuse; the
+  ``flipstudy stimuli`` command passes one that refuses while the study holds
+  any real participant's answer (:func:`study.archive.refuse_real_answers`).
+  The check runs again at the moment of the swap, so a study copied to ``out``
+  while the build runs is not deleted either.
 """
 
 from __future__ import annotations
 
 import csv
+import ctypes
+import errno
 import hashlib
 import io
 import os
@@ -19,6 +40,7 @@ import sys
 import tempfile
 import time
 import zipfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +48,7 @@ import numpy as np
 from .analyse import analyse
 from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
 from .errors import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
+from .exceptions import FlipstudyError
 from .motion.bvh import bvh_text, load_bvh
 from .motion.clip import Clip
 
@@ -179,15 +202,38 @@ def original_of(design: Design, clip_name: str, group) -> str:
     return f"{clip_name}_{group.name}_0" if 0.0 in group.levels else ""
 
 
-def build_stimuli(design: Design, out, force: bool = False, progress: bool = True) -> list[dict]:
-    """Generate, measure and write the stimulus set of ``design`` into ``out``."""
+class StudyLocked(FlipstudyError, RuntimeError):
+    """Another build (or ``flipstudy archive``) holds the lock of this study folder."""
+
+
+class StudyFolderError(FlipstudyError, FileExistsError):
+    """A folder that a build will not replace (it holds files the build did not write)."""
+
+
+def build_stimuli(design: Design, out, force: bool = False, progress: bool = True,
+                  replace_check=None) -> list[dict]:
+    """Generate, measure and write the stimulus set of ``design`` into ``out``.
+
+    ``force``: replace an existing ``out`` that holds only a previous build's
+    files.  ``replace_check(folder, foreign_names)``: called when ``out`` holds
+    anything else; it raises to refuse, returns to allow (see the module
+    docstring).  Raises :class:`StudyLocked` when another build holds ``out``.
+    """
     out = Path(out)
-    if out.exists() and not force:
-        raise FileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
     out.parent.mkdir(parents=True, exist_ok=True)
+    with study_lock(out, "build"):
+        _recover_and_clean(out)
+        if out.exists() or out.is_symlink():
+            if not force:
+                raise FileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
+            _check_replaceable(out, replace_check, out)      # fail before the work, not after
+        return _build(design, out, force, progress, replace_check)
+
+
+def _build(design: Design, out: Path, force: bool, progress: bool, replace_check) -> list[dict]:
     todo = plan(design)
     bar = _Progress(len(todo), "stimuli", progress)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-", dir=out.parent))
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
     try:
         base = {}
         for c in design.clips:
@@ -248,9 +294,10 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
         write_manifest(tmp / "manifest.csv", rows)
         if design.path is not None:
             shutil.copyfile(design.path, tmp / "design.toml")
-        _replace_dir(tmp, out)
+        _install(tmp, out, force, replace_check)
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
     return rows
 
@@ -273,16 +320,143 @@ def write_manifest(path: Path, rows: list[dict]) -> None:
     path.write_text(buf.getvalue())
 
 
-def _replace_dir(tmp: Path, out: Path) -> None:
-    """Rename ``tmp`` to ``out``; an existing ``out`` is moved aside first and
-    removed only once the new one is in place."""
-    old = None
-    if out.exists():
-        old = out.parent / f".{out.name}.old-{os.getpid()}"
-        os.replace(out, old)
-    os.replace(tmp, out)
-    if old is not None:
-        shutil.rmtree(old, ignore_errors=True)
+# --- the study folder: lock, atomic swap, recovery ---------------------------------------
+
+AT_FDCWD = -100
+RENAME_NOREPLACE, RENAME_EXCHANGE = 1, 2
+BUILD_FILES = ("manifest.csv", "design.toml")
+
+
+def lock_path(out) -> Path:
+    out = Path(out)
+    return out.parent / f".{out.name}.lock"
+
+
+@contextmanager
+def study_lock(out, what: str = "build"):
+    """Hold the exclusive lock of the study folder ``out`` (``.NAME.lock`` beside
+    it, ``fcntl.flock``); raises :class:`StudyLocked` at once when another
+    process holds it.  The kernel releases the lock when the holder dies (even
+    by SIGKILL); the lock file is removed on release."""
+    import fcntl
+    path = lock_path(out)
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            try:
+                holder = os.read(fd, 200).decode(errors="replace").split()
+            except OSError:
+                holder = []
+            os.close(fd)
+            who = f"a {holder[1]} (pid {holder[0]})" if len(holder) >= 2 else "another build"
+            raise StudyLocked(f"{out}: {who} is writing this study folder right now (lock "
+                              f"{path}); wait until it has finished, or choose another --out") from None
+        try:
+            st, cur = os.fstat(fd), os.stat(path)
+            same = (st.st_ino, st.st_dev) == (cur.st_ino, cur.st_dev)
+        except FileNotFoundError:
+            same = False
+        if same:
+            break
+        os.close(fd)                      # the file was removed by its last holder: lock the new one
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()} {what}\n".encode())
+        yield path
+    finally:
+        try:
+            os.unlink(path)
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+
+
+def _renameat2(src: Path, dst: Path, flags: int) -> bool:
+    """``renameat2(src, dst, flags)``; False when this system or file system lacks it."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        fn = ctypes.CDLL(None, use_errno=True).renameat2
+    except (AttributeError, OSError):
+        return False
+    fn.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    if fn(AT_FDCWD, os.fsencode(src), AT_FDCWD, os.fsencode(dst), flags) == 0:
+        return True
+    e = ctypes.get_errno()
+    if e in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
+        return False
+    raise OSError(e, os.strerror(e), str(src), None, str(dst))
+
+
+def foreign_files(folder) -> list[str]:
+    """Top-level names in ``folder`` that a build does not write (folders end in
+    ``/``): everything but ``manifest.csv``, ``design.toml`` and the ``.bvh`` /
+    ``.npz`` files its manifest lists."""
+    folder = Path(folder)
+    ours = set(BUILD_FILES)
+    try:
+        for r in read_manifest(folder):
+            ours.update(r.get(k) or "" for k in ("bvh", "npz"))
+    except (OSError, ValueError, csv.Error):
+        ours = set()                      # no readable manifest: nothing here is known to be ours
+    return sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir() if p.name not in ours)
+
+
+def _check_replaceable(folder: Path, replace_check, shown: Path) -> None:
+    if folder.is_symlink() or not folder.is_dir():
+        raise StudyFolderError(f"{shown} exists and is not a folder; choose another --out")
+    foreign = foreign_files(folder)
+    if not foreign:
+        return
+    if replace_check is None:
+        listed = ", ".join(foreign[:6]) + (", ..." if len(foreign) > 6 else "")
+        raise StudyFolderError(
+            f"{shown} holds files a stimuli build did not write ({listed}): participants' answers "
+            f"or renders may be among them, so it is not replaced. Move it aside first "
+            f"(`flipstudy archive {shown}`) or choose another --out")
+    replace_check(folder, foreign)
+
+
+def _install(tmp: Path, out: Path, force: bool, replace_check) -> None:
+    """Put the finished build ``tmp`` at ``out`` (under the lock)."""
+    if not (out.exists() or out.is_symlink()):
+        if _renameat2(tmp, out, RENAME_NOREPLACE):
+            return
+        if not (out.exists() or out.is_symlink()):
+            os.rename(tmp, out)
+            return
+    # out exists now (maybe copied there while this build ran): check it again
+    if not force:
+        raise FileExistsError(f"{out} appeared while the build ran; it is left as it is "
+                              f"(pass --force to replace it)")
+    _check_replaceable(out, replace_check, out)
+    if _renameat2(tmp, out, RENAME_EXCHANGE):             # atomic: out is always a complete study
+        try:                                             # what was swapped out, checked once more
+            _check_replaceable(tmp, replace_check, out)
+        except BaseException:                          # answers arrived in the last instant
+            if not _renameat2(tmp, out, RENAME_EXCHANGE):  # swap back; never delete them
+                os.rename(tmp, out.parent / f"{out.name}.previous-{os.getpid()}")
+            raise
+        shutil.rmtree(tmp, ignore_errors=True)
+        return
+    old = out.parent / f".{out.name}.old-{os.getpid()}"   # fallback: restored by the next build
+    os.rename(out, old)
+    os.rename(tmp, out)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def _recover_and_clean(out: Path) -> None:
+    """Under the lock: restore ``out`` from a killed build's ``.NAME.old-*`` when
+    ``out`` is missing, then remove every leftover ``.NAME.tmp-*`` and ``.NAME.old-*``
+    (no live build can own them: it would hold the lock)."""
+    parent = out.parent
+    olds = sorted(parent.glob(f".{out.name}.old-*"), key=lambda p: p.stat().st_mtime)
+    if olds and not (out.exists() or out.is_symlink()):
+        os.rename(olds.pop(), out)
+    for p in olds + list(parent.glob(f".{out.name}.tmp-*")):
+        shutil.rmtree(p, ignore_errors=True)
 
 
 def read_manifest(study_dir) -> list[dict]:

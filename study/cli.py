@@ -109,11 +109,32 @@ def cmd_init(args) -> int:
 def cmd_stimuli(args) -> int:
     from stimuli.design import load_design
     from stimuli.stimset import build_stimuli
+    from study.archive import describe, refuse_real_answers
     design = load_design(args.design)
-    rows = build_stimuli(design, args.out, force=args.force, progress=not args.quiet)
+    replaced = {}
+
+    def replace_check(folder, foreign):
+        # refuses while the study holds any real answer; otherwise notes what goes
+        replaced["answers"] = refuse_real_answers(folder, foreign, shown=Path(args.out))
+        replaced["foreign"] = foreign
+
+    rows = build_stimuli(design, args.out, force=args.force, progress=not args.quiet,
+                         replace_check=replace_check)
+    if replaced:
+        print(f"replaced {args.out}: it held no real participant's answers "
+              f"({describe(replaced['answers'])}); removed with it: {', '.join(replaced['foreign'])}")
     worst = max((abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"])) for r in rows), default=0.0)
     print(f"wrote {len(rows)} stimuli to {args.out} (manifest.csv, .bvh, .npz); largest gap between "
           f"measured and nominal error {worst:.2f} points (tolerance {design.tolerance_pct:g})")
+    return 0
+
+
+def cmd_archive(args) -> int:
+    from study.archive import answers_in, archive_study, describe
+    what = describe(answers_in(args.study_dir))
+    dest = archive_study(args.study_dir, args.to)
+    print(f"moved {args.study_dir} to {dest} (everything kept: {what})")
+    print(f"next: flipstudy stimuli DESIGN.toml --out {args.study_dir} builds a fresh study there")
     return 0
 
 
@@ -233,9 +254,23 @@ def build_parser() -> argparse.ArgumentParser:
                                    "with the analyser and write .bvh, .npz and manifest.csv (atomically).")
     p.add_argument("design", metavar="DESIGN.toml")
     p.add_argument("--out", required=True, metavar="STUDY_DIR")
-    p.add_argument("--force", action="store_true", help="replace an existing STUDY_DIR")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing STUDY_DIR, unless it holds any real participant's "
+                        "answer (then move it aside with `flipstudy archive STUDY_DIR`); a study "
+                        "with only simulated answers is replaced, and the command says so")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_stimuli)
+
+    p = sub.add_parser("archive", help="move a whole study folder aside (STUDY-archived-DATE)",
+                       description="Move STUDY_DIR, with everything in it (answers, renders, "
+                                   "exports), to STUDY_DIR-archived-YYYYMMDDTHHMMSSZ beside it "
+                                   "(one rename: nothing is copied or deleted), so that a fresh "
+                                   "study can be built at STUDY_DIR. Waits for no build: fails "
+                                   "at once while a build holds the study.")
+    p.add_argument("study_dir", metavar="STUDY_DIR")
+    p.add_argument("--to", metavar="DIR", default=None,
+                   help="where to move it (default: STUDY_DIR-archived-DATE beside it; same file system)")
+    p.set_defaults(func=cmd_archive)
 
     p = sub.add_parser("edit", help="more flips, or an animator edit in flight, with momentum repaired",
                        description="Multi-flip editing (Majkowska & Faloutsos 2007, Section 5): turn a single "

@@ -3,15 +3,23 @@
 ``responses.csv`` is DESIGN.md's long format, one row per answered trial::
 
     participant, session, trial, stimulus, group, level, repetition, response,
-    rt_ms, shown_ms, timestamp, clip, kind, late_frames, replays, input
+    rt_ms, shown_ms, timestamp, clip, kind, late_frames, replays, input,
+    simulated, complete
 
 (``trial`` and ``repetition`` 1-based, ``level`` the nominal error in percent,
-``timestamp`` ISO 8601 UTC of the moment the answer was stored).
-``participants.csv`` (next to it) has one row per session: participant,
-session, source (browser/simulated), age (empty: not given), gender,
-animation_experience, gymnastics_experience, started, finished, answered,
-n_trials.  Both files are written to a temporary file in the same folder and
-renamed into place (``os.replace``), so a reader never sees half a file.
+``timestamp`` ISO 8601 UTC of the moment the answer was stored, ``simulated``
+``true`` for an answer of a simulated participant (``flipstudy simulate``),
+``complete`` ``false`` for an answer of a session that did not answer every
+trial).  ``participants.csv`` (next to it) has one row per session:
+participant, session, source (browser/simulated), age (empty: not given),
+gender, animation_experience, gymnastics_experience, started, finished,
+answered, n_trials, simulated, complete.
+
+Simulated participants are left out of both files unless
+``include_simulated=True`` (``flipstudy export --include-simulated``); when
+included, every one of their rows says ``simulated=true``.  Both files are
+written to a temporary file in the same folder and renamed into place
+(``os.replace``), so a reader never sees half a file.
 """
 from __future__ import annotations
 
@@ -25,9 +33,14 @@ from . import store
 
 RESPONSE_COLUMNS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
                     "response", "rt_ms", "shown_ms", "timestamp", "clip", "kind", "late_frames",
-                    "replays", "input"]
+                    "replays", "input", "simulated", "complete"]
 PARTICIPANT_COLUMNS = ["participant", "session", "source", "age", "gender", "animation_experience",
-                       "gymnastics_experience", "started", "finished", "answered", "n_trials"]
+                       "gymnastics_experience", "started", "finished", "answered", "n_trials",
+                       "simulated", "complete"]
+
+
+def _flag(v) -> str:
+    return "true" if v else "false"
 
 
 def atomic_write_text(path: Path, text: str) -> None:
@@ -64,14 +77,16 @@ def _fmt_response(r: dict) -> dict:
     out["level"] = f"{r['level']:g}"
     out["rt_ms"] = f"{r['rt_ms']:.1f}"
     out["shown_ms"] = f"{r['shown_ms']:.1f}"
+    out["simulated"], out["complete"] = _flag(r["simulated"]), _flag(r["complete"])
     return out
 
 
 def export_responses(study_dir, out=None, *, participants_out=None,
-                     include_simulated: bool = True) -> dict:
+                     include_simulated: bool = False) -> dict:
     """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``) and
     ``participants.csv`` beside it.  Returns ``{"responses": path, "participants":
-    path, "rows": n, "sessions": m}``."""
+    path, "rows": n, "sessions": m, "real": [IDs], "simulated": [IDs written],
+    "simulated_left_out": [IDs], "incomplete": ["P07/1 (6/18)", ...]}``."""
     study_dir = Path(study_dir)
     out = Path(out) if out is not None else study_dir / "responses.csv"
     pout = Path(participants_out) if participants_out is not None else out.parent / "participants.csv"
@@ -80,12 +95,21 @@ def export_responses(study_dir, out=None, *, participants_out=None,
     conn = store.connect(study_dir, create=False)
     try:
         rows = [_fmt_response(r) for r in store.response_rows(conn, include_simulated=include_simulated)]
-        parts = store.participant_rows(conn, include_simulated=include_simulated)
+        parts = store.participant_rows(conn, include_simulated=True)
     finally:
         conn.close()
+    sims = sorted({p["participant"] for p in parts if p["simulated"]})
+    written = [p for p in parts if include_simulated or not p["simulated"]]
+    for p in written:
+        p["simulated"], p["complete"] = _flag(p["simulated"]), _flag(p["complete"])
     atomic_write_text(out, _csv(RESPONSE_COLUMNS, rows))
-    atomic_write_text(pout, _csv(PARTICIPANT_COLUMNS, parts))
-    return {"responses": out, "participants": pout, "rows": len(rows), "sessions": len(parts)}
+    atomic_write_text(pout, _csv(PARTICIPANT_COLUMNS, written))
+    return {"responses": out, "participants": pout, "rows": len(rows), "sessions": len(written),
+            "real": sorted({p["participant"] for p in written if p["simulated"] == "false"}),
+            "simulated": sims if include_simulated else [],
+            "simulated_left_out": [] if include_simulated else sims,
+            "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/{p['n_trials']})"
+                           for p in written if p["complete"] == "false"]}
 
 
 def status(study_dir) -> list[dict]:

@@ -9,7 +9,9 @@ exact flips:
                         camera and one style for all (``flipstudy render``)
 4. ``study/sessions.sqlite``  a simulated panel of 19 participants answering every
                         trial through the session runner's storage path
-                        (``flipstudy simulate``), exported to ``responses.csv``
+                        (``flipstudy simulate``; stored as source=simulated),
+                        exported with ``--include-simulated`` to ``responses.csv``
+                        (``simulated=true`` on every row) and analysed as such
 5. ``analysis/``        mean ratings, d′, GEE tests, psychometric fits, the
                         Table-2 layout (CSV, Markdown, LaTeX) and the figures,
                         with a figure sheet beside a ghost and a trail composite
@@ -70,10 +72,18 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     from .export import export_responses
     from .simulate import simulate
 
+    from .archive import refuse_real_answers
+
     out = Path(out)
     if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
         raise ReproduceError(f"{out} exists and is not empty; choose another --out or pass --force "
                              f"to replace it")
+
+    def guard():                   # --force never replaces real participants' answers
+        if out.is_dir():
+            for d in [out, *sorted(p for p in out.iterdir() if p.is_dir())]:
+                refuse_real_answers(d, shown=d, command="reproduce --force")
+    guard()
     out.parent.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     seconds: dict = {}
@@ -116,7 +126,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         simulate(study, participants, seed=seed, progress=tick)
         if not quiet:
             print(file=sys.stderr)
-        exp = export_responses(study)
+        exp = export_responses(study, include_simulated=True)      # marked simulated=true
         seconds["sessions"] = time.perf_counter() - t
 
         t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
@@ -125,10 +135,12 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
                   "ghost strongest error": render_dir / f"{SHEET_ERROR}_ghost.png",
                   "trail original": render_dir / f"{SHEET_ORIGINAL}_trail.png",
                   "trail strongest error": render_dir / f"{SHEET_ERROR}_trail.png"}
-        result = analyze(exp["responses"], work / "analysis", images=images, seed=seed)
+        result = analyze(exp["responses"], work / "analysis", images=images, seed=seed,
+                         include_simulated=True)
         seconds["analysis"] = time.perf_counter() - t
 
         # move into place: nothing half-written is ever at OUT
+        guard()                    # answers may have arrived while the run went on
         if out.exists():
             old = out.with_name(f".{out.name}.old-{os.getpid()}")
             out.rename(old)
@@ -166,7 +178,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
     return {"files": files, "seconds": seconds, "n_stimuli": len(rows), "worst_gap_pct": worst,
             "n_videos": sum(1 for s in rec["stimuli"].values() if "video" in s["files"]),
-            "n_responses": exp["rows"], "table_md": to_markdown(result.table), "result": result}
+            "n_responses": exp["rows"], "n_simulated": len(exp["simulated"]), "table_md": to_markdown(result.table), "result": result}
 
 
 def summary_text(r: dict, out) -> str:
@@ -191,13 +203,18 @@ def summary_text(r: dict, out) -> str:
         f"(largest gap {r['worst_gap_pct']:.2f} points)",
         f"  {f['videos']}/  {r['n_videos']} stimulus videos (.mp4), ghost and trail composites (.png), "
         f"render.json",
-        f"  {f['sessions']}  every simulated answer; {f['responses']} ({r['n_responses']} rows)",
+        f"  {f['sessions']}  every simulated answer; {f['responses']} ({r['n_responses']} rows, "
+        f"simulated=true)",
         f"  {f['table_paper']}  the Table-2 layout (also .csv, .tex; table.csv has every column)",
         f"  {f['figure_ratings']}, {f['figure_dprime'].name}, {f['figure_psychometric'].name}, "
         f"{f['figure_sheet'].name}  figures (PNG + PDF)",
         f"  {f['notes']}  methods: correction, tests, fits",
         "",
-        f"a real participant: flipstudy run {f['stimuli']} --participant P01",
+        f"{f['stimuli']} holds {r['n_simulated']} simulated participants (marked simulated=true; "
+        f"the analysis above includes them with --include-simulated). Real participants go into a "
+        f"fresh study, never this one:",
+        f"  flipstudy stimuli {f['design']} --out mystudy && flipstudy render mystudy && "
+        f"flipstudy run mystudy --participant P01",
     ]
     return "\n".join(lines)
 

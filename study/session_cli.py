@@ -65,11 +65,22 @@ def cmd_export(args) -> int:
     from .export import export_responses
     try:
         r = export_responses(args.study_dir, args.out, participants_out=args.participants_out,
-                             include_simulated=not args.exclude_simulated)
+                             include_simulated=args.include_simulated)
     except (ValueError, OSError) as e:
         return _fail("export", e)
-    print(f"wrote {r['rows']} responses to {r['responses']} and {r['sessions']} session(s) to "
-          f"{r['participants']}")
+    who = f"{len(r['real'])} real participant(s)"
+    if r["simulated"]:
+        who += f" and {len(r['simulated'])} simulated (marked simulated=true on every row)"
+    print(f"wrote {r['rows']} responses of {who} to {r['responses']} and {r['sessions']} session(s) "
+          f"to {r['participants']}")
+    if r["simulated_left_out"]:
+        print(f"left out {len(r['simulated_left_out'])} simulated participant(s) "
+              f"({r['simulated_left_out'][0]}..{r['simulated_left_out'][-1]}); "
+              f"--include-simulated writes them, marked")
+    if r["incomplete"]:
+        print(f"{len(r['incomplete'])} incomplete session(s), marked complete=false (analyze leaves "
+              f"them out by default): {', '.join(r['incomplete'][:8])}"
+              + (", ..." if len(r["incomplete"]) > 8 else ""))
     return 0
 
 
@@ -91,8 +102,9 @@ def cmd_status(args) -> int:
     if not rows:
         print("no sessions yet")
         return 0
-    head = ("participant", "session", "source", "answered", "started", "last answer", "finished")
+    head = ("participant", "session", "source", "answered", "", "started", "last answer", "finished")
     table = [(r["participant"], str(r["session"]), r["source"], f"{r['answered']}/{r['total']}",
+              "" if r["complete"] else "INCOMPLETE",
               r["started"] or "—", r["last_answer"] or "—", r["finished"] or "no") for r in rows]
     widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(head)]
     line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip()  # noqa: E731
@@ -101,6 +113,14 @@ def cmd_status(args) -> int:
         print(line(t))
     done = sum(1 for r in rows if r["finished"])
     print(f"{len(rows)} session(s), {done} finished")
+    real = sorted({r["participant"] for r in rows if not r["simulated"]})
+    sim = sorted({r["participant"] for r in rows if r["simulated"]})
+    print(f"{len(real)} real participant(s), {len(sim)} simulated"
+          + (" (left out of export and analyze unless --include-simulated)" if sim else ""))
+    inc = [r for r in rows if not r["complete"]]
+    if inc:
+        print(f"{len(inc)} incomplete session(s) (analyze leaves them out by default): "
+              + ", ".join(f"{r['participant']}/{r['session']} {r['answered']}/{r['total']}" for r in inc))
     return 0
 
 
@@ -111,7 +131,9 @@ def cmd_simulate(args) -> int:
     except (ValueError, OSError, RequestError) as e:
         return _fail("simulate", e)
     print(f"simulated {len(ids)} participant(s) ({ids[0]}..{ids[-1]}) in "
-          f"{args.study_dir}/sessions.sqlite; next: flipstudy export {args.study_dir}")
+          f"{args.study_dir}/sessions.sqlite, stored as source=simulated; export and analyze leave "
+          f"them out unless --include-simulated. next: flipstudy export {args.study_dir} "
+          f"--include-simulated")
     return 0
 
 
@@ -142,21 +164,26 @@ def add_commands(subparsers) -> None:
         "export", help="write responses.csv (one row per trial) and participants.csv",
         description="Write the answers as DESIGN.md's long format (participant, session, trial, "
                     "stimulus, group, level, repetition, response, rt_ms, shown_ms, timestamp, "
-                    "plus clip, kind, late_frames, replays, input) and the demographics as "
-                    "participants.csv beside it; both atomically.")
+                    "plus clip, kind, late_frames, replays, input, simulated, complete) and the "
+                    "demographics as participants.csv beside it; both atomically. Simulated "
+                    "participants are left out unless --include-simulated; sessions that did not "
+                    "answer every trial are marked complete=false.")
     p.add_argument("study_dir", metavar="STUDY_DIR")
     p.add_argument("--out", metavar="responses.csv", default=None,
                    help="output file (default STUDY_DIR/responses.csv)")
     p.add_argument("--participants-out", metavar="participants.csv", default=None,
                    help="demographics file (default: participants.csv next to --out)")
-    p.add_argument("--exclude-simulated", action="store_true",
-                   help="leave out simulated participants (flipstudy simulate)")
+    p.add_argument("--include-simulated", action="store_true",
+                   help="also write the simulated participants (flipstudy simulate), marked "
+                        "simulated=true on every row (default: left out)")
+    p.add_argument("--exclude-simulated", action="store_true", help=argparse.SUPPRESS)  # the default now
     p.set_defaults(func=cmd_export)
 
     p = subparsers.add_parser(
         "status", help="who has done what: sessions, answered/total, finished",
-        description="One line per participant session: answered/total, started, last answer, "
-                    "finished.")
+        description="One line per participant session: source (browser/simulated), "
+                    "answered/total (INCOMPLETE when not every trial is answered), started, last "
+                    "answer, finished; then the number of real and simulated participants.")
     p.add_argument("study_dir", metavar="STUDY_DIR")
     p.add_argument("--json", action="store_true", help="print a JSON list")
     p.set_defaults(func=cmd_status)

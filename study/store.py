@@ -254,7 +254,8 @@ def has_demographics(conn, participant: str, session: int) -> bool:
 
 def status_rows(conn) -> list[dict]:
     """One dict per session: participant, session, source, answered, total,
-    started, last_answer, finished."""
+    started, last_answer, finished, simulated (bool), complete (bool: every
+    trial answered)."""
     rows = conn.execute("""
         SELECT s.participant, s.session, s.source, s.n_trials AS total, s.started, s.finished,
                COUNT(r.trial) AS answered, MAX(r.timestamp) AS last_answer
@@ -262,32 +263,43 @@ def status_rows(conn) -> list[dict]:
              ON r.participant = s.participant AND r.session = s.session
         GROUP BY s.participant, s.session
         ORDER BY s.participant, s.session""").fetchall()
-    return [dict(r) for r in rows]
+    out = [dict(r) for r in rows]
+    for r in out:
+        r["simulated"] = r["source"] == "simulated"
+        r["complete"] = r["answered"] >= r["total"]
+    return out
 
 
-def response_rows(conn, *, include_simulated: bool = True) -> list[dict]:
+def response_rows(conn, *, include_simulated: bool = False) -> list[dict]:
     """Every answered trial joined with its trial row, ordered by participant,
-    session, trial."""
+    session, trial; ``simulated`` (0/1: a simulated participant's) and
+    ``complete`` (0/1: its session has every trial answered) on every row."""
     rows = conn.execute(f"""
         SELECT t.participant, t.session, t.trial, t.stimulus, t.group_name, t.level, t.repetition,
                r.response, r.rt_ms, r.shown_ms, r.timestamp, t.clip, t.kind, r.late_frames,
-               r.replays, r.input, s.source
+               r.replays, r.input, s.source, s.source = 'simulated' AS simulated,
+               (SELECT COUNT(*) FROM responses r2 WHERE r2.participant = s.participant
+                    AND r2.session = s.session) >= s.n_trials AS complete
         FROM responses r
         JOIN trials t ON t.participant = r.participant AND t.session = r.session AND t.trial = r.trial
         JOIN sessions s ON s.participant = r.participant AND s.session = r.session
-        {"" if include_simulated else "WHERE s.source = 'browser'"}
+        {"" if include_simulated else "WHERE s.source != 'simulated'"}
         ORDER BY t.participant, t.session, t.trial""").fetchall()
     return [dict(r) for r in rows]
 
 
-def participant_rows(conn, *, include_simulated: bool = True) -> list[dict]:
+def participant_rows(conn, *, include_simulated: bool = False) -> list[dict]:
     rows = conn.execute(f"""
         SELECT s.participant, s.session, s.source, d.age, d.gender, d.animation_experience,
                d.gymnastics_experience, s.started, s.finished, s.n_trials,
                (SELECT COUNT(*) FROM responses r WHERE r.participant = s.participant
-                    AND r.session = s.session) AS answered
+                    AND r.session = s.session) AS answered,
+               s.source = 'simulated' AS simulated
         FROM sessions s LEFT JOIN demographics d
              ON d.participant = s.participant AND d.session = s.session
-        {"" if include_simulated else "WHERE s.source = 'browser'"}
+        {"" if include_simulated else "WHERE s.source != 'simulated'"}
         ORDER BY s.participant, s.session""").fetchall()
-    return [dict(r) for r in rows]
+    out = [dict(r) for r in rows]
+    for r in out:
+        r["complete"] = int(r["answered"] >= r["n_trials"])
+    return out

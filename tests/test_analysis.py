@@ -333,7 +333,9 @@ def test_analyze_is_byte_identical_for_a_seed(paper_run, tmp_path):
     for name in ("table.csv", "thresholds.csv", "table_paper.tex", "participants.csv"):
         assert Path(again.files[name]).read_bytes() == Path(res.files[name]).read_bytes(), name
     from analysis.figures import ratings_figure, save
-    for p in save(ratings_figure(again.table), tmp_path / "ratings"):
+    from analysis.pipeline import _labelled                 # figures say which participants
+    for p in save(_labelled(ratings_figure(again.table), again.settings["participants_label"]),
+                  tmp_path / "ratings"):
         assert p.read_bytes() == Path(res.files[p.name]).read_bytes(), p.name
 
 

@@ -206,10 +206,11 @@ def test_inspect_advice_weighs_frame_time_against_scale(cmu):
     w = gravity_warning(a.apparent_gravity, c)
     assert w is not None and f"--scale {CMU_SCALE:.4g}" in w and "--fps" not in w
     # independent check of the measurement: gravity is proportional to the scale (to
-    # 6 %: the flight detector's thresholds are in metres, so its window moves a little),
+    # 10 %: the flight detector's thresholds are in metres, so its window moves a little,
+    # and the mass fit keeps the prior at one scale and not at the other),
     # and the skeleton read at the CMU unit is an adult
     a_ok = analyse(load_bvh(cmu, fps=60))
-    assert a.apparent_gravity * CMU_SCALE / 0.01 == pytest.approx(a_ok.apparent_gravity, rel=0.06)
+    assert a.apparent_gravity * CMU_SCALE / 0.01 == pytest.approx(a_ok.apparent_gravity, rel=0.10)
     assert physics_advice(a_ok.apparent_gravity, a_ok.clip) is None
     # header rate: the height is right, so the fix is the frame rate (a factor of two)
     c120 = load_bvh(cmu)
@@ -287,11 +288,11 @@ def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
     from study.simulate import simulate
     d = make_demo_study(tmp_path / "study", videos=False, levels=(0, 25, 50), original=None)
     simulate(d, 5, seed=3)
-    res = export_responses(d)
+    res = export_responses(d, include_simulated=True)   # simulated answers are kept apart
     rs = pd.read_csv(res["responses"])
     assert res["rows"] == 5 * 2 * 5                        # 5 stimuli (1 original), twice
     assert (rs["group"] == "original").sum() == 5 * 2
-    r = analyze(d, None, psychometric="none", gee=False, n_boot=50)
+    r = analyze(d, None, psychometric="none", gee=False, n_boot=50, include_simulated=True)
     t = r.table.set_index(["group", "level"])
     n0 = t.loc[("smooth-increase", 0.0)]
     m0 = t.loc[("abrupt-decrease", 0.0)]

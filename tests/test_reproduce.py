@@ -74,3 +74,40 @@ def test_cli_refuses_a_nonempty_folder_cleanly(tmp_path, capsys):
     assert main(["reproduce", "--out", str(tmp_path / "x"), "--quiet"]) == 1
     assert "not empty" in capsys.readouterr().err
     assert (tmp_path / "x" / "keep.txt").read_text() == "mine"
+
+
+def test_simulated_panel_is_marked_and_real_participants_go_elsewhere(run):
+    from study.reproduce import summary_text
+    out, r = run
+    responses = list(csv.DictReader(open(out / "study" / "responses.csv")))
+    assert {x["simulated"] for x in responses} == {"true"}
+    notes = (out / "analysis" / "notes.md").read_text()
+    assert "N = 4 participants (0 real, 4 simulated)" in notes
+    assert "describe the observer model" in notes and "not meaningful" in notes
+    text = summary_text(r, str(out))
+    assert "4 simulated participants" in text and "fresh study" in text
+    assert f"flipstudy run {out / 'study'}" not in text
+    assert "--out mystudy" in text and "flipstudy run mystudy --participant P01" in text
+
+
+def test_force_refused_while_the_study_holds_a_real_answer(run, tmp_path):
+    import hashlib
+    import shutil
+
+    from study.session import load_study, open_session, submit_answer
+    out, _ = run
+    copy = tmp_path / "paper"
+    shutil.copytree(out, copy)
+    s = open_session(load_study(copy / "study"), "P01")
+    t = s.trials[0]
+    submit_answer(s, {"participant": "P01", "session": 1, "trial": 1, "stimulus": t.stimulus,
+                      "response": "correct", "rt_ms": 700.0, "shown_ms": 2000.0, "late_frames": 0})
+    s.close()
+
+    def snap():
+        return {str(p.relative_to(copy)): hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in sorted(copy.rglob("*")) if p.is_file()}
+    before = snap()
+    with pytest.raises(OSError, match="1 answers of 1 real participant"):
+        reproduce(copy, participants=2, size=(160, 120), quiet=True, force=True)
+    assert snap() == before and sorted(p.name for p in tmp_path.iterdir()) == ["paper"]

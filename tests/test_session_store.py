@@ -189,7 +189,7 @@ def test_analysis_reads_the_export(study_dir, tmp_path):
     from analysis.io import load_responses
     simulate(study_dir, 3, seed=1)
     out = tmp_path / "responses.csv"
-    export_responses(study_dir, out)
+    export_responses(study_dir, out, include_simulated=True)
     df = load_responses(out)
     assert len(df) == 3 * 12 and set(df["response"]) <= {"correct", "incorrect"}
 
@@ -203,6 +203,96 @@ def test_status_command(study_dir, capsys):
     assert cli(["status", str(study_dir)]) == 0
     out = capsys.readouterr().out
     assert "P01" in out and "1/12" in out and "1 session(s), 0 finished" in out
+
+
+def test_simulate_and_export_leave_real_rows_alone_and_mark_or_omit_simulated(study_dir, tmp_path,
+                                                                             capsys):
+    """Real answers are exported the same with or without simulated participants
+    in the store; these are left out by default and marked on every row when asked."""
+    s = open_session(load_study(study_dir), "P01")
+    demographics(s)
+    for i in range(1, 13):
+        answer(s, i, "incorrect" if i % 3 else "correct", input="key")
+    p2 = open_session(load_study(study_dir), "P02")       # stopped after 4 of 12
+    for i in range(1, 5):
+        answer(p2, i)
+    real_only = read_csv(export_responses(study_dir, tmp_path / "before.csv")["responses"])
+    assert len(real_only) == 16
+    assert cli(["simulate", str(study_dir), "--participants", "3", "--seed", "2"]) == 0
+    assert "--include-simulated" in capsys.readouterr().out
+    assert cli(["export", str(study_dir), "--out", str(tmp_path / "after.csv")]) == 0
+    msg = capsys.readouterr().out
+    assert "2 real participant(s)" in msg and "left out 3 simulated" in msg
+    assert "P02/1 (4/12)" in msg and "complete=false" in msg
+    after = read_csv(tmp_path / "after.csv")
+    assert after == real_only                              # byte for byte the same rows
+    assert {r["simulated"] for r in after} == {"false"}
+    assert {(r["participant"], r["complete"]) for r in after} == {("P01", "true"), ("P02", "false")}
+    ps = read_csv(tmp_path / "participants.csv")
+    assert [(p["participant"], p["simulated"], p["complete"]) for p in ps] == [
+        ("P01", "false", "true"), ("P02", "false", "false")]
+    # asked for: every simulated row says so, and the real rows are unchanged
+    r = export_responses(study_dir, tmp_path / "all.csv", include_simulated=True)
+    assert r["simulated"] == ["sim001", "sim002", "sim003"] and r["real"] == ["P01", "P02"]
+    both = read_csv(tmp_path / "all.csv")
+    assert [x for x in both if x["simulated"] == "false"] == real_only
+    sim = [x for x in both if x["simulated"] == "true"]
+    assert len(sim) == 36 and {x["participant"] for x in sim} == {"sim001", "sim002", "sim003"}
+    assert all(x["input"] == "simulated" for x in sim)
+    # status flags the incomplete session and counts real and simulated participants
+    assert cli(["status", str(study_dir)]) == 0
+    out = capsys.readouterr().out
+    line = next(ln for ln in out.splitlines() if ln.startswith("P02"))
+    assert "4/12" in line and "INCOMPLETE" in line
+    assert "INCOMPLETE" not in next(ln for ln in out.splitlines() if ln.startswith("P01"))
+    assert "2 real participant(s), 3 simulated" in out and "P02/1 4/12" in out
+
+
+def test_analyze_leaves_out_simulated_and_incomplete_and_says_who(study_dir, tmp_path, capsys):
+    from analysis.cli import main as analyze_cli
+    from analysis.pipeline import analyze
+    for pid in ("P01", "P02", "P03"):
+        s = open_session(load_study(study_dir), pid)
+        for i in range(1, 13):
+            answer(s, i, "incorrect" if (i + len(pid)) % 3 == 0 else "correct")
+    p4 = open_session(load_study(study_dir), "P04")
+    for i in range(1, 7):
+        answer(p4, i)
+    simulate(study_dir, 5, seed=1)
+    csv_all = export_responses(study_dir, tmp_path / "r.csv", include_simulated=True)["responses"]
+    res = analyze(csv_all, tmp_path / "a", psychometric="none", gee=False, n_boot=50)
+    who = res.settings["participants"]
+    assert who["real"] == ["P01", "P02", "P03"] and who["simulated"] == []
+    assert who["simulated_left_out"] == [f"sim00{i}" for i in range(1, 6)]
+    assert who["incomplete_left_out"] == ["P04/1 (6 answers)"]
+    assert res.settings["n_participants"] == 3
+    assert int(res.table["n"].sum()) == 3 * 12
+    label = res.settings["participants_label"]
+    assert label == "N = 3 participants (3 real, 0 simulated); left out: 5 simulated, 1 incomplete session"
+    notes = (tmp_path / "a" / "notes.md").read_text()
+    assert label in notes and "not meaningful" in notes and "95% coverage" not in notes
+    assert label in (tmp_path / "a" / "table_paper.md").read_text()
+    assert label in (tmp_path / "a" / "table_paper.tex").read_text()
+    import json
+    assert json.loads((tmp_path / "a" / "summary.json").read_text())["settings"]["participants"] == who
+    # asked for: simulated kept and said so
+    res2 = analyze(csv_all, None, psychometric="none", gee=False, n_boot=50, include_simulated=True,
+                   include_incomplete=True)
+    assert res2.settings["participants"]["simulated"] == [f"sim00{i}" for i in range(1, 6)]
+    assert res2.settings["n_participants"] == 9 and int(res2.table["n"].sum()) == 3 * 12 + 6 + 5 * 12
+    assert any("describe the observer model" in n for n in res2.notes)
+    # the command prints the counts
+    assert analyze_cli(["analyze", str(csv_all), "--out", str(tmp_path / "b"), "--psychometric",
+                        "none", "--no-gee", "--no-figures", "--n-boot", "50"]) == 0
+    out = capsys.readouterr().out
+    assert "left out 5 simulated participant(s)" in out and "left out 1 incomplete session(s)" in out
+    # a study with only simulated participants: nothing to analyse, and the error says why
+    only = make_demo_study(tmp_path / "sim", videos=False, levels=(0, 25, 50))
+    simulate(only, 2, seed=1)
+    csv_sim = export_responses(only, tmp_path / "s.csv", include_simulated=True)["responses"]
+    from analysis.io import ResponsesError
+    with pytest.raises(ResponsesError, match="--include-simulated"):
+        analyze(csv_sim, None, psychometric="none", gee=False, n_boot=50)
 
 
 # --- simulated observers ------------------------------------------------------------------
@@ -247,12 +337,13 @@ def test_simulate_answers_every_trial_deterministically(study_dir, tmp_path, cap
                      "[groups.abrupt-decrease]\nlevels = [0, 50]\np_correct = [0.5, 0.5]\n")
     assert cli(["simulate", str(study_dir), "--participants", "4", "--model", str(model),
                 "--seed", "3"]) == 0
-    export_responses(study_dir, tmp_path / "a.csv")
+    export_responses(study_dir, tmp_path / "a.csv", include_simulated=True)
     a = read_csv(tmp_path / "a.csv")
     assert len(a) == 4 * 12
     assert sorted({r["participant"] for r in a}) == ["sim001", "sim002", "sim003", "sim004"]
     for r in a:
         assert r["input"] == "simulated" and 150 <= float(r["rt_ms"]) <= 20000
+        assert r["simulated"] == "true" and r["complete"] == "true"
         assert abs(float(r["shown_ms"]) - 1000.0) < 60      # 30 frames at 30 fps
         if r["group"] == "smooth-increase" and r["level"] in ("0", "50"):
             assert r["response"] == ("correct" if r["level"] == "0" else "incorrect")
@@ -262,7 +353,7 @@ def test_simulate_answers_every_trial_deterministically(study_dir, tmp_path, cap
     other = make_demo_study(tmp_path / "other", videos=False, levels=(0, 25, 50))
     simulate(other, 4, model=model, seed=3)
     simulate(other, 4, model=model, seed=3)
-    export_responses(other, tmp_path / "b.csv")
+    export_responses(other, tmp_path / "b.csv", include_simulated=True)
     b = read_csv(tmp_path / "b.csv")
     key = lambda rows: [(r["participant"], r["trial"], r["stimulus"], r["response"], r["rt_ms"])  # noqa: E731
                         for r in rows]
@@ -274,7 +365,7 @@ def test_simulate_answers_every_trial_deterministically(study_dir, tmp_path, cap
 
 def test_simulate_resumes_an_interrupted_participant(study_dir, tmp_path):
     simulate(study_dir, 1, seed=9)
-    full = read_csv(export_responses(study_dir, tmp_path / "full.csv")["responses"])
+    full = read_csv(export_responses(study_dir, tmp_path / "full.csv", include_simulated=True)["responses"])
     other = make_demo_study(tmp_path / "other", videos=False, levels=(0, 25, 50))
     # a simulated participant stopped after 5 answers, then resumed
     import study.simulate as sim
@@ -286,7 +377,7 @@ def test_simulate_resumes_an_interrupted_participant(study_dir, tmp_path):
                           "shown_ms": float(r["shown_ms"]), "late_frames": int(r["late_frames"]),
                           "input": "simulated"})
     sim.simulate(other, 1, seed=9)
-    resumed = read_csv(export_responses(other, tmp_path / "resumed.csv")["responses"])
+    resumed = read_csv(export_responses(other, tmp_path / "resumed.csv", include_simulated=True)["responses"])
     assert [(r["trial"], r["response"]) for r in resumed] == [(r["trial"], r["response"]) for r in full]
 
 
@@ -304,7 +395,7 @@ def test_simulated_panel_reproduces_table_2(tmp_path):
                         groups=(("abrupt-decrease", "angular-momentum", "abrupt", -1),),
                         levels=(0, 17, 25, 37, 50))
     simulate(d, 80, seed=2)
-    rs = read_csv(export_responses(d, tmp_path / "r.csv")["responses"])
+    rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True)["responses"])
     for lv, p in zip((0, 17, 25, 37, 50), (0.72, 0.83, 0.68, 0.33, 0.22)):
         cell = [r["response"] == "correct" for r in rs if r["level"] == str(lv)]
         assert len(cell) == 80
@@ -328,7 +419,7 @@ def test_sessions_on_a_stimulus_set_built_from_motion_capture(tmp_path):
     study = load_study(d)
     assert [r["stimulus"] for r in study.references] == ["backflip_reference"]
     simulate(d, 2, seed=4)
-    rs = read_csv(export_responses(d, tmp_path / "r.csv")["responses"])
+    rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True)["responses"])
     assert len(rs) == 2 * 2 * 2 * 2
     assert {(r["group"], r["level"]) for r in rs} == {
         (g, lv) for g in ("smooth-increase", "abrupt-decrease") for lv in ("0", "25")}
