@@ -254,13 +254,41 @@ def _run_local(settings: dict, tasks: list, done) -> None:
         _close_worker()
 
 
+def _descendants(pids) -> set[int]:
+    """Processes started by ``pids`` (Linux /proc; empty elsewhere), e.g. the
+    workers' ffmpeg encoders, which run in their own process group."""
+    ppid = {}
+    try:
+        entries = [e for e in os.listdir("/proc") if e.isdigit()]
+    except OSError:
+        return set()
+    for e in entries:
+        try:
+            with open(f"/proc/{e}/stat", "rb") as f:
+                ppid[int(e)] = int(f.read().rsplit(b")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+    found, front = set(), set(pids)
+    while front:
+        front = {c for c, pp in ppid.items() if pp in front} - found
+        found |= front
+    return found
+
+
 def _stop_workers(ex, timeout: float = 5.0) -> None:
     """Terminate a ProcessPoolExecutor's workers now (SIGTERM, then SIGKILL)
-    instead of letting them finish their tasks."""
+    and what they started (SIGKILL) instead of letting them finish their tasks."""
+    import signal
     procs = list((getattr(ex, "_processes", None) or {}).values())
+    helpers = _descendants(p.pid for p in procs if p.pid)
     for p in procs:
         if p.is_alive():
             p.terminate()
+    for pid in helpers:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except OSError:
+            pass
     t_end = time.monotonic() + timeout
     for p in procs:
         p.join(max(0.0, t_end - time.monotonic()))
