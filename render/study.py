@@ -620,6 +620,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     finally:
         import shutil
         shutil.rmtree(settings["partial"], ignore_errors=True)
+        (out / ".render.json.tmp").unlink(missing_ok=True)     # a write cut short
     return write()
 
 
