@@ -8,6 +8,14 @@ outputs in parallel worker processes — each worker builds its offscreen
 plotter once and reuses it for all its stimuli.  Outputs go to
 ``STUDY_DIR/render/`` and the settings (camera, style, size, fps, versions,
 per-stimulus offsets and files) to ``STUDY_DIR/render/render.json``.
+
+Interruptible and resumable: Ctrl-C terminates the workers at once (they
+ignore SIGINT; the parent stops them and what they started), workers die with
+their parent (``PR_SET_PDEATHSIG`` and a parent-pid watchdog), outputs are
+written under ``render/.partial-<pid>/`` and renamed into place when complete,
+and ``render.json`` records per output what it was made from, so a rerun makes
+only what is missing or stale.  :func:`check_rendered` is what ``flipstudy
+run`` asks before serving the videos.
 """
 from __future__ import annotations
 
