@@ -4,7 +4,8 @@
     add_commands(subparsers)          # adds `render` and `figure`
 
 ``flipstudy render STUDY_DIR [--what video,ghost,trail,strip,composite,overlay]
-[--size WxH] [--jobs N] [--fps 60] [--style STYLE.toml] [--frames] [--quiet]``
+[--size WxH] [--jobs N] [--fps 60] [--style STYLE.toml] [--frames] [--force] [--quiet]``
+(resumable: only what is missing or stale is made; Ctrl-C stops the workers at once)
 
 ``flipstudy figure CLIP [--ghost|--trail|--strip|--composite|--overlay OTHER]
 --out FILE.png [--fps F] [--scale S] [--size WxH] [--interval S] [--debug]
@@ -38,13 +39,14 @@ def cmd_render(args) -> int:
         what = parse_what(args.what)
         rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs, fps=args.fps,
                            style=_style(args.style), frames=args.frames, progress=not args.quiet,
-                           orient=not args.no_orient)
+                           orient=not args.no_orient, force=args.force)
     except (StudyRenderError, ValueError, OSError) as e:
         print(f"flipstudy render: error: {e}", file=sys.stderr)
         return 1
     n = len(rec["stimuli"])
     print(f"rendered {n} stimuli ({', '.join(rec['what'])}) at {rec['size'][0]}x{rec['size'][1]}, "
-          f"{rec['fps']:g} fps, {rec['jobs']} worker(s), {rec['seconds']:.1f} s")
+          f"{rec['fps']:g} fps: {rec['made']} output(s) made, {rec['up_to_date']} already up to "
+          f"date; {rec['jobs']} worker(s), {rec['seconds']:.1f} s")
     print(f"  settings  {args.study_dir.rstrip('/')}/render/render.json")
     return 0
 
@@ -110,6 +112,9 @@ def add_commands(subparsers) -> None:
     p.add_argument("--no-orient", action="store_true",
                    help="do not turn base clips that travel in other directions to travel like "
                         "the first one (they are only moved to the take-off spot)")
+    p.add_argument("--force", action="store_true",
+                   help="make every output again (default: only what is missing or stale, i.e. "
+                        "made from another stimulus file or with other settings)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_render)
 

@@ -313,8 +313,20 @@ def build_parser() -> argparse.ArgumentParser:
     return ap
 
 
+def _interrupted(command) -> int:
+    """Ctrl-C: one line, the shell's 128 + SIGINT; a further Ctrl-C while the
+    interpreter shuts down is ignored (no second traceback, no other status)."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    print(f"flipstudy{' ' + command if command else ''}: interrupted", file=sys.stderr)
+    return 130
+
+
 def main(argv: list[str] | None = None) -> int:
-    ap = build_parser()
+    try:                                            # the imports take a second or two
+        ap = build_parser()
+    except KeyboardInterrupt:
+        return _interrupted(None)
     args = ap.parse_args(argv)
     if not getattr(args, "func", None):
         ap.print_help()
@@ -323,8 +335,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except KeyboardInterrupt:                       # Ctrl-C: one line, the shell's 128 + SIGINT
-        print(f"flipstudy {args.command}: interrupted", file=sys.stderr)
-        return 130
+        return _interrupted(args.command)
     except FlipstudyError as e:                     # a user error: one line, no traceback
         print(f"flipstudy {args.command}: error: {e}", file=sys.stderr)
         return 1

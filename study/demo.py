@@ -90,4 +90,25 @@ def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, siz
         for i, r in enumerate(rows):
             write_test_video(out / "render" / f"{r['stimulus']}.mp4", size=size, frames=video_frames,
                              fps=video_fps, color=palette[i % len(palette)])
+        write_demo_record(out, rows, size=size, fps=video_fps)
     return out
+
+
+def write_demo_record(out, rows, *, size=(64, 48), fps: float = 30.0) -> None:
+    """``render/render.json`` for placeholder videos, in the form `flipstudy render`
+    writes (one settings record, each video made from its manifest row's sha256),
+    so ``flipstudy run`` serves them."""
+    import json
+
+    from render.study import file_sha256
+    render = Path(out) / "render"
+    settings = {"size": list(size), "fps": float(fps), "placeholder": "study.demo moving square"}
+    outputs = {}
+    for r in rows:
+        f = render / f"{r['stimulus']}.mp4"
+        outputs[f.name] = {"stimulus": r["stimulus"], "kind": "video",
+                           "stimulus_sha256": str(r.get("sha256", "")), "settings": "demo",
+                           "bytes": f.stat().st_size, "sha256": file_sha256(f)}
+    rec = {"what": ["video"], "size": list(size), "fps": float(fps), "settings_id": "demo",
+           "settings_records": {"demo": settings}, "outputs": outputs}
+    (render / "render.json").write_text(json.dumps(rec, indent=2) + "\n")

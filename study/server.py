@@ -13,9 +13,12 @@ error is a JSON object ``{"error": "..."}`` with a 4xx status):
                             ``STUDY_DIR/render/`` (no traversal, no symlinks out)
 
 Experimenter actions (export, status) are command-line only.  The server binds
-to 127.0.0.1 unless told otherwise, accepts only loopback ``Host`` headers then,
-refuses cross-origin posts and anything but ``application/json`` bodies of at
-most 8 KiB.
+to 127.0.0.1 unless told otherwise, accepts only loopback ``Host`` headers then
+(on another address: the machine's names and addresses and ``--allowed-host``
+names, never any name, against DNS rebinding), refuses cross-origin posts and
+anything but ``application/json`` bodies of at most 8 KiB.  One server per
+participant: :mod:`study.lock`.  It serves only videos that ``render.json``
+says were made from the current stimuli with one set of settings.
 
 Example
 -------
@@ -62,6 +65,38 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host.strip("[]")).is_loopback
     except ValueError:
         return False
+
+
+def allowed_host_names(host: str, extra=()) -> set[str]:
+    """The names a ``Host`` header may carry for a server listening on ``host``
+    (DNS-rebinding guard): the loopback names, ``host`` itself, ``extra``
+    (``--allowed-host``) and, for a non-loopback address, this machine's host
+    name, its fully qualified name and the addresses that name resolves to
+    (IPv6 ones also in brackets).  A wildcard (0.0.0.0, ::) is not a name a
+    browser sends, so it is not added."""
+    names = {n.lower() for n in LOOPBACK_NAMES}
+    wildcard = host in ("0.0.0.0", "::", "")
+    if not wildcard:
+        names.add(host.lower())
+    if not is_loopback(host):
+        machine = {socket.gethostname()}
+        try:
+            machine.add(socket.getfqdn())
+        except OSError:
+            pass
+        names |= {m.lower() for m in machine if m}
+        for m in list(machine):
+            try:
+                for info in socket.getaddrinfo(m, None, type=socket.SOCK_STREAM):
+                    names.add(info[4][0].lower())
+            except OSError:
+                pass
+    for n in extra or ():
+        n = str(n).strip().lower()
+        if n:
+            names.add(n)
+    names |= {f"[{n}]" for n in list(names) if ":" in n and not n.startswith("[")}
+    return names
 
 
 class _Guard:
@@ -207,18 +242,46 @@ def bind(host: str = "127.0.0.1", port: int = 0) -> socket.socket:
 
 def serve(study_dir, participant: str, *, host: str = "127.0.0.1", port: int = 0,
           open_browser: bool = True, new_session: bool = False, iti_ms: int = 500,
-          out=sys.stdout) -> int:
+          allowed_hosts=(), out=sys.stdout) -> int:
     """Open or resume the session, print the URL, open the browser and serve
-    until interrupted (Ctrl-C)."""
+    until interrupted (Ctrl-C).  One server per participant: a second one for
+    the same participant of the same study is refused (:mod:`study.lock`).
+    ``allowed_hosts``: more names the Host header may carry (see
+    :func:`allowed_host_names`)."""
+    from .validate import check_participant
+    try:
+        check_participant(participant)
+    except RequestError as e:
+        raise SessionError(e.message) from None
+    study = load_study(study_dir)
+    from .lock import ParticipantLock
+    lock = ParticipantLock(study.dir, participant).acquire(host_arg=host)
+    try:
+        return _serve_locked(study, participant, lock, host=host, port=port,
+                             open_browser=open_browser, new_session=new_session, iti_ms=iti_ms,
+                             allowed_hosts=allowed_hosts, out=out)
+    finally:
+        lock.release()
+
+
+def _serve_locked(study, participant, lock, *, host, port, open_browser, new_session, iti_ms,
+                  allowed_hosts, out) -> int:
     import uvicorn
 
-    study = load_study(study_dir)
+    from render.study import StaleRenderError, check_rendered
     open_session(study, participant, new_session=new_session, dry_run=True)   # refusals first
     missing = study.missing_videos()
     if missing:
         raise SessionError(f"{len(missing)} of {len(study.manifest)} stimulus videos are missing in "
                            f"{study.render_dir} (e.g. {missing[0]}.mp4); render them first: "
                            f"flipstudy render {study.dir}")
+    try:       # every video made from the stimulus as it is now, all with one settings record
+        check_rendered(study.dir, "video", rows=study.manifest)
+    except StaleRenderError as e:
+        raise SessionError(str(e)) from None
+    if lock.previous and lock.previous.get("pid"):
+        print(f"flipstudy run: note: took over the lock of a server that is gone "
+              f"(pid {lock.previous['pid']}, since {lock.previous.get('since', '?')})", file=out)
     session = open_session(study, participant, new_session=new_session)
     state = session.state()
     sock = bind(host, port)
@@ -234,7 +297,13 @@ def serve(study_dir, participant: str, *, host: str = "127.0.0.1", port: int = 0
     print(f"flipstudy run: participant {participant}, {what}", file=out)
     if not loop:
         print(f"flipstudy run: warning: listening on {host}, reachable from the network", file=out)
+    allowed = allowed_host_names(host, allowed_hosts)
+    if not loop:
+        print(f"flipstudy run: the page answers only to the Host names "
+              f"{', '.join(sorted(n for n in allowed if not n.startswith('[')))} "
+              f"(more with --allowed-host NAME)", file=out)
     print(f"participant page: {url}", file=out, flush=True)
+    lock.update(url=url, port=port)
 
     def progress(result):
         msg = f"{participant}: {result['trial']}/{session.n_trials} answered"
@@ -242,7 +311,6 @@ def serve(study_dir, participant: str, *, host: str = "127.0.0.1", port: int = 0
             msg += " — session finished; press Ctrl-C to stop the server"
         print(msg, file=out, flush=True)
 
-    allowed = (set(LOOPBACK_NAMES) | {host}) if loop else None
     app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress)
     config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=False,
                             server_header=False, lifespan="off", timeout_graceful_shutdown=3)

@@ -134,7 +134,7 @@ class Session:
 
 
 def open_session(study: Study, participant: str, *, new_session: bool = False,
-                 source: str = "browser", dry_run: bool = False) -> Session:
+                 source: str = "browser", dry_run: bool = False, _retried: bool = False) -> Session:
     """Resume the participant's unfinished session, or start one.
 
     A new session's trial order is stored before this returns (so before the
@@ -176,7 +176,18 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         trials = trial_order(study.design, study.manifest, participant, s)
         seed = participant_seed(study.design.seed, participant, s)
         if not dry_run:
-            store.create_session(conn, participant, s, source, seed, study.manifest_sha256, trials)
+            try:
+                store.create_session(conn, participant, s, source, seed, study.manifest_sha256,
+                                     trials)
+            except store.Conflict:
+                if _retried:
+                    raise SessionError(f"participant {participant}: session {s} is being created "
+                                       f"by another process; try again") from None
+                # another process created this session between our read and our write:
+                # it is the session asked for, so open (resume) that one
+                conn.close()
+                return open_session(study, participant, new_session=False, source=source,
+                                    _retried=True)
         return Session(study, participant, s, source, trials, resumed=False)
     finally:
         conn.close()

@@ -54,7 +54,7 @@ def cmd_run(args) -> int:
     try:
         return serve(args.study_dir, args.participant, host=args.host, port=args.port,
                      open_browser=not args.no_browser, new_session=args.new_session,
-                     iti_ms=args.iti_ms)
+                     iti_ms=args.iti_ms, allowed_hosts=args.allowed_host)
     except (ValueError, OSError, RequestError) as e:
         return _fail("run", e)
     except KeyboardInterrupt:
@@ -153,6 +153,10 @@ def add_commands(subparsers) -> None:
     p.add_argument("--port", type=_port, default=0, help="TCP port (default: a free one)")
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1, this machine only)")
+    p.add_argument("--allowed-host", action="append", default=[], metavar="NAME",
+                   help="with a --host other than loopback: a name the participant's browser "
+                        "uses for this machine, accepted in the Host header (repeatable; "
+                        "default: this machine's host names and addresses)")
     p.add_argument("--no-browser", action="store_true", help="print the URL, do not open a browser")
     p.add_argument("--new-session", action="store_true",
                    help="start a new session for this participant (the earlier ones are kept)")

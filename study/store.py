@@ -158,16 +158,26 @@ def latest_session(conn, participant: str):
 
 def create_session(conn, participant: str, session: int, source: str, seed: int,
                    manifest_sha256: str, trials: list[Trial]) -> None:
-    """Create a session and store its whole trial order, in one transaction."""
-    with transaction(conn):
-        conn.execute("INSERT INTO sessions (participant, session, source, seed, manifest_sha256, "
-                     "n_trials, started) VALUES (?,?,?,?,?,?,?)",
-                     (participant, session, source, str(seed), manifest_sha256, len(trials),
-                      utc_now()))
-        conn.executemany(
-            "INSERT INTO trials VALUES (?,?,?,?,?,?,?,?,?)",
-            [(participant, session, t.trial, t.stimulus, t.clip, t.group, t.kind, t.level,
-              t.repetition) for t in trials])
+    """Create a session and store its whole trial order, in one transaction.
+    Raises :class:`Conflict` if another connection created that session first
+    (two processes opening the same new participant at once)."""
+    try:
+        with transaction(conn):
+            conn.execute("INSERT INTO sessions (participant, session, source, seed, "
+                         "manifest_sha256, n_trials, started) VALUES (?,?,?,?,?,?,?)",
+                         (participant, session, source, str(seed), manifest_sha256, len(trials),
+                          utc_now()))
+            _insert_trials(conn, participant, session, trials)
+    except sqlite3.IntegrityError as e:
+        raise Conflict(f"session {session} of participant {participant} was created by another "
+                       f"process at the same time ({e})") from None
+
+
+def _insert_trials(conn, participant: str, session: int, trials: list[Trial]) -> None:
+    conn.executemany(
+        "INSERT INTO trials VALUES (?,?,?,?,?,?,?,?,?)",
+        [(participant, session, t.trial, t.stimulus, t.clip, t.group, t.kind, t.level,
+          t.repetition) for t in trials])
 
 
 def load_trials(conn, participant: str, session: int) -> list[Trial]:
