@@ -173,6 +173,11 @@ def gravity_warning(g_app: float, clip: Clip) -> str | None:
             f"--fps {best:g} --scale {scale / s:.4g} (now {scale:.4g} m per file unit).")
 
 
+def flight_breaks(flights) -> list[int]:
+    """The phase starts of :func:`stimuli.physics.momentum` for these flights."""
+    return sorted({b for f in flights for b in (f.takeoff, f.landing + 1)})
+
+
 def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
             estimate: bool = True, W: float = DEFAULT_W) -> Analysis:
     """Flight analysis of one clip.
@@ -200,7 +205,8 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
         f = flights[0]
         fit = estimate_masses(clip, body0, f.takeoff, f.landing, W=W)
         final_body = fit.body
-        m = momentum(clip, final_body)
+    if flights:
+        m = momentum(clip, final_body, flight_breaks(flights))
     a = Analysis(clip=clip, body=final_body, com=m.com, p=m.p, L=m.L, flights=flights,
                  mass_fit=fit, warnings=warnings)
     if a.flight is None:
