@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .body import Body
-from .flight import Flight, detect_flights, fit_path
+from .flight import Flight, detect_flights, fit_path, path_values
 from .massfit import G, MassFit, estimate_masses
 from .motion.clip import Clip
 from .physics import Momentum, momentum
@@ -51,6 +51,21 @@ class Analysis:
         return None if self.flight is None else self.flight.landing
 
     @property
+    def takeoff_time(self) -> float | None:
+        """The take-off instant, seconds (sub-frame): the body's lowest point leaves
+        its support; frames strictly after it are airborne."""
+        return None if self.flight is None else float(self.flight.takeoff_time)
+
+    @property
+    def landing_time(self) -> float | None:
+        """The touchdown instant, seconds (sub-frame)."""
+        return None if self.flight is None else float(self.flight.landing_time)
+
+    def path_at(self, t: np.ndarray) -> np.ndarray:
+        """(n,3) the flight's fitted COM path at clip times ``t`` (seconds)."""
+        return path_values(self.path, np.asarray(t, float) - self.takeoff / self.clip.fps)
+
+    @property
     def flight_frames(self) -> slice:
         if self.flight is None:
             raise ValueError(f"{self.clip.meta.get('name', 'clip')}: no flight phase")
@@ -58,7 +73,8 @@ class Analysis:
 
     @property
     def flight_s(self) -> float | None:
-        return None if self.flight is None else (self.landing - self.takeoff) / self.clip.fps
+        """Seconds from the take-off instant to the touchdown instant."""
+        return None if self.flight is None else self.landing_time - self.takeoff_time
 
     @property
     def path(self) -> np.ndarray | None:
@@ -75,8 +91,12 @@ class Analysis:
 
     @property
     def takeoff_velocity(self) -> np.ndarray | None:
-        """COM velocity at take-off from the fitted path (m/s)."""
-        return None if self.flight is None else self.path[:, 1].copy()
+        """COM velocity at the take-off instant from the fitted path (m/s)."""
+        if self.flight is None:
+            return None
+        v = self.path[:, 1].copy()
+        v[1] += 2.0 * self.path[1, 0] * (self.takeoff_time - self.takeoff / self.clip.fps)
+        return v
 
     @property
     def takeoff_angle(self) -> float | None:
@@ -127,6 +147,8 @@ class Analysis:
             "apparent_gravity": r(self.apparent_gravity, 3),
             "takeoff": self.takeoff,
             "landing": self.landing,
+            "takeoff_time": r(self.takeoff_time, 5),
+            "landing_time": r(self.landing_time, 5),
             "flight_s": r(self.flight_s),
             "takeoff_angle_deg": r(self.takeoff_angle, 2),
             "takeoff_velocity": None if self.flight is None else [r(v) for v in self.takeoff_velocity],
@@ -134,6 +156,8 @@ class Analysis:
             "L_cv_pct": r(self.L_cv_pct, 3),
             "L_direction": None if self.flight is None else [r(v) for v in self.L_direction],
             "flights": [{"takeoff": f.takeoff, "landing": f.landing,
+                         "takeoff_time": round(f.takeoff_time, 5),
+                         "landing_time": round(f.landing_time, 5),
                          "com_rms_mm": round(f.rms * 1000, 2)} for f in self.flights],
             "total_mass": self.body.total_mass,
             "segment_masses": {k: round(v, 3) for k, v in self.body.segment_masses().items()},
