@@ -231,7 +231,7 @@ def measure(original: Analysis, inj: Injected) -> dict:
     where fully applied for AM, horizontal take-off velocity ratio −1 for take-off
     errors), ``L_ratio_window`` (mean |L| ratio over the last 10 % of flight
     (smooth) or its second half (abrupt)), ``L_error_touchdown_pct`` (|L| ratio
-    −1 at the last airborne frame), ``takeoff_angle_deg``,
+    −1 just before touchdown: the median over the last three airborne frames), ``takeoff_angle_deg``,
     ``takeoff_angle_change_deg``, ``flight_s``, ``jump_height_m``,
     ``jump_length_m``, ``dp_takeoff``/``dp_landing`` (jump in linear momentum
     across take-off/landing, kg·m/s), ``dv_takeoff``/``dv_landing`` (COM
@@ -275,27 +275,32 @@ def measure(original: Analysis, inj: Injected) -> dict:
         Tn = inj.landing_time - inj.takeoff_time
         if inj.profile == "smooth":
             # r(τ) rises linearly from the take-off instant; fit the per-frame ratio
-            # and read it at touchdown, where the error is fully applied
+            # and read it at touchdown, where the error is fully applied (the
+            # end frames, differenced one-sidedly, are left out: on captured data
+            # their noise is the largest)
             A = np.stack([np.ones(n), tau / Tn], 1)
-            c = np.linalg.lstsq(A, ratio, rcond=None)[0]
+            inner = slice(1, n - 1) if n > 6 else slice(0, n)
+            c = np.linalg.lstsq(A[inner], ratio[inner], rcond=None)[0]
             full = c[0] + c[1]
             win = slice(int(np.floor(0.9 * (n - 1))), n)
         else:
             # the rate switches at the midpoint of the stimulus' airborne span
             half = int(np.searchsorted(tau, Tn / 2, side="right"))
-            win = slice(min(half + 1, n - 1), n)
+            win = slice(min(half + 1, n - 2), n - 1) if n > 6 else slice(min(half, n - 1), n)
             full = float(np.mean(ratio[win]))
         out["measured_error_pct"] = 100.0 * (full - 1.0)
         out["L_ratio_window"] = float(np.mean(ratio[win]))
-        out["L_error_touchdown_pct"] = 100.0 * (float(ratio[-1]) - 1.0)
+        out["L_error_touchdown_pct"] = 100.0 * (float(np.median(ratio[-3:])) - 1.0)
         out["L_change_pct"] = 100.0 * (float(np.mean(Ln[fr])) / original.L_mean - 1.0)
     else:
         v0 = original.takeoff_velocity
         out["measured_error_pct"] = 100.0 * (np.hypot(v[0], v[2]) / np.hypot(v0[0], v0[2]) - 1.0)
         out["L_ratio_window"] = float(np.mean(Ln[fr]) / original.L_mean)
         out["L_change_pct"] = 100.0 * (out["L_ratio_window"] - 1.0)
-        Lo_end = Lo[min(original.landing, Lo.size - 1)]
-        out["L_error_touchdown_pct"] = 100.0 * (float(Ln[inj.landing]) / Lo_end - 1.0)
+        end = slice(max(inj.landing - 2, inj.takeoff), inj.landing + 1)
+        end0 = slice(max(original.landing - 2, original.takeoff), original.landing + 1)
+        out["L_error_touchdown_pct"] = 100.0 * (float(np.median(Ln[end]))
+                                                / float(np.median(Lo[end0])) - 1.0)
     p = mo.p
     out["dp_takeoff"] = float(np.linalg.norm(p[inj.takeoff] - p[max(inj.takeoff - 2, 0)]))
     last = min(inj.landing + 2, p.shape[0] - 1)

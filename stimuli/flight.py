@@ -230,16 +230,23 @@ def contact_instants(h: np.ndarray, contact: np.ndarray, com_y: np.ndarray, fps:
     jitter, at least ``eps_min`` × ``size`` m) and the one within ``eps_max`` ×
     ``size`` (captured markers sit off the skin and drift on a rolling foot);
     inside the bracket the COM decides: the contact frame is the latest
-    (take-off) / earliest (landing) whose COM acceleration (second difference)
-    is not yet / already away from free fall (above −g/2).  The instant is the
+    (take-off) / earliest (landing) whose COM acceleration (the second
+    difference reaching into the flight side) is not yet / already away from
+    free fall (above −g/2).  The instant is the
     zero crossing of the clearance on the frame interval beside the contact
     frame (clipped to it).  A run touching the clip's start or end has its
     instant half a frame outside the first/last frame."""
     F = h.shape[0]
     w = max(3, int(round(window * fps)))
-    acc = np.full(F, -np.inf)
+    # one-sided second differences reaching toward the flight: a frame is still
+    # pushed (take-off) / already braked (landing) when its COM leaves the path
+    # through the next (previous) two frames
+    acc_to = np.full(F, -np.inf)
+    acc_ld = np.full(F, -np.inf)
     if F >= 3:
-        acc[1:-1] = (com_y[2:] - 2 * com_y[1:-1] + com_y[:-2]) * fps ** 2
+        a2 = (com_y[2:] - 2 * com_y[1:-1] + com_y[:-2]) * fps ** 2
+        acc_to[:-2] = a2
+        acc_ld[2:] = a2
 
     def clearance(lo, hi):
         sel = contact[lo:hi]
@@ -264,7 +271,7 @@ def contact_instants(h: np.ndarray, contact: np.ndarray, com_y: np.ndarray, fps:
         lo_ = int(np.flatnonzero(head <= eps)[-1]) if (head <= eps).any() else s - 1
         hi_ = int(np.flatnonzero(head <= eps_max * size)[-1]) if (head <= eps_max * size).any() else lo_
         hi_ = max(hi_, lo_)
-        push = np.flatnonzero(acc[lo_:hi_ + 1] > -g / 2)
+        push = np.flatnonzero(acc_to[lo_:hi_ + 1] > -g / 2)
         f0 = min(lo_ + int(push[-1]) if push.size else lo_, F - 2)
         den = d[f0 + 1] - d[f0]
         t_to = f0 + (float(np.clip(-d[f0] / den, 0.0, 1.0)) if den > 0 else 0.0)
@@ -277,7 +284,7 @@ def contact_instants(h: np.ndarray, contact: np.ndarray, com_y: np.ndarray, fps:
         lo_ = e + int(np.flatnonzero(tail <= eps_max * size)[0]) if (tail <= eps_max * size).any() else e + 1
         hi_ = e + int(np.flatnonzero(tail <= eps)[0]) if (tail <= eps).any() else lo_
         hi_ = max(hi_, lo_)
-        brake = np.flatnonzero(acc[lo_:hi_ + 1] > -g / 2)
+        brake = np.flatnonzero(acc_ld[lo_:hi_ + 1] > -g / 2)
         f1 = max(lo_ + int(brake[0]) if brake.size else hi_, 1)
         den = d[f1 - 1] - d[f1]
         t_ld = f1 - (float(np.clip(d[f1] / den, 0.0, 1.0)) if den > 0 else 0.0)
@@ -316,8 +323,25 @@ def detect_flights(clip: Clip, body: Body, com: np.ndarray | None = None, *,
         t_to, t_ld = contact_instants(H, C, com[:, 1], clip.fps, s, e, size)
         to = int(np.floor(t_to * clip.fps + 1e-6)) + 1
         ld = int(np.ceil(t_ld * clip.fps - 1e-6)) - 1
-        # the instants cannot cut into the ballistic core
+        # the instants cannot cut into the ballistic core, and the frames they add
+        # to it must follow its COM path within 5× the core's median residual or
+        # 5 cm (a hand still on the floor, which the effector rule missed, keeps
+        # the COM far off it)
         to, ld = min(max(to, 0), s + a), max(min(ld, clip.num_frames - 1), s + b)
+        core = com[s + a:s + b + 1]
+        t_core = np.arange(core.shape[0]) / clip.fps
+        r_core = np.linalg.norm(core - path_values(coef, t_core), axis=1)
+        thr = max(5.0 * float(np.median(r_core)), 0.05 * size)
+        fr = np.arange(to, ld + 1)
+        r = np.linalg.norm(com[fr] - path_values(coef, (fr - (s + a)) / clip.fps), axis=1)
+        off = r > thr
+        pre, post = off[:s + a - to], off[s + b + 1 - to:]
+        if pre.any():                 # the geometry missed a contact: mid-interval
+            to = to + int(np.flatnonzero(pre)[-1]) + 1
+            t_to = (to - 0.5) / clip.fps
+        if post.any():
+            ld = s + b + int(np.flatnonzero(post)[0])
+            t_ld = (ld + 0.5) / clip.fps
         t_to = min(t_to, (to - 0.5) / clip.fps)
         t_ld = max(t_ld, (ld + 0.5) / clip.fps)
         seg = com[to:ld + 1]

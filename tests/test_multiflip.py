@@ -235,12 +235,13 @@ def test_join_refuses_a_jump():
 
 
 def test_landing_join_on_the_landing_frame_itself():
-    """90_11 (a handspring, 60 Hz) with loops of at least 90°: the landing join's g
-    is the landing frame; the double is made and its flight is where it says."""
+    """90_11 (a handspring, 60 Hz) made a triple: the landing join's g is the
+    landing frame (the last frame strictly inside the flight); the triple is made
+    and its flight is where it says."""
     from _shared import shared_file
     from stimuli import load_bvh
     a = analyse(load_bvh(shared_file("90_11.bvh")))
-    r = multiflip(a, 2, min_turn_deg=90)
+    r = multiflip(a, 3)
     assert r.report["landing_join"]["g"] == a.landing
     m = measure(r, a)
     assert m["analyser_flight"] == [r.takeoff, r.landing]
