@@ -231,7 +231,7 @@ def measure(original: Analysis, inj: Injected) -> dict:
     where fully applied for AM, horizontal take-off velocity ratio −1 for take-off
     errors), ``L_ratio_window`` (mean |L| ratio over the last 10 % of flight
     (smooth) or its second half (abrupt)), ``L_error_touchdown_pct`` (|L| ratio
-    −1 just before touchdown: the median over the last three airborne frames), ``takeoff_angle_deg``,
+    −1 at the touchdown instant: a line through the last five airborne frames), ``takeoff_angle_deg``,
     ``takeoff_angle_change_deg``, ``flight_s``, ``jump_height_m``,
     ``jump_length_m``, ``dp_takeoff``/``dp_landing`` (jump in linear momentum
     across take-off/landing, kg·m/s), ``dv_takeoff``/``dv_landing`` (COM
@@ -290,7 +290,13 @@ def measure(original: Analysis, inj: Injected) -> dict:
             full = float(np.mean(ratio[win]))
         out["measured_error_pct"] = 100.0 * (full - 1.0)
         out["L_ratio_window"] = float(np.mean(ratio[win]))
-        out["L_error_touchdown_pct"] = 100.0 * (float(np.median(ratio[-3:])) - 1.0)
+        # a line through the last five airborne frames, read at the touchdown instant
+        m5 = min(5, n)
+        if m5 >= 2:
+            c5 = np.polyfit(tau[-m5:], ratio[-m5:], 1)
+            out["L_error_touchdown_pct"] = 100.0 * (float(np.polyval(c5, Tn)) - 1.0)
+        else:
+            out["L_error_touchdown_pct"] = 100.0 * (float(ratio[-1]) - 1.0)
         out["L_change_pct"] = 100.0 * (float(np.mean(Ln[fr])) / original.L_mean - 1.0)
     else:
         v0 = original.takeoff_velocity
