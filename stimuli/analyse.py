@@ -79,7 +79,8 @@ class Analysis:
     @property
     def path(self) -> np.ndarray | None:
         """(3,3) ballistic COM path of the flight, rows x,y,z; columns t², t, 1 with
-        t in seconds from take-off (estimated masses)."""
+        t in seconds from the first frame strictly inside the flight (``takeoff``;
+        :meth:`path_at` takes clip times), fitted to the frames strictly inside."""
         if self.flight is None:
             return None
         return fit_path(self.com[self.flight_frames], self.clip.fps)

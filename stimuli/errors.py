@@ -123,7 +123,8 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
     tau = t - t_to
     src_t = np.where(tau <= 0, t, np.where(tau <= Tn, t_to + s_of(np.clip(tau, 0.0, Tn)),
                                            t_ld + (tau - Tn)))
-    src = src_t * fps
+    # frames up to the take-off instant are the source's own (whole frames exactly)
+    src = np.where(tau <= 0, np.arange(n_new, dtype=float), src_t * fps)
     new = sample(clip, src)
     t_ld_new = t_to + Tn
     to, ld_new = _inside(t_to, t_ld_new, fps)
@@ -237,7 +238,9 @@ def measure(original: Analysis, inj: Injected) -> dict:
     across take-off/landing, kg·m/s), ``dv_takeoff``/``dv_landing`` (COM
     velocity change at the contact instants, m/s), ``air_acc_dev`` (largest
     in-air |a − g| of the COM, m/s²) and ``air_acc_dev_original``,
-    ``L_change_pct`` (mean |L| in flight vs the original, for take-off errors),
+    ``below_floor_mm`` (how far the stimulus' lowest point goes below the
+    original's lowest: a changed take-off velocity moves the feet near the
+    floor), ``L_change_pct`` (mean |L| in flight vs the original, for take-off errors),
     ``takeoff``/``landing`` found by the analyser."""
     from .physics import momentum
     stim = analyse(inj.clip, body=original.body, estimate=False)
@@ -313,10 +316,19 @@ def measure(original: Analysis, inj: Injected) -> dict:
     out["dp_landing"] = float(np.linalg.norm(p[last] - p[inj.landing]))
     out["dv_takeoff"], out["dv_landing"] = contact_velocity_changes(
         com, fps, inj.takeoff, inj.landing, inj.takeoff_time, inj.landing_time)
+    out["below_floor_mm"] = 1000.0 * max(0.0, _lowest(original.clip) - _lowest(inj.clip))
     out["air_acc_dev"] = air_departure(com, fps, inj.takeoff, inj.landing)
     out["air_acc_dev_original"] = air_departure(original.com, original.clip.fps,
                                                 original.takeoff, original.landing)
     return out
+
+
+def _lowest(clip: Clip) -> float:
+    """Height of the lowest joint or end site over the whole clip (m)."""
+    h = clip.joint_positions()[..., 1].min()
+    if clip.skeleton.end_sites:
+        h = min(h, clip.end_site_positions()[..., 1].min())
+    return float(h)
 
 
 def _fit(com: np.ndarray, fps: float) -> np.ndarray:

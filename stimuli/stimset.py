@@ -36,7 +36,7 @@ MANIFEST_COLUMNS = [
     "L_ratio_window", "L_change_pct", "flight_s", "jump_height_m", "jump_length_m",
     "dp_takeoff", "dp_landing", "frames", "fps", "bvh", "npz",
     "takeoff_time", "landing_time", "air_acc_dev", "air_acc_dev_original", "dv_takeoff",
-    "dv_landing", "L_error_touchdown_pct",
+    "dv_landing", "L_error_touchdown_pct", "below_floor_mm",
 ]
 
 
@@ -185,7 +185,7 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
                 "bvh": f"{name}.bvh", "npz": f"{name}.npz",
                 "takeoff_time": inj.takeoff_time, "landing_time": inj.landing_time,
                 **{k: m[k] for k in ("air_acc_dev", "air_acc_dev_original", "dv_takeoff",
-                                     "dv_landing", "L_error_touchdown_pct")},
+                                     "dv_landing", "L_error_touchdown_pct", "below_floor_mm")},
             })
             bar.step(name)
         write_manifest(tmp / "manifest.csv", rows)

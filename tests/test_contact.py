@@ -202,6 +202,15 @@ def test_manifest_measures_contact_velocity_changes_and_in_air_departure(design_
         m = measure(a, inj)
         assert m["air_acc_dev"] < 1e-6 and m["air_acc_dev_original"] < 1e-6
         check(m, inj, 1.0, stim)                     # not refused
+        # a changed take-off velocity moves the feet near the floor: reported, and
+        # a few millimetres at most (independently: the lowest joint or end site)
+        depth = 1000 * max(0.0, lowest_point(a.clip).min() - lowest_point(inj.clip).min())
+        assert m["below_floor_mm"] == pytest.approx(depth, abs=1e-6)
+        assert m["below_floor_mm"] < 8.0
+        # everything up to the take-off instant is the original's, bit for bit
+        n0 = inj.takeoff
+        assert np.array_equal(inj.clip.rotations[:n0], a.clip.rotations[:n0])
+        assert np.array_equal(inj.clip.root_pos[:n0], a.clip.root_pos[:n0])
         if group.kind == "takeoff-angle":
             # the horizontal velocity changes by e·v_h at take-off and back at touchdown
             vh = np.hypot(a.takeoff_velocity[0], a.takeoff_velocity[2])
