@@ -44,10 +44,12 @@ class Analysis:
 
     @property
     def takeoff(self) -> int | None:
+        """First frame strictly inside the flight (after the take-off instant)."""
         return None if self.flight is None else self.flight.takeoff
 
     @property
     def landing(self) -> int | None:
+        """Last frame strictly inside the flight (before the touchdown instant)."""
         return None if self.flight is None else self.flight.landing
 
     @property
