@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .body import Body
-from .flight import Flight, detect_flights, fit_path
+from .flight import Flight, detect_flights, fit_path, path_values
 from .massfit import DEFAULT_W, G, MassFit, estimate_masses
 from .motion.clip import Clip
 from .physics import Momentum, momentum
@@ -43,11 +43,28 @@ class Analysis:
 
     @property
     def takeoff(self) -> int | None:
+        """First frame strictly inside the flight (after the take-off instant)."""
         return None if self.flight is None else self.flight.takeoff
 
     @property
     def landing(self) -> int | None:
+        """Last frame strictly inside the flight (before the touchdown instant)."""
         return None if self.flight is None else self.flight.landing
+
+    @property
+    def takeoff_time(self) -> float | None:
+        """The take-off instant, seconds (sub-frame): the body's lowest point leaves
+        its support; frames strictly after it are airborne."""
+        return None if self.flight is None else float(self.flight.takeoff_time)
+
+    @property
+    def landing_time(self) -> float | None:
+        """The touchdown instant, seconds (sub-frame)."""
+        return None if self.flight is None else float(self.flight.landing_time)
+
+    def path_at(self, t: np.ndarray) -> np.ndarray:
+        """(n,3) the flight's fitted COM path at clip times ``t`` (seconds)."""
+        return path_values(self.path, np.asarray(t, float) - self.takeoff / self.clip.fps)
 
     @property
     def flight_frames(self) -> slice:
@@ -57,12 +74,14 @@ class Analysis:
 
     @property
     def flight_s(self) -> float | None:
-        return None if self.flight is None else (self.landing - self.takeoff) / self.clip.fps
+        """Seconds from the take-off instant to the touchdown instant."""
+        return None if self.flight is None else self.landing_time - self.takeoff_time
 
     @property
     def path(self) -> np.ndarray | None:
         """(3,3) ballistic COM path of the flight, rows x,y,z; columns t², t, 1 with
-        t in seconds from take-off (estimated masses)."""
+        t in seconds from the first frame strictly inside the flight (``takeoff``;
+        :meth:`path_at` takes clip times), fitted to the frames strictly inside."""
         if self.flight is None:
             return None
         return fit_path(self.com[self.flight_frames], self.clip.fps)
@@ -74,8 +93,12 @@ class Analysis:
 
     @property
     def takeoff_velocity(self) -> np.ndarray | None:
-        """COM velocity at take-off from the fitted path (m/s)."""
-        return None if self.flight is None else self.path[:, 1].copy()
+        """COM velocity at the take-off instant from the fitted path (m/s)."""
+        if self.flight is None:
+            return None
+        v = self.path[:, 1].copy()
+        v[1] += 2.0 * self.path[1, 0] * (self.takeoff_time - self.takeoff / self.clip.fps)
+        return v
 
     @property
     def takeoff_angle(self) -> float | None:
@@ -126,6 +149,8 @@ class Analysis:
             "apparent_gravity": r(self.apparent_gravity, 3),
             "takeoff": self.takeoff,
             "landing": self.landing,
+            "takeoff_time": r(self.takeoff_time, 5),
+            "landing_time": r(self.landing_time, 5),
             "flight_s": r(self.flight_s),
             "takeoff_angle_deg": r(self.takeoff_angle, 2),
             "takeoff_velocity": None if self.flight is None else [r(v) for v in self.takeoff_velocity],
@@ -133,6 +158,8 @@ class Analysis:
             "L_cv_pct": r(self.L_cv_pct, 3),
             "L_direction": None if self.flight is None else [r(v) for v in self.L_direction],
             "flights": [{"takeoff": f.takeoff, "landing": f.landing,
+                         "takeoff_time": round(f.takeoff_time, 5),
+                         "landing_time": round(f.landing_time, 5),
                          "com_rms_mm": round(f.rms * 1000, 2)} for f in self.flights],
             "total_mass": self.body.total_mass,
             "segment_masses": {k: round(v, 3) for k, v in self.body.segment_masses().items()},
@@ -297,6 +324,11 @@ def gravity_warning(g_app: float, clip: Clip) -> str | None:
     return f"{adv.problem} Rerun with {fix}." if fix else adv.problem
 
 
+def flight_breaks(flights) -> list[int]:
+    """The phase starts of :func:`stimuli.physics.momentum` for these flights."""
+    return sorted({b for f in flights for b in (f.takeoff, f.landing + 1)})
+
+
 def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
             estimate: bool = True, W: float = DEFAULT_W) -> Analysis:
     """Flight analysis of one clip.
@@ -325,7 +357,8 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
         f = flights[0]
         fit = estimate_masses(clip, body0, f.takeoff, f.landing, W=W)
         final_body = fit.body
-        m = momentum(clip, final_body)
+    if flights:
+        m = momentum(clip, final_body, flight_breaks(flights))
     a = Analysis(clip=clip, body=final_body, com=m.com, p=m.p, L=m.L, flights=flights,
                  mass_fit=fit, warnings=warnings)
     if a.flight is None:

@@ -11,7 +11,17 @@
    still pushing at take-off, already braking at landing: the paper's momentum
    build-up/release pattern); a candidate whose COM does not fit a downward
    parabola within ``tol`` (RMS) is not a flight.
-4. The flight is the longest surviving interval; all of them are reported.
+4. **Contact instants.**  Around each surviving flight the lowest point of the
+   body (toe tips, balls of the feet, ankles, hand tips, wrists: the points that
+   were in contact just before / just after) is followed relative to its own
+   support level (its median height while in contact there: the floor, a box
+   top, the hands' floor).  Take-off is the last frame before the flight where
+   that clearance is within the measurement noise of the support, landing the
+   first after it; the instants are the sub-frame zero crossings of the
+   clearance, clipped to the frame interval beside that contact frame (the
+   built-ins' exact instants lie on frames and are recovered exactly).  The
+   flight's frames are those strictly between the instants.
+5. The flight is the longest surviving interval; all of them are reported.
 """
 
 from __future__ import annotations
@@ -27,13 +37,18 @@ from .motion.clip import Clip, finite_difference
 @dataclass
 class Flight:
     """A ballistic phase: ``takeoff`` and ``landing`` are the first and last
-    airborne frames (inclusive); the COM fit is y = a t² + b t + c with t in
-    seconds from the take-off frame, x and z linear."""
+    frames strictly inside the airborne span (inclusive); ``takeoff_time`` and
+    ``landing_time`` are the contact instants in seconds (sub-frame): the
+    lowest point of the body leaves / reaches its support.  The COM fit is
+    y = a t² + b t + c with t in seconds from the take-off frame, x and z
+    linear, fitted to the frames strictly inside."""
 
     takeoff: int
     landing: int
     coef: np.ndarray          # (3,3): rows x,y,z; columns t², t, 1
     rms: float                # COM residual from the fitted path, metres
+    takeoff_time: float = float("nan")
+    landing_time: float = float("nan")
 
     @property
     def frames(self) -> int:
@@ -181,6 +196,101 @@ def body_size(clip: Clip) -> float:
     return ext if ext > 0 else 1.7
 
 
+def foot_points(clip: Clip, body: Body) -> tuple[np.ndarray, list[str]]:
+    """(F,K,3) the points whose contact is followed at take-off and landing: the
+    effectors of :func:`effector_points` and the balls of the feet (the toe
+    joint, when the toe tip is an end site of it)."""
+    P, names = effector_points(clip, body)
+    sk, lm = clip.skeleton, body.landmarks
+    extra, en = [], []
+    for key in ("toe_tip_l", "toe_tip_r"):
+        v = lm[key]
+        if not isinstance(v, str) and v[1] is not None:
+            extra.append(sk.index(v[0]))
+            en.append(key.replace("toe_tip", "ball"))
+    if extra:
+        P = np.concatenate([P, clip.joint_positions()[:, extra]], axis=1)
+        names = names + en
+    return P, names
+
+
+def contact_instants(h: np.ndarray, contact: np.ndarray, com_y: np.ndarray, fps: float,
+                     s: int, e: int, size: float = 1.0, window: float = 0.25,
+                     eps_min: float = 2e-4, eps_max: float = 0.02, g: float = 9.81
+                     ) -> tuple[float, float]:
+    """Take-off and landing instants (seconds) of the airborne run ``s..e``.
+
+    ``h`` (F,K) heights of the followed points, ``contact`` (F,K) their contact
+    (a ball follows its toe tip), ``com_y`` (F,) the COM height.  On each side
+    the points in contact within ``window`` seconds of the run give the
+    support: each its median height there.  The clearance is the lowest point's
+    height above its support.  The contact frame is bracketed by geometry: the
+    last (take-off) / first (landing) frame whose clearance is within the
+    measurement noise (5 robust σ of the supporting points' frame-to-frame
+    jitter, at least ``eps_min`` × ``size`` m) and the one within ``eps_max`` ×
+    ``size`` (captured markers sit off the skin and drift on a rolling foot);
+    inside the bracket the COM decides: the contact frame is the latest
+    (take-off) / earliest (landing) whose COM acceleration (the second
+    difference reaching into the flight side) is not yet / already away from
+    free fall (above −g/2).  The instant is the
+    zero crossing of the clearance on the frame interval beside the contact
+    frame (clipped to it).  A run touching the clip's start or end has its
+    instant half a frame outside the first/last frame."""
+    F = h.shape[0]
+    w = max(3, int(round(window * fps)))
+    # one-sided second differences reaching toward the flight: a frame is still
+    # pushed (take-off) / already braked (landing) when its COM leaves the path
+    # through the next (previous) two frames
+    acc_to = np.full(F, -np.inf)
+    acc_ld = np.full(F, -np.inf)
+    if F >= 3:
+        a2 = (com_y[2:] - 2 * com_y[1:-1] + com_y[:-2]) * fps ** 2
+        acc_to[:-2] = a2
+        acc_ld[2:] = a2
+
+    def clearance(lo, hi):
+        sel = contact[lo:hi]
+        pts = np.flatnonzero(sel.any(0))
+        if pts.size == 0:
+            return None, None
+        lev = np.array([np.median(h[lo:hi][sel[:, k], k]) for k in pts])
+        d = (h[:, pts] - lev[None]).min(axis=1)
+        hh, ss = h[lo:hi, pts], sel[:, pts]
+        dd = np.diff(hh, 2, axis=0)[ss[:-2] & ss[1:-1] & ss[2:]] if hh.shape[0] >= 3 else []
+        sig = (1.4826 * float(np.median(np.abs(dd - np.median(dd)))) / np.sqrt(6.0)
+               if len(dd) else 0.0)
+        eps = max(5.0 * sig, eps_min * size)
+        return d, min(eps, eps_max * size)
+
+    d = clearance(max(0, s - w), s)[0] if s > 0 else None
+    if d is None:
+        t_to = s - 0.5
+    else:
+        eps = clearance(max(0, s - w), s)[1]
+        head = d[:s + 1]
+        lo_ = int(np.flatnonzero(head <= eps)[-1]) if (head <= eps).any() else s - 1
+        hi_ = int(np.flatnonzero(head <= eps_max * size)[-1]) if (head <= eps_max * size).any() else lo_
+        hi_ = max(hi_, lo_)
+        push = np.flatnonzero(acc_to[lo_:hi_ + 1] > -g / 2)
+        f0 = min(lo_ + int(push[-1]) if push.size else lo_, F - 2)
+        den = d[f0 + 1] - d[f0]
+        t_to = f0 + (float(np.clip(-d[f0] / den, 0.0, 1.0)) if den > 0 else 0.0)
+    d = clearance(e + 1, min(F, e + 1 + w)) if e < F - 1 else (None, None)
+    d, eps = d
+    if d is None:
+        t_ld = e + 0.5
+    else:
+        tail = d[e:]
+        lo_ = e + int(np.flatnonzero(tail <= eps_max * size)[0]) if (tail <= eps_max * size).any() else e + 1
+        hi_ = e + int(np.flatnonzero(tail <= eps)[0]) if (tail <= eps).any() else lo_
+        hi_ = max(hi_, lo_)
+        brake = np.flatnonzero(acc_ld[lo_:hi_ + 1] > -g / 2)
+        f1 = max(lo_ + int(brake[0]) if brake.size else hi_, 1)
+        den = d[f1 - 1] - d[f1]
+        t_ld = f1 - (float(np.clip(d[f1] / den, 0.0, 1.0)) if den > 0 else 0.0)
+    return t_to / fps, t_ld / fps
+
+
 def detect_flights(clip: Clip, body: Body, com: np.ndarray | None = None, *,
                    v_thr: float = 1.0, margin: float = 0.10, tol: float = 0.06,
                    min_duration: float = 0.1) -> list[Flight]:
@@ -194,6 +304,11 @@ def detect_flights(clip: Clip, body: Body, com: np.ndarray | None = None, *,
     v_thr, margin, tol = v_thr * size, margin * size, tol * size
     contact = contact_mask(clip, body, v_thr=v_thr, margin=margin, touch=0.03 * size)
     airborne = ~contact.any(axis=1)
+    P, names = foot_points(clip, body)
+    H = P[..., 1]
+    ne = contact.shape[1]
+    C = np.concatenate([contact, contact[:, [names.index(n.replace("ball", "toe_tip"))
+                                             for n in names[ne:]]]], axis=1)
     min_frames = max(4, int(np.ceil(min_duration * clip.fps)))
     flights = []
     for s, e in _runs(airborne):
@@ -205,6 +320,33 @@ def detect_flights(clip: Clip, body: Body, com: np.ndarray | None = None, *,
         a, b, rms, coef = found
         if rms > tol or coef[1, 0] >= 0:      # not ballistic: no downward parabola
             continue
-        flights.append(Flight(s + a, s + b, coef, rms))
+        t_to, t_ld = contact_instants(H, C, com[:, 1], clip.fps, s, e, size)
+        to = int(np.floor(t_to * clip.fps + 1e-6)) + 1
+        ld = int(np.ceil(t_ld * clip.fps - 1e-6)) - 1
+        # the instants cannot cut into the ballistic core, and the frames they add
+        # to it must follow its COM path within 5× the core's median residual or
+        # 5 cm (a hand still on the floor, which the effector rule missed, keeps
+        # the COM far off it)
+        to, ld = min(max(to, 0), s + a), max(min(ld, clip.num_frames - 1), s + b)
+        core = com[s + a:s + b + 1]
+        t_core = np.arange(core.shape[0]) / clip.fps
+        r_core = np.linalg.norm(core - path_values(coef, t_core), axis=1)
+        thr = max(5.0 * float(np.median(r_core)), 0.05 * size)
+        fr = np.arange(to, ld + 1)
+        r = np.linalg.norm(com[fr] - path_values(coef, (fr - (s + a)) / clip.fps), axis=1)
+        off = r > thr
+        pre, post = off[:s + a - to], off[s + b + 1 - to:]
+        if pre.any():                 # the geometry missed a contact: mid-interval
+            to = to + int(np.flatnonzero(pre)[-1]) + 1
+            t_to = (to - 0.5) / clip.fps
+        if post.any():
+            ld = s + b + int(np.flatnonzero(post)[0])
+            t_ld = (ld + 0.5) / clip.fps
+        t_to = min(t_to, (to - 0.5) / clip.fps)
+        t_ld = max(t_ld, (ld + 0.5) / clip.fps)
+        seg = com[to:ld + 1]
+        coef = fit_path(seg, clip.fps)
+        r = np.linalg.norm(seg - path_values(coef, np.arange(seg.shape[0]) / clip.fps), axis=1)
+        flights.append(Flight(to, ld, coef, float(np.sqrt(np.mean(r ** 2))), t_to, t_ld))
     flights.sort(key=lambda f: -f.frames)
     return flights

@@ -47,8 +47,13 @@ class Momentum:
     inertia: np.ndarray
 
 
-def momentum(clip: Clip, body: Body) -> Momentum:
+def momentum(clip: Clip, body: Body, breaks=()) -> Momentum:
     """COM, linear momentum and angular momentum about the COM for every frame.
+
+    ``breaks``: frames where a new phase starts (a flight's first and the frame
+    after its last frame strictly inside): velocities are then differenced
+    within each phase only (one-sided at its ends), so no stencil reaches across
+    a contact.  A break leaving a phase of one frame is ignored.
 
     Example
     -------
@@ -59,6 +64,18 @@ def momentum(clip: Clip, body: Body) -> Momentum:
     >>> m.L.shape == (clip.num_frames, 3)
     True
     """
+    F = clip.num_frames
+    cuts = sorted({int(b) for b in breaks if 0 < int(b) < F})
+    edges, last = [0], 0
+    for b in cuts:
+        if b - last >= 2 and F - b >= 2:
+            edges.append(b)
+            last = b
+    if len(edges) > 1:
+        edges.append(F)
+        parts = [momentum(clip.slice(a, b), body) for a, b in zip(edges[:-1], edges[1:])]
+        return Momentum(*(np.concatenate([getattr(p, k) for p in parts])
+                          for k in ("com", "v_com", "p", "L", "inertia")))
     R = clip.joint_rotations()[:, body.joint]                 # (F,P,3,3)
     omega = clip.angular_velocities()[:, body.joint]           # (F,P,3)
     c = piece_positions(clip, body)                            # (F,P,3)

@@ -59,6 +59,8 @@ MANIFEST_COLUMNS = [
     "L_ratio_window", "L_change_pct", "flight_s", "jump_height_m", "jump_length_m",
     "dp_takeoff", "dp_landing", "frames", "fps", "bvh", "npz",
     "original", "accept_unphysical",
+    "takeoff_time", "landing_time", "air_acc_dev", "air_acc_dev_original", "dv_takeoff",
+    "dv_landing", "L_error_touchdown_pct", "below_floor_mm",
 ]
 
 
@@ -251,7 +253,8 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
             if group is None or level == 0:
                 inj = Injected(a.clip, group.kind if group else "reference",
                                group.profile if group else None, 0.0, a.takeoff, a.landing,
-                               np.arange(a.clip.num_frames, dtype=float), a.flight_s)
+                               np.arange(a.clip.num_frames, dtype=float), a.flight_s,
+                               a.takeoff_time, a.landing_time)
             elif group.kind == "angular-momentum":
                 inj = inject_angular_momentum(a, group.sign * level / 100.0, group.profile,
                                               design.com_policy)
@@ -259,7 +262,7 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 inj = inject_takeoff_angle(a, group.sign * level / 100.0)
             if inj.kind == "reference":
                 m = measure(a, Injected(a.clip, "takeoff-angle", None, 0.0, a.takeoff, a.landing,
-                                        None, a.flight_s))
+                                        None, a.flight_s, a.takeoff_time, a.landing_time))
                 m["measured_error_pct"] = 0.0
             else:
                 m = measure(a, inj)
@@ -289,6 +292,9 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 "bvh": f"{name}.bvh", "npz": f"{name}.npz",
                 "original": original_of(design, spec.name, group),
                 "accept_unphysical": "true" if spec.accept_unphysical else "false",
+                "takeoff_time": inj.takeoff_time, "landing_time": inj.landing_time,
+                **{k: m[k] for k in ("air_acc_dev", "air_acc_dev_original", "dv_takeoff",
+                                     "dv_landing", "L_error_touchdown_pct", "below_floor_mm")},
             })
             bar.step(name)
         write_manifest(tmp / "manifest.csv", rows)

@@ -66,7 +66,8 @@ def cmd_inspect(args) -> int:
     if a.flight is None:
         print("  flight          none")
     else:
-        print(f"  flight          frames {d['takeoff']}–{d['landing']} ({d['flight_s']:.3f} s)"
+        print(f"  flight          frames {d['takeoff']}–{d['landing']} (contact instants at frame "
+              f"{d['takeoff_time'] * d['fps']:.2f} and {d['landing_time'] * d['fps']:.2f}: {d['flight_s']:.3f} s)"
               + (f"; {len(a.flights) - 1} shorter flight(s): "
                  + ", ".join(f"{f.takeoff}–{f.landing}" for f in a.flights[1:]) if len(a.flights) > 1 else ""))
         print(f"  gravity         {d['apparent_gravity']:.2f} m/s² apparent (9.81 expected)")

@@ -212,9 +212,10 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
     seq = Clip(clip.skeleton, fps, root_pos, rot, None,
                {**clip.meta, "edit": f"multiflip {flips}"})
     seq.meta.pop("source_frames", None)
-    end0 = int(np.flatnonzero(copy == -2)[0])        # the end segment starts at g + 1
-    # (the module's d8cdec5 fix: a landing join on the landing frame g itself)
-    ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld > g else (end0 - 1 if ld == g else end0)
+    end0 = int(np.flatnonzero(copy == -2)[0])
+    # a landing on the join frame g itself: the frame before the end segment
+    ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld > g else (
+        end0 - 1 if ld == g else end0)
     T_seq = (ld_seq - to) / fps
 
     # 3. retiming by k over take-off, flight and landing

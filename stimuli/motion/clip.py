@@ -257,7 +257,7 @@ def angular_velocity(R: np.ndarray, fps: float) -> np.ndarray:
     """World-frame angular velocity from world rotation matrices R (F,...,3,3).
 
     Central difference on the rotation group: ``ω(t) = log(R(t+1) R(t-1)ᵀ) / 2Δt``,
-    one-sided at the ends.  Exact for a constant angular velocity.
+    one-sided (second order) at the ends.  Exact for a constant angular velocity.
     """
     R = np.asarray(R, dtype=np.float64)
     F = R.shape[0]
@@ -267,6 +267,13 @@ def angular_velocity(R: np.ndarray, fps: float) -> np.ndarray:
     rot = Rotation.from_matrix(R)
     if F >= 3:
         out[1:-1] = (rot[2:] * rot[:-2].inv()).as_rotvec() * (fps / 2.0)
+        # one-sided, second order at the ends (like np.gradient's edge_order=2):
+        # ω₀ ≈ [4 log(R₁R₀ᵀ) − log(R₂R₀ᵀ)] / 2Δt, still exact for a constant spin
+        out[0] = (2.0 * (rot[1] * rot[0].inv()).as_rotvec()
+                  - 0.5 * (rot[2] * rot[0].inv()).as_rotvec()) * fps
+        out[-1] = (2.0 * (rot[-1] * rot[-2].inv()).as_rotvec()
+                   - 0.5 * (rot[-1] * rot[-3].inv()).as_rotvec()) * fps
+        return out
     out[0] = (rot[1] * rot[0].inv()).as_rotvec() * fps
-    out[-1] = (rot[-1] * rot[-2].inv()).as_rotvec() * fps
+    out[-1] = out[0]
     return out
