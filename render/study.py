@@ -11,6 +11,8 @@ per-stimulus offsets and files) to ``STUDY_DIR/render/render.json``.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 from stimuli.exceptions import FlipstudyError
 import json
 import math
@@ -44,9 +46,9 @@ def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in str(text).lower().split("x"))
     except ValueError:
-        raise ValueError(f"size {text!r}: expected WIDTHxHEIGHT, e.g. 640x480") from None
+        raise FlipstudyValueError(f"size {text!r}: expected WIDTHxHEIGHT, e.g. 640x480") from None
     if w < 16 or h < 16:
-        raise ValueError(f"size {text!r}: width and height must be at least 16 pixels")
+        raise FlipstudyValueError(f"size {text!r}: width and height must be at least 16 pixels")
     return w, h
 
 
@@ -54,7 +56,7 @@ def parse_what(text) -> list[str]:
     items = [w.strip() for w in (text.split(",") if isinstance(text, str) else text) if w.strip()]
     bad = [w for w in items if w not in RENDER_KINDS]
     if bad or not items:
-        raise ValueError(f"--what {text!r}: choose from {', '.join(RENDER_KINDS)} (comma-separated)")
+        raise FlipstudyValueError(f"--what {text!r}: choose from {', '.join(RENDER_KINDS)} (comma-separated)")
     return items
 
 

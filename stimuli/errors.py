@@ -22,6 +22,8 @@ Every stimulus is then *measured* by the analyser (:func:`measure`), and
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyValueError
+
 from .exceptions import FlipstudyError
 from dataclasses import dataclass
 
@@ -76,7 +78,7 @@ def _rate_map(profile: str, e: float, T: float):
         def s(tau):
             return tau + e * tau ** 2 / (2 * Tn)
     else:
-        raise ValueError(f"profile must be one of {PROFILES}, got {profile!r}")
+        raise FlipstudyValueError(f"profile must be one of {PROFILES}, got {profile!r}")
     return Tn, s
 
 
@@ -94,7 +96,7 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
     if not (-0.9 < error < 5.0):
         raise StimulusError(f"angular-momentum error {error!r} out of range (-0.9, 5)")
     if com_policy not in COM_POLICIES:
-        raise ValueError(f"com_policy must be one of {COM_POLICIES}, got {com_policy!r}")
+        raise FlipstudyValueError(f"com_policy must be one of {COM_POLICIES}, got {com_policy!r}")
     clip, fps = a.clip, a.clip.fps
     to, ld = a.takeoff, a.landing
     T = (ld - to) / fps

@@ -10,6 +10,8 @@ byte-identical manifest (content hashes included).
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyFileExistsError, FlipstudyFileNotFoundError
+
 import csv
 import hashlib
 import io
@@ -124,7 +126,7 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
     """Generate, measure and write the stimulus set of ``design`` into ``out``."""
     out = Path(out)
     if out.exists() and not force:
-        raise FileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
+        raise FlipstudyFileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
     out.parent.mkdir(parents=True, exist_ok=True)
     todo = plan(design)
     bar = _Progress(len(todo), "stimuli", progress)
@@ -226,6 +228,6 @@ def read_manifest(study_dir) -> list[dict]:
     """The rows of a study's ``manifest.csv`` (strings)."""
     p = Path(study_dir) / "manifest.csv"
     if not p.exists():
-        raise FileNotFoundError(f"{p}: no manifest; make the stimuli first (flipstudy stimuli DESIGN.toml --out DIR)")
+        raise FlipstudyFileNotFoundError(f"{p}: no manifest; make the stimuli first (flipstudy stimuli DESIGN.toml --out DIR)")
     with p.open(newline="") as f:
         return list(csv.DictReader(f))

@@ -15,6 +15,8 @@ renamed into place (``os.replace``), so a reader never sees half a file.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import csv
 import io
 import os
@@ -76,7 +78,7 @@ def export_responses(study_dir, out=None, *, participants_out=None,
     out = Path(out) if out is not None else study_dir / "responses.csv"
     pout = Path(participants_out) if participants_out is not None else out.parent / "participants.csv"
     if pout.resolve() == out.resolve():
-        raise ValueError(f"{out}: the responses and participants tables need different files")
+        raise FlipstudyValueError(f"{out}: the responses and participants tables need different files")
     conn = store.connect(study_dir, create=False)
     try:
         rows = [_fmt_response(r) for r in store.response_rows(conn, include_simulated=include_simulated)]
