@@ -25,9 +25,13 @@ class FlipstudyFileExistsError(FlipstudyError, FileExistsError):
     """An output the user named exists and would be replaced (``--force`` not given)."""
 
 
+class FlipstudyOSError(FlipstudyError, OSError):
+    """A file the user named cannot be read or written (the message names it and why)."""
+
+
 class FlipstudyStateError(FlipstudyError, RuntimeError):
     """A file is in a state this flipstudy cannot use (e.g. a newer schema version)."""
 
 
 __all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
-           "FlipstudyFileExistsError", "FlipstudyStateError"]
+           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError"]
