@@ -26,6 +26,7 @@ origin (after unit scaling); every angle within :data:`MAX_ANGLE_DEG` degrees.
 from __future__ import annotations
 
 from ..exceptions import FlipstudyError, FlipstudyValueError
+import math
 import os
 import re
 import stat
@@ -177,7 +178,7 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
                 vals = [float(v) for v in parts[1:]]
             except (ValueError, OverflowError):
                 raise BVHError(path, ln, f"OFFSET needs 3 numbers, found {' '.join(parts[1:])!r}") from None
-            if len(vals) != 3 or not all(np.isfinite(vals)):
+            if len(vals) != 3 or not all(map(math.isfinite, vals)):
                 raise BVHError(path, ln, f"OFFSET needs 3 finite numbers, found {len(vals)}: "
                                          f"{' '.join(parts[1:])!r}")
             if stack[-1] == -2:
@@ -561,11 +562,13 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     rot_cols = np.array([c for cols in col_of_rot for c in cols], dtype=np.int64)
     pos_cols = np.array([c for cols in col_of_pos if cols is not None for c in cols], dtype=np.int64)
     meta: dict = {"name": path.stem, "path": str(path), "warnings": [], "dropped_frames": []}
+    skel = None
     if scale is None:
         rest_offsets = offsets.copy()
-        rest_offsets[0] = 0.0       # the extent does not depend on where the root stands
+        rest_offsets[0] = 0.0       # root_pos carries the root's position (see below)
+        skel = Skeleton(names, parents, rest_offsets, channels, h["end_sites"])
         with np.errstate(over="ignore", invalid="ignore"):   # absurd offsets: refused below
-            s, unit = guess_scale(Skeleton(names, parents, rest_offsets, channels, h["end_sites"]))
+            s, unit = guess_scale(skel)
         meta["scale_source"] = f"guess: {unit}"
     else:
         try:
@@ -616,7 +619,8 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     meta["file_root_offset"] = offsets[0].tolist()
     offsets[0] = 0.0  # root_pos is absolute from here on
 
-    skel = Skeleton(names, parents, offsets, channels, h["end_sites"])
+    if skel is None:
+        skel = Skeleton(names, parents, offsets, channels, h["end_sites"])
     meta["scale"] = s
     header_fps = _header_fps(frame_time, frame_time_text)
     meta["header_fps"] = header_fps
