@@ -474,9 +474,10 @@ def _check_bounds(path, h: dict, values: np.ndarray, first: int, s: float,
         bad = np.flatnonzero(np.abs(arr).max(axis=1, initial=0) > lim)
         if bad.size:
             k = int(bad[0])
-            raise BVHError(path, lns[k], f"{what} {np.abs(arr[k]).max():g} file units = "
-                                         f"{np.abs(arr[k]).max() * s:.3g} m from its joint, beyond "
-                                         f"the {MAX_POSITION_M:g} m a body part can be")
+            raise BVHError(path, lns[k], f"{what} {np.abs(arr[k]).max():g} file units "
+                                         f"({np.abs(arr[k]).max() * s:.3g} m at {s:g} m per unit) "
+                                         f"from its joint, beyond the {MAX_POSITION_M:g} m a body "
+                                         f"part can be")
     # rest pose: each joint's distance from the root (sums of bounded offsets)
     parents = h["parents"]
     rest = np.zeros_like(offsets)
