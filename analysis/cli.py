@@ -5,6 +5,8 @@
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
+
 import argparse
 import json
 import sys
@@ -68,7 +70,7 @@ def _images(specs):
 
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
-    from .io import NeedsExport, ResponsesError, resolve_responses_path
+    from .io import NeedsExport, resolve_responses_path
     from .pipeline import analyze
     try:
         src = resolve_responses_path(args.responses)
@@ -81,7 +83,7 @@ def handler(args) -> int:
     except NeedsExport as e:
         print(f"flipstudy analyze: {e}", file=sys.stderr)
         return 2
-    except (ResponsesError, ValueError, OSError) as e:
+    except FlipstudyError as e:
         print(f"flipstudy analyze: error: {e}", file=sys.stderr)
         return 1
     if args.json:

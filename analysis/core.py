@@ -6,6 +6,8 @@ replacement and is one matrix product per block of resamples.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import warnings
 from dataclasses import dataclass
 
@@ -135,9 +137,9 @@ def summarize(df: pd.DataFrame, correction: str = "loglinear", n_boot: int = 200
     """
     correction = normalise_correction(correction)
     if not 0 < ci < 1:
-        raise ValueError(f"ci must lie between 0 and 1, got {ci}")
+        raise FlipstudyValueError(f"ci must lie between 0 and 1, got {ci}")
     if n_boot < 1:
-        raise ValueError(f"n_boot must be at least 1, got {n_boot}")
+        raise FlipstudyValueError(f"n_boot must be at least 1, got {n_boot}")
     cnt = count_cells(df)
     P, K = cnt.k.shape
     has = cnt.orig >= 0

@@ -95,7 +95,7 @@ def ratings_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
                 c, m = sty[g]
                 x = sub["level"].to_numpy() + dx[i]
                 y = sub["rating_pct"].to_numpy()
-                err = np.vstack([y - sub["rating_ci_low"].to_numpy(), sub["rating_ci_high"].to_numpy() - y])
+                err = _yerr(y, sub["rating_ci_low"], sub["rating_ci_high"])
                 ax.errorbar(x, y, yerr=err, color=c, marker=m, ms=5.5, mfc=c, mec="white", mew=0.6,
                             lw=1.5, elinewidth=0.9, label=g, zorder=3)
             ax.axhline(50, color="0.55", lw=0.8, ls=":", zorder=1)
@@ -139,11 +139,11 @@ def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
             step = 0.025 * ((x.max() - x.min()) or 1.0)
             d = sub["dprime"].to_numpy(float)
             ax.axhline(0, color="0.45", lw=0.8, ls="--", zorder=1)
-            ax.errorbar(x - step, d, yerr=np.vstack([d - sub["dprime_pooled_ci_low"], sub["dprime_pooled_ci_high"] - d]),
+            ax.errorbar(x - step, d, yerr=_yerr(d, sub["dprime_pooled_ci_low"], sub["dprime_pooled_ci_high"]),
                         color=c, marker=m, ms=5.5, mec="white", mew=0.6, lw=1.4, elinewidth=0.9,
                         label="pooled d′", zorder=3)
             dm = sub["dprime_mean_participants"].to_numpy(float)
-            ax.errorbar(x + step, dm, yerr=np.vstack([dm - sub["dprime_ci_low"], sub["dprime_ci_high"] - dm]),
+            ax.errorbar(x + step, dm, yerr=_yerr(dm, sub["dprime_ci_low"], sub["dprime_ci_high"]),
                         color=c, marker=m, ms=5, mfc="white", mec=c, mew=1.1, lw=0, elinewidth=0.9,
                         label="mean of participants' d′", zorder=3)
             ax.set_title(g, color=c, fontweight="bold")
@@ -167,6 +167,17 @@ def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
         else:
             fig.legend(handles=handles, loc="outside lower center", ncols=2, frameon=False)
     return fig
+
+
+def _yerr(y, lo, hi) -> np.ndarray:
+    """(2, n) error-bar lengths below and above ``y``, never negative: an interval edge
+    that equals its estimate up to rounding (or a bootstrap percentile interval that
+    does not contain the pooled estimate) draws no bar on that side instead of making
+    matplotlib refuse the figure.  NaN (no interval) stays NaN: no bar."""
+    y, lo, hi = (np.asarray(a, dtype=float) for a in (y, lo, hi))
+    with np.errstate(invalid="ignore"):
+        below, above = y - lo, hi - y
+    return np.vstack([np.where(below < 0, 0.0, below), np.where(above < 0, 0.0, above)])
 
 
 def _point_intervals(fit: PsychometricFit, table: pd.DataFrame | None):
@@ -201,7 +212,7 @@ def _draw_fit(ax, fit: PsychometricFit, colour, marker, table=None, annotate=Tru
                     mec=colour, mew=1.6, ls="none", zorder=4)
         return
     p, lo, hi = _point_intervals(fit, table)
-    ax.errorbar(fit.x, p, yerr=np.vstack([p - lo, hi - p]), color=colour, marker=marker, ls="none",
+    ax.errorbar(fit.x, p, yerr=_yerr(p, lo, hi), color=colour, marker=marker, ls="none",
                 ms=5, mec="white", mew=0.6, elinewidth=0.9, zorder=3)
     g = fit.params["gamma"]
     ax.axhline(g, color="0.6", lw=0.8, ls=":", zorder=1)

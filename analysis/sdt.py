@@ -33,6 +33,8 @@ True
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import numpy as np
 from scipy.special import ndtri
 
@@ -57,7 +59,7 @@ def normalise_correction(correction: str) -> str:
     or ``"1/(2N)"``); aliases such as ``"1/2N"`` and ``"log-linear"`` are accepted."""
     key = str(correction).strip().lower()
     if key not in _ALIASES:
-        raise ValueError(f"unknown correction {correction!r}: expected one of "
+        raise FlipstudyValueError(f"unknown correction {correction!r}: expected one of "
                          f"{', '.join(CORRECTIONS)} (aliases: 1/2N, log-linear)")
     return _ALIASES[key]
 

@@ -41,6 +41,8 @@ Psychometric function
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import warnings
 from dataclasses import dataclass, field
 
@@ -365,7 +367,7 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95, se
     ``"mle"``, or ``"none"``."""
     method = method.lower()
     if method not in ("psignifit", "mle", "none"):
-        raise ValueError(f"unknown psychometric method {method!r}: expected psignifit, mle or none")
+        raise FlipstudyValueError(f"unknown psychometric method {method!r}: expected psignifit, mle or none")
     fits, notes = [], []
     if method == "none":
         return fits, notes

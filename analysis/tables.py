@@ -7,6 +7,8 @@ angular momentum 0/17/25/37/50 % and take-off angle 0/10/20/30/40 %).
 from __future__ import annotations
 
 import math
+import re
+import unicodedata
 
 import pandas as pd
 
@@ -88,20 +90,46 @@ def to_markdown(table: pd.DataFrame, caption: str = "") -> str:
     return "\n".join(parts)
 
 
+#: Non-ASCII characters of our captions and labels, as LaTeX that pdflatex reads
+#: without any package (the table is pure ASCII).
+_TEX_UNICODE = {"d\u2032": "$d'$", "\u2032": "$'$", "\u2212": "$-$", "\u2013": "--", "\u2014": "---",
+                "\u00d7": r"$\times$", "\u00b0": r"$^\circ$", "\u00b7": r"$\cdot$",
+                "\u03b3": r"$\gamma$", "\u03bb": r"$\lambda$", "\u2264": r"$\leq$",
+                "\u2265": r"$\geq$", "\u00b1": r"$\pm$", "\u2192": r"$\rightarrow$",
+                "\u201c": "``", "\u201d": "''", "\u2018": "`", "\u2019": "'", "\u00a0": "~",
+                "\u2026": r"\ldots{}"}
+
+
 def _tex_escape(s: str) -> str:
-    for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"),
+    """Text as pure-ASCII LaTeX: specials escaped, the known non-ASCII characters as macros,
+    accented letters without their accents (NFKD), anything else as '?'."""
+    s = re.sub(r'"([^"]*)"', "\x01\\1\x02", s)          # "quoted" -> ``quoted''
+    for a, b in (("\\", "\x00"), ("&", r"\&"), ("%", r"\%"), ("$", r"\$"),
                  ("#", r"\#"), ("_", r"\_"), ("{", r"\{"), ("}", r"\}"), ("~", r"\textasciitilde{}"),
-                 ("^", r"\textasciicircum{}")):
+                 ("^", r"\textasciicircum{}"), ("<", r"\textless{}"), (">", r"\textgreater{}"),
+                 ("|", r"\textbar{}"), ('"', "''")):
         s = s.replace(a, b)
-    return s
+    s = s.replace("\x00", r"\textbackslash{}").replace("\x01", "``").replace("\x02", "''")
+    for a, b in _TEX_UNICODE.items():
+        s = s.replace(a, b)
+    if not s.isascii():
+        s = unicodedata.normalize("NFKD", s)
+        s = "".join(c if c.isascii() else ("" if unicodedata.combining(c) else "?") for c in s)
+    return "".join(c if c.isprintable() else " " for c in s)
 
 
 def to_latex(table: pd.DataFrame, caption: str = "", label: str = "tab:ratings") -> str:
-    """A booktabs table (needs ``\\usepackage{booktabs}``): one header row per
-    block of groups sharing their levels, as in the paper."""
+    """A LaTeX table, one header row per block of groups sharing their levels, as in the
+    paper.  Pure ASCII; it compiles with pdflatex and no package, and uses booktabs' rules
+    when the document loads ``\\usepackage{booktabs}`` (plain ``\\hline`` otherwise)."""
     bl = blocks(table)
     ncol = max(len(levels) for levels, _ in bl)
-    lines = [r"\begin{table}[t]", r"  \centering"]
+    lines = [r"\begin{table}[t]", r"  \centering",
+             r"  % booktabs rules when the document loads booktabs, \hline and \cline otherwise",
+             r"  \providecommand{\toprule}{\hline}\providecommand{\midrule}{\hline}"
+             r"\providecommand{\bottomrule}{\hline}",
+             r"  \ifdefined\cmidrule\def\flipstudyrule#1{\cmidrule(lr){#1}}"
+             r"\else\def\flipstudyrule#1{\cline{#1}}\fi"]
     if caption:
         lines.append(f"  \\caption{{{_tex_escape(caption)}}}")
         lines.append(f"  \\label{{{label}}}")
@@ -113,7 +141,7 @@ def to_latex(table: pd.DataFrame, caption: str = "", label: str = "tab:ratings")
         head = ["Error group"] + [_tex_escape(f"{lv:g} %").replace("-", "$-$") for lv in levels]
         head += [""] * (ncol - len(levels))
         lines.append("    " + " & ".join(head) + r" \\")
-        lines.append(f"    \\cmidrule(lr){{2-{len(levels) + 1}}}")
+        lines.append(f"    \\flipstudyrule{{2-{len(levels) + 1}}}")
         for r in _block_rows(table, levels, groups, "$-$"):
             r = [_tex_escape(r[0])] + [c.replace(MISSING, "--") for c in r[1:]]
             r += [""] * (ncol + 1 - len(r))

@@ -17,6 +17,8 @@ view angle) and round-trips through a dict / JSON.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import json
 from dataclasses import dataclass, field
 
@@ -56,11 +58,11 @@ class Camera:
         self.view_up = tuple(float(v) for v in self.view_up)
         self.view_angle = float(self.view_angle)
         if len(self.position) != 3 or len(self.focal_point) != 3 or len(self.view_up) != 3:
-            raise ValueError("Camera: position, focal_point and view_up must be 3-vectors")
+            raise FlipstudyValueError("Camera: position, focal_point and view_up must be 3-vectors")
         if not 0.0 < self.view_angle < 180.0:
-            raise ValueError(f"Camera.view_angle must be in (0, 180) degrees, got {self.view_angle}")
+            raise FlipstudyValueError(f"Camera.view_angle must be in (0, 180) degrees, got {self.view_angle}")
         if np.linalg.norm(np.subtract(self.position, self.focal_point)) < 1e-9:
-            raise ValueError("Camera: position and focal_point coincide")
+            raise FlipstudyValueError("Camera: position and focal_point coincide")
 
     # ------------------------------------------------------------ conversions
     def to_dict(self) -> dict:
@@ -73,7 +75,7 @@ class Camera:
             return cls(d["position"], d["focal_point"], d.get("view_up", (0, 1, 0)),
                        d.get("view_angle", 25.0))
         except KeyError as e:
-            raise ValueError(f"Camera: missing field {e.args[0]!r} "
+            raise FlipstudyValueError(f"Camera: missing field {e.args[0]!r} "
                              f"(need position, focal_point)") from None
 
     def to_json(self) -> str:

@@ -13,6 +13,8 @@
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
+
 import argparse
 import sys
 
@@ -21,7 +23,7 @@ def _size(text: str):
     from .study import parse_size
     try:
         return parse_size(text)
-    except ValueError as e:
+    except FlipstudyError as e:
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
@@ -34,13 +36,13 @@ def _style(path):
 
 def cmd_render(args) -> int:
     """``flipstudy render``: all stimuli of a study, one camera, in parallel."""
-    from .study import StudyRenderError, parse_what, render_study
+    from .study import parse_what, render_study
     try:
         what = parse_what(args.what)
         rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs, fps=args.fps,
                            style=_style(args.style), frames=args.frames, progress=not args.quiet,
                            orient=not args.no_orient, force=args.force)
-    except (StudyRenderError, ValueError, OSError) as e:
+    except FlipstudyError as e:
         print(f"flipstudy render: error: {e}", file=sys.stderr)
         return 1
     n = len(rec["stimuli"])
@@ -82,7 +84,7 @@ def cmd_figure(args) -> int:
         else:
             fg.ghost_image(clip, args.out, interval=interval or 0.2, debug=debug, **kw)
             kind = "ghost"
-    except (ValueError, OSError) as e:
+    except FlipstudyError as e:
         print(f"flipstudy figure: error: {e}", file=sys.stderr)
         return 1
     print(f"{kind} figure of {args.clip}: {args.out}")

@@ -7,6 +7,8 @@ expects.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyOSError
+
 import glob
 import os
 from functools import lru_cache
@@ -65,7 +67,7 @@ def write_png(path, img) -> Path:
     buf.specmod().attribute("png:compressionLevel", 9)
     buf.specmod().attribute("oiio:UnassociatedAlpha", 0)
     if not buf.write(str(path)):
-        raise OSError(f"{path}: cannot write PNG: {buf.geterror() or oiio.geterror()}")
+        raise FlipstudyOSError(f"{path}: cannot write PNG: {buf.geterror() or oiio.geterror()}")
     return path
 
 
@@ -73,7 +75,7 @@ def read_image(path) -> np.ndarray:
     """An image file as a uint8 array (H,W,C)."""
     buf = oiio.ImageBuf(str(path))
     if buf.has_error:
-        raise OSError(f"{path}: cannot read image: {buf.geterror()}")
+        raise FlipstudyOSError(f"{path}: cannot read image: {buf.geterror()}")
     return from_buf(buf)
 
 

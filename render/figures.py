@@ -22,6 +22,8 @@ are returned as ``uint8`` arrays ``(H, W, 3)``.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import contextlib
 from dataclasses import dataclass
 from pathlib import Path
@@ -131,20 +133,20 @@ def _span(clip: Clip, span, margin: float, takeoff, landing) -> tuple[float, flo
     if isinstance(span, str):
         if span == "clip" or takeoff is None or landing is None:
             if span not in ("clip", "flight"):
-                raise ValueError(f"span must be 'flight', 'clip' or (t0, t1) seconds, got {span!r}")
+                raise FlipstudyValueError(f"span must be 'flight', 'clip' or (t0, t1) seconds, got {span!r}")
             return 0.0, clip.duration
         if span != "flight":
-            raise ValueError(f"span must be 'flight', 'clip' or (t0, t1) seconds, got {span!r}")
+            raise FlipstudyValueError(f"span must be 'flight', 'clip' or (t0, t1) seconds, got {span!r}")
         return (max(0.0, takeoff / clip.fps - margin), min(clip.duration, landing / clip.fps + margin))
     t0, t1 = (float(v) for v in span)
     if not (0.0 <= t0 <= t1):
-        raise ValueError(f"span (t0, t1) must satisfy 0 <= t0 <= t1, got {span!r}")
+        raise FlipstudyValueError(f"span (t0, t1) must satisfy 0 <= t0 <= t1, got {span!r}")
     return t0, min(t1, clip.duration)
 
 
 def _regular_times(t0: float, t1: float, step: float) -> np.ndarray:
     if not (np.isfinite(step) and step > 0):
-        raise ValueError(f"interval must be a positive number of seconds, got {step!r}")
+        raise FlipstudyValueError(f"interval must be a positive number of seconds, got {step!r}")
     n = int(np.floor((t1 - t0) / step + 1e-9)) + 1
     return t0 + step * np.arange(n)
 
@@ -185,7 +187,7 @@ class Gizmos:
         self.what = tuple(DEBUG_ALL if what is True else what)
         bad = set(self.what) - set(DEBUG_ALL)
         if bad:
-            raise ValueError(f"debug: unknown overlay(s) {sorted(bad)}; choose from {DEBUG_ALL}")
+            raise FlipstudyValueError(f"debug: unknown overlay(s) {sorted(bad)}; choose from {DEBUG_ALL}")
         self.clip, self.body = clip, body
         m = momentum(clip, body)
         self.com, self.v, self.L = m.com, m.v_com, m.L
@@ -304,7 +306,7 @@ def render_video(clip: Clip, path, *, fps: float = 60.0, size=(640, 480), style:
     import imageio_ffmpeg
     W, H = int(size[0]), int(size[1])
     if W % 2 or H % 2:
-        raise ValueError(f"video size {W}x{H}: width and height must be even for H.264 yuv420p")
+        raise FlipstudyValueError(f"video size {W}x{H}: width and height must be even for H.264 yuv420p")
     clips = [clip] + ([other] if other is not None else [])
     prep = prepare(clips, bodies=None if body is None else [body] * len(clips),
                    takeoffs=None if takeoff is None else [takeoff] * len(clips),
@@ -391,7 +393,7 @@ def _trail_points(clip: Clip, body: Body, name: str, times) -> np.ndarray:
         return pc.points(np.array([jj]), off[None])[:, 0]
     if name in clip.skeleton.joint_names:
         return pc.joint_positions()[:, clip.skeleton.index(name)]
-    raise ValueError(f"trail joint {name!r}: not a body landmark ({sorted(body.landmarks)}), "
+    raise FlipstudyValueError(f"trail joint {name!r}: not a body landmark ({sorted(body.landmarks)}), "
                      f"'com', or a joint of the skeleton")
 
 

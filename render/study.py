@@ -19,6 +19,8 @@ run`` asks before serving the videos.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 from stimuli.exceptions import FlipstudyError
 import json
 import math
@@ -52,9 +54,9 @@ def parse_size(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in str(text).lower().split("x"))
     except ValueError:
-        raise ValueError(f"size {text!r}: expected WIDTHxHEIGHT, e.g. 640x480") from None
+        raise FlipstudyValueError(f"size {text!r}: expected WIDTHxHEIGHT, e.g. 640x480") from None
     if w < 16 or h < 16:
-        raise ValueError(f"size {text!r}: width and height must be at least 16 pixels")
+        raise FlipstudyValueError(f"size {text!r}: width and height must be at least 16 pixels")
     return w, h
 
 
@@ -62,7 +64,7 @@ def parse_what(text) -> list[str]:
     items = [w.strip() for w in (text.split(",") if isinstance(text, str) else text) if w.strip()]
     bad = [w for w in items if w not in RENDER_KINDS]
     if bad or not items:
-        raise ValueError(f"--what {text!r}: choose from {', '.join(RENDER_KINDS)} (comma-separated)")
+        raise FlipstudyValueError(f"--what {text!r}: choose from {', '.join(RENDER_KINDS)} (comma-separated)")
     return items
 
 

@@ -14,6 +14,8 @@ RGB tuples in 0..1 or 0..255).
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
@@ -93,16 +95,16 @@ class Style:
                      "trail_palette", "legend_size"):
             setattr(self, name, tuple(getattr(self, name)))
         if self.anti_aliasing not in ("ssaa", "none"):
-            raise ValueError(f"Style.anti_aliasing must be 'ssaa' or 'none', got {self.anti_aliasing!r}")
+            raise FlipstudyValueError(f"Style.anti_aliasing must be 'ssaa' or 'none', got {self.anti_aliasing!r}")
         if self.lighting not in ("key-fill", "light kit"):
-            raise ValueError(f"Style.lighting must be 'key-fill' or 'light kit', got {self.lighting!r}")
+            raise FlipstudyValueError(f"Style.lighting must be 'key-fill' or 'light kit', got {self.lighting!r}")
         for name in ("ghost_opacity", "ghost_last_opacity", "layer_opacity", "overlay_opacity",
                      "trail_body_opacity"):
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
-                raise ValueError(f"Style.{name} must be in [0, 1], got {v!r}")
+                raise FlipstudyValueError(f"Style.{name} must be in [0, 1], got {v!r}")
         if len(self.trail_palette) == 0:
-            raise ValueError("Style.trail_palette is empty")
+            raise FlipstudyValueError("Style.trail_palette is empty")
 
     # ------------------------------------------------------------ conversions
     def to_dict(self) -> dict:
@@ -117,7 +119,7 @@ class Style:
         names = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(d) - names)
         if unknown:
-            raise ValueError(f"Style: unknown field(s) {unknown}; known fields: {sorted(names)}")
+            raise FlipstudyValueError(f"Style: unknown field(s) {unknown}; known fields: {sorted(names)}")
         return cls(**d)
 
     @classmethod
@@ -130,7 +132,7 @@ class Style:
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:
-            raise ValueError(f"{p or 'style'}: not valid TOML: {e}") from None
+            raise FlipstudyValueError(f"{p or 'style'}: not valid TOML: {e}") from None
         return cls.from_dict(data.get("style", data))
 
     def replace(self, **kw) -> "Style":

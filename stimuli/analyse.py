@@ -9,6 +9,8 @@ contradiction becomes a warning that names the likely frame time and the
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyValueError
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -69,7 +71,7 @@ class Analysis:
     @property
     def flight_frames(self) -> slice:
         if self.flight is None:
-            raise ValueError(f"{self.clip.meta.get('name', 'clip')}: no flight phase")
+            raise FlipstudyValueError(f"{self.clip.meta.get('name', 'clip')}: no flight phase")
         return slice(self.takeoff, self.landing + 1)
 
     @property

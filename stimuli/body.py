@@ -24,6 +24,8 @@ A bone ``a → b`` is rigid in the frame of joint ``a``.
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyValueError
+
 from .exceptions import FlipstudyError
 import re
 import warnings
@@ -240,7 +242,7 @@ class Body:
         → kg) overrides the table; the rest keep their table fraction of
         ``total_mass``."""
         if not (np.isfinite(total_mass) and total_mass > 0):
-            raise ValueError(f"total_mass must be a positive number of kg, got {total_mass!r}")
+            raise FlipstudyValueError(f"total_mass must be a positive number of kg, got {total_mass!r}")
         lm = auto_landmarks(skeleton)
         if mapping:
             for k, v in mapping.items():
@@ -283,10 +285,10 @@ class Body:
             elif k in SEGMENT_TABLE:
                 masses[f"{k}_l"] = masses[f"{k}_r"] = float(v) / 2.0
             else:
-                raise ValueError(f"segment_masses: unknown segment {k!r}; expected one of "
+                raise FlipstudyValueError(f"segment_masses: unknown segment {k!r}; expected one of "
                                  f"{SEGMENTS} or {GROUPS}")
             if not (np.isfinite(v) and v >= 0):
-                raise ValueError(f"segment_masses[{k!r}] must be a mass >= 0 kg, got {v!r}")
+                raise FlipstudyValueError(f"segment_masses[{k!r}] must be a mass >= 0 kg, got {v!r}")
         total_mass = float(sum(masses.values()))
         if pose is None:
             pose = (skeleton.rest_positions()[None], np.broadcast_to(np.eye(3), (1, skeleton.num_joints, 3, 3)))

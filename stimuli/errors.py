@@ -27,6 +27,8 @@ contact instants (what a different push or landing would do), never in the air.
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyValueError
+
 from .exceptions import FlipstudyError
 from dataclasses import dataclass
 
@@ -91,7 +93,7 @@ def _rate_map(profile: str, e: float, T: float):
         def s(tau):
             return tau + e * tau ** 2 / (2 * Tn)
     else:
-        raise ValueError(f"profile must be one of {PROFILES}, got {profile!r}")
+        raise FlipstudyValueError(f"profile must be one of {PROFILES}, got {profile!r}")
     return Tn, s
 
 
@@ -112,7 +114,7 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
     if not (-0.9 < error < 5.0):
         raise StimulusError(f"angular-momentum error {error!r} out of range (-0.9, 5)")
     if com_policy not in COM_POLICIES:
-        raise ValueError(f"com_policy must be one of {COM_POLICIES}, got {com_policy!r}")
+        raise FlipstudyValueError(f"com_policy must be one of {COM_POLICIES}, got {com_policy!r}")
     clip, fps = a.clip, a.clip.fps
     t_to, t_ld = a.takeoff_time, a.landing_time
     T = t_ld - t_to

@@ -17,4 +17,21 @@ class FlipstudyValueError(FlipstudyError, ValueError):
     """A user error that is also a ``ValueError`` (bad value in a file or field)."""
 
 
-__all__ = ["FlipstudyError", "FlipstudyValueError"]
+class FlipstudyFileNotFoundError(FlipstudyError, FileNotFoundError):
+    """A file or folder the user named (or a step before this one should have made) is absent."""
+
+
+class FlipstudyFileExistsError(FlipstudyError, FileExistsError):
+    """An output the user named exists and would be replaced (``--force`` not given)."""
+
+
+class FlipstudyOSError(FlipstudyError, OSError):
+    """A file the user named cannot be read or written (the message names it and why)."""
+
+
+class FlipstudyStateError(FlipstudyError, RuntimeError):
+    """A file is in a state this flipstudy cannot use (e.g. a newer schema version)."""
+
+
+__all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
+           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError"]

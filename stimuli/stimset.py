@@ -29,6 +29,8 @@ The folder ``out`` is handled so that a study is never lost:
 
 from __future__ import annotations
 
+from .exceptions import FlipstudyFileExistsError, FlipstudyFileNotFoundError
+
 import csv
 import ctypes
 import errno
@@ -227,7 +229,7 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
         _recover_and_clean(out)
         if out.exists() or out.is_symlink():
             if not force:
-                raise FileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
+                raise FlipstudyFileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
             _check_replaceable(out, replace_check, out)      # fail before the work, not after
         return _build(design, out, force, progress, replace_check)
 
@@ -435,7 +437,7 @@ def _install(tmp: Path, out: Path, force: bool, replace_check) -> None:
             return
     # out exists now (maybe copied there while this build ran): check it again
     if not force:
-        raise FileExistsError(f"{out} appeared while the build ran; it is left as it is "
+        raise FlipstudyFileExistsError(f"{out} appeared while the build ran; it is left as it is "
                               f"(pass --force to replace it)")
     _check_replaceable(out, replace_check, out)
     if _renameat2(tmp, out, RENAME_EXCHANGE):             # atomic: out is always a complete study
@@ -469,6 +471,6 @@ def read_manifest(study_dir) -> list[dict]:
     """The rows of a study's ``manifest.csv`` (strings)."""
     p = Path(study_dir) / "manifest.csv"
     if not p.exists():
-        raise FileNotFoundError(f"{p}: no manifest; make the stimuli first (flipstudy stimuli DESIGN.toml --out DIR)")
+        raise FlipstudyFileNotFoundError(f"{p}: no manifest; make the stimuli first (flipstudy stimuli DESIGN.toml --out DIR)")
     with p.open(newline="") as f:
         return list(csv.DictReader(f))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import sys
 from pathlib import Path
@@ -20,9 +21,9 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None):
         return clip
     p = Path(spec)
     if not p.exists():
-        from stimuli import BUILTIN_NAMES
-        raise SystemExit(f"flipstudy: {spec!r} is neither a built-in clip "
-                         f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file")
+        from stimuli.exceptions import FlipstudyValueError
+        raise FlipstudyValueError(f"{spec}: neither a built-in clip ({', '.join(BUILTIN_NAMES)}) "
+                                  f"nor an existing BVH file")
     return load_bvh(p, scale=scale, fps=fps)
 
 
@@ -323,7 +324,19 @@ def _interrupted(command) -> int:
     return 130
 
 
+#: Exit status of an internal error (a bug): EX_SOFTWARE of BSD's sysexits.h.
+EXIT_BUG = 70
+#: OSErrors about a file the user named that the machine refused (one line, status 1)
+_ENVIRONMENT_ERRNOS = {errno.ENOENT, errno.EACCES, errno.EPERM, errno.ENOSPC, errno.EROFS,
+                       errno.EDQUOT, errno.EEXIST, errno.EISDIR, errno.ENOTDIR, errno.ENAMETOOLONG,
+                       errno.ELOOP, errno.EBUSY}
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one command.  Exit status: 0 done, 1 a user error (a :class:`FlipstudyError`,
+    printed in one line naming the file and line or field), 2 a usage error (argparse),
+    130 interrupted, 70 (:data:`EXIT_BUG`) anything else: a bug, printed with its
+    traceback and a request to report it."""
     try:                                            # the imports take a second or two
         ap = build_parser()
     except KeyboardInterrupt:
@@ -340,9 +353,25 @@ def main(argv: list[str] | None = None) -> int:
     except FlipstudyError as e:                     # a user error: one line, no traceback
         print(f"flipstudy {args.command}: error: {e}", file=sys.stderr)
         return 1
-    except (ValueError, OSError, KeyError) as e:   # legacy: to be narrowed to FlipstudyError
-        print(f"flipstudy {args.command}: error: {e}", file=sys.stderr)
+    except OSError as e:
+        if e.filename is None or e.errno not in _ENVIRONMENT_ERRNOS:
+            return _bug(args, e)
+        # the machine refused a file the user named (disk full, no permission, read-only, a
+        # missing folder): not a bug; one line naming the file
+        print(f"flipstudy {args.command}: error: {e.filename}: {e.strerror}", file=sys.stderr)
         return 1
+    except Exception as e:                          # a bug: the traceback, and ask for a report
+        return _bug(args, e)
+
+
+def _bug(args, e: BaseException) -> int:
+    """An exception that is not a user error: its traceback and a request to report it."""
+    import traceback
+    traceback.print_exception(e)
+    print(f"flipstudy {args.command}: internal error ({type(e).__name__}): this is a bug in "
+          f"flipstudy, not a problem with your input; please report it with the command line "
+          f"and the traceback above", file=sys.stderr)
+    return EXIT_BUG
 
 
 if __name__ == "__main__":

@@ -2,6 +2,8 @@
 (Shum, Komura & Yadav 2009), with the motion-graph join as a baseline."""
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import json
 import sys
 from pathlib import Path
@@ -12,9 +14,9 @@ def _range(text: str) -> tuple[int, int]:
         a, b = text.split(":")
         a, b = int(a), int(b)
     except ValueError:
-        raise ValueError(f"a frame range is F0:F1 with whole frame numbers, got {text!r}") from None
+        raise FlipstudyValueError(f"a frame range is F0:F1 with whole frame numbers, got {text!r}") from None
     if not 0 <= a < b:
-        raise ValueError(f"a frame range F0:F1 needs 0 <= F0 < F1, got {text!r}")
+        raise FlipstudyValueError(f"a frame range F0:F1 needs 0 <= F0 < F1, got {text!r}")
     return a, b
 
 
@@ -23,7 +25,7 @@ def _pick(clip, rng, label: str, spec: str):
         return clip
     a, b = _range(rng)
     if b > clip.num_frames:
-        raise ValueError(f"--range-{label} {rng}: {spec} has only {clip.num_frames} frames")
+        raise FlipstudyValueError(f"--range-{label} {rng}: {spec} has only {clip.num_frames} frames")
     out = clip.slice(a, b)
     out.meta["name"] = f"{clip.meta.get('name', Path(spec).stem)}[{a}:{b}]"
     return out

@@ -23,6 +23,8 @@ written to a temporary file in the same folder and renamed into place
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import csv
 import io
 import os
@@ -91,7 +93,7 @@ def export_responses(study_dir, out=None, *, participants_out=None,
     out = Path(out) if out is not None else study_dir / "responses.csv"
     pout = Path(participants_out) if participants_out is not None else out.parent / "participants.csv"
     if pout.resolve() == out.resolve():
-        raise ValueError(f"{out}: the responses and participants tables need different files")
+        raise FlipstudyValueError(f"{out}: the responses and participants tables need different files")
     conn = store.connect(study_dir, create=False)
     try:
         rows = [_fmt_response(r) for r in store.response_rows(conn, include_simulated=include_simulated)]

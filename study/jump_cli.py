@@ -11,6 +11,8 @@ energy-based controller of Ooi 2016 (``stimuli.control``), written as BVH::
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
+
 import argparse
 import json
 import sys
@@ -66,7 +68,7 @@ def cmd_jump(args) -> int:
         clip = res.clip
         save_bvh(clip, args.out)
         figs = jump_figures(clip, args.strip, args.composite) if (args.strip or args.composite) else {}
-    except (ValueError, OSError) as e:
+    except FlipstudyError as e:
         print(f"flipstudy jump: error: {e}", file=sys.stderr)
         return 1
     m = clip.meta

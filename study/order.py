@@ -25,6 +25,8 @@ Example
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 import hashlib
 import random
 from dataclasses import asdict, dataclass
@@ -64,7 +66,7 @@ def _level(row: dict) -> float:
     try:
         return float(row["level"])
     except (KeyError, ValueError) as e:
-        raise ValueError(f"manifest.csv: stimulus {row.get('stimulus')!r}: bad level "
+        raise FlipstudyValueError(f"manifest.csv: stimulus {row.get('stimulus')!r}: bad level "
                          f"{row.get('level')!r}") from e
 
 
@@ -93,7 +95,7 @@ def trial_order(design, manifest: list[dict], participant: str, session: int = 1
     group, groups interleaved (see the module docstring)."""
     groups = group_stimuli(manifest, design)
     if not groups:
-        raise ValueError("manifest.csv has no test stimuli (only reference rows)")
+        raise FlipstudyValueError("manifest.csv has no test stimuli (only reference rows)")
     rng = random.Random(participant_seed(design.seed, participant, session))
     n_stimuli = sum(len(rows) for rows in groups.values())
     trials: list[Trial] = []

@@ -223,7 +223,7 @@ def cmd_reproduce(args) -> int:
     try:
         r = reproduce(args.out, participants=args.participants, seed=args.seed, jobs=args.jobs,
                       force=args.force, quiet=args.quiet)
-    except (ReproduceError, ValueError, OSError) as e:
+    except FlipstudyError as e:
         print(f"flipstudy reproduce: error: {e}", file=sys.stderr)
         return 1
     print(summary_text(r, args.out.rstrip("/")))

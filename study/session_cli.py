@@ -6,6 +6,8 @@ study.session_cli COMMAND ...`` runs them on their own.
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyError
+
 import argparse
 import json
 import sys
@@ -55,7 +57,7 @@ def cmd_run(args) -> int:
         return serve(args.study_dir, args.participant, host=args.host, port=args.port,
                      open_browser=not args.no_browser, new_session=args.new_session,
                      iti_ms=args.iti_ms, allowed_hosts=args.allowed_host)
-    except (ValueError, OSError, RequestError) as e:
+    except (FlipstudyError, RequestError) as e:
         return _fail("run", e)
     except KeyboardInterrupt:
         return 0
@@ -66,7 +68,7 @@ def cmd_export(args) -> int:
     try:
         r = export_responses(args.study_dir, args.out, participants_out=args.participants_out,
                              include_simulated=args.include_simulated)
-    except (ValueError, OSError) as e:
+    except FlipstudyError as e:
         return _fail("export", e)
     who = f"{len(r['real'])} real participant(s)"
     if r["simulated"]:
@@ -94,7 +96,7 @@ def cmd_status(args) -> int:
         return _fail("status", ValueError(f"{d} is not a study folder (no manifest.csv)"))
     try:
         rows = status(d) if db_path(d).exists() else []
-    except (ValueError, OSError) as e:
+    except FlipstudyError as e:
         return _fail("status", e)
     if args.json:
         print(json.dumps(rows, indent=2))
@@ -128,7 +130,7 @@ def cmd_simulate(args) -> int:
     from .simulate import simulate
     try:
         ids = simulate(args.study_dir, args.participants, model=args.model, seed=args.seed)
-    except (ValueError, OSError, RequestError) as e:
+    except (FlipstudyError, RequestError) as e:
         return _fail("simulate", e)
     print(f"simulated {len(ids)} participant(s) ({ids[0]}..{ids[-1]}) in "
           f"{args.study_dir}/sessions.sqlite, stored as source=simulated; export and analyze leave "

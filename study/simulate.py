@@ -37,6 +37,8 @@ Example
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyValueError
+
 from stimuli.exceptions import FlipstudyError
 import hashlib
 import json
@@ -230,7 +232,7 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
     left as they are (their answers would be the same).  Returns the IDs.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1 or n > 9999:
-        raise ValueError(f"--participants: expected 1 to 9999, got {n!r}")
+        raise FlipstudyValueError(f"--participants: expected 1 to 9999, got {n!r}")
     if model is None:
         model = DEFAULT_MODEL
     elif not isinstance(model, ObserverModel):

@@ -24,6 +24,8 @@ milliseconds (``2026-01-05T10:00:00.123Z``).
 """
 from __future__ import annotations
 
+from stimuli.exceptions import FlipstudyFileNotFoundError, FlipstudyStateError
+
 import sqlite3
 from contextlib import contextmanager
 from datetime import datetime, timezone
@@ -110,7 +112,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     between threads if the caller serialises its use (the server does)."""
     path = db_path(study_dir)
     if not create and not path.exists():
-        raise FileNotFoundError(f"{path}: no sessions yet (run `flipstudy run` or `flipstudy simulate`)")
+        raise FlipstudyFileNotFoundError(f"{path}: no sessions yet (run `flipstudy run` or `flipstudy simulate`)")
     conn = sqlite3.connect(path, timeout=30.0, isolation_level=None, check_same_thread=False)
     try:
         conn.row_factory = sqlite3.Row
@@ -128,7 +130,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
                                  (str(SCHEMA_VERSION),))
                     conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
         elif version != SCHEMA_VERSION:
-            raise RuntimeError(f"{path}: schema version {version}; this flipstudy reads version "
+            raise FlipstudyStateError(f"{path}: schema version {version}; this flipstudy reads version "
                                f"{SCHEMA_VERSION}")
     except BaseException:
         conn.close()

@@ -282,9 +282,10 @@ def test_markdown_and_latex_layout():
     assert "| smooth-increase | 72 (.00) | 79 (−.22) |" in md
     assert md.count("| group |") == 2                           # one block per level set
     tex = to_latex(table, caption="Ratings & d′")
-    for s in (r"\toprule", r"\midrule", r"\bottomrule", r"\cmidrule", "79 ($-$.22)", r"Ratings \& d′",
+    for s in (r"\toprule", r"\midrule", r"\bottomrule", r"\cmidrule", "79 ($-$.22)", r"Ratings \& $d'$",
               r"17 \%"):
         assert s in tex
+    assert tex.isascii()                         # pdflatex without packages (was U+2032)
 
 
 # ------------------------------------------------------------------ pipeline

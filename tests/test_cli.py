@@ -69,8 +69,39 @@ def test_bad_file_gives_a_clear_error_not_a_traceback(capsys, tmp_path):
     bad.write_text("HIERARCHY\nROOT Hips\n{\n OFFSET 0 0 0\n CHANNELS 3 Xposition Yposition Qrotation\n}\nMOTION\n")
     code, out, err = run(capsys, "inspect", str(bad))
     assert code == 1 and "bad.bvh, line 5" in err and "Qrotation" in err and "Traceback" not in err
-    with pytest.raises(SystemExit, match="neither a built-in"):
-        main(["inspect", str(tmp_path / "missing.bvh")])
+    code, out, err = run(capsys, "inspect", str(tmp_path / "missing.bvh"))
+    assert code == 1 and "missing.bvh: neither a built-in clip" in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_an_internal_bug_shows_its_traceback_and_asks_for_a_report(capsys, monkeypatch):
+    """Only user errors (FlipstudyError) are one line: a bug inside the library, here a
+    ZeroDivisionError injected into the analyser, keeps its traceback, asks to be reported
+    and exits with EX_SOFTWARE (70), not the user-error status 1."""
+    import stimuli
+
+    def broken(*a, **kw):
+        return 1 / 0
+
+    monkeypatch.setattr(stimuli, "analyse", broken)
+    code, out, err = run(capsys, "inspect", "backflip")
+    assert code == 70
+    assert "Traceback (most recent call last)" in err and "ZeroDivisionError" in err
+    assert "in broken" in err                      # the frame of the bug is shown
+    assert "bug in flipstudy" in err and "please report it" in err
+    # a ValueError is not a user error either (the old CLI printed it as one line)
+    monkeypatch.setattr(stimuli, "analyse", lambda *a, **kw: float("x"))
+    code, out, err = run(capsys, "inspect", "backflip")
+    assert code == 70 and "Traceback" in err and "ValueError" in err
+
+
+def test_a_refused_output_file_is_one_line(capsys, tmp_path):
+    """An OSError about a file the user named (here a folder that cannot be created) is the
+    machine refusing it, not a bug: one line naming the file, status 1."""
+    (tmp_path / "f").write_text("x")
+    code, out, err = run(capsys, "edit", "backflip", "--flips", "2", "--out",
+                         str(tmp_path / "f" / "sub" / "x.bvh"))
+    assert code == 1 and "Traceback" not in err and str(tmp_path / "f") in err
 
 
 def test_console_script_help():

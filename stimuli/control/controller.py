@@ -36,6 +36,8 @@ v_L).  :func:`plan` iterates that fixed point; the feet land on the target.
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyValueError
+
 import time
 from dataclasses import dataclass, field, replace
 
@@ -128,9 +130,9 @@ def make_scene(name: str = "forward", distance: float | None = None, box_height:
     ``target`` (x, y, z) overrides the landing point (y must be the height of
     the surface there)."""
     if name not in SCENES:
-        raise ValueError(f"scene: expected one of {', '.join(SCENES)}, got {name!r}")
+        raise FlipstudyValueError(f"scene: expected one of {', '.join(SCENES)}, got {name!r}")
     if distance is not None and not (np.isfinite(distance) and distance > 0):
-        raise ValueError(f"distance: expected a positive number of metres, got {distance!r}")
+        raise FlipstudyValueError(f"distance: expected a positive number of metres, got {distance!r}")
     if name == "forward":
         sc = Scene("forward", (0.0, 0.0, 0.0), (0.0, 0.0, float(distance or 1.0)), tuck=0.8)
     elif name == "sideways":
@@ -138,7 +140,7 @@ def make_scene(name: str = "forward", distance: float | None = None, box_height:
     elif name == "box":
         h = float(0.5 if box_height is None else box_height)
         if not (0.1 <= h <= 1.2):
-            raise ValueError(f"box_height: expected 0.1–1.2 m, got {box_height!r}")
+            raise FlipstudyValueError(f"box_height: expected 0.1–1.2 m, got {box_height!r}")
         sc = Scene("box", (0.0, 0.0, 0.0), (0.0, h, 0.8), (Box((-0.5, 0.0, 0.5), (0.5, h, 1.3)),),
                    tuck=1.0, t_windup=0.15)
     else:
@@ -148,7 +150,7 @@ def make_scene(name: str = "forward", distance: float | None = None, box_height:
     if target is not None:
         t = np.asarray(target, float)
         if t.shape != (3,) or not np.all(np.isfinite(t)):
-            raise ValueError(f"to: expected X,Y,Z in metres, got {target!r}")
+            raise FlipstudyValueError(f"to: expected X,Y,Z in metres, got {target!r}")
         sc = Scene(sc.name, sc.start, tuple(t), sc.boxes, sc.tuck, sc.t_air, sc.t_windup)
     _check_surface(sc, "start", sc.start)
     _check_surface(sc, "to", sc.target)
@@ -158,7 +160,7 @@ def make_scene(name: str = "forward", distance: float | None = None, box_height:
 def _check_surface(sc: Scene, what: str, p) -> None:
     h = float(sc.surface(np.array([[p[0], p[2]]]))[0])
     if abs(h - p[1]) > 0.01:
-        raise ValueError(f"{what}: there is no surface at height {p[1]:g} m under x={p[0]:g}, "
+        raise FlipstudyValueError(f"{what}: there is no surface at height {p[1]:g} m under x={p[0]:g}, "
                          f"z={p[2]:g} in the {sc.name!r} scene (the surface there is at {h:g} m); "
                          f"give Y = {h:g}" + (" or use --scene box" if sc.name != "box" else ""))
 
@@ -213,7 +215,7 @@ def _touchdown(jumper, feet1, F1, delta, lean):
     L = TOUCHDOWN_EXTENSION * (jumper.thigh + jumper.shank)
     dh = float(np.hypot(*delta))
     if dh >= 0.95 * L:
-        raise ValueError("target unreachable: the landing needs the feet "
+        raise FlipstudyValueError("target unreachable: the landing needs the feet "
                          f"{dh:.2f} m ahead of the hips; use a longer --air or a shorter jump")
     y = F1[1] + jumper.ankle_height + np.sqrt(L ** 2 - dh ** 2) - jumper.hip_offset["l"][1]
     p = np.array([F1[0] + delta[0], y, F1[2] + delta[1]])
@@ -260,7 +262,7 @@ def plan(jumper: Jumper, scene: Scene, k, t_air: float, t_windup: float, g, max_
             o = c_td - p_td
             vLy = (c_td[1] - c_to[1]) / t_air + gv[1] * t_air / 2.0
             if vLy >= -0.05:
-                raise ValueError(f"target unreachable: the feet would reach the surface at "
+                raise FlipstudyValueError(f"target unreachable: the feet would reach the surface at "
                                  f"y = {F1[1]:g} m still rising (vertical velocity {vLy:+.2f} m/s); "
                                  f"use a longer --air")
             T_a = 3.0 * (c_s[1] - c_td[1]) / vLy
@@ -287,7 +289,7 @@ def plan(jumper: Jumper, scene: Scene, k, t_air: float, t_windup: float, g, max_
     v0 = (c_td - c_to) / t_air - gv * t_air / 2.0
     path = estimate_path(c_td - c_to, t_air, t_windup, gv)
     if kinetic_energy(m, path.v0) - ap.energy[-1] > EPSILON * kinetic_energy(m, path.v0):
-        raise ValueError("windup: the crouch reached does not store the energy of the final "
+        raise FlipstudyValueError("windup: the crouch reached does not store the energy of the final "
                          "take-off velocity; use a slightly shorter jump")
     vL = path.v_land
     T_a = 3.0 * (c_s_exact[1] - c_td[1]) / vL[1]
@@ -322,7 +324,7 @@ def _solve_com(jumper, com, lean, feet, heel: bool, root0, iterations: int = 10,
                 ball = np.broadcast_to(feet[s] + jumper.ball_offset, hip.shape)
                 ph = heel_pitch(hip, ball, jumper.ball_offset, L_ext, MAX_HEEL_PITCH)
                 if np.any(~np.isfinite(ph)):
-                    raise ValueError("thrust: the legs cannot reach the ground from the planned "
+                    raise FlipstudyValueError("thrust: the legs cannot reach the ground from the planned "
                                      "take-off (heels raised 60°); use a longer --windup or a shorter jump")
                 pitch[s] = ph
         ankles = {}
@@ -337,7 +339,7 @@ def _solve_com(jumper, com, lean, feet, heel: bool, root0, iterations: int = 10,
         if np.max(np.abs(err)) < tol:
             return root, Q, st
         root = root + err
-    raise ValueError(f"the legs cannot carry the COM on its planned path (COM error "
+    raise FlipstudyValueError(f"the legs cannot carry the COM on its planned path (COM error "
                      f"{1000 * np.max(np.abs(err)):.2f} mm after {iterations} rounds)")
 
 
@@ -426,18 +428,18 @@ def jump(target=None, *, scene: str | Scene = "forward", t_air: float | None = N
     if isinstance(scene, Scene) and target is not None:
         t = np.asarray(target, float)
         if t.shape != (3,) or not np.all(np.isfinite(t)):
-            raise ValueError(f"to: expected X,Y,Z in metres, got {target!r}")
+            raise FlipstudyValueError(f"to: expected X,Y,Z in metres, got {target!r}")
         sc = replace(scene, target=tuple(t))
         _check_surface(sc, "to", sc.target)
     t_air = sc.t_air if t_air is None else t_air
     t_windup = sc.t_windup if t_windup is None else t_windup
     for name, v in (("air", t_air), ("windup", t_windup), ("crouch_time", crouch_time)):
         if not (isinstance(v, (int, float, np.number)) and np.isfinite(v) and v > 0):
-            raise ValueError(f"{name}: expected a positive time in seconds, got {v!r}")
+            raise FlipstudyValueError(f"{name}: expected a positive time in seconds, got {v!r}")
     if not (isinstance(fps, (int, float, np.number)) and np.isfinite(fps) and 30 <= fps <= 1000):
-        raise ValueError(f"fps: expected 30–1000 frames per second, got {fps!r}")
+        raise FlipstudyValueError(f"fps: expected 30–1000 frames per second, got {fps!r}")
     if not (np.isfinite(strength) and strength > 0):
-        raise ValueError(f"strength: expected a positive factor on k, got {strength!r}")
+        raise FlipstudyValueError(f"strength: expected a positive factor on k, got {strength!r}")
     k_table = parse_k(k)
     k_eff = k_table * float(strength)
     jumper = Jumper(height, mass)
@@ -589,7 +591,7 @@ def _check(jumper, sc, clip, i_to, i_td, feet0, feet1, F1) -> dict:
     hit = np.nonzero(after & (gap.min(axis=1) <= RAY_TOLERANCE))[0]
     td_detected = int(hit[0]) if hit.size else None
     if td_detected is None or td_detected != i_td:
-        raise ValueError(f"landing: the feet meet a surface at frame {td_detected}, not at the planned "
+        raise FlipstudyValueError(f"landing: the feet meet a surface at frame {td_detected}, not at the planned "
                          f"touch-down {i_td}; the jump hits something: use a longer --air")
     below = float(gap.min())
     # collisions in flight: body points inside a box
@@ -600,7 +602,7 @@ def _check(jumper, sc, clip, i_to, i_td, feet0, feet1, F1) -> dict:
     for b in sc.boxes:
         if np.any(b.contains(pts, margin=0.005)):
             fr = i_to + int(np.nonzero(b.contains(pts, 0.005).any(1))[0][0])
-            raise ValueError(f"the jump hits the box {b.to_list()} at frame {fr}; use a longer --air, "
+            raise FlipstudyValueError(f"the jump hits the box {b.to_list()} at frame {fr}; use a longer --air, "
                              f"another target or --scene")
         top = b.hi[1]
         if top <= F1[1] + 1e-9 and b.contains(np.array([F1[0], top - 0.01, F1[2]])):

@@ -9,6 +9,8 @@ position, the legs (hip, knee, ankle, toe) and the upper body (Spine, Spine1).
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyValueError
+
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -52,9 +54,9 @@ class Jumper:
 
     def __post_init__(self):
         if not (np.isfinite(self.height) and 1.0 <= self.height <= 2.5):
-            raise ValueError(f"height: expected a standing height between 1.0 and 2.5 m, got {self.height!r}")
+            raise FlipstudyValueError(f"height: expected a standing height between 1.0 and 2.5 m, got {self.height!r}")
         if not (np.isfinite(self.mass) and self.mass > 0):
-            raise ValueError(f"mass: expected a positive body mass in kg, got {self.mass!r}")
+            raise FlipstudyValueError(f"mass: expected a positive body mass in kg, got {self.mass!r}")
         self.skeleton = make_skeleton(self.height)
         self.body = Body.from_skeleton(self.skeleton, self.mass)
         sk = self.skeleton

@@ -23,6 +23,8 @@ presets.
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyValueError
+
 import numpy as np
 
 #: muscle order (Table 5.1's columns)
@@ -43,7 +45,7 @@ def spring_displacement(theta, r: float = BONE_WIDTH) -> np.ndarray:
     """s = r sin(π − θ) / sin(θ/2) for θ (radians) in (0, π], the angle between the bones."""
     th = np.asarray(theta, dtype=float)
     if np.any(~np.isfinite(th)) or np.any(th <= 0) or np.any(th > np.pi + 1e-9):
-        raise ValueError("theta: the angle between the bones must be in (0, π] radians "
+        raise FlipstudyValueError("theta: the angle between the bones must be in (0, π] radians "
                          "(π = straight); got values outside")
     return r * np.sin(np.pi - th) / np.sin(th / 2.0)
 
@@ -83,7 +85,7 @@ def parse_k(spec) -> np.ndarray:
         try:
             vals = [float(v) for v in key.split(",")]
         except ValueError:
-            raise ValueError(f"k: unknown preset {spec!r}; expected one of {', '.join(PRESETS)}, "
+            raise FlipstudyValueError(f"k: unknown preset {spec!r}; expected one of {', '.join(PRESETS)}, "
                              f"one number or six comma-separated numbers "
                              f"({', '.join(MUSCLES)})") from None
     else:
@@ -91,6 +93,6 @@ def parse_k(spec) -> np.ndarray:
     if len(vals) == 1:
         vals = vals * 6
     if len(vals) != 6 or not all(np.isfinite(v) and v > 0 for v in vals):
-        raise ValueError(f"k: expected a preset ({', '.join(PRESETS)}), one positive number or six "
+        raise FlipstudyValueError(f"k: expected a preset ({', '.join(PRESETS)}), one positive number or six "
                          f"positive numbers ({', '.join(MUSCLES)}), got {spec!r}")
     return np.array(vals, dtype=float)

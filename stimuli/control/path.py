@@ -17,6 +17,8 @@ vector (Y up): ``(0, −9.81, 0)``; a positive number is taken as its magnitude.
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyValueError
+
 from dataclasses import dataclass
 
 import numpy as np
@@ -29,11 +31,11 @@ def gravity_vector(g) -> np.ndarray:
     arr = np.asarray(g, dtype=float)
     if arr.ndim == 0:
         if not (np.isfinite(arr) and arr > 0):
-            raise ValueError(f"gravity: expected a positive magnitude in m/s² (e.g. 9.81) or a "
+            raise FlipstudyValueError(f"gravity: expected a positive magnitude in m/s² (e.g. 9.81) or a "
                              f"vector, got {g!r}")
         return np.array([0.0, -float(arr), 0.0])
     if arr.shape != (3,) or not np.all(np.isfinite(arr)) or arr[1] >= 0:
-        raise ValueError(f"gravity: expected a vector (gx, gy, gz) with gy < 0 (Y up), got {g!r}")
+        raise FlipstudyValueError(f"gravity: expected a vector (gx, gy, gz) with gy < 0 (Y up), got {g!r}")
     return arr.copy()
 
 
@@ -78,13 +80,13 @@ def estimate_path(displacement, t_air: float, t_windup: float = 0.2, g=G, v_i=(0
     Raises ``ValueError`` naming the parameter for bad input."""
     d = np.asarray(displacement, dtype=float)
     if d.shape != (3,) or not np.all(np.isfinite(d)):
-        raise ValueError(f"displacement: expected three finite numbers (x, y, z) in metres, got {displacement!r}")
+        raise FlipstudyValueError(f"displacement: expected three finite numbers (x, y, z) in metres, got {displacement!r}")
     for name, v in (("t_air", t_air), ("t_windup", t_windup)):
         if not (isinstance(v, (int, float, np.number)) and np.isfinite(v) and v > 0):
-            raise ValueError(f"{name}: expected a positive time in seconds, got {v!r}")
+            raise FlipstudyValueError(f"{name}: expected a positive time in seconds, got {v!r}")
     vi = np.asarray(v_i, dtype=float)
     if vi.shape != (3,) or not np.all(np.isfinite(vi)):
-        raise ValueError(f"v_i: expected three finite numbers (m/s), got {v_i!r}")
+        raise FlipstudyValueError(f"v_i: expected three finite numbers (m/s), got {v_i!r}")
     gv = gravity_vector(g)
     t_air, t_windup = float(t_air), float(t_windup)
     v0 = d / t_air - gv * t_air / 2.0

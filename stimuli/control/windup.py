@@ -40,6 +40,8 @@ position, the same constraints), for comparison with the sampled answer.
 """
 from __future__ import annotations
 
+from ..exceptions import FlipstudyValueError
+
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -370,14 +372,14 @@ def choose(field: SampleField, k, required: float, travel=None, eps: float = EPS
                           float(np.linalg.norm(bal.residual[i])), 0, False)
         emax = float(E[usable].max()) if usable.any() else 0.0
         if emax < (1 - eps) * required:
-            raise ValueError(
+            raise FlipstudyValueError(
                 f"target unreachable: the jump needs E_k = {required:.0f} J but the muscles "
                 f"(k = {', '.join(f'{v:g}' for v in np.asarray(k))}) store at most {emax:.0f} J in "
                 f"a balanced crouch; use stronger muscles (--k / --strength), a shorter jump, or an "
                 f"--air time nearer the cheapest one")
         if not pre.any():
-            raise ValueError(f"target unreachable: no balanced crouch stores {required:.0f} J")
-        raise ValueError(
+            raise FlipstudyValueError(f"target unreachable: no balanced crouch stores {required:.0f} J")
+        raise FlipstudyValueError(
             f"target unreachable: crouches storing {required:.0f} J exist, but none leaves room "
             f"for the thrust (the legs must extend over {np.linalg.norm(travel):.2f} m and keep the "
             f"feet on the ground); use another --windup time or a shorter jump")
@@ -455,7 +457,7 @@ def approach(jumper: Jumper, start: np.ndarray, goal: np.ndarray, feet: dict, k,
         lean = pd_lean(lean, b, b if b_prev is None else b_prev)
         b_prev = b
     else:
-        raise ValueError(f"windup: the PD controllers did not settle in {max_iter} iterations "
+        raise FlipstudyValueError(f"windup: the PD controllers did not settle in {max_iter} iterations "
                          f"(pelvis error {np.linalg.norm(goal - p) * 1000:.1f} mm, balance error "
                          f"{np.linalg.norm(b) * 1000:.1f} mm, lean {np.degrees(lean).round(1).tolist()}°, "
                          f"energy {E:.0f} of {required:.0f} J)")

@@ -9,6 +9,8 @@ second) or the paper's frame rule ``next = last + 1/ratio(last)``.
 
 from __future__ import annotations
 
+from ..exceptions import FlipstudyValueError
+
 from typing import Callable
 
 import numpy as np
@@ -72,7 +74,7 @@ def retime(clip: Clip, factor: float) -> Clip:
     """Uniform retiming: the motion plays ``factor`` times faster (``factor`` < 1:
     slower) at the same frame rate, so velocities, p and L scale by ``factor``."""
     if not (np.isfinite(factor) and factor > 0):
-        raise ValueError(f"retime factor must be a positive number, got {factor!r}")
+        raise FlipstudyValueError(f"retime factor must be a positive number, got {factor!r}")
     n = int(np.floor((clip.num_frames - 1) / factor + 1e-9)) + 1
     return sample(clip, np.arange(n) * factor)
 

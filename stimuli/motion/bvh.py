@@ -16,13 +16,20 @@ Reading resolves, at the edge, everything the real files disagree on
 * **T-pose first frame** of raw CMU files: detected and dropped (``drop_tpose``).
 
 The numbers of the MOTION block are parsed in one vectorised step.  Malformed
-input raises :class:`BVHError` naming the file, the line and what was expected.
+or absurd input raises :class:`BVHError` naming the file, the line and what was
+expected: only regular files of at most :data:`MAX_BVH_BYTES` are read; every number
+must be finite; the frame rate must lie in :data:`FPS_RANGE`; every OFFSET, rest
+joint position and position channel within :data:`MAX_POSITION_M` metres of the
+origin (after unit scaling); every angle within :data:`MAX_ANGLE_DEG` degrees.
 """
 
 from __future__ import annotations
 
-from ..exceptions import FlipstudyError
+from ..exceptions import FlipstudyError, FlipstudyValueError
+import math
 import os
+import re
+import stat
 import tempfile
 from decimal import Decimal, InvalidOperation
 import warnings
@@ -47,6 +54,19 @@ UNIT_CANDIDATES = (
 )
 STANDING_HEIGHT_M = 1.70
 
+#: Largest file :func:`load_bvh` reads (bytes); larger ones are refused by name.
+#: The largest real clip we know is 4 MB; raise this module constant to read more.
+MAX_BVH_BYTES = 512 * 2**20
+#: Frame rates a BVH file may declare (or ``fps=`` give), frames per second.
+FPS_RANGE = (1.0, 10_000.0)
+#: Farthest a joint may be from the origin, metres (after unit scaling).
+MAX_POSITION_M = 1000.0
+#: Largest rotation channel value, degrees (a thousand-odd turns; beyond is not motion).
+MAX_ANGLE_DEG = 1e6
+
+_FRAMES_RE = re.compile(r"Frames\s*:\s*(.*)\Z", re.IGNORECASE)
+_FRAME_TIME_RE = re.compile(r"Frame\s+Time\s*:\s*(.*)\Z", re.IGNORECASE)
+
 
 class BVHError(FlipstudyError, ValueError):
     """A malformed BVH file: the message names the file, the line and what was expected."""
@@ -62,6 +82,9 @@ class BVHError(FlipstudyError, ValueError):
 def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
     """Parse HIERARCHY up to MOTION. Returns skeleton parts and the MOTION line index."""
     names: list[str] = []
+    index_of: dict[str, int] = {}  # name -> joint: uniqueness checked in O(1)
+    offset_lines: list[int] = []   # 1-based line of each joint's OFFSET
+    end_lines: list[int] = []      # 1-based line of each End Site's OFFSET
     parents: list[int] = []
     offsets: list[list[float]] = []
     channels: list[tuple[str, ...]] = []
@@ -97,7 +120,7 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
             if not names:
                 raise BVHError(path, ln, "no ROOT joint in HIERARCHY")
             return dict(names=names, parents=parents, offsets=offsets, channels=channels,
-                        end_sites=end_sites), i
+                        end_sites=end_sites, offset_lines=offset_lines, end_lines=end_lines), i
         if pending is not None and key != "{":
             raise BVHError(path, ln, f"expected '{{' after joint line, found {raw[:40]!r}")
         if key in ("ROOT", "JOINT"):
@@ -113,10 +136,12 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
                 if not stack or stack[-1] < 0:
                     raise BVHError(path, ln, "JOINT outside a ROOT/JOINT block")
                 parent = stack[-1]
-            if name in names:
+            if name in index_of:
                 raise BVHError(path, ln, f"duplicate joint name {name!r} "
-                                         f"(first at joint {names.index(name)})")
+                                         f"(first at joint {index_of[name]})")
+            index_of[name] = len(names)
             names.append(name)
+            offset_lines.append(0)
             parents.append(parent)
             offsets.append(None)  # type: ignore[arg-type]
             channels.append(None)  # type: ignore[arg-type]
@@ -125,7 +150,7 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
             if not stack or stack[-1] < 0:
                 raise BVHError(path, ln, "End Site outside a joint block")
             pending = -2
-            cur_end = [stack[-1], None]
+            cur_end = [stack[-1], None, 0]
         elif key == "{":
             if pending is None:
                 raise BVHError(path, ln, "unexpected '{' (no ROOT, JOINT or End Site before it)")
@@ -139,6 +164,7 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
                 if cur_end is None or cur_end[1] is None:
                     raise BVHError(path, ln, "End Site without OFFSET")
                 end_sites.append((cur_end[0], cur_end[1]))
+                end_lines.append(cur_end[2])
                 cur_end = None
             else:
                 if offsets[top] is None:
@@ -150,21 +176,23 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
                 raise BVHError(path, ln, "OFFSET outside a block")
             try:
                 vals = [float(v) for v in parts[1:]]
-            except ValueError:
+            except (ValueError, OverflowError):
                 raise BVHError(path, ln, f"OFFSET needs 3 numbers, found {' '.join(parts[1:])!r}") from None
-            if len(vals) != 3 or not all(np.isfinite(vals)):
+            if len(vals) != 3 or not all(map(math.isfinite, vals)):
                 raise BVHError(path, ln, f"OFFSET needs 3 finite numbers, found {len(vals)}: "
                                          f"{' '.join(parts[1:])!r}")
             if stack[-1] == -2:
                 cur_end[1] = np.array(vals)  # type: ignore[index]
+                cur_end[2] = ln  # type: ignore[index]
             else:
                 offsets[stack[-1]] = vals
+                offset_lines[stack[-1]] = ln
         elif key == "CHANNELS":
             if not stack or stack[-1] < 0:
                 raise BVHError(path, ln, "CHANNELS outside a joint block")
             try:
                 count = int(parts[1])
-            except (IndexError, ValueError):
+            except (IndexError, ValueError, OverflowError):
                 raise BVHError(path, ln, "CHANNELS needs a count, e.g. 'CHANNELS 3 Zrotation "
                                          "Yrotation Xrotation'") from None
             chans = tuple(parts[2:])
@@ -186,13 +214,6 @@ def _parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
     if stack or pending is not None:
         raise BVHError(path, n, f"unbalanced braces: file ends with {len(stack)} block(s) open")
     raise BVHError(path, n, "no MOTION section (file ends inside HIERARCHY)")
-
-
-def _header_value(line: str, key: str, path, ln: int) -> str:
-    s = line.strip()
-    if not s.startswith(key):
-        raise BVHError(path, ln, f"expected '{key} ...', found {s[:40]!r}")
-    return s[len(key):].strip()
 
 
 def _tokens_per_line(data: bytes, n_lines: int) -> np.ndarray:
@@ -217,10 +238,13 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
         i += 1
     if i >= len(lines):
         raise BVHError(path, i, "MOTION block is empty: expected 'Frames: N'")
-    val = _header_value(lines[i].replace(":", ": ", 1), "Frames:", path, i + 1)
+    m = _FRAMES_RE.match(lines[i].strip())
+    if m is None:
+        raise BVHError(path, i + 1, f"expected 'Frames: N', found {lines[i].strip()[:40]!r}")
+    val = m.group(1).strip()
     try:
         n_frames = int(val)
-    except ValueError:
+    except (ValueError, OverflowError):
         raise BVHError(path, i + 1, f"'Frames:' needs a whole number, found {val!r}") from None
     if n_frames < 0:
         raise BVHError(path, i + 1, f"'Frames:' must not be negative, found {n_frames}")
@@ -229,16 +253,19 @@ def _parse_motion(lines: list[str], start: int, n_channels: int, path):
     i += 1
     while i < len(lines) and not lines[i].strip():
         i += 1
-    if i >= len(lines) or not lines[i].strip().startswith("Frame Time"):
+    m = _FRAME_TIME_RE.match(lines[i].strip()) if i < len(lines) else None
+    if m is None:
         raise BVHError(path, min(i + 1, len(lines)), "missing 'Frame Time: seconds' after 'Frames:'")
-    val = lines[i].strip()[len("Frame Time"):].lstrip().lstrip(":").strip()
+    val = m.group(1).strip()
     try:
         frame_time = float(val)
-    except ValueError:
+    except (ValueError, OverflowError):
         raise BVHError(path, i + 1, f"'Frame Time:' needs a number of seconds, found {val!r}") from None
-    if not (np.isfinite(frame_time) and frame_time > 0):
-        raise BVHError(path, i + 1, f"'Frame Time:' must be a positive number of seconds, "
-                                    f"found {val!r}")
+    lo, hi = FPS_RANGE
+    if not (np.isfinite(frame_time) and 1.0 / hi <= frame_time <= 1.0 / lo):
+        raise BVHError(path, i + 1, f"'Frame Time:' must be a positive number of seconds between "
+                                    f"{1.0 / hi:g} and {1.0 / lo:g} ({lo:g} to {hi:g} frames per "
+                                    f"second), found {val[:40]!r}")
     first = i + 1  # 0-based index of the first data line
     data_lines = lines[first:]
     # drop trailing blank lines
@@ -405,6 +432,89 @@ def _detect_tpose(values: np.ndarray, rot_cols: np.ndarray, q: np.ndarray) -> bo
     return bool(step[0] > 10 * max(np.median(step[1:]), 1e-6))
 
 
+def _read_regular_file(path: Path) -> bytes:
+    """The bytes of a regular file of at most :data:`MAX_BVH_BYTES`; a FIFO, a device
+    (``/dev/zero``), a directory or a larger file is refused before it is opened."""
+    try:
+        st = os.stat(path)
+    except OSError as e:
+        raise BVHError(path, None, f"cannot read file: {e.strerror}") from None
+    if not stat.S_ISREG(st.st_mode):
+        kind = ("a directory" if stat.S_ISDIR(st.st_mode) else "a FIFO (named pipe)"
+                if stat.S_ISFIFO(st.st_mode) else "a device" if stat.S_ISCHR(st.st_mode)
+                or stat.S_ISBLK(st.st_mode) else "a socket" if stat.S_ISSOCK(st.st_mode)
+                else "not a regular file")
+        raise BVHError(path, None, f"is {kind}; expected a regular BVH file")
+    if st.st_size > MAX_BVH_BYTES:
+        raise BVHError(path, None, f"file is {st.st_size / 2**20:.0f} MiB, larger than the "
+                                   f"{MAX_BVH_BYTES / 2**20:g} MiB the reader accepts "
+                                   f"(stimuli.motion.bvh.MAX_BVH_BYTES)")
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(MAX_BVH_BYTES + 1)   # the file may grow between stat and read
+    except OSError as e:
+        raise BVHError(path, None, f"cannot read file: {e.strerror}") from None
+    if len(raw) > MAX_BVH_BYTES:
+        raise BVHError(path, None, f"file is larger than the {MAX_BVH_BYTES / 2**20:g} MiB the "
+                                   f"reader accepts (stimuli.motion.bvh.MAX_BVH_BYTES)")
+    return raw
+
+
+def _check_bounds(path, h: dict, values: np.ndarray, first: int, s: float,
+                  pos_cols: np.ndarray, rot_cols: np.ndarray) -> None:
+    """Refuse absurd numbers (all finite by now), each with its line: OFFSETs and rest
+    joint positions farther than :data:`MAX_POSITION_M` metres once scaled by ``s``,
+    position channels as far, rotation channels beyond :data:`MAX_ANGLE_DEG`.  Array
+    operations over all frames at once; the loops below run only to name a culprit."""
+    lim = MAX_POSITION_M / s                                   # in file units
+    offsets = np.array(h["offsets"], dtype=np.float64)          # (J, 3), finite
+    ends = np.array([o for _, o in h["end_sites"]], dtype=np.float64).reshape(-1, 3)
+    for arr, lns, what in ((offsets, h["offset_lines"], "OFFSET"),
+                           (ends, h["end_lines"], "End Site OFFSET")):
+        bad = np.flatnonzero(np.abs(arr).max(axis=1, initial=0) > lim)
+        if bad.size:
+            k = int(bad[0])
+            raise BVHError(path, lns[k], f"{what} {np.abs(arr[k]).max():g} file units "
+                                         f"({np.abs(arr[k]).max() * s:.3g} m at {s:g} m per unit) "
+                                         f"from its joint, beyond the {MAX_POSITION_M:g} m a body "
+                                         f"part can be")
+    # rest pose: each joint's distance from the root (sums of bounded offsets)
+    parents = h["parents"]
+    rest = np.zeros_like(offsets)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for j in range(1, len(parents)):
+            rest[j] = rest[parents[j]] + offsets[j]
+    far = np.flatnonzero(~(np.abs(rest).max(axis=1) <= lim))
+    if far.size:
+        k = int(far[0])
+        raise BVHError(path, h["offset_lines"][k], f"joint {h['names'][k]!r} lies "
+                                                   f"{np.abs(rest[k]).max() * s:.3g} m from the root in "
+                                                   f"the rest pose, beyond {MAX_POSITION_M:g} m")
+    for cols, limit, what, unit in ((pos_cols, lim, "position", f"file units (> {MAX_POSITION_M:g} m)"),
+                                    (rot_cols, MAX_ANGLE_DEG, "angle", "degrees")):
+        if cols.size == 0:
+            continue
+        over = np.abs(values[:, cols]) > limit
+        if over.any():
+            f, c = np.argwhere(over)[0]
+            raise BVHError(path, first + int(f) + 1,
+                           f"{what} {values[f, cols[c]]:g} in frame {int(f) + 1}, channel "
+                           f"{int(cols[c]) + 1}: beyond ±{limit:g} {unit}")
+
+
+def _check_fps(fps, field: str = "fps") -> float:
+    """A frame rate given by the caller, in :data:`FPS_RANGE`."""
+    try:
+        v = float(fps)
+    except (TypeError, ValueError):
+        v = float("nan")
+    lo, hi = FPS_RANGE
+    if not (np.isfinite(v) and lo <= v <= hi):
+        raise FlipstudyValueError(f"{field}: expected a frame rate between {lo:g} and {hi:g} frames "
+                                  f"per second, got {fps!r}")
+    return v
+
+
 def load_bvh(path, scale: float | None = None, fps: float | None = None,
              drop_tpose: bool | str = "auto") -> Clip:
     """Read a BVH file into a :class:`Clip` in metres.
@@ -424,10 +534,7 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     'guess: CMU/ASF length units (1/0.45 in)'
     """
     path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as e:
-        raise BVHError(path, None, f"cannot read file: {e.strerror}") from None
+    raw = _read_regular_file(path)
     try:
         text = raw.decode("utf-8-sig")  # a byte-order mark is not part of 'HIERARCHY'
     except UnicodeDecodeError:
@@ -453,10 +560,29 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
         col_of_pos.append([idx[c] for c in POSITION_CHANNELS] if POSITION_CHANNELS[0] in idx else None)
         c0 += len(ch)
     orders = ["".join(c[0] for c in ch if c in ROTATION_CHANNELS) for ch in channels]
+    rot_cols = np.array([c for cols in col_of_rot for c in cols], dtype=np.int64)
+    pos_cols = np.array([c for cols in col_of_pos if cols is not None for c in cols], dtype=np.int64)
+    meta: dict = {"name": path.stem, "path": str(path), "warnings": [], "dropped_frames": []}
+    skel = None
+    if scale is None:
+        rest_offsets = offsets.copy()
+        rest_offsets[0] = 0.0       # root_pos carries the root's position (see below)
+        skel = Skeleton(names, parents, rest_offsets, channels, h["end_sites"])
+        with np.errstate(over="ignore", invalid="ignore"):   # absurd offsets: refused below
+            s, unit = guess_scale(skel)
+        meta["scale_source"] = f"guess: {unit}"
+    else:
+        try:
+            s = float(scale)
+        except (TypeError, ValueError):
+            s = float("nan")
+        if not (np.isfinite(s) and 1e-6 <= s <= 1e3):
+            raise FlipstudyValueError(f"scale: expected metres per file unit between 1e-06 and 1000 "
+                                      f"(0.01 for centimetres), got {scale!r}")
+        meta["scale_source"] = "given"
+    _check_bounds(path, h, values, first, s, pos_cols, rot_cols)
     q = _euler_to_quat(values, orders, col_of_rot)
 
-    meta: dict = {"name": path.stem, "path": str(path), "warnings": [], "dropped_frames": []}
-    rot_cols = np.array([c for cols in col_of_rot for c in cols], dtype=np.int64)
     first_frame = values[0]  # the translation convention is decided on the file's frame 1
     do_drop = drop_tpose is True or (drop_tpose == "auto" and _detect_tpose(values, rot_cols, q))
     if do_drop and n_frames > 1:
@@ -494,23 +620,14 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     meta["file_root_offset"] = offsets[0].tolist()
     offsets[0] = 0.0  # root_pos is absolute from here on
 
-    skel = Skeleton(names, parents, offsets, channels, h["end_sites"])
-    if scale is None:
-        s, unit = guess_scale(skel)
-        meta["scale_source"] = f"guess: {unit}"
-    else:
-        s = float(scale)
-        if not (np.isfinite(s) and s > 0):
-            raise ValueError(f"scale must be a positive number of metres per file unit, got {scale!r}")
-        meta["scale_source"] = "given"
+    if skel is None:
+        skel = Skeleton(names, parents, offsets, channels, h["end_sites"])
     meta["scale"] = s
     header_fps = _header_fps(frame_time, frame_time_text)
     meta["header_fps"] = header_fps
     meta["header_frame_time"] = frame_time
     if fps is not None:
-        fps = float(fps)
-        if not (np.isfinite(fps) and fps > 0):
-            raise ValueError(f"fps must be a positive number, got {fps!r}")
+        fps = _check_fps(fps)
         meta["fps_source"] = "given"
     else:
         fps = header_fps

@@ -50,6 +50,8 @@ the ankle rises only while the heel does, before take-off.
 
 from __future__ import annotations
 
+from ..exceptions import FlipstudyValueError
+
 from ..exceptions import FlipstudyError
 
 import time
@@ -340,22 +342,22 @@ def _flight_rotation(model, spline, T, n_fine, dtheta):
 # ------------------------------------------------------------------- build
 def _check_params(name, fps, total_mass, params):
     if name not in DESIGNS:
-        raise ValueError(f"unknown built-in clip {name!r}; valid names: {', '.join(BUILTIN_NAMES)}")
+        raise FlipstudyValueError(f"unknown built-in clip {name!r}; valid names: {', '.join(BUILTIN_NAMES)}")
     bad = [k for k in params if k not in PARAMS]
     if bad:
-        raise ValueError(f"builtin({name!r}): unknown parameter(s) {bad}; valid: "
+        raise FlipstudyValueError(f"builtin({name!r}): unknown parameter(s) {bad}; valid: "
                          f"{', '.join(PARAMS)} (and fps, total_mass)")
     if not (isinstance(fps, (int, float, np.number)) and np.isfinite(fps) and fps >= 10):
-        raise ValueError(f"fps must be a number of frames per second >= 10, got {fps!r}")
+        raise FlipstudyValueError(f"fps must be a number of frames per second >= 10, got {fps!r}")
     if not (np.isfinite(total_mass) and total_mass > 0):
-        raise ValueError(f"total_mass must be a positive number of kg, got {total_mass!r}")
+        raise FlipstudyValueError(f"total_mass must be a positive number of kg, got {total_mass!r}")
     d = dict(DESIGNS[name])
     for k in ("flight_time", "tuck", "horizontal_speed", "crouch_depth", "turns"):
         if k in params:
             d[k] = params[k]
     shape = params.get("shape", "tuck")
     if shape not in SHAPES:
-        raise ValueError(f"shape must be one of {', '.join(SHAPES)}, got {shape!r}")
+        raise FlipstudyValueError(f"shape must be one of {', '.join(SHAPES)}, got {shape!r}")
     if shape == "pike":                   # hips folded further, knees straight
         d["tucked"] = d["tucked"].copy()
         d["tucked"][IX["hip"]] = -2.5
@@ -364,22 +366,22 @@ def _check_params(name, fps, total_mass, params):
         d["tuck"] = 0.0
     H = float(params.get("height", REF_HEIGHT))
     if not (np.isfinite(H) and 1.0 <= H <= 2.5):
-        raise ValueError(f"height must be between 1.0 and 2.5 m, got {H!r}")
+        raise FlipstudyValueError(f"height must be between 1.0 and 2.5 m, got {H!r}")
     if not (0.0 <= float(d["tuck"]) <= 1.0):
-        raise ValueError(f"tuck must be between 0 (layout) and 1 (full tuck), got {d['tuck']!r}")
+        raise FlipstudyValueError(f"tuck must be between 0 (layout) and 1 (full tuck), got {d['tuck']!r}")
     if not (0.3 <= float(d["flight_time"]) <= 1.2):
-        raise ValueError(f"flight_time must be between 0.3 and 1.2 s, got {d['flight_time']!r}")
+        raise FlipstudyValueError(f"flight_time must be between 0.3 and 1.2 s, got {d['flight_time']!r}")
     if not (abs(float(d["horizontal_speed"])) <= 3.0):
-        raise ValueError(f"horizontal_speed must be within ±3 m/s, got {d['horizontal_speed']!r}")
+        raise FlipstudyValueError(f"horizontal_speed must be within ±3 m/s, got {d['horizontal_speed']!r}")
     if not (0.10 <= float(d["crouch_depth"]) <= 0.45):
-        raise ValueError(f"crouch_depth must be between 0.10 and 0.45 m, got {d['crouch_depth']!r}")
+        raise FlipstudyValueError(f"crouch_depth must be between 0.10 and 0.45 m, got {d['crouch_depth']!r}")
     turns = d["turns"]
     if name == "jump":
         if turns != 0:
-            raise ValueError("turns: the jump does not rotate; use 'backflip' or 'frontflip'")
+            raise FlipstudyValueError("turns: the jump does not rotate; use 'backflip' or 'frontflip'")
     else:
         if int(turns) != turns or abs(turns) < 1 or abs(turns) > 3:
-            raise ValueError(f"turns must be a whole number of somersaults from 1 to 3 (the clip "
+            raise FlipstudyValueError(f"turns must be a whole number of somersaults from 1 to 3 (the clip "
                              f"ends standing at the same facing), got {turns!r}")
         turns = (-1 if name == "backflip" else 1) * abs(int(turns))
     d["turns"] = turns
