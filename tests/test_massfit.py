@@ -99,10 +99,10 @@ def test_regulariser_is_absolute_kkt(case):
 
 
 def test_band_keeps_the_prior_when_the_data_contradict_it(case):
-    """Unregularised on a noisy flip the arms run off (forearms +60..+160 %): the fit
+    """Unregularised on a noisy flip the arms run off (forearms +60..+140 %): the fit
     says so, names the groups, and keeps the prior masses."""
     clip, true, prior, a = case
-    noisy = _noisy(clip, 0.05, 0)
+    noisy = _noisy(clip, 0.2, 0)           # 0.2° RMS: the arms run off on both flips
     fit = estimate_masses(noisy, prior, a.takeoff, a.landing, W=0.0)
     off = {g for g in fit.fitted if abs(fit.fitted[g] / fit.prior[g] - 1) > 0.35}
     assert off and fit.status == "prior kept"

@@ -276,7 +276,7 @@ def test_crossfade_rotation_known_values():
     from stimuli.edit.reposition import rotate
     from stimuli.physics import center_of_mass
     a = analyse(builtin("backflip"))
-    f, w = a.takeoff + 20, 8
+    f, w = a.takeoff + 30, 8       # the tuck held (closing, the root outruns the body by 10 %)
     L = a.L[a.takeoff + 2:a.landing - 1].mean(0)
     x = crossfade_rotation(a.clip, a.body, f, w, L)
     assert x["unexplained_deg"] < 0.5 and x["turned_perp_deg"] < 0.5
