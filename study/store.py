@@ -116,7 +116,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     conn = sqlite3.connect(path, timeout=30.0, isolation_level=None, check_same_thread=False)
     try:
         conn.row_factory = sqlite3.Row
-        conn.execute("PRAGMA journal_mode=WAL")
+        _set_wal(conn)
         conn.execute("PRAGMA synchronous=FULL")
         conn.execute("PRAGMA foreign_keys=ON")
         version = conn.execute("PRAGMA user_version").fetchone()[0]
@@ -136,6 +136,23 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
         conn.close()
         raise
     return conn
+
+
+def _set_wal(conn: sqlite3.Connection, wait: float = 30.0) -> None:
+    """``PRAGMA journal_mode=WAL``.  Switching a new database to WAL (or opening one
+    whose WAL another connection is recovering) can answer "database is locked" at
+    once, without SQLite's busy handler; several openers of a new study race there, so
+    the switch is retried for up to ``wait`` seconds like any other lock."""
+    import time
+    end = time.monotonic() + wait
+    while True:
+        try:
+            conn.execute("PRAGMA journal_mode=WAL")
+            return
+        except sqlite3.OperationalError as e:
+            if "locked" not in str(e) or time.monotonic() > end:
+                raise
+            time.sleep(0.02)
 
 
 @contextmanager
