@@ -3,7 +3,7 @@
 Reads response tables (the long format of DESIGN.md) with pandas; imports
 nothing of ``study``, ``render`` or ``stimuli``.
 
->>> import analysis
+>>> from flipstudy import analysis
 >>> round(float(analysis.dprime(59, 100, 28, 100)), 2)     # the paper's 41 % vs 72 % rated correct
 0.81
 
@@ -14,7 +14,7 @@ Entry points:
   signal detection on counts (vectorised);
 * :func:`load_responses` — read and check a response table;
 * :func:`summarize`, :func:`gee_levels`, :func:`fit_psychometric` — the steps;
-* :mod:`analysis.simulate` — simulated panels (the paper's, SDT observers).
+* :mod:`flipstudy.analysis.simulate` — simulated panels (the paper's, SDT observers).
 """
 from .core import count_cells, participant_dprimes, summarize
 from .io import NeedsExport, ResponsesError, load_responses

@@ -1,7 +1,7 @@
 """Reading and checking response tables (the long format of DESIGN.md)."""
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 from pathlib import Path
 
 import numpy as np

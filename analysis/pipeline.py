@@ -32,7 +32,7 @@ class Result:
     ``table``: one row per group and level (the columns of ``table.csv``);
     ``participants``: per-participant d′; ``gee``: each level against its
     original; ``thresholds``: one row per group; ``fits``: the
-    :class:`~analysis.stats.PsychometricFit` objects; ``paper``: the paper's
+    :class:`~flipstudy.analysis.stats.PsychometricFit` objects; ``paper``: the paper's
     layout as strings; ``files``: name → path of every file written;
     ``notes``: sentences worth reading (corrections, thresholds not reached,
     missing images...).
@@ -90,14 +90,14 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     ``responses``: a DataFrame, a responses CSV or a study folder (its
     ``responses.csv``).  ``out_dir``: where to write (None: compute only).
     ``correction``: ``"loglinear"`` (default), ``"loglinear-all"`` or
-    ``"1/(2N)"`` (see :mod:`analysis.sdt`).  ``images``: for the figure sheet,
+    ``"1/(2N)"`` (see :mod:`flipstudy.analysis.sdt`).  ``images``: for the figure sheet,
     a mapping label → PNG path or a list of up to four paths (ghost original,
     ghost strongest error, trail original, trail strongest error).
     ``seed``: every random draw (bootstrap, posterior samples).
     ``psychometric``: ``"psignifit"``, ``"mle"`` or ``"none"``.
     ``include_simulated`` / ``include_incomplete``: keep simulated participants
     (column ``simulated``) / sessions marked ``complete`` = false, which are
-    left out by default (:func:`analysis.io.select_participants`); which
+    left out by default (:func:`flipstudy.analysis.io.select_participants`); which
     participants were used is in ``settings["participants"]``, in every table
     caption, figure, ``notes.md`` and ``summary.json``.
 
@@ -107,7 +107,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     ``summary.json`` and the figures ``ratings``, ``dprime``,
     ``psychometric``, ``sheet`` (``.pdf`` + ``.png``).
 
-    >>> from analysis.simulate import paper_panel
+    >>> from flipstudy.analysis.simulate import paper_panel
     >>> r = analyze(paper_panel(19, seed=1), None, psychometric="none", gee=False, n_boot=200)
     >>> list(r.table.columns[:5])
     ['group', 'level', 'n', 'n_incorrect', 'n_participants']

@@ -33,7 +33,7 @@ True
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import numpy as np
 from scipy.special import ndtri

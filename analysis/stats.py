@@ -41,7 +41,7 @@ Psychometric function
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import warnings
 from dataclasses import dataclass, field

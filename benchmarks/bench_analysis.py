@@ -36,9 +36,9 @@ from scipy.stats import norm
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from analysis import load_responses, summarize  # noqa: E402
-from analysis.core import bootstrap_counts, expanded_level  # noqa: E402
-from analysis.simulate import paper_panel  # noqa: E402
+from flipstudy.analysis import load_responses, summarize  # noqa: E402
+from flipstudy.analysis.core import bootstrap_counts, expanded_level  # noqa: E402
+from flipstudy.analysis.simulate import paper_panel  # noqa: E402
 
 N_BOOT = 2000
 TARGET_S = 2.0
@@ -127,7 +127,7 @@ def main(argv=None) -> int:
     ap.add_argument("--participants", type=int, default=1000)
     ap.add_argument("--quick", action="store_true", help="skip the baseline and the psignifit timing")
     args = ap.parse_args(argv)
-    from analysis.stats import fit_psychometric, gee_levels
+    from flipstudy.analysis.stats import fit_psychometric, gee_levels
     with tempfile.TemporaryDirectory() as d:
         csv = Path(d) / "responses.csv"
         df = paper_panel(args.participants, seed=0)
@@ -152,7 +152,7 @@ def main(argv=None) -> int:
         if not args.quick:
             t_ps, _ = best_of(lambda: fit_psychometric(checked, "psignifit"), n=1)
             print(f"{'  outside the core: psychometric fits, psignifit (5 groups)':58s} {t_ps:8.3f} s")
-        from analysis.figures import dprime_figure, ratings_figure, save
+        from flipstudy.analysis.figures import dprime_figure, ratings_figure, save
         t_fig, _ = best_of(lambda: (save(ratings_figure(table), Path(d) / "r"),
                                     save(dprime_figure(table), Path(d) / "d")), n=1)
         print(f"{'  outside the core: ratings + d′ figures (PDF + PNG)':58s} {t_fig:8.3f} s")

@@ -57,7 +57,7 @@ def timed(fn, repeat: int, budget: float):
 
 # ------------------------------------------------------------------------ ours
 def ours(path):
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     clip = load_bvh(path, drop_tpose=False)
     return clip.skeleton.joint_names, clip.joint_positions()
 
@@ -169,7 +169,7 @@ def main() -> int:
                     help="skip the bvh package's channel API on clips over 500 frames (minutes)")
     args = ap.parse_args()
 
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     paths = [SHARED / c for c in CLIPS]
     absent = [p for p in paths if not p.exists()]
     if absent:

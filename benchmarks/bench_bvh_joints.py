@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
 from _bvh_gen import many_joints_bvh  # noqa: E402
-from stimuli import load_bvh  # noqa: E402
+from flipstudy.stimuli import load_bvh  # noqa: E402
 
 
 def best(f, repeat):

@@ -41,8 +41,8 @@ def best(fn, n):
 
 
 def cases():
-    from stimuli import analyse, builtin, load_bvh
-    from stimuli.edit import concat as C
+    from flipstudy.stimuli import analyse, builtin, load_bvh
+    from flipstudy.stimuli.edit import concat as C
     specs = [("built-in backflip", lambda: builtin("backflip"), False)]
     for name, fps in (("88_01.bvh", 60), ("87_03.bvh", 60), ("mass_cartwheel.bvh", None)):
         p = SHARED / name
@@ -66,7 +66,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeat", type=int, default=7)
     args = ap.parse_args()
-    from stimuli.edit import concat as C
+    from flipstudy.stimuli.edit import concat as C
     print(f"{'input':44s} {'pairs':>8s} {'vectorised ms':>14s} {'brute force ms':>15s} {'ratio':>8s}")
     bad = 0
     summary = []

@@ -30,7 +30,7 @@ def best_of(fn, n=5):
 
 
 def main() -> int:
-    from stimuli import analyse, load_bvh
+    from flipstudy.stimuli import analyse, load_bvh
     src = SHARED / "88_01.bvh"
     if not src.exists():
         print(f"skipped: {src} not found (../shared/ test data absent)")

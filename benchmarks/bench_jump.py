@@ -34,9 +34,9 @@ def median_s(fn, n=7):
 
 def main() -> int:
     import numpy as np
-    from stimuli import save_bvh
-    from stimuli.control import Jumper, jump, make_scene
-    from stimuli.control import windup as W
+    from flipstudy.stimuli import save_bvh
+    from flipstudy.stimuli.control import Jumper, jump, make_scene
+    from flipstudy.stimuli.control import windup as W
 
     def fresh_field():
         W._CACHE.clear()

@@ -38,7 +38,7 @@ def median_ms(fn, n=15):
 def naive_distances(feat):
     """The Appendix A distance for every pair, one pair at a time."""
     import numpy as np
-    from stimuli.edit.similarity import distance_matrix
+    from flipstudy.stimuli.edit.similarity import distance_matrix
     F = feat.frames.size
     D = np.zeros((F, F))
     for i in range(F):
@@ -50,16 +50,16 @@ def naive_distances(feat):
 
 
 def _one(f, i):
-    from stimuli.edit.similarity import PoseFeatures
+    from flipstudy.stimuli.edit.similarity import PoseFeatures
     return PoseFeatures(f.frames[i:i + 1], f.axis, f.root_q[i:i + 1], f.root_w[i:i + 1],
                         f.part_R[i:i + 1], f.part_w[i:i + 1], f.weights, f.names)
 
 
 def main() -> int:
     import numpy as np
-    from stimuli import analyse, builtin
-    from stimuli.edit.multiflip import flight_axis, multiflip, prepare
-    from stimuli.edit.similarity import distance_matrix, pose_features
+    from flipstudy.stimuli import analyse, builtin
+    from flipstudy.stimuli.edit.multiflip import flight_axis, multiflip, prepare
+    from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features
     a = analyse(builtin("backflip"))
     t_pre = median_ms(lambda: analyse(builtin("backflip")), 5)
     t_prep = median_ms(lambda: prepare(a), 10)

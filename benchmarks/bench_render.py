@@ -38,20 +38,20 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from render._pv import pv  # noqa: E402  (EGL offscreen before anything else)
-from render.figures import iter_frames, prepare  # noqa: E402
-from render.geometry import piece_frames, resample  # noqa: E402
-from render.scene import Scene  # noqa: E402
-from render.style import Style  # noqa: E402
+from flipstudy.render._pv import pv  # noqa: E402  (EGL offscreen before anything else)
+from flipstudy.render.figures import iter_frames, prepare  # noqa: E402
+from flipstudy.render.geometry import piece_frames, resample  # noqa: E402
+from flipstudy.render.scene import Scene  # noqa: E402
+from flipstudy.render.style import Style  # noqa: E402
 
 
 def load_clip():
     if (ROOT / "stimuli" / "synth" / "__init__.py").exists():
-        from stimuli import builtin
+        from flipstudy.stimuli import builtin
         return builtin("backflip"), "built-in backflip"
     p = ROOT.parent / "shared" / "mocap" / "88_01.bvh"
     if p.exists():
-        from stimuli import load_bvh
+        from flipstudy.stimuli import load_bvh
         return load_bvh(p, fps=60), "CMU 88_01 (60 fps)"
     sys.path.insert(0, str(ROOT / "tests"))
     from test_render import jumper
@@ -156,8 +156,8 @@ def bench_naive_plotter(prep, size, n, style, ground):
 def bench_study(clip, n_stimuli=10, jobs=None, size=(640, 480), style=None):
     from scipy.spatial.transform import Rotation
 
-    from render.study import render_study
-    from stimuli import analyse, save_bvh
+    from flipstudy.render.study import render_study
+    from flipstudy.stimuli import analyse, save_bvh
     a = analyse(clip)
     t0, t1 = a.takeoff, a.landing
     with tempfile.TemporaryDirectory() as d:
@@ -189,9 +189,9 @@ def bench_study(clip, n_stimuli=10, jobs=None, size=(640, 480), style=None):
 def bench_default_study(style, jobs=None, size=(640, 480)):
     """All videos of the default study: the paper's design (`flipstudy init`), its
     stimuli built and measured, every stimulus rendered (render time only)."""
-    from render.study import render_study
-    from stimuli.design import PAPER_DESIGN, load_design
-    from stimuli.stimset import build_stimuli
+    from flipstudy.render.study import render_study
+    from flipstudy.stimuli.design import PAPER_DESIGN, load_design
+    from flipstudy.stimuli.stimset import build_stimuli
     with tempfile.TemporaryDirectory() as d:
         d = Path(d)
         (d / "design.toml").write_text(PAPER_DESIGN, encoding="utf-8")

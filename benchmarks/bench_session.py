@@ -26,10 +26,10 @@ TRIAL_MS = 2000.0          # a flip of the paper's study is about 2 s on screen
 
 
 def main() -> int:
-    from study.demo import make_demo_study
-    from study.server import ServerThread, create_app
-    from study.session import load_study, open_session, submit_answer
-    from study.simulate import simulate
+    from flipstudy.study.demo import make_demo_study
+    from flipstudy.study.server import ServerThread, create_app
+    from flipstudy.study.session import load_study, open_session, submit_answer
+    from flipstudy.study.simulate import simulate
 
     with tempfile.TemporaryDirectory() as tmp:
         d = make_demo_study(Path(tmp) / "study", levels=(0, 10, 20, 30, 40), repetitions=10,

@@ -35,9 +35,9 @@ def timed(fn, n):
 
 def naive(design) -> int:
     """One stimulus at a time, the base clip analysed again for each one."""
-    from stimuli import analyse
-    from stimuli.errors import inject_angular_momentum, inject_takeoff_angle, measure
-    from stimuli.stimset import load_base_clip
+    from flipstudy.stimuli import analyse
+    from flipstudy.stimuli.errors import inject_angular_momentum, inject_takeoff_angle, measure
+    from flipstudy.stimuli.stimset import load_base_clip
     n = 0
     for spec in design.clips:
         for g in design.groups:
@@ -53,8 +53,8 @@ def naive(design) -> int:
 
 
 def main() -> int:
-    from stimuli.design import PAPER_DESIGN, parse_design
-    from stimuli.stimset import build_stimuli
+    from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
+    from flipstudy.stimuli.stimset import build_stimuli
     designs = [("built-in flips, 120 fps", PAPER_DESIGN)]
     if (MOCAP / "88_01.bvh").exists():
         real = PAPER_DESIGN.replace('source = "backflip"', f'source = "{MOCAP / "88_01.bvh"}"\nfps = 60')

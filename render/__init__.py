@@ -5,12 +5,12 @@ marker trails, animation strips, layered composites, original/edited overlays
 and debug gizmos — all with one style, one camera and one take-off spot per
 study.  ::
 
-    from render import stage, render_video, ghost_image, trail_image, strip_image
+    from flipstudy.render import stage, render_video, ghost_image, trail_image, strip_image
     st = stage([clip_a, clip_b])                       # same take-off spot, one camera
     render_video(st.clips[0], "a.mp4", camera=st.camera)
     ghost_image(clip, "ghost.png")                     # stages a single clip itself
 
-PyVista is imported lazily (``render.plots`` is matplotlib only), and in EGL
+PyVista is imported lazily (``flipstudy.render.plots`` is matplotlib only), and in EGL
 offscreen mode (no X server).
 """
 from __future__ import annotations

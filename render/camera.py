@@ -17,16 +17,16 @@ view angle) and round-trips through a dict / JSON.
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import json
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from stimuli.body import Body
-from stimuli.motion.clip import Clip
-from stimuli.physics import center_of_mass
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.motion.clip import Clip
+from flipstudy.stimuli.physics import center_of_mass
 
 from .geometry import body_points
 
@@ -229,7 +229,7 @@ def place(clip: Clip, offset, yaw_deg: float = 0.0) -> Clip:
     if yaw_deg:
         from scipy.spatial.transform import Rotation
 
-        from stimuli.edit.reposition import rotate
+        from flipstudy.stimuli.edit.reposition import rotate
         clip = rotate(clip, Rotation.from_rotvec([0.0, np.radians(yaw_deg), 0.0]), np.zeros(3))
     return clip
 
@@ -341,7 +341,7 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, size=(640, 480), 
     """Place clips for one study: same take-off spot, one camera.
 
     ``takeoffs``/``landings`` (frame indices, one per clip) default to what
-    :func:`stimuli.analyse` finds.  ``bodies`` default to the table body of each
+    :func:`flipstudy.stimuli.analyse` finds.  ``bodies`` default to the table body of each
     skeleton (the same for every stimulus of one base clip, so the drawn
     character and the take-off spot do not depend on the edit).  ``direction``
     (horizontal vector) defaults to the first clip's take-off→landing COM travel
@@ -361,7 +361,7 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, size=(640, 480), 
         raise ValueError("stage: no clips")
     bodies = _bodies_for(clips, bodies)
     if takeoffs is None or landings is None:
-        from stimuli import analyse
+        from flipstudy.stimuli import analyse
         found = [analyse(c, body=b, estimate=False) for c, b in zip(clips, bodies)]
         takeoffs = [a.takeoff for a in found] if takeoffs is None else takeoffs
         landings = [a.landing for a in found] if landings is None else landings

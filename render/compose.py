@@ -1,13 +1,13 @@
 """Image files and 2D compositing with OpenImageIO.
 
 Arrays are ``uint8`` images ``img[y, x, c]`` (top row first), RGB or RGBA;
-RGBA from :meth:`render.scene.Scene.grab` has *premultiplied* colour (VTK
+RGBA from :meth:`flipstudy.render.scene.Scene.grab` has *premultiplied* colour (VTK
 blends onto a transparent background), which is what ``ImageBufAlgo.over``
 expects.
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyOSError
+from flipstudy.stimuli.exceptions import FlipstudyOSError
 
 import glob
 import os

@@ -12,17 +12,17 @@
   arrows at the COM, support polygon while in contact (Ooi's gizmos, Fig. 4.5).
 
 Every function takes the same keywords: ``size`` (w, h), ``style``
-(:class:`~render.style.Style`), ``camera`` (:class:`~render.camera.Camera`;
+(:class:`~flipstudy.render.style.Style`), ``camera`` (:class:`~flipstudy.render.camera.Camera`;
 ``None`` stages the clip — take-off COM to the origin — and fits one),
-``body`` (the :class:`stimuli.Body` to draw; default the table body of the
+``body`` (the :class:`flipstudy.stimuli.Body` to draw; default the table body of the
 skeleton), ``takeoff``/``landing`` (frames; default found by
-:func:`stimuli.analyse`), ``scene`` (a :class:`~render.scene.Scene` to reuse,
+:func:`flipstudy.stimuli.analyse`), ``scene`` (a :class:`~flipstudy.render.scene.Scene` to reuse,
 e.g. one per worker) and ``path`` (write a PNG with OpenImageIO).  Images
 are returned as ``uint8`` arrays ``(H, W, 3)``.
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import contextlib
 from dataclasses import dataclass
@@ -30,9 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from stimuli.body import Body
-from stimuli.motion.clip import Clip
-from stimuli.physics import center_of_mass, momentum
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.motion.clip import Clip
+from flipstudy.stimuli.physics import center_of_mass, momentum
 
 from .camera import Camera, fit_camera, stage
 from .compose import draw_legend, draw_text, find_font, flatten, grid, over, write_png
@@ -75,7 +75,7 @@ def _ground_bounds(clips, bodies, margin: float, camera: Camera) -> tuple:
 def prepare(clips, *, bodies=None, takeoffs=None, landings=None, camera: Camera | None = None,
             size=(640, 480), ground_bounds=None, style: Style | None = None) -> Prepared:
     """Place clips for drawing.  Without a ``camera`` they are staged (take-off
-    COM at the origin, one fitted side camera, see :func:`render.camera.stage`);
+    COM at the origin, one fitted side camera, see :func:`flipstudy.render.camera.stage`);
     with one they are drawn where they are."""
     clips = list(clips)
     style = style or DEFAULT_STYLE
@@ -86,7 +86,7 @@ def prepare(clips, *, bodies=None, takeoffs=None, landings=None, camera: Camera 
             bodies.append(same[0] if same else Body.from_clip(c))
     bodies = list(bodies)
     if takeoffs is None or landings is None:
-        from stimuli import analyse
+        from flipstudy.stimuli import analyse
         found = [analyse(c, body=b, estimate=False) for c, b in zip(clips, bodies)]
         takeoffs = [a.takeoff for a in found] if takeoffs is None else list(takeoffs)
         landings = [a.landing for a in found] if landings is None else list(landings)
@@ -183,7 +183,7 @@ class Gizmos:
     """
 
     def __init__(self, clip: Clip, body: Body, what=DEBUG_ALL):
-        from stimuli.flight import contact_mask, effector_points
+        from flipstudy.stimuli.flight import contact_mask, effector_points
         self.what = tuple(DEBUG_ALL if what is True else what)
         bad = set(self.what) - set(DEBUG_ALL)
         if bad:

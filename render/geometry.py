@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from stimuli.body import Body
-from stimuli.motion.clip import Clip
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.motion.clip import Clip
 
 
 def unit_sphere(n_around: int = 20, n_along: int = 12) -> tuple[np.ndarray, np.ndarray]:
@@ -124,7 +124,7 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
     >>> v.fps, v.duration <= clip.duration            # doctest: +SKIP
     (60.0, True)
     """
-    from stimuli.edit.timing import sample
+    from flipstudy.stimuli.edit.timing import sample
     fps = float(fps)
     if not (np.isfinite(fps) and fps > 0):
         raise ValueError(f"resample: fps must be a positive number, got {fps!r}")
@@ -144,7 +144,7 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
 def poses_at(clip: Clip, times) -> Clip:
     """A clip whose frames are ``clip`` at the given times (seconds, any order),
     interpolated as in :func:`resample`."""
-    from stimuli.edit.timing import sample
+    from flipstudy.stimuli.edit.timing import sample
     t = np.atleast_1d(np.asarray(times, dtype=float))
     return sample(clip, np.clip(t * clip.fps, 0, clip.num_frames - 1))
 

@@ -16,7 +16,7 @@ def _mpl():
 
 
 def plot_analysis(a, path, title: str | None = None) -> Path:
-    """Write a three-panel PNG (or PDF, by suffix) of an :class:`~stimuli.analyse.Analysis`.
+    """Write a three-panel PNG (or PDF, by suffix) of an :class:`~flipstudy.stimuli.analyse.Analysis`.
 
     Example
     -------
@@ -125,13 +125,13 @@ def plot_concat(result, body, path, baseline=None, sources=(), title: str | None
     same two motions (dotted green), as in Figure 8 of Shum, Komura & Yadav
     (2009); the blend window shaded; ``sources``: (label, clip, frame offset)
     drawn thin for reference.  ``result`` and ``baseline`` are
-    :class:`stimuli.edit.concat.Concatenation` objects.
+    :class:`flipstudy.stimuli.edit.concat.Concatenation` objects.
 
     Example
     -------
     >>> plot_concat(concatenate(a, a), body, "L.png", baseline=motion_graph_join(a, a))  # doctest: +SKIP
     """
-    from stimuli.physics import momentum
+    from flipstudy.stimuli.physics import momentum
     plt = _mpl()
     fig, ax = plt.subplots(figsize=(8.0, 3.6), constrained_layout=True)
     clip = result.clip

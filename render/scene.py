@@ -2,7 +2,7 @@
 
 A :class:`Scene` owns a single :class:`pyvista.Plotter` (VTK through EGL).
 Everything in it is created once and then updated in place: characters are
-:class:`~render.geometry.BodyMesh` objects whose points are rewritten each
+:class:`~flipstudy.render.geometry.BodyMesh` objects whose points are rewritten each
 frame, extra characters (ghosts) come from a pool and are hidden when unused,
 markers and gizmos have fixed topology.  Frames are read back into a reused
 buffer.  Close the scene (or use it as a context manager) when done.
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from stimuli.body import Body
+from flipstudy.stimuli.body import Body
 
 from ._pv import pv
 from .camera import Camera
@@ -297,7 +297,7 @@ class Scene:
     # ------------------------------------------------------------- contents
     def character(self, key=0, body: Body | None = None, inflate: float = 0.0) -> Character:
         """The character in slot ``key`` (created on first use, then reused),
-        made visible.  ``inflate``: see :class:`~render.geometry.BodyMesh`."""
+        made visible.  ``inflate``: see :class:`~flipstudy.render.geometry.BodyMesh`."""
         body = body or self.body
         if body is None:
             raise ValueError("Scene: no body; pass body= to Scene() or character()")

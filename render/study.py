@@ -2,7 +2,7 @@
 
 :func:`render_study` reads ``STUDY_DIR/manifest.csv``, loads every stimulus
 (``STUDY_DIR/<stimulus>.bvh``, metres, the header's frame rate), places all of
-them with :func:`render.camera.stage` (take-off COM at the origin, one camera
+them with :func:`flipstudy.render.camera.stage` (take-off COM at the origin, one camera
 fitted to every frame of every stimulus, one ground), and renders the chosen
 outputs in parallel worker processes — each worker builds its offscreen
 plotter once and reuses it for all its stimuli.  Outputs go to
@@ -13,15 +13,15 @@ Interruptible and resumable: Ctrl-C terminates the workers at once (they
 ignore SIGINT; the parent stops them and what they started), workers die with
 their parent (``PR_SET_PDEATHSIG`` and a parent-pid watchdog), outputs are
 written under ``render/.partial-<pid>/`` and renamed into place when complete,
-and ``render.json`` records per output what it was made from, so a rerun makes
+and ``flipstudy.render.json`` records per output what it was made from, so a rerun makes
 only what is missing or stale.  :func:`check_rendered` is what ``flipstudy
 run`` asks before serving the videos.
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 import json
 import math
 import multiprocessing as mp
@@ -90,7 +90,7 @@ class _Bodies:
 
     def __call__(self, clip):
         """The body of ``clip``'s skeleton, measured on the first clip seen with it."""
-        from stimuli.body import Body
+        from flipstudy.stimuli.body import Body
         k = _skeleton_key(clip.skeleton)
         if k not in self._cache:
             self._cache[k] = Body.from_clip(clip)
@@ -99,8 +99,8 @@ class _Bodies:
 
 def load_stimuli(study_dir) -> tuple[list[dict], list]:
     """Manifest rows and their clips (BVH in metres, the header's frame rate)."""
-    from stimuli import load_bvh
-    from stimuli.stimset import read_manifest
+    from flipstudy.stimuli import load_bvh
+    from flipstudy.stimuli.stimset import read_manifest
     study_dir = Path(study_dir)
     rows = read_manifest(study_dir)
     if not rows:
@@ -182,7 +182,7 @@ def _close_worker() -> None:
 
 
 def _load_placed(path: str, offset, yaw: float = 0.0):
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
 
     from .camera import place
     return place(load_bvh(path, scale=1.0), offset, yaw)
@@ -431,7 +431,7 @@ def stimulus_hashes(study_dir, rows) -> list[str]:
 
 
 def read_record(out_dir) -> dict | None:
-    """``render.json`` of a render folder (None if there is none)."""
+    """``flipstudy.render.json`` of a render folder (None if there is none)."""
     p = Path(out_dir) / "render.json"
     if not p.is_file():
         return None
@@ -478,13 +478,13 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     """Render the stimuli of a study with one style, one camera and one take-off
     spot; returns (and writes to ``render/render.json``) the settings.  With
     ``orient`` base clips that travel in other directions are turned about the
-    vertical to travel like the first one (see :func:`render.camera.stage`).
+    vertical to travel like the first one (see :func:`flipstudy.render.camera.stage`).
 
-    Resumable: ``render.json`` records for every output what it was made from
+    Resumable: ``flipstudy.render.json`` records for every output what it was made from
     (the stimulus's sha256, its placement, the settings that change pixels and
     the library versions) and the file's size and sha256; an output whose record
     matches and whose file is intact is kept, anything else is made again
-    (``force``: everything).  ``render.json`` is rewritten atomically after every
+    (``force``: everything).  ``flipstudy.render.json`` is rewritten atomically after every
     stimulus, so an interrupted render loses at most the outputs in flight, and
     those never appear under their final names.
 
@@ -644,7 +644,7 @@ def check_rendered(study_dir, kind: str = "video", rows=None, hash_files: bool =
     from the stimulus as it is now, intact, and all with one settings record.
     Returns that settings record; raises :class:`StaleRenderError` naming the
     offending files and the fix."""
-    from stimuli.stimset import read_manifest
+    from flipstudy.stimuli.stimset import read_manifest
     study_dir = Path(study_dir)
     out = study_dir / "render"
     rows = read_manifest(study_dir) if rows is None else rows

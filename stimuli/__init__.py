@@ -2,12 +2,13 @@
 
 Stable entry points::
 
-    from stimuli import load_bvh, save_bvh, builtin, analyse
+    from flipstudy.stimuli import load_bvh, save_bvh, builtin, analyse
 """
 from .exceptions import FlipstudyError
 from .motion import BVHError, Clip, Skeleton, load_bvh, save_bvh
 from .body import Body
 from .analyse import Analysis, analyse
+from .loading import load_clip
 
 
 BUILTIN_NAMES = ("backflip", "frontflip", "jump")
@@ -15,10 +16,10 @@ BUILTIN_NAMES = ("backflip", "frontflip", "jump")
 
 def builtin(name: str, **params) -> Clip:
     """A built-in, physically exact synthetic clip: ``"backflip"``, ``"frontflip"``
-    or ``"jump"`` (see :mod:`stimuli.synth`)."""
+    or ``"jump"`` (see :mod:`flipstudy.stimuli.synth`)."""
     from .synth import builtin as _builtin
     return _builtin(name, **params)
 
 
 __all__ = ["FlipstudyError", "BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh", "Body", "Analysis",
-           "analyse", "builtin", "BUILTIN_NAMES"]
+           "analyse", "builtin", "load_clip", "BUILTIN_NAMES"]

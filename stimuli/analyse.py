@@ -327,7 +327,7 @@ def gravity_warning(g_app: float, clip: Clip) -> str | None:
 
 
 def flight_breaks(flights) -> list[int]:
-    """The phase starts of :func:`stimuli.physics.momentum` for these flights."""
+    """The phase starts of :func:`flipstudy.stimuli.physics.momentum` for these flights."""
     return sorted({b for f in flights for b in (f.takeoff, f.landing + 1)})
 
 
@@ -342,7 +342,7 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
     estimate : estimate segment masses from the flight (Section 4.2) and use them
         for the momenta; with ``False`` the given/table masses are used.
     W : regularisation weight of the mass fit, W‖m − m⁰‖² (m²/kg²; see
-        ``stimuli.massfit.DEFAULT_W``).
+        ``flipstudy.stimuli.massfit.DEFAULT_W``).
 
     Example
     -------

@@ -176,7 +176,7 @@ class Body:
 
     Example
     -------
-    >>> from stimuli import builtin
+    >>> from flipstudy.stimuli import builtin
     >>> body = Body.from_skeleton(builtin("backflip").skeleton, total_mass=70)
     >>> round(sum(body.segment_masses().values()), 6)
     70.0

@@ -88,7 +88,7 @@ class Design:
         return any(g.original == "shared" and 0.0 in g.levels for g in self.groups)
 
     def stimulus_names(self) -> list[str]:
-        """Every stimulus name, in manifest order (see :func:`stimuli.stimset.plan`)."""
+        """Every stimulus name, in manifest order (see :func:`flipstudy.stimuli.stimset.plan`)."""
         out = [f"{r}_reference" for r in self.reference]
         for c in self.clips:
             if self.shares_original:

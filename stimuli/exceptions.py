@@ -10,7 +10,7 @@ from __future__ import annotations
 
 
 class FlipstudyError(Exception):
-    """Base of every flipstudy user error (see :mod:`stimuli.exceptions`)."""
+    """Base of every flipstudy user error (see :mod:`flipstudy.stimuli.exceptions`)."""
 
 
 class FlipstudyValueError(FlipstudyError, ValueError):

@@ -57,8 +57,8 @@ def momentum(clip: Clip, body: Body, breaks=()) -> Momentum:
 
     Example
     -------
-    >>> from stimuli import builtin
-    >>> from stimuli.body import Body
+    >>> from flipstudy.stimuli import builtin
+    >>> from flipstudy.stimuli.body import Body
     >>> clip = builtin("backflip")
     >>> m = momentum(clip, Body.from_skeleton(clip.skeleton))
     >>> m.L.shape == (clip.num_frames, 3)

@@ -22,7 +22,7 @@ The folder ``out`` is handled so that a study is never lost:
   is replaced only if the caller passes ``replace_check``, a function
   ``replace_check(folder, foreign_names)`` that raises to refuse; the
   ``flipstudy stimuli`` command passes one that refuses while the study holds
-  any real participant's answer (:func:`study.archive.refuse_real_answers`).
+  any real participant's answer (:func:`flipstudy.study.archive.refuse_real_answers`).
   The check runs again at the moment of the swap, so a study copied to ``out``
   while the build runs is not deleted either.
 """
@@ -71,7 +71,7 @@ def load_base_clip(spec, design: Design) -> Clip:
 
     A BVH clip is read at its entry's ``fps`` (else the header's) and, when the
     design writes ``[study] fps``, resampled to that rate with the project's slerp
-    sampler (:func:`stimuli.edit.timing.sample`); ``meta["fps_read"]`` keeps the rate
+    sampler (:func:`flipstudy.stimuli.edit.timing.sample`); ``meta["fps_read"]`` keeps the rate
     it was read at.  With ``flips``, the base clip passes the physics gate
     (:func:`physics_gate`) before it is made an N-flip one."""
     from . import BUILTIN_NAMES, builtin
@@ -114,7 +114,7 @@ def resample(clip: Clip, fps: float) -> Clip:
 
 def physics_gate(spec, a, design: Design | None = None) -> None:
     """Refuse a base clip that physics contradicts (apparent gravity, or the body's
-    height from the skeleton; see :func:`stimuli.analyse.physics_advice`), naming
+    height from the skeleton; see :func:`flipstudy.stimuli.analyse.physics_advice`), naming
     the fix as design keys, unless its entry says ``accept_unphysical = true``."""
     from .analyse import physics_advice
     adv = physics_advice(a.apparent_gravity, a.clip)

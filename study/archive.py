@@ -23,7 +23,7 @@ import sqlite3
 from datetime import datetime, timezone
 from pathlib import Path
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 
 from .store import DB_NAME
 
@@ -139,7 +139,7 @@ def describe(a: dict) -> str:
 def refuse_real_answers(folder, foreign=(), *, shown=None, command: str = "stimuli --force"):
     """Raise :class:`StudyHasAnswers` when ``folder`` holds any real answer (or a
     file that cannot be read); return the :func:`answers_in` summary otherwise.
-    Used as ``replace_check`` of :func:`stimuli.stimset.build_stimuli`."""
+    Used as ``replace_check`` of :func:`flipstudy.stimuli.stimset.build_stimuli`."""
     shown = Path(shown) if shown is not None else Path(folder)
     a = answers_in(folder)
     if a["real_answers"] or a["unreadable"]:
@@ -165,7 +165,7 @@ def archive_study(study_dir, dest=None) -> Path:
     """Move the whole study folder to ``dest`` (default ``NAME-archived-DATE``
     beside it) with one rename (nothing is copied or deleted), holding the
     study's build lock so that no build writes it meanwhile.  Returns ``dest``."""
-    from stimuli.stimset import _renameat2, RENAME_NOREPLACE, study_lock
+    from flipstudy.stimuli.stimset import _renameat2, RENAME_NOREPLACE, study_lock
     d = Path(study_dir)
     if d.is_symlink() or not d.is_dir():
         raise ArchiveError(f"{d}: no such study folder")

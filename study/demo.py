@@ -1,5 +1,5 @@
 """A tiny study folder for tests, demos and development: a design, a manifest in
-the format of :mod:`stimuli.stimset` and small placeholder videos (a moving
+the format of :mod:`flipstudy.stimuli.stimset` and small placeholder videos (a moving
 square; H.264, yuv420p) — no motion data or renderer needed.
 
 Example
@@ -66,8 +66,8 @@ def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, siz
                     videos: bool = True, **design) -> Path:
     """Write ``design.toml``, ``manifest.csv`` and ``render/<stimulus>.mp4`` into ``out``
     (keyword arguments go to :func:`demo_design_text`)."""
-    from stimuli.design import parse_design
-    from stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
+    from flipstudy.stimuli.design import parse_design
+    from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     text = demo_design_text(**design)
@@ -100,9 +100,9 @@ def write_demo_record(out, rows, *, size=(64, 48), fps: float = 30.0) -> None:
     so ``flipstudy run`` serves them."""
     import json
 
-    from render.study import file_sha256
+    from flipstudy.render.study import file_sha256
     render = Path(out) / "render"
-    settings = {"size": list(size), "fps": float(fps), "placeholder": "study.demo moving square"}
+    settings = {"size": list(size), "fps": float(fps), "placeholder": "flipstudy.study.demo moving square"}
     outputs = {}
     for r in rows:
         f = render / f"{r['stimulus']}.mp4"

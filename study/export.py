@@ -23,7 +23,7 @@ written to a temporary file in the same folder and renamed into place
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import csv
 import io

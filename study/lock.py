@@ -20,7 +20,7 @@ import os
 import socket
 from pathlib import Path
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 
 LOCK_DIR = ".locks"
 

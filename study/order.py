@@ -25,7 +25,7 @@ Example
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import hashlib
 import random

@@ -19,12 +19,12 @@ exact flips:
 
 Everything is built in a hidden folder beside ``OUT`` and moved into place at
 the end, so an interrupted run leaves nothing half-written.  The simulated
-observers follow the paper's Table 2 (see :mod:`study.simulate`): the table that
+observers follow the paper's Table 2 (see :mod:`flipstudy.study.simulate`): the table that
 comes out should resemble the paper's, within the noise of 19 participants.
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 import os
 import shutil
 import sys
@@ -63,11 +63,11 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     >>> sorted(r["files"])[:3]                   # doctest: +SKIP
     ['analysis', 'design', 'figure_sheet']
     """
-    from analysis.pipeline import analyze
-    from analysis.tables import to_markdown
-    from render.study import render_study
-    from stimuli.design import PAPER_DESIGN, load_design
-    from stimuli.stimset import build_stimuli
+    from flipstudy.analysis.pipeline import analyze
+    from flipstudy.analysis.tables import to_markdown
+    from flipstudy.render.study import render_study
+    from flipstudy.stimuli.design import PAPER_DESIGN, load_design
+    from flipstudy.stimuli.stimset import build_stimuli
 
     from .export import export_responses
     from .simulate import simulate
@@ -217,34 +217,3 @@ def summary_text(r: dict, out) -> str:
         f"flipstudy run mystudy --participant P01",
     ]
     return "\n".join(lines)
-
-
-def cmd_reproduce(args) -> int:
-    try:
-        r = reproduce(args.out, participants=args.participants, seed=args.seed, jobs=args.jobs,
-                      force=args.force, quiet=args.quiet)
-    except FlipstudyError as e:
-        print(f"flipstudy reproduce: error: {e}", file=sys.stderr)
-        return 1
-    print(summary_text(r, args.out.rstrip("/")))
-    return 0
-
-
-def add_commands(subparsers) -> None:
-    p = subparsers.add_parser(
-        "reproduce", help="the whole pipeline on the embedded default: design → stimuli → render → "
-                          "simulated sessions → analysis",
-        description="Reproduce the study of Majkowska & Faloutsos 2007 (Section 7) on the built-in "
-                    "flips: the paper's design, its 46 stimuli (measured), videos and composites, a "
-                    "simulated panel of participants, the analysis, the Table-2 layout and the "
-                    "figures. Built in a hidden folder beside OUT and moved into place at the end.")
-    p.add_argument("--out", default="flipstudy-paper", metavar="OUT",
-                   help="output folder (default: flipstudy-paper)")
-    p.add_argument("--participants", type=int, default=19,
-                   help="simulated participants (default 19, as in the paper)")
-    p.add_argument("--seed", type=int, default=1, help="seed of the simulated answers and bootstraps")
-    p.add_argument("--jobs", type=int, default=None, metavar="N",
-                   help="render worker processes (default: number of CPUs)")
-    p.add_argument("--force", action="store_true", help="replace OUT if it exists")
-    p.add_argument("--quiet", action="store_true", help="no progress output")
-    p.set_defaults(func=cmd_reproduce)

@@ -5,9 +5,9 @@ error is a JSON object ``{"error": "..."}`` with a 4xx status):
 
 ``GET  /``                  the page (``study/static/index.html``)
 ``GET  /static/<file>``     ``session.js``, ``session.css`` (a fixed list, read at start)
-``GET  /api/session``       the timeline (:func:`study.timeline.build_timeline`)
-``POST /api/answer``        one trial's answer (:func:`study.session.submit_answer`)
-``POST /api/demographics``  the demographics (:func:`study.session.submit_demographics`)
+``GET  /api/session``       the timeline (:func:`flipstudy.study.timeline.build_timeline`)
+``POST /api/answer``        one trial's answer (:func:`flipstudy.study.session.submit_answer`)
+``POST /api/demographics``  the demographics (:func:`flipstudy.study.session.submit_demographics`)
 ``GET  /stimuli/<name>.mp4`` a stimulus video: ``name`` must be a stimulus of the
                             manifest and the file must resolve inside
                             ``STUDY_DIR/render/`` (no traversal, no symlinks out)
@@ -17,7 +17,7 @@ to 127.0.0.1 unless told otherwise, accepts only loopback ``Host`` headers then
 (on another address: the machine's names and addresses and ``--allowed-host``
 names, never any name, against DNS rebinding), refuses cross-origin posts and
 anything but ``application/json`` bodies of at most 8 KiB.  One server per
-participant: :mod:`study.lock`.  It serves only videos that ``render.json``
+participant: :mod:`flipstudy.study.lock`.  It serves only videos that ``flipstudy.render.json``
 says were made from the current stimuli with one set of settings.
 
 Example
@@ -245,7 +245,7 @@ def serve(study_dir, participant: str, *, host: str = "127.0.0.1", port: int = 0
           allowed_hosts=(), out=sys.stdout) -> int:
     """Open or resume the session, print the URL, open the browser and serve
     until interrupted (Ctrl-C).  One server per participant: a second one for
-    the same participant of the same study is refused (:mod:`study.lock`).
+    the same participant of the same study is refused (:mod:`flipstudy.study.lock`).
     ``allowed_hosts``: more names the Host header may carry (see
     :func:`allowed_host_names`)."""
     from .validate import check_participant
@@ -268,7 +268,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
                   allowed_hosts, out) -> int:
     import uvicorn
 
-    from render.study import StaleRenderError, check_rendered
+    from flipstudy.render.study import StaleRenderError, check_rendered
     open_session(study, participant, new_session=new_session, dry_run=True)   # refusals first
     missing = study.missing_videos()
     if missing:

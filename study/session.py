@@ -3,7 +3,7 @@
 The functions here are the single path by which answers reach the database:
 the server's POST handlers call :func:`submit_answer` and
 :func:`submit_demographics`, and so do the simulated observers
-(:mod:`study.simulate`).
+(:mod:`flipstudy.study.simulate`).
 
 Example
 -------
@@ -16,7 +16,7 @@ Example
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 import hashlib
 import re
 import threading
@@ -62,8 +62,8 @@ class Study:
 
 def load_study(study_dir) -> Study:
     """Read ``STUDY_DIR/design.toml`` and ``STUDY_DIR/manifest.csv``."""
-    from stimuli.design import load_design
-    from stimuli.stimset import read_manifest
+    from flipstudy.stimuli.design import load_design
+    from flipstudy.stimuli.stimset import read_manifest
     d = Path(study_dir)
     if not d.is_dir():
         raise SessionError(f"{d}: no such study folder (make one with `flipstudy stimuli DESIGN.toml "
@@ -78,7 +78,7 @@ def load_study(study_dir) -> Study:
         if not STIMULUS_RE.fullmatch(name or ""):
             raise SessionError(f"{d / 'manifest.csv'}: line {i}: stimulus name {name!r} is not a "
                                f"plain file name")
-    from stimuli.design import TRIALS_MAX
+    from flipstudy.stimuli.design import TRIALS_MAX
     names = [r.get("stimulus", "") for r in manifest]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})

@@ -27,8 +27,8 @@ Model file (TOML)::
 Simulated participants are ``sim001``, ``sim002``, …; each one's random
 numbers come from SHA-256 of the seed and the ID, so the answers do not depend
 on how many others are simulated.  Every answer goes as JSON bytes through the
-calls the server's POST handler makes (:func:`study.validate.parse_json_object`,
-then :func:`study.session.submit_answer`), so it is validated and stored alike.
+calls the server's POST handler makes (:func:`flipstudy.study.validate.parse_json_object`,
+then :func:`flipstudy.study.session.submit_answer`), so it is validated and stored alike.
 
 Example
 -------
@@ -37,9 +37,9 @@ Example
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 import hashlib
 import json
 import math
@@ -194,7 +194,7 @@ def load_model(path) -> ObserverModel:
 def _with_shared_original(model: ObserverModel, manifest: list[dict]) -> ObserverModel:
     """``model`` with an ``original`` group when the manifest has shared originals
     and the model lacks one: the mean level-0 probability of the sharing groups."""
-    from stimuli.design import SHARED_ORIGINAL_GROUP as SO
+    from flipstudy.stimuli.design import SHARED_ORIGINAL_GROUP as SO
     if SO in model.groups or not any(r.get("group") == SO for r in manifest):
         return model
     sharing = sorted({r["group"] for r in manifest

@@ -24,7 +24,7 @@ milliseconds (``2026-01-05T10:00:00.123Z``).
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyFileNotFoundError, FlipstudyStateError
+from flipstudy.stimuli.exceptions import FlipstudyFileNotFoundError, FlipstudyStateError
 
 import sqlite3
 from contextlib import contextmanager
@@ -221,7 +221,7 @@ def count_answers(conn, participant: str, session: int) -> int:
 
 def insert_answer(conn, participant: str, session: int, n_trials: int, answer: dict,
                   timestamp: str | None = None) -> str:
-    """Store one checked answer (see :func:`study.validate.parse_answer`).
+    """Store one checked answer (see :func:`flipstudy.study.validate.parse_answer`).
 
     Returns ``"stored"``, or ``"duplicate"`` when the same response to the same
     trial is already stored (nothing is written).  Raises :class:`Conflict` when

@@ -12,7 +12,7 @@ screens in order from ``start``.  Types:
 
 ``instructions``  ``title``, ``paragraphs`` (list of str), ``button``
 ``demographics``  ``title``, ``text``, ``fields`` (see
-                  :data:`study.validate.DEMOGRAPHIC_FIELDS`), ``submit`` (URL)
+                  :data:`flipstudy.study.validate.DEMOGRAPHIC_FIELDS`), ``submit`` (URL)
 ``examples``      ``title``, ``text``, ``stimuli`` (list of ``{"video", "label"}``),
                   ``button``: each example is loaded fully, played, may be
                   watched again; the button is enabled once all were shown
@@ -50,7 +50,7 @@ def _keys_sentence(keys: dict) -> str:
 
 def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
                    video_url: str = "/stimuli/{name}.mp4") -> dict:
-    """The screens of ``session`` (:class:`study.session.Session`) and where to
+    """The screens of ``session`` (:class:`flipstudy.study.session.Session`) and where to
     start, given its ``state`` (:meth:`Session.state`)."""
     state = state or session.state()
     design = session.study.design

@@ -33,19 +33,19 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from stimuli.analyse import Analysis, analyse
-from stimuli.motion.clip import Clip
-from stimuli.physics import center_of_mass
-from stimuli.edit.reposition import ballistic_path
-from stimuli.edit.similarity import distance_matrix, pose_features
+from flipstudy.stimuli.analyse import Analysis, analyse
+from flipstudy.stimuli.motion.clip import Clip
+from flipstudy.stimuli.physics import center_of_mass
+from flipstudy.stimuli.edit.reposition import ballistic_path
+from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features
 # unchanged by the fast path: shared with the module rather than copied
-from stimuli.edit.multiflip import (FlipEditError, MultiFlip, SelfLoop, find_self_loop,  # noqa: F401
+from flipstudy.stimuli.edit.multiflip import (FlipEditError, MultiFlip, SelfLoop, find_self_loop,  # noqa: F401
                                     flight_axis, k_star, piecewise_source, turn_angle)
-from stimuli.edit.timing import smoothstep as _smooth
+from flipstudy.stimuli.edit.timing import smoothstep as _smooth
 
 
 def sample(clip: Clip, src: np.ndarray) -> Clip:
-    """stimuli.edit.timing.sample as it was: slerp over every frame and joint."""
+    """flipstudy.stimuli.edit.timing.sample as it was: slerp over every frame and joint."""
     src = np.clip(np.asarray(src, dtype=np.float64), 0.0, clip.num_frames - 1)
     i0 = np.floor(src).astype(np.int64)
     i0 = np.minimum(i0, clip.num_frames - 2) if clip.num_frames > 1 else i0
@@ -73,7 +73,7 @@ def standing_span(clip: Clip, body, takeoff: int, landing: int, still: float = 0
     below its height in the clip's first (before) or last (after) frame — so the
     bottom of a crouch, where the COM also stops, is not taken for standing.  The
     clip's ends when no frame qualifies."""
-    from stimuli.physics import momentum
+    from flipstudy.stimuli.physics import momentum
     m = momentum(clip, body)
     v = np.linalg.norm(m.v_com, axis=1)
     y = m.com[:, 1]
@@ -316,7 +316,7 @@ def measure(result: MultiFlip, original: Analysis) -> dict:
     to, ld = result.takeoff, result.landing
     s0, s1 = standing_span(clip, original.body, to, ld)
     Lm = np.linalg.norm(a.L[to + 2:ld - 1], axis=1)
-    from stimuli.flight import fit_path, path_values
+    from flipstudy.stimuli.flight import fit_path, path_values
     com = a.com[to:ld + 1]
     coef = fit_path(com, clip.fps)
     res = com - path_values(coef, np.arange(com.shape[0]) / clip.fps)

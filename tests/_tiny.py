@@ -3,11 +3,11 @@ flying on a parabola and spinning at a varying rate."""
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from stimuli.motion import Clip, Skeleton
+from flipstudy.stimuli.motion import Clip, Skeleton
 
 
 def tiny_body_clip(fps=240, seconds=1.0):
-    from stimuli.body import Body
+    from flipstudy.stimuli.body import Body
     names = ["Hips", "Spine", "Neck", "Head", "LeftUpLeg", "LeftLeg", "LeftFoot",
              "RightUpLeg", "RightLeg", "RightFoot", "LeftArm", "LeftForeArm", "LeftHand",
              "RightArm", "RightForeArm", "RightHand"]

@@ -11,12 +11,12 @@ import pandas as pd
 import pytest
 from scipy.stats import norm
 
-import analysis
-from analysis import analyze, corrected_rate, criterion, dprime, load_responses, summarize
-from analysis.cli import add_commands
-from analysis.simulate import PAPER_TABLE2, paper_panel, sdt_observers
-from analysis.stats import detection_threshold, fit_mle, fit_psychometric, gee_levels, psychometric_curve
-from analysis.tables import fmt_cell, fmt_dprime, paper_layout, to_latex, to_markdown
+from flipstudy import analysis
+from flipstudy.analysis import analyze, corrected_rate, criterion, dprime, load_responses, summarize
+from flipstudy.study.cli.analyze import add_commands
+from flipstudy.analysis.simulate import PAPER_TABLE2, paper_panel, sdt_observers
+from flipstudy.analysis.stats import detection_threshold, fit_mle, fit_psychometric, gee_levels, psychometric_curve
+from flipstudy.analysis.tables import fmt_cell, fmt_dprime, paper_layout, to_latex, to_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -248,7 +248,7 @@ def test_psignifit_fit_and_flat_group():
     x = np.array([0, 17, 25, 37, 50.0])
     n = np.full(5, 76.0)
     truth = detection_threshold(32, 15, 0.25, 0.0)
-    from analysis.stats import fit_psignifit
+    from flipstudy.analysis.stats import fit_psignifit
     f = fit_psignifit("steep", x, _curve_counts(32, 15, 0.25, 0.0, x, n), n, seed=0)
     assert f.method == "psignifit" and f.reached
     assert f.ci_low <= truth <= f.ci_high and abs(f.threshold - truth) < 6
@@ -333,8 +333,8 @@ def test_analyze_is_byte_identical_for_a_seed(paper_run, tmp_path):
     again = analyze(csv, tmp_path, psychometric="mle", n_boot=500, seed=3, figures=False)
     for name in ("table.csv", "thresholds.csv", "table_paper.tex", "participants.csv"):
         assert Path(again.files[name]).read_bytes() == Path(res.files[name]).read_bytes(), name
-    from analysis.figures import ratings_figure, save
-    from analysis.pipeline import _labelled                 # figures say which participants
+    from flipstudy.analysis.figures import ratings_figure, save
+    from flipstudy.analysis.pipeline import _labelled                 # figures say which participants
     for p in save(_labelled(ratings_figure(again.table), again.settings["participants_label"]),
                   tmp_path / "ratings"):
         assert p.read_bytes() == Path(res.files[p.name]).read_bytes(), p.name
@@ -403,9 +403,11 @@ def test_analysis_imports_nothing_of_the_other_packages():
             else:
                 continue
             for m in mods:
-                if m == "stimuli.exceptions":      # the one error family, shared by all parts
+                if m == "flipstudy.stimuli.exceptions":      # the one error family, shared by all parts
                     continue
-                assert m.split(".")[0] not in {"study", "render", "stimuli"}, (f.name, m)
+                parts = m.split(".")
+                part = parts[1] if parts[0] == "flipstudy" and len(parts) > 1 else parts[0]
+                assert part not in {"study", "render", "stimuli"}, (f.name, m)
 
 
 @pytest.mark.parametrize("method", ["mle", "psignifit"])
@@ -415,7 +417,7 @@ def test_degenerate_groups_never_crash(method):
         pytest.importorskip("psignifit")
     x = np.array([0, 17, 25, 37, 50.0])
     n = np.full(5, 20.0)
-    from analysis.stats import fit_psignifit
+    from flipstudy.analysis.stats import fit_psignifit
     fit = fit_mle if method == "mle" else fit_psignifit
     cases = (np.zeros(5), n.copy()) if method == "mle" else (np.zeros(5),)     # psignifit: ~1 s a fit
     for k in cases:

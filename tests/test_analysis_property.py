@@ -15,9 +15,9 @@ import pandas as pd
 import pytest
 from hypothesis import HealthCheck, example, given, settings, strategies as st
 
-from analysis.io import DESIGN_COLUMNS
-from analysis.pipeline import analyze
-from analysis.simulate import PAPER_FILL, PAPER_TABLE2
+from flipstudy.analysis.io import DESIGN_COLUMNS
+from flipstudy.analysis.pipeline import analyze
+from flipstudy.analysis.simulate import PAPER_FILL, PAPER_TABLE2
 
 GROUPS = ["smooth-increase", "abrupt-decrease", "takeoff-increase", "my_group & 50%", "Größe #2"]
 LEVELS = [0.0, 10.0, 17.0, 25.0, 50.0, -10.0]
@@ -59,7 +59,7 @@ def table2_ratings_panel(n_participants: int = 19, trials: int = 4) -> pd.DataFr
 
 @pytest.fixture(scope="module")
 def monkeypatch_save():
-    from analysis import figures
+    from flipstudy.analysis import figures
     mp = pytest.MonkeyPatch()
     mp.setattr(figures, "save", _draw_only)
     yield

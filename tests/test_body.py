@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from stimuli.body import Body, BodyMappingError, GROUPS, SEGMENT_TABLE, ellipsoid_inertia
-from stimuli.motion import Skeleton, load_bvh
+from flipstudy.stimuli.body import Body, BodyMappingError, GROUPS, SEGMENT_TABLE, ellipsoid_inertia
+from flipstudy.stimuli.motion import Skeleton, load_bvh
 
 from _shared import ALL_BVH, shared_file
 
@@ -117,8 +117,8 @@ def test_trunk_com_at_de_levas_fraction(name):
     the physics' own piece positions on the clip's frames, along the mid-hip →
     mid-shoulder line of each frame."""
     import warnings
-    from stimuli import builtin
-    from stimuli.physics import piece_positions
+    from flipstudy.stimuli import builtin
+    from flipstudy.stimuli.physics import piece_positions
     clip = builtin("backflip") if name == "builtin" else load_bvh(shared_file(name))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)

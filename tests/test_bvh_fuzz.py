@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from stimuli.exceptions import FlipstudyError
-from stimuli.motion import BVHError, load_bvh
-from stimuli.motion import bvh as bvh_mod
+from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.motion import BVHError, load_bvh
+from flipstudy.stimuli.motion import bvh as bvh_mod
 
 from _bvh_gen import many_joints_bvh
 from _shared import MOCAP, PEER

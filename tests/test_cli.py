@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from study.cli import main
+from flipstudy.study.cli import main
 
 from _shared import shared_file
 
@@ -78,8 +78,7 @@ def test_an_internal_bug_shows_its_traceback_and_asks_for_a_report(capsys, monke
     """Only user errors (FlipstudyError) are one line: a bug inside the library, here a
     ZeroDivisionError injected into the analyser, keeps its traceback, asks to be reported
     and exits with EX_SOFTWARE (70), not the user-error status 1."""
-    import stimuli
-
+    from flipstudy import stimuli
     def broken(*a, **kw):
         return 1 / 0
 
@@ -105,12 +104,12 @@ def test_a_refused_output_file_is_one_line(capsys, tmp_path):
 
 
 def test_console_script_help():
-    r = subprocess.run([sys.executable, "-m", "study.cli", "--help"], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-m", "flipstudy.study.cli", "--help"], capture_output=True, text=True)
     assert r.returncode == 0 and "inspect" in r.stdout
 
 
 def test_edit_makes_a_double_flip_and_refuses_a_jump(capsys, tmp_path):
-    from stimuli import analyse, load_bvh
+    from flipstudy.stimuli import analyse, load_bvh
     out = tmp_path / "double.bvh"
     code, text, _ = run(capsys, "edit", "backflip", "--flips", "2", "--k-ratio", "1", "--out", str(out),
                         "--plot", str(tmp_path / "L.png"))

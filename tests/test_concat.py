@@ -7,9 +7,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from stimuli import analyse, builtin
-from stimuli.edit import concat as C
-from stimuli.physics import momentum
+from flipstudy.stimuli import analyse, builtin
+from flipstudy.stimuli.edit import concat as C
+from flipstudy.stimuli.physics import momentum
 
 from _shared import shared_file
 
@@ -218,7 +218,7 @@ def test_point_cloud_distance_is_invariant_to_turns_and_shifts(backflip):
 
 # ------------------------------------------------------------ refusals
 def test_different_skeletons_are_refused(backflip):
-    from stimuli import Skeleton
+    from flipstudy.stimuli import Skeleton
     c, body = backflip
     sk = c.skeleton
     names = list(sk.joint_names)
@@ -245,7 +245,7 @@ CASES = [
 
 @pytest.mark.parametrize("name,fps,opts,rule", CASES, ids=[c[0] for c in CASES])
 def test_real_concatenations_meet_the_measures(name, fps, opts, rule):
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     clip = load_bvh(shared_file(name), fps=fps)
     if "range" in opts:
         clip = clip.slice(*opts["range"])
@@ -265,7 +265,7 @@ def test_real_concatenations_meet_the_measures(name, fps, opts, rule):
 def test_the_mass_kick_and_its_mirror_are_refused_with_the_reason():
     """The MASS kick turns the body ~120° about the vertical: a mirrored kick faces
     more than π/4 away at every blendable frame, and the paper's test refuses it."""
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     clip = load_bvh(shared_file("mass_kick.bvh"))
     with pytest.raises(C.ConcatError, match="torso facing directions differ"):
         C.concatenate(clip, C.mirror(clip), rule="reverse")
@@ -273,7 +273,7 @@ def test_the_mass_kick_and_its_mirror_are_refused_with_the_reason():
 
 # ------------------------------------------------------------------- CLI
 def test_cli_concat(tmp_path, capsys):
-    from study.cli import main
+    from flipstudy.study.cli import main
     out = tmp_path / "double.bvh"
     assert main(["concat", "backflip", "backflip", "--baseline", "motion-graph", "--out", str(out),
                  "--plot", str(tmp_path / "L.png")]) == 0
@@ -281,7 +281,7 @@ def test_cli_concat(tmp_path, capsys):
     for key in ("rule", "θ =", "T =", "f_T", "blend", "smoothing", "slide", "motion graph"):
         assert key in text
     assert out.exists() and (tmp_path / "double_motion-graph.bvh").exists() and (tmp_path / "L.png").exists()
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     back = load_bvh(out)
     a = analyse(back, estimate=False)
     assert len(a.flights) == 2
@@ -294,8 +294,8 @@ def test_facing_rule_refuses_the_half_twist_and_blends_turn_only_about_L(backfli
     cannot happen here: the π/4 facing rule refuses it, naming the 180°; and the
     blend concat makes (in double support) turns the body about the axes ⟂ L only
     by what L explains (measured with the join's cross-fade measure)."""
-    from stimuli.edit.join import crossfade_rotation
-    from stimuli.physics import momentum
+    from flipstudy.stimuli.edit.join import crossfade_rotation
+    from flipstudy.stimuli.physics import momentum
     c, body = backflip
     with pytest.raises(C.ConcatError, match=r"facing directions differ by at least 180°"):
         C.concatenate(c, builtin("frontflip"), rule="forward", body=body)

@@ -5,14 +5,14 @@ window)."""
 import numpy as np
 import pytest
 
-from stimuli import analyse, builtin, load_bvh
-from stimuli.body import Body
-from stimuli.design import PAPER_DESIGN, parse_design
-from stimuli.errors import (AIR_MARGIN, Injected, StimulusError, check, inject_angular_momentum,
+from flipstudy.stimuli import analyse, builtin, load_bvh
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
+from flipstudy.stimuli.errors import (AIR_MARGIN, Injected, StimulusError, check, inject_angular_momentum,
                             inject_takeoff_angle, measure)
-from stimuli.motion.bvh import bvh_text
-from stimuli.physics import center_of_mass, momentum
-from stimuli.stimset import plan
+from flipstudy.stimuli.motion.bvh import bvh_text
+from flipstudy.stimuli.physics import center_of_mass, momentum
+from flipstudy.stimuli.stimset import plan
 
 from _shared import shared_file
 
@@ -108,7 +108,7 @@ def test_cmu_takeoff_and_landing_match_foot_geometry(cmu):
 @pytest.mark.parametrize("name,flips", [("backflip", 2), ("backflip", 3), ("backflip", 4),
                                         ("frontflip", 2)])
 def test_multiflip_flight_L_conserved_after_bvh_round_trip(tmp_path, name, flips):
-    from stimuli.edit.multiflip import multiflip
+    from flipstudy.stimuli.edit.multiflip import multiflip
     res = multiflip(analyse(builtin(name)), flips)
     p = tmp_path / "x.bvh"
     p.write_text(bvh_text(res.clip, 1.0))
@@ -117,7 +117,7 @@ def test_multiflip_flight_L_conserved_after_bvh_round_trip(tmp_path, name, flips
 
 
 def test_momentum_breaks_keep_stencils_in_their_phase():
-    from stimuli.edit.multiflip import multiflip
+    from flipstudy.stimuli.edit.multiflip import multiflip
     clip = multiflip(analyse(builtin("backflip")), 2).clip
     a = analyse(clip)
     fr = a.flight_frames

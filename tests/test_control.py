@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from stimuli import analyse, load_bvh, save_bvh
-from stimuli.body import Body
-from stimuli.control import (PRESETS, Jumper, assign_energy, choose, estimate_path, jump, make_scene,
+from flipstudy.stimuli import analyse, load_bvh, save_bvh
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.control import (PRESETS, Jumper, assign_energy, choose, estimate_path, jump, make_scene,
                              parse_k, sample_field, spring_displacement, spring_energy, spring_force)
-from stimuli.control.balance import inside, polygon_centre, support_polygon
-from stimuli.control.controller import STRENGTH
-from stimuli.control.ik import ccd_leg
-from stimuli.control.windup import EPSILON, approach
-from stimuli.physics import center_of_mass
+from flipstudy.stimuli.control.balance import inside, polygon_centre, support_polygon
+from flipstudy.stimuli.control.controller import STRENGTH
+from flipstudy.stimuli.control.ik import ccd_leg
+from flipstudy.stimuli.control.windup import EPSILON, approach
+from flipstudy.stimuli.physics import center_of_mass
 
 
 # ----------------------------------------------------------- the printed tables
@@ -208,7 +208,7 @@ def test_sample_field_cached_and_energies_direct():
     ok = np.nonzero(f.ok)[0]
     assert ok.size > 1000
     # a few samples recomputed one by one (FK, angle between the bones, ½ k s²)
-    from stimuli.control.ik import solve_legs
+    from flipstudy.stimuli.control.ik import solve_legs
     for i in ok[:: ok.size // 7]:
         st = solve_legs(j, f.pelvis[i][None], j.rest_quats(1), j.feet())
         P = j.positions(f.pelvis[i][None], st.quats)[0]
@@ -401,7 +401,7 @@ def test_uneven_legs_load_the_stronger_leg(tmp_path):
 def _cli(argv):
     import argparse
 
-    from study.jump_cli import add_commands
+    from flipstudy.study.cli.jump import add_commands
     ap = argparse.ArgumentParser(prog="flipstudy")
     sub = ap.add_subparsers(dest="command")
     add_commands(sub)
@@ -437,7 +437,7 @@ def test_boxes_are_drawn(jumps):
     """The renderer draws the scene's boxes (with the ground, in the plate of a
     composite) and nothing of them without."""
     pytest.importorskip("pyvista")
-    from render.figures import composite_image
+    from flipstudy.render.figures import composite_image
     res, _ = jumps[("box", 0.5)]
     clip = res.clip
     kw = dict(size=(160, 120), interval=0.25, takeoff=clip.meta["takeoff"], landing=clip.meta["touchdown"] - 1)

@@ -9,10 +9,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from _shared import shared_file
-from stimuli.analyse import analyse, gravity_warning, physics_advice
-from stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
-from stimuli.motion.bvh import load_bvh
-from stimuli.stimset import build_stimuli, plan
+from flipstudy.stimuli.analyse import analyse, gravity_warning, physics_advice
+from flipstudy.stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
+from flipstudy.stimuli.motion.bvh import load_bvh
+from flipstudy.stimuli.stimset import build_stimuli, plan
 
 CMU_SCALE = 0.0254 / 0.45          # CMU/ASF length unit in metres
 
@@ -223,7 +223,7 @@ def test_inspect_advice_weighs_frame_time_against_scale(cmu):
 
 
 def test_builtins_pass_the_gate():
-    from stimuli import builtin
+    from flipstudy.stimuli import builtin
     for name in ("backflip", "frontflip", "jump"):
         c = builtin(name)
         assert physics_advice(analyse(c).apparent_gravity, c) is None, name
@@ -251,7 +251,7 @@ def test_a_session_of_the_default_design_shows_each_motion_file_as_designed(tmp_
     """Built for real: each stimulus twice; the unmodified clip (by content) twice as the
     angular-momentum groups' shared original and twice as the take-off group's own —
     before, level 0 of each of the five groups was shown twice: 10 times in all."""
-    from study.session import load_study, open_session
+    from flipstudy.study.session import load_study, open_session
     dp = tmp_path / "paper.toml"
     dp.write_text(PAPER_DESIGN)
     out = tmp_path / "study"
@@ -282,10 +282,10 @@ def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
     every sharing group's level 0 is the same answers, d′ against them."""
     import pandas as pd
 
-    from analysis.pipeline import analyze
-    from study.demo import make_demo_study
-    from study.export import export_responses
-    from study.simulate import simulate
+    from flipstudy.analysis.pipeline import analyze
+    from flipstudy.study.demo import make_demo_study
+    from flipstudy.study.export import export_responses
+    from flipstudy.study.simulate import simulate
     d = make_demo_study(tmp_path / "study", videos=False, levels=(0, 25, 50), original=None)
     simulate(d, 5, seed=3)
     res = export_responses(d, include_simulated=True)   # simulated answers are kept apart
@@ -302,14 +302,14 @@ def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
     assert "original" not in set(r.table["group"])
     assert r.settings["n_trials"] == len(rs)
     # d′ of a level against the shared answers, from the counts (log-linear when extreme)
-    from analysis.sdt import dprime
+    from flipstudy.analysis.sdt import dprime
     row = t.loc[("abrupt-decrease", 50.0)]
     assert row["dprime"] == pytest.approx(dprime(row["n_incorrect"], row["n"], k_orig, 10))
 
 
 def test_a_session_refuses_a_manifest_with_duplicate_or_too_many_trials(tmp_path):
-    from study.demo import make_demo_study
-    from study.session import SessionError, load_study
+    from flipstudy.study.demo import make_demo_study
+    from flipstudy.study.session import SessionError, load_study
     d = make_demo_study(tmp_path / "s", videos=False)
     man = (d / "manifest.csv").read_text().splitlines()
     (d / "manifest.csv").write_text("\n".join(man + [man[-1]]) + "\n")
@@ -341,7 +341,7 @@ def test_a_group_may_keep_its_own_original():
 def test_shared_answers_go_only_to_groups_of_their_kind():
     import pandas as pd
 
-    from analysis.io import ResponsesError, load_responses
+    from flipstudy.analysis.io import ResponsesError, load_responses
     rows = []
     for p in ("P1", "P2"):
         for g, kind, lv in [("original", "angular-momentum", 0), ("am", "angular-momentum", 25),

@@ -4,10 +4,10 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.transform import Rotation
 
-from stimuli import analyse, load_bvh
-from stimuli.body import Body
-from stimuli.edit import ballistic_path, move_com, ratio_retime_frames, retime, rotate, sample, source_times
-from stimuli.physics import center_of_mass, momentum
+from flipstudy.stimuli import analyse, load_bvh
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.edit import ballistic_path, move_com, ratio_retime_frames, retime, rotate, sample, source_times
+from flipstudy.stimuli.physics import center_of_mass, momentum
 
 from _shared import shared_file
 

@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from stimuli.motion import BVHError, Clip, Skeleton, load_bvh
-from stimuli.motion import bvh as bvh_mod
-from stimuli.motion.skeleton import ROTATION_CHANNELS
+from flipstudy.stimuli.motion import BVHError, Clip, Skeleton, load_bvh
+from flipstudy.stimuli.motion import bvh as bvh_mod
+from flipstudy.stimuli.motion.skeleton import ROTATION_CHANNELS
 
 from _shared import ALL_BVH, shared_file
 
@@ -211,7 +211,7 @@ def _assert_same_multiflip(r0, r1):
 
 @pytest.fixture(scope="module")
 def builtin_flips():
-    from stimuli import analyse, builtin
+    from flipstudy.stimuli import analyse, builtin
     return {name: analyse(builtin(name)) for name in ("backflip", "frontflip")}
 
 
@@ -222,7 +222,7 @@ def builtin_flips():
                                 dict(flips=3, k=1.2, blend_s=0.05)])
 def test_multiflip_on_prepared_source_equals_the_plain_implementation(builtin_flips, name, kw):
     import _multiflip_reference as ref
-    from stimuli.edit.multiflip import multiflip, prepare
+    from flipstudy.stimuli.edit.multiflip import multiflip, prepare
     a = builtin_flips[name]
     r0 = ref.multiflip(a, **kw)
     _assert_same_multiflip(r0, multiflip(a, **kw))
@@ -234,8 +234,8 @@ def test_multiflip_of_real_cmu_equals_the_plain_implementation(name):
     """Real clips also put cross-fades next to take-off or landing, where the
     sequenced clip's COM is read (and computed for them alone)."""
     import _multiflip_reference as ref
-    from stimuli import analyse
-    from stimuli.edit.multiflip import FlipEditError, multiflip, prepare
+    from flipstudy.stimuli import analyse
+    from flipstudy.stimuli.edit.multiflip import FlipEditError, multiflip, prepare
     a = analyse(load_bvh(shared_file(name)))
     pre = prepare(a)
     for flips in (2, 3):
@@ -250,8 +250,8 @@ def test_multiflip_of_real_cmu_equals_the_plain_implementation(name):
 
 
 def test_sampling_at_whole_frames_keeps_the_source_quaternions():
-    from stimuli import builtin
-    from stimuli.edit.timing import sample
+    from flipstudy.stimuli import builtin
+    from flipstudy.stimuli.edit.timing import sample
     clip = builtin("backflip")
     s = np.array([0.0, 3.0, 3.25, 7.0, 7.5, clip.num_frames - 1.0])
     out = sample(clip, s)

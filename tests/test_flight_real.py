@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from stimuli import analyse, load_bvh
+from flipstudy.stimuli import analyse, load_bvh
 
 from _shared import shared_file
 

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from stimuli import analyse, builtin
-from stimuli.body import Body
-from stimuli.massfit import estimate_masses
+from flipstudy.stimuli import analyse, builtin
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.massfit import estimate_masses
 
 # a body that is not the table's: trunk -12 %, thighs +15 %, head +12 %, shanks -12 %,
 # upper arms +20 %, forearms -15 % (kg, both sides together)
@@ -75,7 +75,7 @@ def test_regulariser_is_absolute_kkt(case):
     """The fit solves min mean‖Am − COM‖²/3 + W‖m − m⁰‖² s.t. Σm = M (the paper's
     absolute regulariser, in kg²): checked against the KKT system of that problem,
     solved separately with the path parameters eliminated by projection."""
-    from stimuli.massfit import _path_design, group_positions
+    from flipstudy.stimuli.massfit import _path_design, group_positions
     clip, true, prior, a = case
     W = 1e-6
     fit = estimate_masses(clip, prior, a.takeoff, a.landing, W=W, band=None)
@@ -119,9 +119,9 @@ def test_cmu_flips_at_60fps(name, status):
     and feet near 0 kg, so the prior is kept and ``inspect`` says why."""
     import subprocess, sys, os
     from _shared import shared_file
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     path = shared_file(name)
-    from study.cli import load_clip
+    from flipstudy.study.cli import load_clip
     a = analyse(load_clip(str(path), None, 60.0))
     fit = a.mass_fit
     assert fit.status == status
@@ -132,7 +132,7 @@ def test_cmu_flips_at_60fps(name, status):
     else:
         assert np.max(np.abs([fit.fitted[g] / fit.prior[g] - 1 for g in fit.prior])) > 0.35
         assert np.all(rel == 0)
-    out = subprocess.run([sys.executable, "-m", "study.cli", "inspect", str(path), "--fps", "60"],
+    out = subprocess.run([sys.executable, "-m", "flipstudy.study.cli", "inspect", str(path), "--fps", "60"],
                          capture_output=True, text=True, env={**os.environ}, cwd=os.getcwd()).stdout
     line = next(x for x in out.splitlines() if "mass fit" in x)
     assert status in line

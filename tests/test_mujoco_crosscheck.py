@@ -20,9 +20,9 @@ from scipy.spatial.transform import Rotation
 mujoco = pytest.importorskip("mujoco", reason="the cross-check needs the mujoco package "
                              "(pip install 'flipstudy[test]')")
 
-from stimuli import physics  # noqa: E402
-from stimuli.body import Body  # noqa: E402
-from stimuli.motion import Clip, Skeleton, load_bvh  # noqa: E402
+from flipstudy.stimuli import physics  # noqa: E402
+from flipstudy.stimuli.body import Body  # noqa: E402
+from flipstudy.stimuli.motion import Clip, Skeleton, load_bvh  # noqa: E402
 
 from _mujoco_model import FreePieces  # noqa: E402
 

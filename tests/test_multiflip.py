@@ -6,12 +6,12 @@ import pytest
 from hypothesis import given, settings, strategies as st
 from scipy.spatial.transform import Rotation
 
-from stimuli import analyse, builtin, load_bvh
-from stimuli.edit import rotate
-from stimuli.edit.multiflip import (FlipEditError, find_self_loop, flight_axis, k_star, measure,
+from flipstudy.stimuli import analyse, builtin, load_bvh
+from flipstudy.stimuli.edit import rotate
+from flipstudy.stimuli.edit.multiflip import (FlipEditError, find_self_loop, flight_axis, k_star, measure,
                                     multiflip, piecewise_source)
-from stimuli.edit.similarity import distance_matrix, pose_features, twist_angles
-from stimuli.physics import momentum
+from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features, twist_angles
+from flipstudy.stimuli.physics import momentum
 
 from _shared import shared_file
 
@@ -179,7 +179,7 @@ def test_straight_legs_edit_is_repaired_by_retiming(flips, name):
     than 50 % at the old timing; the paper's retiming rule brings it within 12 %
     (the paper: 20 %), its midpoint variant within 7 %; the flight gets longer
     and higher (the paper's Figure 4b)."""
-    from stimuli.edit.animator import repair_momentum, straighten
+    from flipstudy.stimuli.edit.animator import repair_momentum, straighten
     a = flips[name]
     edited = straighten(a, "legs")
     r = repair_momentum(a, edited)
@@ -198,7 +198,7 @@ def test_straight_legs_edit_is_repaired_by_retiming(flips, name):
 
 
 def test_midpoint_rule_follows_a_fast_edit_more_closely(flips):
-    from stimuli.edit.animator import repair_momentum, straighten
+    from flipstudy.stimuli.edit.animator import repair_momentum, straighten
     a = flips["frontflip"]
     edited = straighten(a, "legs")
     paper = repair_momentum(a, edited).report["max_error_after_pct"]
@@ -211,7 +211,7 @@ def test_join_tuck_take_off_with_pike_landing():
     """Figure 4c in kind: a tucked backflip's take-off joined in flight to a piked
     backflip's landing; L is matched by retiming, the joined flight keeps |L|
     near the first motion's and the character lands upright."""
-    from stimuli.edit.join import join_in_flight
+    from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(builtin("backflip"))
     r = join_in_flight(a, builtin("backflip", shape="pike"))
     rep = r["report"]
@@ -242,7 +242,7 @@ def test_join_refuses_a_frontflip_facing_the_other_way():
     """A frontflip turned 180° about the vertical so its L lies along a backflip's
     faces backwards: every pair's root orientations differ by ~180° about an axis
     ⟂ L, so the join is refused with the numbers instead of a mid-air half twist."""
-    from stimuli.edit.join import join_in_flight
+    from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(builtin("backflip"))
     with pytest.raises(FlipEditError, match=r"face different ways.*-?180° about the vertical.*"
                                             r"differ by 1[78]\d° or more about an axis ⟂ L") as e:
@@ -255,7 +255,7 @@ def test_join_cross_fade_check_measures_the_twist():
     the measurement of the assembled motion: the root turns ~180° about the axes
     ⟂ L during the cross-fade while the flight's L explains a few degrees (the
     old behaviour: a 175° yaw, |L| CV 21 %)."""
-    from stimuli.edit.join import join_in_flight
+    from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(builtin("backflip"))
     with pytest.raises(FlipEditError, match=r"cross-fade .* turns the body 1[78]\d° about the axes ⟂ L") as e:
         join_in_flight(a, builtin("frontflip"), max_swing_deg=180)
@@ -272,9 +272,9 @@ def test_crossfade_rotation_known_values():
     its L explains and not at all ⟂ L; the same flight given a 40° turn about the
     vertical through its COM, ramped over 8 frames, shows that 40° as unexplained."""
     from scipy.spatial.transform import Rotation
-    from stimuli.edit.join import crossfade_rotation
-    from stimuli.edit.reposition import rotate
-    from stimuli.physics import center_of_mass
+    from flipstudy.stimuli.edit.join import crossfade_rotation
+    from flipstudy.stimuli.edit.reposition import rotate
+    from flipstudy.stimuli.physics import center_of_mass
     a = analyse(builtin("backflip"))
     f, w = a.takeoff + 30, 8       # the tuck held (closing, the root outruns the body by 10 %)
     L = a.L[a.takeoff + 2:a.landing - 1].mean(0)
@@ -296,7 +296,7 @@ def test_crossfade_rotation_known_values():
 
 
 def test_join_refuses_a_jump():
-    from stimuli.edit.join import join_in_flight
+    from flipstudy.stimuli.edit.join import join_in_flight
     with pytest.raises(FlipEditError):
         join_in_flight(builtin("backflip"), builtin("jump"))
 
@@ -306,7 +306,7 @@ def test_landing_join_on_the_landing_frame_itself():
     landing frame (the last frame strictly inside the flight); the triple is made
     and its flight is where it says."""
     from _shared import shared_file
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     a = analyse(load_bvh(shared_file("90_11.bvh")))
     r = multiflip(a, 3)
     assert r.report["landing_join"]["g"] == a.landing
@@ -321,8 +321,8 @@ def test_join_of_two_real_backflips_is_allowed():
     orientations agree within 8° ⟂ L, the cross-fade turns ⟂ L by well under the
     bound, and the character turns one somersault."""
     from _shared import shared_file
-    from study.cli import load_clip
-    from stimuli.edit.join import join_in_flight
+    from flipstudy.study.cli import load_clip
+    from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(load_clip(str(shared_file("87_03.bvh")), None, 60.0))
     r = join_in_flight(a, load_clip(str(shared_file("88_01.bvh")), None, 60.0))["report"]
     assert r["join"]["swing_deg"] < 10

@@ -11,17 +11,17 @@ import pytest
 from scipy import ndimage
 from scipy.spatial.transform import Rotation
 
-from stimuli.body import Body
-from stimuli.motion import Clip, Skeleton, save_bvh
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.motion import Clip, Skeleton, save_bvh
 
-from render.camera import Camera, fit_camera, stage
-from render.compose import over, read_image
-from render.figures import (composite_image, ghost_image, iter_frames, overlay_image, prepare,
+from flipstudy.render.camera import Camera, fit_camera, stage
+from flipstudy.render.compose import over, read_image
+from flipstudy.render.figures import (composite_image, ghost_image, iter_frames, overlay_image, prepare,
                             render_video, strip_image, support_polygon, trail_image)
-from render.geometry import piece_frames, BodyMesh, body_points, resample, unit_sphere
-from render.scene import Scene
-from render.style import Style, rgb8
-from render.study import RENDER_KINDS, parse_size, render_study
+from flipstudy.render.geometry import piece_frames, BodyMesh, body_points, resample, unit_sphere
+from flipstudy.render.scene import Scene
+from flipstudy.render.style import Style, rgb8
+from flipstudy.render.study import RENDER_KINDS, parse_size, render_study
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
 HAVE_SYNTH = (Path(__file__).resolve().parents[1] / "stimuli" / "synth" / "__init__.py").exists()
@@ -174,7 +174,7 @@ def test_stage_aligns_takeoff_and_looks_across_the_jump():
     b = a.replace(root_pos=a.root_pos + [2.0, 0.0, -1.0])          # same jump elsewhere
     st = stage([a, b], [t0, t0], [t1, t1], size=(160, 120))
     body = st.bodies[0]
-    from stimuli.physics import center_of_mass
+    from flipstudy.stimuli.physics import center_of_mass
     for c in st.clips:
         com = center_of_mass(c, body)[t0 - 1]               # the last frame on the ground
         assert com[0] == pytest.approx(0, abs=1e-9) and com[2] == pytest.approx(0, abs=1e-9)
@@ -190,14 +190,14 @@ def test_stage_aligns_takeoff_and_looks_across_the_jump():
 
 def test_stage_orients_other_base_clips_but_not_edits():
     a, t0, t1 = jumper(flip=0.0)                                   # travels +Z
-    from stimuli.edit.reposition import rotate
+    from flipstudy.stimuli.edit.reposition import rotate
     turn = Rotation.from_rotvec([0, np.radians(120), 0])
     other = rotate(jumper(flip=3.0)[0], turn, np.zeros(3))         # another clip, another way
     other_edit = edited(other, t0)                                 # and an edit of it
     st = stage([a, other, other_edit], [t0] * 3, [t1] * 3, size=(160, 120))
     assert st.yaws[0] == 0.0
     assert st.yaws[1] == pytest.approx(-120.0, abs=1e-6) and st.yaws[2] == st.yaws[1]
-    from stimuli.physics import center_of_mass
+    from flipstudy.stimuli.physics import center_of_mass
     for c in st.clips:
         com = center_of_mass(c, st.bodies[0])
         d = com[t1] - com[t0]
@@ -210,7 +210,7 @@ def test_stage_orients_other_base_clips_but_not_edits():
 def test_character_pixels_are_where_the_camera_projects_the_com():
     clip, t0, t1 = jumper(flip=1.0)
     prep = prepare([clip], takeoffs=[t0], landings=[t1], size=(160, 120))
-    from stimuli.physics import center_of_mass
+    from flipstudy.stimuli.physics import center_of_mass
     com = center_of_mass(prep.clips[0], prep.bodies[0])
     frames = []
     with Scene(prep.bodies[0], PLAIN, (160, 120), prep.camera) as sc:
@@ -317,8 +317,8 @@ def test_stimuli_of_one_clip_are_pixel_identical_before_takeoff():
 @pytest.mark.skipif(not (SHARED / "mocap" / "88_01.bvh").exists(),
                     reason=f"needs ../shared/mocap/88_01.bvh (not found under {SHARED})")
 def test_real_edited_flip_pixel_identical_before_takeoff():
-    from stimuli import analyse, load_bvh
-    from stimuli.errors import inject_angular_momentum
+    from flipstudy.stimuli import analyse, load_bvh
+    from flipstudy.stimuli.errors import inject_angular_momentum
     a = analyse(load_bvh(SHARED / "mocap" / "88_01.bvh", fps=60))
     e = inject_angular_momentum(a, 0.25, "smooth").clip           # a real stimulus edit
     st = stage([a.clip, e], [a.takeoff] * 2, [a.landing] * 2, size=(96, 72))
@@ -505,7 +505,7 @@ def test_style_roundtrip_toml_and_errors(tmp_path):
 def test_cli_render_and_figure(tmp_path, capsys):
     import argparse
 
-    from render.cli import add_commands
+    from flipstudy.study.cli.render import add_commands
     ap = argparse.ArgumentParser(prog="flipstudy")
     sub = ap.add_subparsers(dest="command")
     add_commands(sub)
@@ -533,7 +533,7 @@ def test_cli_render_and_figure(tmp_path, capsys):
 @pytest.mark.skipif(not (SHARED / "mocap" / "88_01.bvh").exists(),
                     reason=f"needs ../shared/mocap/88_01.bvh (not found under {SHARED})")
 def test_real_flip_in_frame_and_rendered():
-    from stimuli import load_bvh
+    from flipstudy.stimuli import load_bvh
     clip = load_bvh(SHARED / "mocap" / "88_01.bvh", fps=60)
     st = stage([clip], size=(160, 120))
     # the frames strictly inside the flight (take-off instant at frame 45.0)
@@ -547,7 +547,7 @@ def test_real_flip_in_frame_and_rendered():
 
 @pytest.mark.skipif(not HAVE_SYNTH, reason="stimuli/synth (the built-in clips) not available yet")
 def test_builtin_backflip_renders():
-    from stimuli import builtin
+    from flipstudy.stimuli import builtin
     clip = builtin("backflip")
     img = ghost_image(clip, None, size=(160, 120), style=PLAIN)
     assert nonwhite(img).mean() > 0.03
@@ -556,7 +556,7 @@ def test_builtin_backflip_renders():
 
 
 def test_labels_and_legend_without_a_font_file(monkeypatch):
-    import render.figures as fg
+    import flipstudy.render.figures as fg
     monkeypatch.setattr(fg, "find_font", lambda: None)       # VTK's built-in font instead
     clip, t0, t1 = jumper(flip=3.0)
     st = Style(anti_aliasing="none", ground=False, background="#ffffff")

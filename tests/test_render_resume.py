@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from render.study import StaleRenderError, check_rendered, render_study
+from flipstudy.render.study import StaleRenderError, check_rendered, render_study
 from test_render import _write_study, jumper
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -71,7 +71,7 @@ def wait_gone(pids, seconds=10.0) -> list[str]:
 
 def start(args):
     env = dict(os.environ, PYTHONPATH=str(ROOT), PYTHONUNBUFFERED="1")
-    return subprocess.Popen([sys.executable, "-m", "study.cli", *args], cwd=ROOT, env=env,
+    return subprocess.Popen([sys.executable, "-m", "flipstudy.study.cli", *args], cwd=ROOT, env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             start_new_session=True)     # its own group, like a terminal job
 
@@ -150,7 +150,7 @@ def test_ctrl_c_stops_render_at_once_and_a_rerun_makes_only_the_rest(tmp_path, m
     assert {k for k, v in snapshot(study).items() if v != after[k]} == {"s03.mp4"}
 
     # a re-render at another size, interrupted after two stimuli: mixed sizes, refused
-    import render.study as rs
+    import flipstudy.render.study as rs
     real, calls = rs._render_task, []
 
     def interrupted(task):
@@ -182,7 +182,7 @@ def test_sigkill_of_render_leaves_no_worker(tmp_path):
     assert wait_gone(seen, 10.0) == []
     # what the killed run was writing never appears under an output's name, and
     # the next run clears it and finishes the job
-    from render.study import file_sha256
+    from flipstudy.render.study import file_sha256
     outputs = json.loads((study / "render" / "render.json").read_text())["outputs"]
     made = set(outputs)
     assert made and all(file_sha256(study / "render" / f) == o["sha256"] for f, o in outputs.items())
@@ -191,7 +191,7 @@ def test_sigkill_of_render_leaves_no_worker(tmp_path):
 
 
 def test_ctrl_c_in_stimuli_is_one_line_and_leaves_nothing(tmp_path):
-    from stimuli.design import PAPER_DESIGN
+    from flipstudy.stimuli.design import PAPER_DESIGN
     design = tmp_path / "design.toml"
     design.write_text(PAPER_DESIGN)
     out = tmp_path / "study"

@@ -5,8 +5,8 @@ import json
 
 import pytest
 
-from study.cli import main
-from study.reproduce import ReproduceError, reproduce
+from flipstudy.study.cli import main
+from flipstudy.study.reproduce import ReproduceError, reproduce
 
 
 @pytest.fixture(scope="module")
@@ -49,14 +49,14 @@ def test_existing_output_is_refused(run, tmp_path):
 
 
 def test_a_failing_stage_leaves_nothing_behind(tmp_path, monkeypatch):
-    import analysis.pipeline
-
+    import flipstudy.analysis.pipeline
+    from flipstudy import analysis
     def boom(*a, **k):
         raise RuntimeError("analysis failed on purpose")
 
     monkeypatch.setattr(analysis.pipeline, "analyze", boom)
-    import render.study
-
+    import flipstudy.render.study
+    from flipstudy import render
     def fake_render(study_dir, **k):                # skip the minutes of rendering
         return {"stimuli": {}}
 
@@ -77,7 +77,7 @@ def test_cli_refuses_a_nonempty_folder_cleanly(tmp_path, capsys):
 
 
 def test_simulated_panel_is_marked_and_real_participants_go_elsewhere(run):
-    from study.reproduce import summary_text
+    from flipstudy.study.reproduce import summary_text
     out, r = run
     responses = list(csv.DictReader(open(out / "study" / "responses.csv")))
     assert {x["simulated"] for x in responses} == {"true"}
@@ -94,7 +94,7 @@ def test_force_refused_while_the_study_holds_a_real_answer(run, tmp_path):
     import hashlib
     import shutil
 
-    from study.session import load_study, open_session, submit_answer
+    from flipstudy.study.session import load_study, open_session, submit_answer
     out, _ = run
     copy = tmp_path / "paper"
     shutil.copytree(out, copy)

@@ -34,12 +34,12 @@ pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
                                        f"(apt-get install -y chromium)")
 sync_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install playwright)")
 
-from study.demo import make_demo_study  # noqa: E402
-from study import store  # noqa: E402
-from study.export import export_responses  # noqa: E402
-from study.order import trial_order  # noqa: E402
-from study.server import ServerThread, create_app  # noqa: E402
-from study.session import load_study, open_session  # noqa: E402
+from flipstudy.study.demo import make_demo_study  # noqa: E402
+from flipstudy.study import store  # noqa: E402
+from flipstudy.study.export import export_responses  # noqa: E402
+from flipstudy.study.order import trial_order  # noqa: E402
+from flipstudy.study.server import ServerThread, create_app  # noqa: E402
+from flipstudy.study.session import load_study, open_session  # noqa: E402
 
 BREAK_EVERY = 3
 TIMEOUT = 15_000          # ms, for any one screen
@@ -210,13 +210,8 @@ def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
 # --- kill -9 in the middle of a session ----------------------------------------------------
 
 def _cli_module():
-    """``study.cli`` once it has the session commands wired in, else this package's own."""
-    from study import cli
-    try:
-        names = cli.build_parser()._subparsers._group_actions[0].choices
-    except (AttributeError, IndexError):
-        names = {}
-    return "study.cli" if "run" in names else "study.session_cli"
+    """The module that ``python -m`` runs for the CLI."""
+    return "flipstudy.study.cli"
 
 
 def _free_port():

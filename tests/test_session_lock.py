@@ -18,11 +18,11 @@ from pathlib import Path
 
 import pytest
 
-from study import store
-from study.cli import main as cli
-from study.demo import make_demo_study
-from study.server import allowed_host_names
-from study.session import SessionError, load_study, open_session
+from flipstudy.study import store
+from flipstudy.study.cli import main as cli
+from flipstudy.study.demo import make_demo_study
+from flipstudy.study.server import allowed_host_names
+from flipstudy.study.session import SessionError, load_study, open_session
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -36,7 +36,7 @@ class Run:
     """``flipstudy run STUDY --participant ID --no-browser ...`` as a subprocess."""
 
     def __init__(self, study_dir, participant, *extra):
-        self.args = [sys.executable, "-m", "study.cli", "run", str(study_dir), "--participant",
+        self.args = [sys.executable, "-m", "flipstudy.study.cli", "run", str(study_dir), "--participant",
                      participant, "--no-browser", *extra]
         self.proc = None
         self.lines: queue.Queue = queue.Queue()
@@ -103,7 +103,7 @@ def test_second_server_for_a_participant_is_refused_and_a_dead_ones_lock_taken_o
         # the first one still serves, and is the only session of P01
         assert get(port, "/api/session", f"127.0.0.1:{port}")[0] == 200
         # another participant is not blocked; the same one is, in this process too
-        from study.lock import ParticipantBusy, ParticipantLock
+        from flipstudy.study.lock import ParticipantBusy, ParticipantLock
         with ParticipantLock(demo, "P02"):
             assert json.loads((demo / ".locks" / "run-P02.lock").read_text())["pid"] == os.getpid()
         with pytest.raises(ParticipantBusy, match=f"pid {first.proc.pid}"):
@@ -227,5 +227,5 @@ def test_run_refuses_stale_mixed_or_unrecorded_videos(demo, capsys):
     assert not (demo / "sessions.sqlite").exists() or \
         sqlite3.connect(demo / "sessions.sqlite").execute("SELECT COUNT(*) FROM sessions").fetchone()[0] == 0
     with pytest.raises(SessionError):            # the library path refuses too
-        from study.server import serve
+        from flipstudy.study.server import serve
         serve(demo, "P01", open_browser=False)

@@ -7,10 +7,10 @@ import re
 import subprocess
 import sys
 
-from stimuli.design import PAPER_DESIGN, parse_design
-from stimuli.stimset import plan
-from study.order import participant_seed, reference_stimuli, trial_order
-from study.timeline import build_timeline
+from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
+from flipstudy.stimuli.stimset import plan
+from flipstudy.study.order import participant_seed, reference_stimuli, trial_order
+from flipstudy.study.timeline import build_timeline
 
 
 def paper_manifest():
@@ -130,7 +130,7 @@ def test_uneven_groups_are_all_used():
 
 class _FakeSession:
     def __init__(self, design, rows, n=None, participant="P01"):
-        from study.session import Study
+        from flipstudy.study.session import Study
         self.study = Study(None, design, rows, "x", {r["stimulus"]: r for r in rows})
         self.trials = trial_order(design, rows, participant)[:n]
         self.participant, self.session = participant, 1

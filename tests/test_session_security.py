@@ -10,9 +10,9 @@ import sqlite3
 
 import pytest
 
-from study.demo import make_demo_study
-from study.server import ServerThread, create_app
-from study.session import load_study, open_session
+from flipstudy.study.demo import make_demo_study
+from flipstudy.study.server import ServerThread, create_app
+from flipstudy.study.session import load_study, open_session
 
 
 @pytest.fixture(scope="module")

@@ -6,14 +6,14 @@ import sqlite3
 import numpy as np
 import pytest
 
-from study import store
-from study.demo import make_demo_study
-from study.export import PARTICIPANT_COLUMNS, RESPONSE_COLUMNS, export_responses, status
-from study.order import trial_order
-from study.session import SessionError, load_study, open_session, submit_answer, submit_demographics
-from study.session_cli import main as cli
-from study.simulate import DEFAULT_MODEL, ModelError, parse_model, simulate
-from study.validate import RequestError
+from flipstudy.study import store
+from flipstudy.study.demo import make_demo_study
+from flipstudy.study.export import PARTICIPANT_COLUMNS, RESPONSE_COLUMNS, export_responses, status
+from flipstudy.study.order import trial_order
+from flipstudy.study.session import SessionError, load_study, open_session, submit_answer, submit_demographics
+from flipstudy.study.cli import main as cli
+from flipstudy.study.simulate import DEFAULT_MODEL, ModelError, parse_model, simulate
+from flipstudy.study.validate import RequestError
 
 DESIGN_COLS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
                "response", "rt_ms", "shown_ms", "timestamp"]
@@ -186,7 +186,7 @@ def test_export_long_format_and_participants(study_dir, tmp_path, capsys):
 
 
 def test_analysis_reads_the_export(study_dir, tmp_path):
-    from analysis.io import load_responses
+    from flipstudy.analysis.io import load_responses
     simulate(study_dir, 3, seed=1)
     out = tmp_path / "responses.csv"
     export_responses(study_dir, out, include_simulated=True)
@@ -249,8 +249,8 @@ def test_simulate_and_export_leave_real_rows_alone_and_mark_or_omit_simulated(st
 
 
 def test_analyze_leaves_out_simulated_and_incomplete_and_says_who(study_dir, tmp_path, capsys):
-    from analysis.cli import main as analyze_cli
-    from analysis.pipeline import analyze
+    from flipstudy.study.cli import main as analyze_cli
+    from flipstudy.analysis.pipeline import analyze
     for pid in ("P01", "P02", "P03"):
         s = open_session(load_study(study_dir), pid)
         for i in range(1, 13):
@@ -290,7 +290,7 @@ def test_analyze_leaves_out_simulated_and_incomplete_and_says_who(study_dir, tmp
     only = make_demo_study(tmp_path / "sim", videos=False, levels=(0, 25, 50))
     simulate(only, 2, seed=1)
     csv_sim = export_responses(only, tmp_path / "s.csv", include_simulated=True)["responses"]
-    from analysis.io import ResponsesError
+    from flipstudy.analysis.io import ResponsesError
     with pytest.raises(ResponsesError, match="--include-simulated"):
         analyze(csv_sim, None, psychometric="none", gee=False, n_boot=50)
 
@@ -368,7 +368,7 @@ def test_simulate_resumes_an_interrupted_participant(study_dir, tmp_path):
     full = read_csv(export_responses(study_dir, tmp_path / "full.csv", include_simulated=True)["responses"])
     other = make_demo_study(tmp_path / "other", videos=False, levels=(0, 25, 50))
     # a simulated participant stopped after 5 answers, then resumed
-    import study.simulate as sim
+    import flipstudy.study.simulate as sim
     s = open_session(load_study(other), "sim001", source="simulated")
     for t in s.trials[:5]:
         r = next(x for x in full if int(x["trial"]) == t.trial)
@@ -407,9 +407,9 @@ def test_simulated_panel_reproduces_table_2(tmp_path):
 def test_sessions_on_a_stimulus_set_built_from_motion_capture(tmp_path):
     """The manifest ``flipstudy stimuli`` writes (not the demo's) drives a session."""
     from conftest import SHARED_DIR
-    from stimuli.design import parse_design
-    from stimuli.stimset import build_stimuli
-    from study.demo import demo_design_text
+    from flipstudy.stimuli.design import parse_design
+    from flipstudy.stimuli.stimset import build_stimuli
+    from flipstudy.study.demo import demo_design_text
     text = demo_design_text(seed=11, levels=(0, 25)).replace(
         'source = "backflip"', f'source = "{SHARED_DIR / "mocap" / "88_01.bvh"}"\nfps = 60')
     text = text.replace("[study]", "[study]\ntolerance_pct = 12")

@@ -5,10 +5,10 @@ import os
 import numpy as np
 import pytest
 
-from stimuli import analyse, load_bvh
-from stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
-from stimuli.errors import StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
-from stimuli.stimset import build_stimuli, read_manifest
+from flipstudy.stimuli import analyse, load_bvh
+from flipstudy.stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
+from flipstudy.stimuli.errors import StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
+from flipstudy.stimuli.stimset import build_stimuli, read_manifest
 
 from _shared import MOCAP, shared_file
 
@@ -184,7 +184,7 @@ def test_same_design_same_bytes_and_atomic_replace(tmp_path):
 def test_interrupted_run_leaves_nothing(tmp_path, monkeypatch):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path)
-    import stimuli.stimset as ss
+    import flipstudy.stimuli.stimset as ss
     calls = {"n": 0, "armed": False}
     real_measure = ss.measure
 

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import pytest
 
-from stimuli.design import parse_design
-from stimuli.stimset import (StudyFolderError, StudyLocked, build_stimuli, read_manifest,
+from flipstudy.stimuli.design import parse_design
+from flipstudy.stimuli.stimset import (StudyFolderError, StudyLocked, build_stimuli, read_manifest,
                              study_lock)
-from study.archive import StudyHasAnswers, answers_in, refuse_real_answers
-from study.cli import main as flipstudy
-from study.session import load_study, open_session, submit_answer
+from flipstudy.study.archive import StudyHasAnswers, answers_in, refuse_real_answers
+from flipstudy.study.cli import main as flipstudy
+from flipstudy.study.session import load_study, open_session, submit_answer
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -118,7 +118,7 @@ def test_force_refused_on_a_study_with_real_answers_and_nothing_changes(study, t
 
 
 def test_force_replaces_a_study_with_only_simulated_answers_and_says_so(study, tmp_path, capsys):
-    from study.simulate import simulate
+    from flipstudy.study.simulate import simulate
     simulate(study, 2, seed=1)
     assert answers_in(study)["real_answers"] == 0
     capsys.readouterr()
@@ -162,8 +162,8 @@ def test_archive_moves_everything_then_a_fresh_build(study, tmp_path, capsys):
 
 SLOW_BUILD = """
 import os, sys, time
-import stimuli.stimset as ss
-from stimuli.design import load_design
+import flipstudy.stimuli.stimset as ss
+from flipstudy.stimuli.design import load_design
 orig_clean, orig_measure = ss._recover_and_clean, ss.measure
 def clean(out):
     orig_clean(out)
@@ -190,7 +190,7 @@ def test_two_concurrent_builds_the_second_fails_at_once(tmp_path):
                           str(go)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env())
     try:
         assert a.stdout.readline().strip() == "locked"
-        b = subprocess.run([sys.executable, "-m", "study.cli", "stimuli",
+        b = subprocess.run([sys.executable, "-m", "flipstudy.study.cli", "stimuli",
                             str(design_file(tmp_path, 4)), "--out", str(out), "--force", "--quiet"],
                            capture_output=True, text=True, env=_env(), timeout=60)
         assert a.poll() is None                         # the first build still runs ...
@@ -247,9 +247,9 @@ def test_a_study_copied_to_out_while_a_build_runs_is_kept(study, tmp_path):
 
 LOOP_BUILD = """
 import os, shutil, sys, time
-import stimuli.stimset as ss
-from stimuli.design import load_design
-from stimuli.stimset import build_stimuli
+import flipstudy.stimuli.stimset as ss
+from flipstudy.stimuli.design import load_design
+from flipstudy.stimuli.stimset import build_stimuli
 
 def slow(fn):                             # widen every folder step, so that kills land there too
     def f(*a, **k):
@@ -300,7 +300,7 @@ def test_sigkilled_builds_never_leave_out_without_a_complete_study(tmp_path):
 
 def test_without_exchange_a_build_killed_between_the_renames_is_restored(tmp_path, monkeypatch):
     """The fallback scheme (no renameat2): out renamed to .NAME.old-PID, then the kill."""
-    import stimuli.stimset as ss
+    import flipstudy.stimuli.stimset as ss
     out = tmp_path / "study"
     d = parse_design(DESIGN.format(seed=3))
     build_stimuli(d, out, progress=False)

@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from stimuli import analyse, load_bvh, save_bvh
-from stimuli import builtin as top_builtin
-from stimuli.body import Body
-from stimuli.motion import Clip, finite_difference
-from stimuli.motion.bvh import bvh_text
-from stimuli.physics import center_of_mass, momentum
-from stimuli.synth import BUILTIN_NAMES, SynthError, builtin, make_skeleton
-from stimuli.synth.planar import D, PlanarModel, QuinticSpline, cumulative_simpson
+from flipstudy.stimuli import analyse, load_bvh, save_bvh
+from flipstudy.stimuli import builtin as top_builtin
+from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.motion import Clip, finite_difference
+from flipstudy.stimuli.motion.bvh import bvh_text
+from flipstudy.stimuli.physics import center_of_mass, momentum
+from flipstudy.stimuli.synth import BUILTIN_NAMES, SynthError, builtin, make_skeleton
+from flipstudy.stimuli.synth.planar import D, PlanarModel, QuinticSpline, cumulative_simpson
 
 G = 9.81
 FLIPS = ("backflip", "frontflip")

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from stimuli.exceptions import FlipstudyError
-from study.cli import main
+from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.study.cli import main
 
 from _bvh_gen import many_joints_bvh
 
@@ -57,8 +57,8 @@ def test_analyze_bad_correction_and_bad_table(capsys, tmp_path):
 
 
 def test_library_user_errors_are_of_the_family():
-    from stimuli import builtin
-    from stimuli.control.muscles import parse_k
+    from flipstudy.stimuli import builtin
+    from flipstudy.stimuli.control.muscles import parse_k
     with pytest.raises(FlipstudyError, match="fps"):
         builtin("backflip", fps=3)
     with pytest.raises(FlipstudyError, match="^k: "):

@@ -1,7 +1,7 @@
 """The energy-based jump controller of Ooi 2016 (Chapters 3 and 5): standing
 jumps to a target generated from physical parameters, written as clips.
 
->>> from stimuli.control import jump
+>>> from flipstudy.stimuli.control import jump
 >>> res = jump((0, 0, 1.3))                  # doctest: +SKIP
 >>> res.clip.meta["landing_error_m"] < 0.05  # doctest: +SKIP
 True

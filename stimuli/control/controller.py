@@ -356,7 +356,7 @@ def _conserve_momentum(jumper, Qf, com, tf, T, fps, rounds: int = 3):
     I(t)⁻¹ (L0 − L_joints(t)), with L0 the constant for which the body ends the
     flight upright again (∫ω dt = 0 from take-off to touch-down, so the landing
     pose is the planned one).  A few rounds, each measured with
-    :func:`stimuli.physics.momentum` on the posed frames."""
+    :func:`flipstudy.stimuli.physics.momentum` on the posed frames."""
     from ..physics import momentum
     n = len(tf)
     if n < 4:

@@ -4,7 +4,7 @@ A single flip becomes a double, triple or quadruple one in four steps:
 
 1. **Search** (5.2): in the flight, a self-looping sequence F_B = f_m … f_n−1
    whose end pose is its start pose turned by φ about the angular-momentum axis
-   (Appendix A distance, :mod:`stimuli.edit.similarity`).
+   (Appendix A distance, :mod:`flipstudy.stimuli.edit.similarity`).
 2. **Sequencing** (5.2): F_S, then F_B repeated r+1 times, the k-th copy turned
    by kφ about the axis along L through the COM, r = ⌈(2π·flips − φ_S − φ_E)/φ⌉;
    a second search joins a frame f of the last copies to a frame g of the rest
@@ -192,7 +192,7 @@ def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
 
 def _retimed(pre: "FlipSource", rot: np.ndarray, root_pos: np.ndarray, s_src: np.ndarray,
              plain: np.ndarray, src: np.ndarray):
-    """:func:`~stimuli.edit.timing.sample` of the sequenced frames (``rot``,
+    """:func:`~flipstudy.stimuli.edit.timing.sample` of the sequenced frames (``rot``,
     ``root_pos``) at fractional frames ``src``.  A sequenced frame i is ``plain``
     when it is source frame ``s_src[i]`` with only its root turned; between two
     plain frames that are consecutive source frames, the joints below the root

@@ -32,7 +32,7 @@ class Clip:
 
     Example
     -------
-    >>> from stimuli import builtin
+    >>> from flipstudy.stimuli import builtin
     >>> clip = builtin("backflip")
     >>> P = clip.joint_positions()      # (F, J, 3) metres
     >>> P.shape[0] == clip.num_frames

@@ -1,6 +1,6 @@
 """Built-in, physically exact synthetic clips: the embedded default.
 
->>> from stimuli.synth import builtin, make_skeleton, BUILTIN_NAMES
+>>> from flipstudy.stimuli.synth import builtin, make_skeleton, BUILTIN_NAMES
 >>> clip = builtin("backflip")            # 120 fps, 70 kg, 1.75 m
 >>> clip.meta["takeoff"] < clip.meta["landing"]
 True

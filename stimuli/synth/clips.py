@@ -1,7 +1,7 @@
 """Construction of the built-in, physically exact clips (see :func:`builtin`).
 
 The motion is sagittal and left/right symmetric (rotations about X only, see
-:mod:`stimuli.synth.planar`).  Phases (times for the defaults, 120 fps):
+:mod:`flipstudy.stimuli.synth.planar`).  Phases (times for the defaults, 120 fps):
 
 1. **stand, crouch** (0–1.06 s).  Joint angles are quintics in the DOFs of
    :mod:`.planar`, feet flat.  The crouch is placed by analytic two-bone leg IK
@@ -23,8 +23,8 @@ The motion is sagittal and left/right symmetric (rotations about X only, see
    finer than the frames; L = (Δθ + ∫h/I dt) / ∫1/I dt makes the flight rotate
    by exactly Δθ, and the pitch is the cumulative Simpson integral of Ω.  The
    root position is the ballistic COM parabola minus the COM offset of the pose
-   (forward kinematics + :class:`stimuli.body.Body`, as
-   :func:`stimuli.physics.center_of_mass` computes it), so the COM is an exact
+   (forward kinematics + :class:`flipstudy.stimuli.body.Body`, as
+   :func:`flipstudy.stimuli.physics.center_of_mass` computes it), so the COM is an exact
    parabola.
 4. **touch-down, absorb**.  The feet arrive flat on the floor and stop there
    (the impact: the leg joint rates jump).  The COM keeps its velocity and
@@ -390,7 +390,7 @@ def _check_params(name, fps, total_mass, params):
 
 def build(name: str, fps: float = 120.0, total_mass: float = 70.0,
           segment_masses: dict | None = None, **params) -> Clip:
-    """See :func:`stimuli.synth.builtin`."""
+    """See :func:`flipstudy.stimuli.synth.builtin`."""
     t_start = time.perf_counter()
     d, H = _check_params(name, fps, total_mass, params)
     turns = d["turns"]

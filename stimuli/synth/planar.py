@@ -1,6 +1,6 @@
 """Sagittal (planar) kinematics and mass properties of the synthetic humanoid.
 
-Every scripted motion of :mod:`stimuli.synth` rotates joints about the lateral X
+Every scripted motion of :mod:`flipstudy.stimuli.synth` rotates joints about the lateral X
 axis only, the same on the left and the right.  A pose is then a short vector of
 *degrees of freedom* (:data:`DOFS`, radians, rotations about +X):
 
@@ -20,8 +20,8 @@ momentum is along X, whole-body inertia about X is invariant under the root
 pitch, and joint angular velocities are sums of the DOF rates along the chain:
 all of it is evaluated here in closed form (no finite differences).
 
-The mass properties use the pieces of :class:`stimuli.body.Body` (the model the
-analyser weighs), so ``com`` agrees with :func:`stimuli.physics.center_of_mass`.
+The mass properties use the pieces of :class:`flipstudy.stimuli.body.Body` (the model the
+analyser weighs), so ``com`` agrees with :func:`flipstudy.stimuli.physics.center_of_mass`.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ def cross_x(w: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 class PlanarModel:
     """DOF vector ↔ joint angles, forward kinematics and mass properties for the
-    sagittal motions of a skeleton made by :func:`stimuli.synth.make_skeleton`."""
+    sagittal motions of a skeleton made by :func:`flipstudy.stimuli.synth.make_skeleton`."""
 
     def __init__(self, skeleton: Skeleton, body: Body):
         self.sk = skeleton

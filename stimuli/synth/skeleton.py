@@ -12,7 +12,7 @@ The shoulder joint centres are 0.259 H apart.
 Rest pose: standing upright, arms hanging down, facing +Z with the left side at
 +X (Y up, right-handed), the lowest foot points (ball of the foot and toe tip)
 on the floor ``y = 0``.  Joint names follow the CMU convention so
-:meth:`stimuli.body.Body.from_skeleton` maps the skeleton without a mapping.
+:meth:`flipstudy.stimuli.body.Body.from_skeleton` maps the skeleton without a mapping.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""The ``render`` and ``figure`` subcommands (wired into ``study/cli.py``)::
+"""The ``render`` and ``figure`` commands of the CLI (:mod:`flipstudy.study.cli`)::
 
-    from render.cli import add_commands
+    from flipstudy.study.cli.render import add_commands
     add_commands(subparsers)          # adds `render` and `figure`
 
 ``flipstudy render STUDY_DIR [--what video,ghost,trail,strip,composite,overlay]
@@ -13,14 +13,14 @@
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 
 import argparse
 import sys
 
 
 def _size(text: str):
-    from .study import parse_size
+    from flipstudy.render.study import parse_size
     try:
         return parse_size(text)
     except FlipstudyError as e:
@@ -30,13 +30,13 @@ def _size(text: str):
 def _style(path):
     if not path:
         return None
-    from .style import Style
+    from flipstudy.render.style import Style
     return Style.from_toml(path)
 
 
 def cmd_render(args) -> int:
     """``flipstudy render``: all stimuli of a study, one camera, in parallel."""
-    from .study import parse_what, render_study
+    from flipstudy.render.study import parse_what, render_study
     try:
         what = parse_what(args.what)
         rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs, fps=args.fps,
@@ -55,9 +55,9 @@ def cmd_render(args) -> int:
 
 def cmd_figure(args) -> int:
     """``flipstudy figure``: one still of one clip (ghost, trail, strip, composite, overlay)."""
-    from study.cli import load_clip
+    from .common import load_clip
 
-    from . import figures as fg
+    from flipstudy.render import figures as fg
     try:
         clip = load_clip(args.clip, args.scale, args.fps)
         style = _style(args.style)

@@ -2,7 +2,7 @@
 (Shum, Komura & Yadav 2009), with the motion-graph join as a baseline."""
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import json
 import sys
@@ -32,9 +32,9 @@ def _pick(clip, rng, label: str, spec: str):
 
 
 def cmd_concat(args) -> int:
-    from stimuli import analyse, save_bvh
-    from stimuli.edit.concat import ConcatError, concatenate, mirror, motion_graph_join
-    from study.cli import load_clip
+    from flipstudy.stimuli import analyse, save_bvh
+    from flipstudy.stimuli.edit.concat import ConcatError, concatenate, mirror, motion_graph_join
+    from .common import load_clip
     try:
         a = _pick(load_clip(args.a, args.scale, args.fps), args.range_a, "a", args.a)
         b = _pick(load_clip(args.b, args.scale, args.fps), args.range_b, "b", args.b)
@@ -57,22 +57,22 @@ def cmd_concat(args) -> int:
         save_bvh(base.clip, bpath)
         out["baseline"] = {"out": str(bpath), **base.report}
     if args.plot:
-        from render.plots import plot_concat
+        from flipstudy.render.plots import plot_concat
         srcs = [("motion 1", a, 0), ("motion 2 at T (before smoothing)", b, r["T"])]
         plot_concat(res, body, args.plot, baseline=base, sources=srcs,
                     title=f"{Path(args.out).stem}: {r['rule']} rule")
         out["plot"] = str(args.plot)
     if args.ghost:
-        from render.figures import ghost_image
+        from flipstudy.render.figures import ghost_image
         w0, w1 = r["blend_out"]
         fps = res.clip.fps
         t0 = max(0.0, w0 / fps - args.ghost_margin)
         t1 = min(res.clip.duration, w1 / fps + args.ghost_margin)
         # a side view across the first motion's angular momentum: the rotation is seen in profile
         import numpy as np
-        from render.camera import fit_camera
-        from stimuli.physics import momentum
-        from stimuli.edit.concat import torso_facing
+        from flipstudy.render.camera import fit_camera
+        from flipstudy.stimuli.physics import momentum
+        from flipstudy.stimuli.edit.concat import torso_facing
         f0, f1 = int(t0 * fps), int(np.ceil(t1 * fps)) + 1
         if args.ghost_view == "across-L":
             L = momentum(a, body).L

@@ -1,11 +1,11 @@
 """``flipstudy analyze``: wired into the main CLI with :func:`add_commands`.
 
-    from analysis.cli import add_commands
+    from flipstudy.study.cli.analyze import add_commands
     add_commands(subparsers)          # adds `analyze`, func=handler
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 
 import argparse
 import json
@@ -57,7 +57,7 @@ def add_commands(subparsers) -> None:
 
 
 def _images(specs):
-    from .pipeline import IMAGE_SLOTS
+    from flipstudy.analysis.pipeline import IMAGE_SLOTS
     out = {}
     for i, s in enumerate(specs):
         if "=" in s and not Path(s).exists():
@@ -70,8 +70,8 @@ def _images(specs):
 
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
-    from .io import NeedsExport, resolve_responses_path
-    from .pipeline import analyze
+    from flipstudy.analysis.io import NeedsExport, resolve_responses_path
+    from flipstudy.analysis.pipeline import analyze
     try:
         src = resolve_responses_path(args.responses)
         out = Path(args.out) if args.out else src.parent / "analysis"
@@ -104,7 +104,7 @@ def handler(args) -> int:
         print(f"note: with {who['n']} participant(s), intervals and tests over participants are "
               f"not meaningful (notes.md)")
     print()
-    from .tables import to_markdown
+    from flipstudy.analysis.tables import to_markdown
     print(to_markdown(res.table))
     if len(res.thresholds):
         print("detection thresholds (P(incorrect) = (1 + γ)/2):")
@@ -119,18 +119,3 @@ def handler(args) -> int:
         print(f"note: {n}")
     print(f"\nwrote {len(res.files)} files to {out}/ (table.csv, table_paper.md/.tex, figures, notes.md)")
     return 0
-
-
-def main(argv=None) -> int:
-    """Stand-alone entry (``python -m analysis.cli``) until the main CLI wires it."""
-    ap = argparse.ArgumentParser(prog="flipstudy")
-    add_commands(ap.add_subparsers(dest="command"))
-    args = ap.parse_args(argv)
-    if not getattr(args, "func", None):
-        ap.print_help()
-        return 2
-    return args.func(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

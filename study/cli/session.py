@@ -1,18 +1,17 @@
 """Session commands of the ``flipstudy`` CLI: run, export, status, simulate.
 
-``add_commands(subparsers)`` adds them to the main parser (``study/cli.py``);
-each sets ``func`` to a handler ``handler(args) -> int``.  ``python -m
-study.session_cli COMMAND ...`` runs them on their own.
+``add_commands(subparsers)`` adds them to the main parser (:mod:`flipstudy.study.cli`);
+each sets ``func`` to a handler ``handler(args) -> int``.
 """
 from __future__ import annotations
 
-from stimuli.exceptions import FlipstudyError
+from flipstudy.stimuli.exceptions import FlipstudyError
 
 import argparse
 import json
 import sys
 
-from .validate import RequestError
+from ..validate import RequestError
 
 
 def _port(text: str) -> int:
@@ -52,7 +51,7 @@ def _fail(cmd: str, e: Exception) -> int:
 
 
 def cmd_run(args) -> int:
-    from .server import serve
+    from ..server import serve
     try:
         return serve(args.study_dir, args.participant, host=args.host, port=args.port,
                      open_browser=not args.no_browser, new_session=args.new_session,
@@ -64,7 +63,7 @@ def cmd_run(args) -> int:
 
 
 def cmd_export(args) -> int:
-    from .export import export_responses
+    from ..export import export_responses
     try:
         r = export_responses(args.study_dir, args.out, participants_out=args.participants_out,
                              include_simulated=args.include_simulated)
@@ -89,8 +88,8 @@ def cmd_export(args) -> int:
 def cmd_status(args) -> int:
     from pathlib import Path
 
-    from .export import status
-    from .store import db_path
+    from ..export import status
+    from ..store import db_path
     d = Path(args.study_dir)
     if not (d / "manifest.csv").is_file():
         return _fail("status", ValueError(f"{d} is not a study folder (no manifest.csv)"))
@@ -127,7 +126,7 @@ def cmd_status(args) -> int:
 
 
 def cmd_simulate(args) -> int:
-    from .simulate import simulate
+    from ..simulate import simulate
     try:
         ids = simulate(args.study_dir, args.participants, model=args.model, seed=args.seed)
     except (FlipstudyError, RequestError) as e:
@@ -207,22 +206,3 @@ def add_commands(subparsers) -> None:
                    help="observer model: [groups.NAME] levels = [...], p_correct = [...]; sigma = 0.3")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     p.set_defaults(func=cmd_simulate)
-
-
-def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="flipstudy", description="flipstudy session commands")
-    add_commands(ap.add_subparsers(dest="command", metavar="COMMAND"))
-    return ap
-
-
-def main(argv: list[str] | None = None) -> int:
-    ap = build_parser()
-    args = ap.parse_args(argv)
-    if not getattr(args, "func", None):
-        ap.print_help()
-        return 2
-    return args.func(args)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,42 +1,18 @@
-"""The `flipstudy` command line."""
+"""``flipstudy inspect | init | stimuli | archive | edit``: clips and stimulus sets."""
 
 from __future__ import annotations
 
 import argparse
-import errno
 import json
 import sys
 from pathlib import Path
 
 
-def load_clip(spec: str, scale: float | None = None, fps: float | None = None):
-    """A CLIP argument: a built-in name (backflip, frontflip, jump) or a BVH path.
-    The same loading rules for every command: ``scale`` (metres per file unit;
-    default guessed) and ``fps`` (default: the header's) override the file."""
-    from stimuli import BUILTIN_NAMES, builtin, load_bvh
-    if spec in BUILTIN_NAMES:
-        clip = builtin(spec, **({"fps": fps} if fps else {}))
-        if scale not in (None, 1.0):
-            clip = clip.scaled(scale)
-        return clip
-    p = Path(spec)
-    if not p.exists():
-        from stimuli.exceptions import FlipstudyValueError
-        raise FlipstudyValueError(f"{spec}: neither a built-in clip ({', '.join(BUILTIN_NAMES)}) "
-                                  f"nor an existing BVH file")
-    return load_bvh(p, scale=scale, fps=fps)
-
-
-def _add_clip_args(p: argparse.ArgumentParser):
-    p.add_argument("clip", metavar="CLIP", help="built-in name (backflip, frontflip, jump) or BVH path")
-    p.add_argument("--scale", type=float, default=None,
-                   help="metres per file unit (default: guessed from the skeleton's size)")
-    p.add_argument("--fps", type=float, default=None,
-                   help="frames per second, overriding the file's Frame Time")
+from .common import add_clip_args, add_json, add_mass, load_clip
 
 
 def cmd_inspect(args) -> int:
-    from stimuli import analyse
+    from flipstudy.stimuli import analyse
     clip = load_clip(args.clip, args.scale, args.fps)
     original = None
     if args.compare:
@@ -48,7 +24,7 @@ def cmd_inspect(args) -> int:
         a = analyse(clip, total_mass=args.mass, estimate=not args.prior_masses)
     d = a.to_dict()
     if args.plot:
-        from render.plots import plot_analysis, plot_compare
+        from flipstudy.render.plots import plot_analysis, plot_compare
         if original is not None:
             plot_compare(a, original, args.plot)
         else:
@@ -94,8 +70,8 @@ def cmd_inspect(args) -> int:
 
 
 def cmd_init(args) -> int:
-    from stimuli.design import PAPER_DESIGN, parse_design
-    from stimuli.motion.bvh import atomic_write_text
+    from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
+    from flipstudy.stimuli.motion.bvh import atomic_write_text
     out = Path(args.design)
     if out.exists() and not args.force:
         print(f"flipstudy init: {out} exists; pass --force to overwrite", file=sys.stderr)
@@ -109,9 +85,9 @@ def cmd_init(args) -> int:
 
 
 def cmd_stimuli(args) -> int:
-    from stimuli.design import load_design
-    from stimuli.stimset import build_stimuli
-    from study.archive import describe, refuse_real_answers
+    from flipstudy.stimuli.design import load_design
+    from flipstudy.stimuli.stimset import build_stimuli
+    from flipstudy.study.archive import describe, refuse_real_answers
     design = load_design(args.design)
     replaced = {}
 
@@ -132,7 +108,7 @@ def cmd_stimuli(args) -> int:
 
 
 def cmd_archive(args) -> int:
-    from study.archive import answers_in, archive_study, describe
+    from flipstudy.study.archive import answers_in, archive_study, describe
     what = describe(answers_in(args.study_dir))
     dest = archive_study(args.study_dir, args.to)
     print(f"moved {args.study_dir} to {dest} (everything kept: {what})")
@@ -143,9 +119,9 @@ def cmd_archive(args) -> int:
 def cmd_edit(args) -> int:
     """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit
     with momentum repair (5.5), measured."""
-    from stimuli import analyse, save_bvh
-    from stimuli.edit.animator import AnimatorEditError, repair_momentum, straighten
-    from stimuli.edit.multiflip import FlipEditError, measure, multiflip
+    from flipstudy.stimuli import analyse, save_bvh
+    from flipstudy.stimuli.edit.animator import AnimatorEditError, repair_momentum, straighten
+    from flipstudy.stimuli.edit.multiflip import FlipEditError, measure, multiflip
     if args.flips is None and not args.straighten and not args.join:
         print("flipstudy edit: error: nothing to do: give --flips N, --straighten legs|arms or --join OTHER",
               file=sys.stderr)
@@ -158,7 +134,7 @@ def cmd_edit(args) -> int:
     out_clip, lines, plot = clip, [], None
     try:
         if args.join:
-            from stimuli.edit.join import join_in_flight
+            from flipstudy.stimuli.edit.join import join_in_flight
             other = load_clip(args.join, args.scale, args.fps)
             j = join_in_flight(a, other)
             r = j["report"]
@@ -217,7 +193,7 @@ def cmd_edit(args) -> int:
     for ln in lines:
         print("  " + ln)
     if args.plot:
-        from render.plots import plot_compare, plot_repair
+        from flipstudy.render.plots import plot_compare, plot_repair
         if plot and plot[0] == "repair" and args.flips is None:
             plot_repair(plot[1], args.plot, title=f"{Path(str(args.clip)).stem}: straight {args.straighten}")
         else:
@@ -228,30 +204,27 @@ def cmd_edit(args) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(prog="flipstudy", description=(
-        "Perception studies of ballistic character motion: stimuli, rendering, sessions, analysis."))
-    sub = ap.add_subparsers(dest="command", metavar="COMMAND")
-    p = sub.add_parser("inspect", help="flight analysis of one clip (units, gravity, momentum, masses)",
+def add_commands(subparsers) -> None:
+    p = subparsers.add_parser("inspect", help="flight analysis of one clip (units, gravity, momentum, masses)",
                        description="Find the flight, estimate segment masses, measure momentum and "
                                    "check units and frame time against gravity.")
-    _add_clip_args(p)
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+    add_clip_args(p)
+    add_json(p)
     p.add_argument("--plot", metavar="FILE.png", help="draw |L|(t), |p|(t) and COM height")
-    p.add_argument("--mass", type=float, default=70.0, help="total body mass in kg (default 70)")
+    add_mass(p)
     p.add_argument("--prior-masses", action="store_true",
                    help="use the de Leva table masses instead of estimating them from the flight")
     p.add_argument("--compare", metavar="ORIGINAL",
                    help="plot |L|(t) of CLIP over ORIGINAL (a stimulus over its base clip) to --plot")
     p.set_defaults(func=cmd_inspect)
 
-    p = sub.add_parser("init", help="write a study design (TOML): the paper's design",
+    p = subparsers.add_parser("init", help="write a study design (TOML): the paper's design",
                        description="Write the design of the paper's study (Section 7) as a TOML file to edit.")
     p.add_argument("design", metavar="DESIGN.toml")
     p.add_argument("--force", action="store_true", help="overwrite an existing file")
     p.set_defaults(func=cmd_init)
 
-    p = sub.add_parser("stimuli", help="generate, measure and write the stimuli of a design",
+    p = subparsers.add_parser("stimuli", help="generate, measure and write the stimuli of a design",
                        description="Inject the design's errors into its clips, measure every stimulus "
                                    "with the analyser and write .bvh, .npz and manifest.csv (atomically).")
     p.add_argument("design", metavar="DESIGN.toml")
@@ -263,7 +236,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_stimuli)
 
-    p = sub.add_parser("archive", help="move a whole study folder aside (STUDY-archived-DATE)",
+    p = subparsers.add_parser("archive", help="move a whole study folder aside (STUDY-archived-DATE)",
                        description="Move STUDY_DIR, with everything in it (answers, renders, "
                                    "exports), to STUDY_DIR-archived-YYYYMMDDTHHMMSSZ beside it "
                                    "(one rename: nothing is copied or deleted), so that a fresh "
@@ -274,12 +247,12 @@ def build_parser() -> argparse.ArgumentParser:
                    help="where to move it (default: STUDY_DIR-archived-DATE beside it; same file system)")
     p.set_defaults(func=cmd_archive)
 
-    p = sub.add_parser("edit", help="more flips, or an animator edit in flight, with momentum repaired",
+    p = subparsers.add_parser("edit", help="more flips, or an animator edit in flight, with momentum repaired",
                        description="Multi-flip editing (Majkowska & Faloutsos 2007, Section 5): turn a single "
                                    "flip into N flips (self-looping search, sequencing, retiming by k, COM "
                                    "repositioning), and/or straighten the legs or arms in flight and repair "
                                    "|L| by non-uniform retiming (5.5). Prints what it did and measured.")
-    _add_clip_args(p)
+    add_clip_args(p)
     p.add_argument("--flips", type=int, default=None, metavar="N", help="number of flips of the result (1-6)")
     p.add_argument("--k-ratio", type=float, default=0.7,
                    help="retiming factor as a fraction of k* (default 0.7, the paper's; 1 = continuous momentum)")
@@ -293,86 +266,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "(same skeleton; |L| matched by retiming)")
     p.add_argument("--midpoint", action="store_true",
                    help="second-order variant of the paper's retiming rule for the repair")
-    p.add_argument("--mass", type=float, default=70.0, help="total body mass in kg (default 70)")
+    add_mass(p)
     p.add_argument("--out", required=True, metavar="OUT.bvh")
     p.add_argument("--plot", metavar="FILE.png",
                    help="|L|(t) of the result over the original (with --straighten alone: the error "
                         "before/after repair, the paper's Figure 3)")
     p.set_defaults(func=cmd_edit)
-
-    from render.cli import add_commands as add_render
-    from study.session_cli import add_commands as add_session
-    from analysis.cli import add_commands as add_analysis
-    add_render(sub)
-    add_session(sub)
-    add_analysis(sub)
-    from study.reproduce import add_commands as add_reproduce
-    add_reproduce(sub)
-    from study.concat_cli import add_commands as add_concat
-    add_concat(sub)
-    from study.jump_cli import add_commands as add_jump
-    add_jump(sub)
-    return ap
-
-
-def _interrupted(command) -> int:
-    """Ctrl-C: one line, the shell's 128 + SIGINT; a further Ctrl-C while the
-    interpreter shuts down is ignored (no second traceback, no other status)."""
-    import signal
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    print(f"flipstudy{' ' + command if command else ''}: interrupted", file=sys.stderr)
-    return 130
-
-
-#: Exit status of an internal error (a bug): EX_SOFTWARE of BSD's sysexits.h.
-EXIT_BUG = 70
-#: OSErrors about a file the user named that the machine refused (one line, status 1)
-_ENVIRONMENT_ERRNOS = {errno.ENOENT, errno.EACCES, errno.EPERM, errno.ENOSPC, errno.EROFS,
-                       errno.EDQUOT, errno.EEXIST, errno.EISDIR, errno.ENOTDIR, errno.ENAMETOOLONG,
-                       errno.ELOOP, errno.EBUSY}
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Run one command.  Exit status: 0 done, 1 a user error (a :class:`FlipstudyError`,
-    printed in one line naming the file and line or field), 2 a usage error (argparse),
-    130 interrupted, 70 (:data:`EXIT_BUG`) anything else: a bug, printed with its
-    traceback and a request to report it."""
-    try:                                            # the imports take a second or two
-        ap = build_parser()
-    except KeyboardInterrupt:
-        return _interrupted(None)
-    args = ap.parse_args(argv)
-    if not getattr(args, "func", None):
-        ap.print_help()
-        return 2
-    from stimuli.exceptions import FlipstudyError
-    try:
-        return args.func(args)
-    except KeyboardInterrupt:                       # Ctrl-C: one line, the shell's 128 + SIGINT
-        return _interrupted(args.command)
-    except FlipstudyError as e:                     # a user error: one line, no traceback
-        print(f"flipstudy {args.command}: error: {e}", file=sys.stderr)
-        return 1
-    except OSError as e:
-        if e.filename is None or e.errno not in _ENVIRONMENT_ERRNOS:
-            return _bug(args, e)
-        # the machine refused a file the user named (disk full, no permission, read-only, a
-        # missing folder): not a bug; one line naming the file
-        print(f"flipstudy {args.command}: error: {e.filename}: {e.strerror}", file=sys.stderr)
-        return 1
-    except Exception as e:                          # a bug: the traceback, and ask for a report
-        return _bug(args, e)
-
-
-def _bug(args, e: BaseException) -> int:
-    """An exception that is not a user error: its traceback and a request to report it."""
-    import traceback
-    traceback.print_exception(e)
-    print(f"flipstudy {args.command}: internal error ({type(e).__name__}): this is a bug in "
-          f"flipstudy, not a problem with your input; please report it with the command line "
-          f"and the traceback above", file=sys.stderr)
-    return EXIT_BUG
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,0 +1,29 @@
+"""Loading a CLIP the same way everywhere: a built-in name or a BVH path."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from .exceptions import FlipstudyFileNotFoundError
+
+
+def load_clip(spec: str, scale: float | None = None, fps: float | None = None):
+    """A clip by name: a built-in name (backflip, frontflip, jump) or a BVH path.
+    The same loading rules for every command: ``scale`` (metres per file unit;
+    default guessed) and ``fps`` (default: the header's) override the file.  A name
+    that is neither raises :class:`~flipstudy.stimuli.exceptions.FlipstudyFileNotFoundError`.
+
+    >>> from flipstudy.stimuli import load_clip
+    >>> load_clip("backflip", fps=60).fps
+    60.0
+    """
+    from flipstudy.stimuli import BUILTIN_NAMES, builtin, load_bvh
+    if spec in BUILTIN_NAMES:
+        clip = builtin(spec, **({"fps": fps} if fps else {}))
+        if scale not in (None, 1.0):
+            clip = clip.scaled(scale)
+        return clip
+    p = Path(spec)
+    if not p.exists():
+        raise FlipstudyFileNotFoundError(f"{spec}: neither a built-in clip ({', '.join(BUILTIN_NAMES)}) "
+                                  f"nor an existing BVH file")
+    return load_bvh(p, scale=scale, fps=fps)
