@@ -253,6 +253,26 @@ def finite_difference(x: np.ndarray, fps: float) -> np.ndarray:
     return np.gradient(x, 1.0 / fps, axis=0, edge_order=2)
 
 
+def rotation_log(R: np.ndarray) -> np.ndarray:
+    """Rotation vectors (…,3) of rotation matrices (…,3,3): the axis times the angle.
+
+    Closed form, θ = atan2(|s|, (tr R − 1)/2) with s the skew part, accurate for the
+    small and moderate turns between nearby frames; turns beyond 2.5 rad (where the
+    skew part vanishes towards π) go through scipy's ``Rotation``."""
+    s = 0.5 * np.stack([R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0],
+                        R[..., 1, 0] - R[..., 0, 1]], -1)
+    sn = np.linalg.norm(s, axis=-1)
+    c = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
+    th = np.arctan2(sn, c)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = np.where(sn > 1e-12, th / sn, 1.0 + th * th / 6.0)
+    out = s * k[..., None]
+    big = th > 2.5
+    if np.any(big):
+        out[big] = Rotation.from_matrix(R[big]).as_rotvec()
+    return out
+
+
 def angular_velocity(R: np.ndarray, fps: float) -> np.ndarray:
     """World-frame angular velocity from world rotation matrices R (F,...,3,3).
 
@@ -264,16 +284,16 @@ def angular_velocity(R: np.ndarray, fps: float) -> np.ndarray:
     out = np.zeros(R.shape[:-1])
     if F < 2:
         return out
-    rot = Rotation.from_matrix(R)
+
+    def log(a, b):                      # log(R_a R_bᵀ) for frame index arrays/slices
+        return rotation_log(R[a] @ np.swapaxes(R[b], -1, -2))
     if F >= 3:
-        out[1:-1] = (rot[2:] * rot[:-2].inv()).as_rotvec() * (fps / 2.0)
+        out[1:-1] = log(slice(2, None), slice(None, -2)) * (fps / 2.0)
         # one-sided, second order at the ends (like np.gradient's edge_order=2):
         # ω₀ ≈ [4 log(R₁R₀ᵀ) − log(R₂R₀ᵀ)] / 2Δt, still exact for a constant spin
-        out[0] = (2.0 * (rot[1] * rot[0].inv()).as_rotvec()
-                  - 0.5 * (rot[2] * rot[0].inv()).as_rotvec()) * fps
-        out[-1] = (2.0 * (rot[-1] * rot[-2].inv()).as_rotvec()
-                   - 0.5 * (rot[-1] * rot[-3].inv()).as_rotvec()) * fps
+        out[0] = (2.0 * log(1, 0) - 0.5 * log(2, 0)) * fps
+        out[-1] = (2.0 * log(-1, -2) - 0.5 * log(-1, -3)) * fps
         return out
-    out[0] = (rot[1] * rot[0].inv()).as_rotvec() * fps
+    out[0] = log(1, 0) * fps
     out[-1] = out[0]
     return out
