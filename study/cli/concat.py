@@ -68,21 +68,11 @@ def cmd_concat(args) -> int:
         fps = res.clip.fps
         t0 = max(0.0, w0 / fps - args.ghost_margin)
         t1 = min(res.clip.duration, w1 / fps + args.ghost_margin)
-        # a side view across the first motion's angular momentum: the rotation is seen in profile
         import numpy as np
-        from flipstudy.render.camera import fit_camera
-        from flipstudy.stimuli.physics import momentum
-        from flipstudy.stimuli.edit.concat import torso_facing
+        from flipstudy.render.camera import transition_camera
         f0, f1 = int(t0 * fps), int(np.ceil(t1 * fps)) + 1
-        if args.ghost_view == "across-L":
-            L = momentum(a, body).L
-            d = np.cross([0.0, 1.0, 0.0], L[r["phases_a"]["main"][0]:r["phases_a"]["main"][1] + 1].mean(axis=0))
-        else:
-            # the performer's profile (side) or three-quarter front view at the blend
-            d = torso_facing(res.clip, body)[r["blend_out"][0]]
-            if args.ghost_view == "three-quarter":
-                d = np.array([[0.7071, 0, -0.7071], [0, 1, 0], [0.7071, 0, 0.7071]]) @ d
-        cam = fit_camera(res.clip.joint_positions()[f0:f1], direction=d if np.linalg.norm(d) > 1e-6 else (0, 0, 1))
+        cam = transition_camera(res.clip, a, body, args.ghost_view, main=r["phases_a"]["main"],
+                                at=r["blend_out"][0], frames=(f0, f1))
         ghost_image(res.clip, args.ghost, span=(t0, t1), interval=args.ghost_interval, body=body, camera=cam)
         out["ghost"] = str(args.ghost)
     if args.json:
