@@ -8,6 +8,8 @@ import json
 import sys
 from pathlib import Path
 
+from .common import add_json, add_mass, add_out, add_units
+
 
 def _range(text: str) -> tuple[int, int]:
     try:
@@ -146,10 +148,9 @@ def add_commands(subparsers) -> None:
     p.add_argument("--baseline", choices=["motion-graph"], default=None,
                    help="also join the two at their most similar poses (Kovar et al. 2002), written "
                         "beside OUT as OUT_motion-graph.bvh")
-    p.add_argument("--mass", type=float, default=70.0, help="total body mass in kg (default 70)")
-    p.add_argument("--scale", type=float, default=None, help="metres per file unit (both files)")
-    p.add_argument("--fps", type=float, default=None, help="frames per second (both files)")
-    p.add_argument("--out", required=True, metavar="OUT.bvh")
+    add_mass(p)
+    add_units(p, scale_help="metres per file unit (both files)", fps_help="frames per second (both files)")
+    add_out(p, "OUT.bvh")
     p.add_argument("--plot", metavar="L.png", help="|L|(t) against the baseline (Figure 8 style)")
     p.add_argument("--ghost", metavar="GHOST.png", help="ghost composite of the transition")
     p.add_argument("--ghost-interval", type=float, default=0.15, metavar="S",
@@ -159,5 +160,5 @@ def add_commands(subparsers) -> None:
     p.add_argument("--ghost-view", choices=["across-L", "side", "three-quarter"], default="across-L",
                    help="ghost camera: across the first motion's angular momentum (default: a flip or "
                         "cartwheel seen in profile), the performer's side, or three-quarter front")
-    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    add_json(p, "print the report as JSON")
     p.set_defaults(func=cmd_concat)

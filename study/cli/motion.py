@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 
-from .common import add_clip_args, add_json, add_mass, load_clip
+from .common import add_clip_args, add_json, add_mass, add_out, load_clip
 
 
 def cmd_inspect(args) -> int:
@@ -211,7 +211,7 @@ def add_commands(subparsers) -> None:
                        description="Inject the design's errors into its clips, measure every stimulus "
                                    "with the analyser and write .bvh, .npz and manifest.csv (atomically).")
     p.add_argument("design", metavar="DESIGN.toml")
-    p.add_argument("--out", required=True, metavar="STUDY_DIR")
+    add_out(p, "STUDY_DIR")
     p.add_argument("--force", action="store_true",
                    help="replace an existing STUDY_DIR, unless it holds any real participant's "
                         "answer (then move it aside with `flipstudy archive STUDY_DIR`); a study "
@@ -250,7 +250,7 @@ def add_commands(subparsers) -> None:
     p.add_argument("--midpoint", action="store_true",
                    help="second-order variant of the paper's retiming rule for the repair")
     add_mass(p)
-    p.add_argument("--out", required=True, metavar="OUT.bvh")
+    add_out(p, "OUT.bvh")
     p.add_argument("--plot", metavar="FILE.png",
                    help="|L|(t) of the result over the original (with --straighten alone: the error "
                         "before/after repair, the paper's Figure 3)")
