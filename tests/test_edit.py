@@ -124,3 +124,10 @@ def test_edit_pipeline_straightens_then_flips_the_repaired_clip():
         edit(clip)
     with pytest.raises(FlipEditError, match="no flight"):
         edit(clip.slice(0, 30), flips=2)
+
+
+def test_sample_keeps_meta_as_provenance_only():
+    from flipstudy.stimuli import builtin
+    clip = builtin("backflip")
+    s = sample(clip, np.arange(0, 20, 0.5))
+    assert set(s.meta) == set(clip.meta)

@@ -110,7 +110,6 @@ def retime_flight(clip: Clip, body, to: int, ld: int, grid: np.ndarray, ratio: n
     tail = np.arange(flight[-1] + 1.0, clip.num_frames - 1 + 1e-9, 1.0)
     src = np.concatenate([np.arange(to, dtype=float), flight, tail])
     new = sample(clip, src)
-    new.meta.pop("source_frames", None)
     ld_n = to + flight.size - 1
     G = -2.0 * path[1, 0]
     com = center_of_mass(new, body)

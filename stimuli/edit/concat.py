@@ -636,7 +636,6 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
                           "blending is per joint")
     if abs(a.fps - b.fps) > 1e-9:
         b = sample(b, np.arange(0, b.num_frames - 1 + 1e-9, b.fps / a.fps)).with_fps(a.fps)
-        b.meta.pop("source_frames", None)
     if body is None:
         body = analyse(a).body
     m1 = prepare(a, body, tm=tm_a, main=main_a)
@@ -763,13 +762,11 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
                                        midpoint=True)
             tail = np.arange(src2[-1] + 1.0, out.num_frames - 1 + 1e-9, 1.0)
             out = sample(out, np.concatenate([np.arange(w0, dtype=float), src2, tail]))
-            out.meta.pop("source_frames", None)
             w1 = w0 + src2.size - 1
             Lw = np.linalg.norm(momentum(out, body).L, axis=1)
         applied = {"mode": "profile", "rate": (f1 - f0) / max(w1 - w0, 1), "passes": ratios}
     elif smoothing not in ("uniform", "profile", "none"):
         raise ConcatError(f"smoothing must be 'profile', 'uniform' or 'none', got {smoothing!r}")
-    out.meta.pop("source_frames", None)
     feet = {}
     if fix_feet:
         out, feet = pin_feet(out, body, (w0, w1))

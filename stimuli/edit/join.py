@@ -140,7 +140,6 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     if not (0.33 < s < 3.0):
         raise FlipEditError(f"|L| differs by a factor {s:.2f}: too much to match by retiming (0.33-3)")
     bc = retime(bc, s)
-    bc.meta.pop("source_frames", None)
     b = analyse(bc, body=body, estimate=False)
     if b.flight is None:
         raise FlipEditError("the second motion has no flight after retiming")

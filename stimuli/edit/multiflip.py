@@ -409,7 +409,6 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
     shift[ld_n + 1:] = target[-1] - com_new[ld_n]
     meta = {**clip.meta, "edit": f"multiflip {flips}"}
-    meta.pop("source_frames", None)
     out = Clip(clip.skeleton, fps, root_n + raise_before + shift, rot_n, None,
                {**meta, "takeoff": to_n, "landing": ld_n, "flips": flips})
 
