@@ -128,24 +128,24 @@ def test_multiflip_on_builtin_flips(flips, name, n):
     assert m["L_cv_pct"] < 2.0
     assert m["com_rms_mm"] < 1.0
     rep = r.report
-    assert rep["k"] == pytest.approx(rep["k_star"])
-    assert rep["dp_takeoff_pct"] < 5.0 and rep["dp_landing_pct"] < 5.0, rep
+    assert rep.k == pytest.approx(rep.k_star)
+    assert rep.dp_takeoff_pct < 5.0 and rep.dp_landing_pct < 5.0, rep
     # the analyser finds the flight where the method put it, and earth's gravity
     fl = m["analyser_flight"]
     assert abs(fl[0] - r.takeoff) <= 2 and abs(fl[1] - r.landing) <= 2
     assert m["apparent_gravity"] == pytest.approx(9.81, rel=0.02)
     # faster rotation: the flight's |L| is k* times the original's
-    assert m["L_mean"] == pytest.approx(rep["k"] * a.L_mean, rel=0.05)
+    assert m["L_mean"] == pytest.approx(rep.k * a.L_mean, rel=0.05)
 
 
 def test_default_k_is_the_papers_and_its_jump_is_reported(flips):
     a = flips["backflip"]
     r = multiflip(a, 2)
-    assert r.report["k_ratio"] == pytest.approx(0.7)
+    assert r.report.k_ratio == pytest.approx(0.7)
     m = measure(r, a)
     assert abs(m["turn_deg"] - 720) < 10
     # a slower take-off than the flight needs: a measured, reported jump in momentum
-    assert r.report["dp_takeoff_pct"] > 20
+    assert r.report.dp_takeoff_pct > 20
 
 
 def test_refusals(flips):
@@ -183,10 +183,10 @@ def test_straight_legs_edit_is_repaired_by_retiming(flips, name):
     a = flips[name]
     edited = straighten(a, "legs")
     r = repair_momentum(a, edited)
-    assert r.report["max_error_before_pct"] > 50
-    assert r.report["max_error_after_pct"] <= 12
-    assert repair_momentum(a, edited, midpoint=True).report["max_error_after_pct"] <= 7
-    assert r.report["flight_s_after"] > r.report["flight_s_before"]
+    assert r.report.max_error_before_pct > 50
+    assert r.report.max_error_after_pct <= 12
+    assert repair_momentum(a, edited, midpoint=True).report.max_error_after_pct <= 7
+    assert r.report.flight_s_after > r.report.flight_s_before
     m = analyse(r.clip, body=a.body, estimate=False)
     assert m.flight is not None and m.apparent_gravity == pytest.approx(9.81, rel=0.02)
     # the legs really are straight in the middle of the flight
@@ -201,8 +201,8 @@ def test_midpoint_rule_follows_a_fast_edit_more_closely(flips):
     from flipstudy.stimuli.edit.animator import repair_momentum, straighten
     a = flips["frontflip"]
     edited = straighten(a, "legs")
-    paper = repair_momentum(a, edited).report["max_error_after_pct"]
-    mid = repair_momentum(a, edited, midpoint=True).report["max_error_after_pct"]
+    paper = repair_momentum(a, edited).report.max_error_after_pct
+    mid = repair_momentum(a, edited, midpoint=True).report.max_error_after_pct
     assert mid < paper
 
 
@@ -309,7 +309,7 @@ def test_landing_join_on_the_landing_frame_itself():
     from flipstudy.stimuli import load_bvh
     a = analyse(load_bvh(shared_file("90_11.bvh")))
     r = multiflip(a, 3)
-    assert r.report["landing_join"]["g"] == a.landing
+    assert r.report.landing_join.g == a.landing
     m = measure(r, a)
     assert m["analyser_flight"] == [r.takeoff, r.landing]
     assert m["turn_deg"] > 600

@@ -152,22 +152,22 @@ def cmd_edit(args) -> int:
                      f"{r['dp_takeoff_pct']:.1f} %, landing {r['dp_landing_pct']:.1f} %")
     if steps.repair is not None:
         r = steps.repair.report
-        lines.append(f"straighten {args.straighten}: |L| error {r['max_error_before_pct']:.0f} % before "
-                     f"retiming, {r['max_error_after_pct']:.1f} % after ({r['rule']} rule); flight "
-                     f"{r['flight_s_before']:.3f} → {r['flight_s_after']:.3f} s, height "
-                     f"{r['jump_height_before_m']:.2f} → {r['jump_height_after_m']:.2f} m")
+        lines.append(f"straighten {args.straighten}: |L| error {r.max_error_before_pct:.0f} % before "
+                     f"retiming, {r.max_error_after_pct:.1f} % after ({r.rule} rule); flight "
+                     f"{r.flight_s_before:.3f} → {r.flight_s_after:.3f} s, height "
+                     f"{r.jump_height_before_m:.2f} → {r.jump_height_after_m:.2f} m")
     if steps.multiflip is not None:
         r, m = steps.multiflip.report, steps.measured
         lines += [
-            f"self-looping sequence  frames {r['self_loop']['m']}–{r['self_loop']['n']} "
-            f"(turn {r['self_loop']['phi_deg']:.1f}°, distance {r['self_loop']['distance']:.3f}), "
-            f"repeated {r['repetitions'] + 1}×; landing join {r['landing_join']['f_source']} → "
-            f"{r['landing_join']['g']} (turn error {r['landing_join']['turn_error_deg']:+.1f}°, spread)",
-            f"retiming              k* = {r['k_star']:.3f}, k = {r['k']:.3f} ({r['k_ratio']:.2f} k*), "
-            f"landing phase {r['k_landing']:.3f}; flight {r['flight_s_before_retiming']:.3f} → "
-            f"{r['flight_s']:.3f} s",
-            f"momentum jump         take-off {r['dp_takeoff_pct']:.1f} %, landing "
-            f"{r['dp_landing_pct']:.1f} % of the take-off momentum",
+            f"self-looping sequence  frames {r.self_loop.m}–{r.self_loop.n} "
+            f"(turn {r.self_loop.phi_deg:.1f}°, distance {r.self_loop.distance:.3f}), "
+            f"repeated {r.repetitions + 1}×; landing join {r.landing_join.f_source} → "
+            f"{r.landing_join.g} (turn error {r.landing_join.turn_error_deg:+.1f}°, spread)",
+            f"retiming              k* = {r.k_star:.3f}, k = {r.k:.3f} ({r.k_ratio:.2f} k*), "
+            f"landing phase {r.k_landing:.3f}; flight {r.flight_s_before_retiming:.3f} → "
+            f"{r.flight_s:.3f} s",
+            f"momentum jump         take-off {r.dp_takeoff_pct:.1f} %, landing "
+            f"{r.dp_landing_pct:.1f} % of the take-off momentum",
             f"measured              turn {m['turn_deg']:.1f}° (frames {m['turn_span'][0]}–"
             f"{m['turn_span'][1]}), flight |L| mean {m['L_mean']:.2f} kg·m²/s CV {m['L_cv_pct']:.2f} %, "
             f"COM residual {m['com_rms_mm']:.2f} mm, gravity {m['apparent_gravity']:.2f} m/s²"]
