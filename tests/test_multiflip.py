@@ -214,27 +214,27 @@ def test_join_tuck_take_off_with_pike_landing():
     from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(builtin("backflip"))
     r = join_in_flight(a, builtin("backflip", shape="pike"))
-    rep = r["report"]
-    assert abs(rep["turn_deg"] - 360) < 10
-    assert rep["L_mean"] == pytest.approx(rep["L_first"], rel=0.05)
-    assert rep["L_cv_pct"] < 8
-    assert rep["dp_takeoff_pct"] < 2
+    rep = r.report
+    assert abs(rep.turn_deg - 360) < 10
+    assert rep.L_mean == pytest.approx(rep.L_first, rel=0.05)
+    assert rep.L_cv_pct < 8
+    assert rep.dp_takeoff_pct < 2
     # the orientations agree ⟂ L and the cross-fade turns only about L, by what L explains
-    assert rep["join"]["swing_deg"] < 5
-    xf = rep["join"]["crossfade"]
+    assert rep.join.swing_deg < 5
+    xf = rep.join.crossfade
     assert xf["unexplained_deg"] < 5
     assert xf["turned_about_L_deg"] == pytest.approx(xf["explained_about_L_deg"], abs=5)
     # the flight lasts what the take-off velocity and the landing height give
     # (to the nearest frame), and the character lands and stands on the floor
-    assert abs(rep["flight_s"] - rep["flight_s_required"]) <= 0.5 / a.clip.fps + 1e-9
-    feet = r["clip"].joint_positions()[-1, :, 1].min()
+    assert abs(rep.flight_s - rep.flight_s_required) <= 0.5 / a.clip.fps + 1e-9
+    feet = r.clip.joint_positions()[-1, :, 1].min()
     assert abs(feet - a.clip.joint_positions()[-1, :, 1].min()) < 0.005
-    m = analyse(r["clip"], body=a.body, estimate=False)
+    m = analyse(r.clip, body=a.body, estimate=False)
     assert m.flight is not None and m.apparent_gravity == pytest.approx(9.81, rel=0.02)
     # the legs are straight (piked) after the join and bent (tucked) before it
     knee = a.clip.skeleton.index(a.body.landmarks["knee_l"])
-    bend = lambda f: Rotation.from_quat(r["clip"].rotations[f, knee]).magnitude()   # noqa: E731
-    before, after = rep["join"]["first"] - 3, rep["join"]["first"] + 12
+    bend = lambda f: Rotation.from_quat(r.clip.rotations[f, knee]).magnitude()   # noqa: E731
+    before, after = rep.join.first - 3, rep.join.first + 12
     assert bend(before) > np.radians(90) and bend(after) < np.radians(30)
 
 
@@ -324,8 +324,8 @@ def test_join_of_two_real_backflips_is_allowed():
     from flipstudy.study.cli import load_clip
     from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(load_clip(str(shared_file("87_03.bvh")), None, 60.0))
-    r = join_in_flight(a, load_clip(str(shared_file("88_01.bvh")), None, 60.0))["report"]
-    assert r["join"]["swing_deg"] < 10
-    assert r["join"]["crossfade"]["unexplained_deg"] < 15
-    assert abs(r["turn_deg"] - 360) < 15
-    assert r["L_cv_pct"] < r["L_cv_bound_pct"]
+    r = join_in_flight(a, load_clip(str(shared_file("88_01.bvh")), None, 60.0)).report
+    assert r.join.swing_deg < 10
+    assert r.join.crossfade["unexplained_deg"] < 15
+    assert abs(r.turn_deg - 360) < 15
+    assert r.L_cv_pct < r.L_cv_bound_pct

@@ -11,18 +11,22 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
 from .animator import Repair, repair_momentum, straighten as straighten_group
 from .multiflip import FlipEditError, MultiFlip, measure, multiflip
 
+if TYPE_CHECKING:
+    from .join import Join
+
 
 @dataclass
 class EditSteps:
     """What each step of :func:`edit` made and measured (``None``: not run)."""
     #: :func:`~flipstudy.stimuli.edit.join.join_in_flight`'s result
-    join: dict | None = None
+    join: Join | None = None
     #: the straightening's :func:`~flipstudy.stimuli.edit.animator.repair_momentum`
     repair: Repair | None = None
     #: :func:`~flipstudy.stimuli.edit.multiflip.multiflip`'s result
@@ -63,7 +67,7 @@ def edit(clip: Clip | Analysis, *, flips: int | None = None, k_ratio: float = 0.
     if join is not None:
         from .join import join_in_flight
         steps.join = join_in_flight(a, join)
-        out = steps.join["clip"]
+        out = steps.join.clip
         if flips is not None or straighten:
             raise FlipEditError("--join is made on its own (not with --flips or --straighten)")
     base = a

@@ -138,18 +138,18 @@ def cmd_edit(args) -> int:
         return 1
     out_clip, steps, lines = res.clip, res.steps, []
     if steps.join is not None:
-        r = steps.join["report"]
-        lines.append(f"join {args.join}: turned {r['yaw_deg']:.0f}° about the vertical, retimed ×"
-                     f"{r['retime']:.3f} to match |L|; joined at frame {r['join']['first']} → its "
-                     f"frame {r['join']['second']} (distance {r['join']['distance']:.2f})")
-        xf = r["join"]["crossfade"]
-        lines.append(f"cross-fade            root orientations {r['join']['swing_deg']:.1f}° apart ⟂ L; turns "
+        r = steps.join.report
+        lines.append(f"join {args.join}: turned {r.yaw_deg:.0f}° about the vertical, retimed ×"
+                     f"{r.retime:.3f} to match |L|; joined at frame {r.join.first} → its "
+                     f"frame {r.join.second} (distance {r.join.distance:.2f})")
+        xf = r.join.crossfade
+        lines.append(f"cross-fade            root orientations {r.join.swing_deg:.1f}° apart ⟂ L; turns "
                      f"{xf['turned_perp_deg']:.1f}° ⟂ L ({xf['explained_perp_deg']:.1f}° explained by L, "
                      f"{xf['unexplained_deg']:.1f}° not) and {xf['turned_about_L_deg']:.1f}° about L "
                      f"({xf['explained_about_L_deg']:.1f}° explained)")
-        lines.append(f"measured              turn {r['turn_deg']:.1f}°, flight |L| mean {r['L_mean']:.2f} "
-                     f"(first {r['L_first']:.2f}) CV {r['L_cv_pct']:.1f} %, momentum jump take-off "
-                     f"{r['dp_takeoff_pct']:.1f} %, landing {r['dp_landing_pct']:.1f} %")
+        lines.append(f"measured              turn {r.turn_deg:.1f}°, flight |L| mean {r.L_mean:.2f} "
+                     f"(first {r.L_first:.2f}) CV {r.L_cv_pct:.1f} %, momentum jump take-off "
+                     f"{r.dp_takeoff_pct:.1f} %, landing {r.dp_landing_pct:.1f} %")
     if steps.repair is not None:
         r = steps.repair.report
         lines.append(f"straighten {args.straighten}: |L| error {r.max_error_before_pct:.0f} % before "
