@@ -18,9 +18,24 @@ True
 
 Every user error is a :class:`FlipstudyError`.
 """
-from flipstudy.stimuli import (BVHError, Body, Clip, FlipstudyError, Skeleton, analyse, builtin, load_bvh,
-                      save_bvh)
-from flipstudy.stimuli.analyse import Analysis
+from flipstudy.stimuli.exceptions import FlipstudyError
+
+_LAZY = ("BVHError", "Body", "Clip", "Skeleton", "analyse", "builtin", "load_bvh", "save_bvh", "Analysis")
+
+
+def __getattr__(name: str):
+    # imported on first use, so that ``import flipstudy.study.cli`` loads no scipy
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import flipstudy.stimuli
+    value = getattr(flipstudy.stimuli, name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __version__ = "0.1.0"
 

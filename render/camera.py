@@ -214,6 +214,45 @@ class Stage:
                 "takeoffs": list(self.takeoffs), "landings": list(self.landings)}
 
 
+#: views of :func:`transition_camera`
+TRANSITION_VIEWS = ("across-L", "side", "three-quarter")
+
+
+def transition_camera(joined: Clip, first: Clip, body: Body, view: str = "across-L", *,
+                      main: tuple[int, int], at: int, frames: tuple[int, int],
+                      size=(640, 480)) -> Camera:
+    """The camera for a picture of a concatenation's transition (``flipstudy concat --ghost``).
+
+    ``view`` chooses the direction of travel the camera looks across (see :func:`fit_camera`):
+
+    * ``"across-L"`` — across the mean angular momentum of ``first`` (the first
+      motion) over its main phase, frames ``main[0]``–``main[1]`` inclusive: the
+      camera looks along L, so a flip or a cartwheel is seen in profile;
+    * ``"side"`` — the torso facing of ``joined`` at frame ``at`` (the blend's first
+      frame): the performer seen from the side;
+    * ``"three-quarter"`` — that facing turned 45° about the vertical (clockwise
+      seen from above): a three-quarter front view.
+
+    A direction of zero length (no momentum) falls back to +z.  The camera keeps
+    the joints of ``joined``'s frames ``frames[0]``..``frames[1] - 1`` in the image.
+    """
+    from flipstudy.stimuli.edit.concat import torso_facing
+    from flipstudy.stimuli.physics import momentum
+    if view not in TRANSITION_VIEWS:
+        raise FlipstudyValueError(f"view must be one of {', '.join(TRANSITION_VIEWS)}, got {view!r}")
+    if view == "across-L":
+        L = momentum(first, body).L
+        d = np.cross(UP, L[main[0]:main[1] + 1].mean(axis=0))
+    else:
+        d = torso_facing(joined, body)[at]
+        if view == "three-quarter":
+            # -45° about the vertical (the y axis)
+            d = np.array([[0.7071, 0, -0.7071], [0, 1, 0], [0.7071, 0, 0.7071]]) @ d
+    f0, f1 = frames
+    return fit_camera(joined.joint_positions()[f0:f1], direction=d if np.linalg.norm(d) > 1e-6 else (0, 0, 1),
+                      size=size)
+
+
 def translate(clip: Clip, offset) -> Clip:
     """The clip moved by ``offset`` (3,) metres."""
     o = np.asarray(offset, float)

@@ -116,7 +116,7 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
     """The clip sampled at display times ``start, start + 1/fps, …, ≤ stop``
     (seconds; default the whole clip): rotations slerped, root and joint
     translations linear (no uneven frame dropping).  The result has ``fps``
-    frames per second and ``meta["source_frames"]`` (fractional source frames).
+    frames per second.
 
     Example
     -------
@@ -135,9 +135,7 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
         return clip.replace(fps=fps)
     if np.isclose(fps, clip.fps) and abs(start * clip.fps - round(start * clip.fps)) < 1e-9:
         i0 = int(round(start * clip.fps))
-        out = clip.slice(i0, i0 + n).with_fps(fps)
-        out.meta["source_frames"] = np.arange(i0, i0 + out.num_frames, dtype=float)
-        return out
+        return clip.slice(i0, i0 + n).with_fps(fps)
     return sample(clip, src).with_fps(fps)
 
 

@@ -137,7 +137,7 @@ def plot_concat(result, body, path, baseline=None, sources=(), title: str | None
     clip = result.clip
     fps = clip.fps
     rep = result.report
-    w0, w1 = rep["blend_out"]
+    w0, w1 = rep.blend_out
     ax.axvspan(w0 / fps, w1 / fps, color="#F0E442", alpha=0.45, lw=0, label="blend (after smoothing)")
     for label, c, off in sources:
         L = np.linalg.norm(momentum(c, body).L, axis=1)

@@ -154,7 +154,6 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
     shift[ld_new + 1:] = end_new - c_end
     out = new.replace(root_pos=new.root_pos + shift,
                       meta={**clip.meta, "edit": f"angular-momentum {profile} {error:+.3f}"})
-    out.meta.pop("source_frames", None)
     return Injected(out, "angular-momentum", profile, float(error), to, ld_new, src, Tn,
                     float(t_to), float(t_ld_new))
 

@@ -106,7 +106,6 @@ def resample(clip: Clip, fps: float) -> Clip:
     n = int(np.floor((clip.num_frames - 1) * fps / clip.fps + 1e-9)) + 1
     out = sample(clip, np.arange(n) * (clip.fps / fps))
     meta = dict(out.meta)
-    meta.pop("source_frames", None)
     meta["fps_read"] = clip.meta.get("fps_read", clip.fps)
     meta["fps_source"] = f"{clip.meta.get('fps_source', 'read')}, resampled to {fps:g} ([study] fps)"
     return Clip(out.skeleton, float(fps), out.root_pos, out.rotations, out.joint_pos, meta)

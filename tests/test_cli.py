@@ -135,3 +135,13 @@ def test_edit_join_refuses_a_twist_and_inspect_names_the_mass_fit(capsys, tmp_pa
     code, out, _ = run(capsys, "inspect", "backflip", "--json")
     mf = json.loads(out)["mass_fit"]
     assert mf["status"] == "fitted" and set(mf["prior"]) == set(mf["fitted"]) and mf["W"] == 1e-5
+
+
+def test_building_the_parser_imports_no_heavy_library():
+    # every command's options are read without pandas, scipy, pyvista, …: each
+    # command imports what it needs when it runs
+    heavy = {"pandas", "pyvista", "vtk", "matplotlib", "scipy", "statsmodels", "psignifit"}
+    code = ("import sys; from flipstudy.study.cli import build_parser; build_parser(); "
+            f"print(sorted(m for m in sys.modules if m.split('.')[0] in {heavy!r}))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

@@ -127,18 +127,18 @@ def test_smoothed_blend_has_the_eq9_mean(backflip, mode):
     c, body = backflip
     r = C.concatenate(c, c, body=body, smoothing=mode, fix_feet=False)
     rep = r.report
-    w0, w1 = rep["blend_out"]
+    w0, w1 = rep.blend_out
     L = np.linalg.norm(momentum(r.clip, body).L, axis=1)
-    before = rep["L_peak_blend_before"]
-    assert before > 2 * rep["L_target_blend"]           # the raw blend is much too fast ...
-    assert L[w0:w1 + 1].mean() == pytest.approx(rep["L_target_blend"], rel=0.1)   # ... smoothed: eq. 9
-    assert w1 - w0 > rep["blend"][1] - rep["blend"][0]   # by playing it slower
+    before = rep.L_peak_blend_before
+    assert before > 2 * rep.L_target_blend           # the raw blend is much too fast ...
+    assert L[w0:w1 + 1].mean() == pytest.approx(rep.L_target_blend, rel=0.1)   # ... smoothed: eq. 9
+    assert w1 - w0 > rep.blend[1] - rep.blend[0]   # by playing it slower
 
 
 def test_copy_of_itself_keeps_the_direction_of_L(backflip):
     c, body = backflip
     r = C.concatenate(c, c, rule="forward", body=body)
-    assert r.report["theta_deg"] == pytest.approx(0.0, abs=1e-9)
+    assert r.report.theta_deg == pytest.approx(0.0, abs=1e-9)
     L = momentum(r.clip, body).L
     n = np.linalg.norm(L, axis=1)
     u = C.prepare(c, body).main_L
@@ -146,12 +146,12 @@ def test_copy_of_itself_keeps_the_direction_of_L(backflip):
     # from motion 1's main phase to the second landing (the final posterior phase,
     # the landing absorbing the rotation, turns the other way in the original too)
     span = np.zeros(n.size, bool)
-    span[r.report["phases_a"]["main"][0]:r.report["flights"][-1]["landing"] + 1] = True
+    span[r.report.phases_a["main"][0]:r.report.flights[-1]["landing"] + 1] = True
     big = span & (n > 0.2 * n.max())
     ang = np.degrees(np.arccos(np.clip((L[big] @ u) / n[big], -1, 1)))
     assert ang.max() < 5.0
     # two flips: two flights, the second one after the first, both rotating one way
-    fl = r.report["flights"]
+    fl = r.report.flights
     assert len(fl) == 2 and fl[1]["takeoff"] > fl[0]["landing"]
 
 
@@ -160,15 +160,15 @@ def test_double_backflip_from_the_builtin(backflip):
     r = C.concatenate(c, c, body=body)
     g = C.motion_graph_join(c, c, body=body)
     rep = r.report
-    assert rep["rule"] == "forward" == rep["suggested_rule"]
+    assert rep.rule == "forward" == rep.suggested_rule
     # no higher than the main phases' peak (within 2 %: 53.55 against 52.79 with the
     # trunk's COM at de Leva's 56.9 % of mid-hip → mid-shoulder)
-    assert rep["L_peak_blend"] <= 1.02 * max(rep["L_main_peak_a"], rep["L_main_peak_b"])
-    assert rep["foot_slide_cm"] < 2.0
-    assert rep["lowest_foot_above_floor_cm"] > -0.1
+    assert rep.L_peak_blend <= 1.02 * max(rep.L_main_peak_a, rep.L_main_peak_b)
+    assert rep.feet.foot_slide_cm < 2.0
+    assert rep.feet.lowest_foot_above_floor_cm > -0.1
     assert r.clip.num_frames < g.clip.num_frames
     # the motion graph has to wait for the standing pose: it joins after motion 1 has ended
-    assert g.report["transition_a"] > rep["phases_a"]["main"][1]
+    assert g.report.transition_a > rep.phases_a["main"][1]
 
 
 # ------------------------------------------------------------- IK, mirror
@@ -254,12 +254,12 @@ def test_real_concatenations_meet_the_measures(name, fps, opts, rule):
     r = C.concatenate(clip, b, body=body)
     g = C.motion_graph_join(clip, b, body=body)
     rep = r.report
-    assert rep["rule"] == rule                     # the suggestion from the data is the paper's rule
-    assert rep["L_peak_blend"] <= max(rep["L_main_peak_a"], rep["L_main_peak_b"])
+    assert rep.rule == rule                     # the suggestion from the data is the paper's rule
+    assert rep.L_peak_blend <= max(rep.L_main_peak_a, rep.L_main_peak_b)
     assert r.clip.num_frames < g.clip.num_frames   # the momentum is reused: shorter than the motion graph
-    assert rep["foot_slide_cm"] < 2.0
-    assert rep["lowest_foot_above_floor_cm"] > -0.5
-    assert rep["facing_deg_at_fT"] <= 45.0
+    assert rep.feet.foot_slide_cm < 2.0
+    assert rep.feet.lowest_foot_above_floor_cm > -0.5
+    assert rep.facing_deg_at_fT <= 45.0
 
 
 def test_the_mass_kick_and_its_mirror_are_refused_with_the_reason():
@@ -300,7 +300,7 @@ def test_facing_rule_refuses_the_half_twist_and_blends_turn_only_about_L(backfli
     with pytest.raises(C.ConcatError, match=r"facing directions differ by at least 180°"):
         C.concatenate(c, builtin("frontflip"), rule="forward", body=body)
     r = C.concatenate(c, c, body=body)
-    w0, w1 = r.report["blend_out"]
+    w0, w1 = r.report.blend_out
     L = momentum(r.clip, body).L[w0:w1 + 1].mean(0)
     x = crossfade_rotation(r.clip, body, w0, w1 - w0, L, pad=0)
     assert x["unexplained_deg"] < 1.0 and x["turned_about_L_deg"] > 20

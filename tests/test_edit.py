@@ -104,3 +104,30 @@ def test_ratio_rule_next_frame():
     assert np.allclose(np.diff(f), 0.5) and f[0] == 10 and f[-1] == 20
     with pytest.raises(ValueError, match="positive"):
         ratio_retime_frames(lambda x: 0.0, 0, 5)
+
+
+def test_edit_pipeline_straightens_then_flips_the_repaired_clip():
+    from flipstudy.stimuli import analyse, builtin
+    from flipstudy.stimuli.edit.animator import repair_momentum, straighten
+    from flipstudy.stimuli.edit.multiflip import FlipEditError, multiflip
+    from flipstudy.stimuli.edit.pipeline import edit
+    clip = builtin("backflip")
+    r = edit(clip, straighten="arms", flips=2)
+    a = analyse(clip)
+    rep = repair_momentum(a, straighten(a, "arms"))
+    by_hand = multiflip(analyse(rep.clip, body=a.body, estimate=False), 2)
+    np.testing.assert_array_equal(r.clip.rotations, by_hand.clip.rotations)
+    np.testing.assert_array_equal(r.clip.root_pos, by_hand.clip.root_pos)
+    assert r.steps.repair is not None and r.steps.join is None
+    assert r.steps.measured["turn_deg"] == pytest.approx(720.0, abs=5.0)
+    with pytest.raises(FlipEditError, match="nothing to do"):
+        edit(clip)
+    with pytest.raises(FlipEditError, match="no flight"):
+        edit(clip.slice(0, 30), flips=2)
+
+
+def test_sample_keeps_meta_as_provenance_only():
+    from flipstudy.stimuli import builtin
+    clip = builtin("backflip")
+    s = sample(clip, np.arange(0, 20, 0.5))
+    assert set(s.meta) == set(clip.meta)

@@ -199,14 +199,15 @@ def _assert_same_multiflip(r0, r1):
     np.testing.assert_allclose(c1.rotations, c0.rotations, rtol=0, atol=1e-12)
     np.testing.assert_allclose(c1.root_pos, c0.root_pos, rtol=0, atol=1e-12)
     np.testing.assert_allclose(c1.joint_positions(), c0.joint_positions(), rtol=0, atol=1e-12)
-    assert r0.report.keys() == r1.report.keys()
+    rep1 = r1.report.to_dict()
+    assert r0.report.keys() == rep1.keys()
     for key, v in r0.report.items():
         if isinstance(v, dict):
-            assert v.keys() == r1.report[key].keys()
+            assert v.keys() == rep1[key].keys()
             for k2, v2 in v.items():
-                assert r1.report[key][k2] == pytest.approx(v2, rel=1e-9, abs=1e-9), (key, k2)
+                assert rep1[key][k2] == pytest.approx(v2, rel=1e-9, abs=1e-9), (key, k2)
         else:
-            assert r1.report[key] == pytest.approx(v, rel=1e-9, abs=1e-9), key
+            assert rep1[key] == pytest.approx(v, rel=1e-9, abs=1e-9), key
 
 
 @pytest.fixture(scope="module")

@@ -128,24 +128,24 @@ def test_multiflip_on_builtin_flips(flips, name, n):
     assert m["L_cv_pct"] < 2.0
     assert m["com_rms_mm"] < 1.0
     rep = r.report
-    assert rep["k"] == pytest.approx(rep["k_star"])
-    assert rep["dp_takeoff_pct"] < 5.0 and rep["dp_landing_pct"] < 5.0, rep
+    assert rep.k == pytest.approx(rep.k_star)
+    assert rep.dp_takeoff_pct < 5.0 and rep.dp_landing_pct < 5.0, rep
     # the analyser finds the flight where the method put it, and earth's gravity
     fl = m["analyser_flight"]
     assert abs(fl[0] - r.takeoff) <= 2 and abs(fl[1] - r.landing) <= 2
     assert m["apparent_gravity"] == pytest.approx(9.81, rel=0.02)
     # faster rotation: the flight's |L| is k* times the original's
-    assert m["L_mean"] == pytest.approx(rep["k"] * a.L_mean, rel=0.05)
+    assert m["L_mean"] == pytest.approx(rep.k * a.L_mean, rel=0.05)
 
 
 def test_default_k_is_the_papers_and_its_jump_is_reported(flips):
     a = flips["backflip"]
     r = multiflip(a, 2)
-    assert r.report["k_ratio"] == pytest.approx(0.7)
+    assert r.report.k_ratio == pytest.approx(0.7)
     m = measure(r, a)
     assert abs(m["turn_deg"] - 720) < 10
     # a slower take-off than the flight needs: a measured, reported jump in momentum
-    assert r.report["dp_takeoff_pct"] > 20
+    assert r.report.dp_takeoff_pct > 20
 
 
 def test_refusals(flips):
@@ -183,10 +183,10 @@ def test_straight_legs_edit_is_repaired_by_retiming(flips, name):
     a = flips[name]
     edited = straighten(a, "legs")
     r = repair_momentum(a, edited)
-    assert r.report["max_error_before_pct"] > 50
-    assert r.report["max_error_after_pct"] <= 12
-    assert repair_momentum(a, edited, midpoint=True).report["max_error_after_pct"] <= 7
-    assert r.report["flight_s_after"] > r.report["flight_s_before"]
+    assert r.report.max_error_before_pct > 50
+    assert r.report.max_error_after_pct <= 12
+    assert repair_momentum(a, edited, midpoint=True).report.max_error_after_pct <= 7
+    assert r.report.flight_s_after > r.report.flight_s_before
     m = analyse(r.clip, body=a.body, estimate=False)
     assert m.flight is not None and m.apparent_gravity == pytest.approx(9.81, rel=0.02)
     # the legs really are straight in the middle of the flight
@@ -201,8 +201,8 @@ def test_midpoint_rule_follows_a_fast_edit_more_closely(flips):
     from flipstudy.stimuli.edit.animator import repair_momentum, straighten
     a = flips["frontflip"]
     edited = straighten(a, "legs")
-    paper = repair_momentum(a, edited).report["max_error_after_pct"]
-    mid = repair_momentum(a, edited, midpoint=True).report["max_error_after_pct"]
+    paper = repair_momentum(a, edited).report.max_error_after_pct
+    mid = repair_momentum(a, edited, midpoint=True).report.max_error_after_pct
     assert mid < paper
 
 
@@ -214,27 +214,27 @@ def test_join_tuck_take_off_with_pike_landing():
     from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(builtin("backflip"))
     r = join_in_flight(a, builtin("backflip", shape="pike"))
-    rep = r["report"]
-    assert abs(rep["turn_deg"] - 360) < 10
-    assert rep["L_mean"] == pytest.approx(rep["L_first"], rel=0.05)
-    assert rep["L_cv_pct"] < 8
-    assert rep["dp_takeoff_pct"] < 2
+    rep = r.report
+    assert abs(rep.turn_deg - 360) < 10
+    assert rep.L_mean == pytest.approx(rep.L_first, rel=0.05)
+    assert rep.L_cv_pct < 8
+    assert rep.dp_takeoff_pct < 2
     # the orientations agree ⟂ L and the cross-fade turns only about L, by what L explains
-    assert rep["join"]["swing_deg"] < 5
-    xf = rep["join"]["crossfade"]
+    assert rep.join.swing_deg < 5
+    xf = rep.join.crossfade
     assert xf["unexplained_deg"] < 5
     assert xf["turned_about_L_deg"] == pytest.approx(xf["explained_about_L_deg"], abs=5)
     # the flight lasts what the take-off velocity and the landing height give
     # (to the nearest frame), and the character lands and stands on the floor
-    assert abs(rep["flight_s"] - rep["flight_s_required"]) <= 0.5 / a.clip.fps + 1e-9
-    feet = r["clip"].joint_positions()[-1, :, 1].min()
+    assert abs(rep.flight_s - rep.flight_s_required) <= 0.5 / a.clip.fps + 1e-9
+    feet = r.clip.joint_positions()[-1, :, 1].min()
     assert abs(feet - a.clip.joint_positions()[-1, :, 1].min()) < 0.005
-    m = analyse(r["clip"], body=a.body, estimate=False)
+    m = analyse(r.clip, body=a.body, estimate=False)
     assert m.flight is not None and m.apparent_gravity == pytest.approx(9.81, rel=0.02)
     # the legs are straight (piked) after the join and bent (tucked) before it
     knee = a.clip.skeleton.index(a.body.landmarks["knee_l"])
-    bend = lambda f: Rotation.from_quat(r["clip"].rotations[f, knee]).magnitude()   # noqa: E731
-    before, after = rep["join"]["first"] - 3, rep["join"]["first"] + 12
+    bend = lambda f: Rotation.from_quat(r.clip.rotations[f, knee]).magnitude()   # noqa: E731
+    before, after = rep.join.first - 3, rep.join.first + 12
     assert bend(before) > np.radians(90) and bend(after) < np.radians(30)
 
 
@@ -309,7 +309,7 @@ def test_landing_join_on_the_landing_frame_itself():
     from flipstudy.stimuli import load_bvh
     a = analyse(load_bvh(shared_file("90_11.bvh")))
     r = multiflip(a, 3)
-    assert r.report["landing_join"]["g"] == a.landing
+    assert r.report.landing_join.g == a.landing
     m = measure(r, a)
     assert m["analyser_flight"] == [r.takeoff, r.landing]
     assert m["turn_deg"] > 600
@@ -324,8 +324,8 @@ def test_join_of_two_real_backflips_is_allowed():
     from flipstudy.study.cli import load_clip
     from flipstudy.stimuli.edit.join import join_in_flight
     a = analyse(load_clip(str(shared_file("87_03.bvh")), None, 60.0))
-    r = join_in_flight(a, load_clip(str(shared_file("88_01.bvh")), None, 60.0))["report"]
-    assert r["join"]["swing_deg"] < 10
-    assert r["join"]["crossfade"]["unexplained_deg"] < 15
-    assert abs(r["turn_deg"] - 360) < 15
-    assert r["L_cv_pct"] < r["L_cv_bound_pct"]
+    r = join_in_flight(a, load_clip(str(shared_file("88_01.bvh")), None, 60.0)).report
+    assert r.join.swing_deg < 10
+    assert r.join.crossfade["unexplained_deg"] < 15
+    assert abs(r.turn_deg - 360) < 15
+    assert r.L_cv_pct < r.L_cv_bound_pct

@@ -569,3 +569,27 @@ def test_labels_and_legend_without_a_font_file(monkeypatch):
     strip = fg.strip_image(clip, None, dt=0.5, span="clip", panel_size=(80, 120), style=PLAIN,
                            takeoff=t0, landing=t1)
     assert all(nonwhite(strip[:16, k * 84:k * 84 + 80]).sum() > 10 for k in range(3))
+
+
+def test_transition_camera_views():
+    from flipstudy.render.camera import transition_camera
+    from flipstudy.stimuli import analyse, builtin
+    from flipstudy.stimuli.physics import momentum
+    clip = builtin("backflip")
+    a = analyse(clip)
+    main = (a.takeoff, a.landing)
+
+    def back(view):
+        cam = transition_camera(clip, clip, a.body, view, main=main, at=a.takeoff, frames=(0, clip.num_frames))
+        v = np.subtract(cam.position, cam.focal_point)
+        v[1] = 0.0
+        return v / np.linalg.norm(v)
+
+    # across L: the camera looks along the flight's angular momentum (the flip in profile)
+    L = momentum(clip, a.body).L[main[0]:main[1] + 1].mean(axis=0)
+    L[1] = 0.0
+    assert abs(back("across-L") @ L) / np.linalg.norm(L) == pytest.approx(1.0, abs=1e-3)
+    # three-quarter: the side view turned 45° about the vertical
+    assert np.degrees(np.arccos(np.clip(back("side") @ back("three-quarter"), -1, 1))) == pytest.approx(45.0, abs=0.1)
+    with pytest.raises(ValueError):
+        transition_camera(clip, clip, a.body, "top", main=main, at=0, frames=(0, 10))

@@ -11,11 +11,29 @@ muscles, Table 5.1 presets), :mod:`.ik` (3.4 CCD), :mod:`.balance` (3.3),
 :mod:`.windup` (3.6 sample field, choice, PD approach, energy assignment),
 :mod:`.controller` (thrust, flight, landing, scenes).
 """
-from .controller import SCENES, STRENGTH, Box, JumpResult, Scene, jump, make_scene, plan
-from .model import Jumper
-from .muscles import MUSCLES, PRESETS, parse_k, spring_displacement, spring_energy, spring_force
-from .path import JumpPath, estimate_path, kinetic_energy
-from .windup import assign_energy, choose, sample_field
+import importlib
+
+#: each public name and the module it is defined in, imported on first use (the
+#: controller needs scipy; the CLI's parser reads PRESETS, SCENES, STRENGTH only)
+_WHERE = {**dict.fromkeys(("Box", "JumpResult", "Scene", "jump", "make_scene", "plan"), ".controller"),
+          "Jumper": ".model", "SCENES": ".path", "STRENGTH": ".muscles",
+          **dict.fromkeys(("MUSCLES", "PRESETS", "parse_k", "spring_displacement", "spring_energy",
+                           "spring_force"), ".muscles"),
+          **dict.fromkeys(("JumpPath", "estimate_path", "kinetic_energy"), ".path"),
+          **dict.fromkeys(("assign_energy", "choose", "sample_field"), ".windup")}
+
+
+def __getattr__(name: str):
+    if name not in _WHERE:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(_WHERE[name], __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_WHERE))
+
 
 __all__ = ["SCENES", "STRENGTH", "Box", "JumpResult", "Scene", "jump", "make_scene", "plan", "Jumper",
            "MUSCLES", "PRESETS", "parse_k", "spring_displacement", "spring_energy", "spring_force",

@@ -48,22 +48,11 @@ from ..edit.timing import slerp
 
 from .ik import EX, heel_pitch, reach, solve_legs
 from .model import SIDES, Jumper
-from .muscles import MUSCLES, parse_k
-from .path import estimate_path, gravity_vector, kinetic_energy
+from .muscles import MUSCLES, STRENGTH, parse_k
+from .path import SCENES, estimate_path, gravity_vector, kinetic_energy
 from .windup import (EPSILON, MAX_HEEL_PITCH, Choice, approach, choose, leg_asymmetry, pelvis_roll,
                      sample_field)
 
-#: the Table 5.1 constants are multiplied by this (see :func:`jump`).  With the
-#: angle between the bones (the corrected θ) the thesis's k = 20000 stores at
-#: most 190 J in a balanced crouch of a 70 kg, 1.75 m jumper, less than any of
-#: its 1–2 m jumps needs (a 1 m jump: 262 J); its jumps worked with the flawed
-#: angle, which stretches the springs most when the legs are straight.  3 is the
-#: smallest round factor with which every scene of Chapter 5 can be reached
-#: (1.9 m forward, the 0.75 m box, the jump-over); the longest standing jump of
-#: "global-normal" is then 2.2 m (t_air 0.5 s), near the thesis's calibration of
-#: "normal" (a maximum of 1.5–2 m, 1.9 m "highly athletic").
-STRENGTH = 3.0
-SCENES = ("forward", "sideways", "box", "over")
 T_STAND, T_CROUCH, T_RECOVER, T_HOLD = 0.3, 0.8, 0.8, 0.4
 TOUCHDOWN_EXTENSION = 0.96      # hip–ankle distance at touch-down / leg length
 TAKEOFF_LEAN = np.radians(10.0)  # upper body leaning into the jump at take-off

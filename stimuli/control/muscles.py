@@ -27,6 +27,17 @@ from ..exceptions import FlipstudyValueError
 
 import numpy as np
 
+#: the Table 5.1 constants are multiplied by this (see :func:`~flipstudy.stimuli.control.controller.jump`).  With the
+#: angle between the bones (the corrected θ) the thesis's k = 20000 stores at
+#: most 190 J in a balanced crouch of a 70 kg, 1.75 m jumper, less than any of
+#: its 1–2 m jumps needs (a 1 m jump: 262 J); its jumps worked with the flawed
+#: angle, which stretches the springs most when the legs are straight.  3 is the
+#: smallest round factor with which every scene of Chapter 5 can be reached
+#: (1.9 m forward, the 0.75 m box, the jump-over); the longest standing jump of
+#: "global-normal" is then 2.2 m (t_air 0.5 s), near the thesis's calibration of
+#: "normal" (a maximum of 1.5–2 m, 1.9 m "highly athletic").
+STRENGTH = 3.0
+
 #: muscle order (Table 5.1's columns)
 MUSCLES = ("hip_l", "knee_l", "ankle_l", "hip_r", "knee_r", "ankle_r")
 #: Table 5.1 — spring constants (kg/s²) of the thesis's trials

@@ -23,6 +23,7 @@ from scipy.spatial.transform import Rotation
 from ..analyse import Analysis
 from ..motion.clip import Clip
 from ..physics import center_of_mass, momentum
+from .report import Report
 from .reposition import ballistic_path
 from .timing import ratio_retime_frames, sample
 
@@ -74,6 +75,19 @@ def straighten(a: Analysis, group: str = "legs", t0: float | None = None, t1: fl
 
 
 @dataclass
+class RepairReport(Report):
+    """What :func:`repair_momentum` did: the retiming rule, the largest |L| error
+    of the edit before and after, flight time and jump height before and after."""
+    rule: str
+    max_error_before_pct: float
+    max_error_after_pct: float
+    flight_s_before: float
+    flight_s_after: float
+    jump_height_before_m: float
+    jump_height_after_m: float
+
+
+@dataclass
 class Repair:
     clip: Clip
     takeoff: int
@@ -81,7 +95,7 @@ class Repair:
     src: np.ndarray              # fractional frame of the edited clip shown at each new frame
     error_before: np.ndarray     # |L| relative error per flight frame of the edit, before
     error_after: np.ndarray      # ... after the repair (against the original at the same source frame)
-    report: dict
+    report: RepairReport
 
 
 def _L_on_grid(clip: Clip, body, start: int, stop: int, sub: int) -> tuple[np.ndarray, np.ndarray]:
@@ -110,7 +124,6 @@ def retime_flight(clip: Clip, body, to: int, ld: int, grid: np.ndarray, ratio: n
     tail = np.arange(flight[-1] + 1.0, clip.num_frames - 1 + 1e-9, 1.0)
     src = np.concatenate([np.arange(to, dtype=float), flight, tail])
     new = sample(clip, src)
-    new.meta.pop("source_frames", None)
     ld_n = to + flight.size - 1
     G = -2.0 * path[1, 0]
     com = center_of_mass(new, body)
@@ -155,9 +168,10 @@ def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bo
     kb = np.arange(to + 2, ld - 1)
     L_ed = np.linalg.norm(momentum(edited, body).L, axis=1)
     err_before = L_ed[kb] / np.linalg.norm(original.L[kb], axis=1) - 1.0
-    rep = {"rule": "midpoint" if midpoint else "paper", "max_error_before_pct": float(100 * np.abs(err_before).max()),
-           "max_error_after_pct": float(100 * np.abs(err_after).max()),
-           "flight_s_before": T0, "flight_s_after": Tn,
-           "jump_height_before_m": float(path[1, 1] ** 2 / (2 * G)),
-           "jump_height_after_m": float(vy ** 2 / (2 * G))}
+    rep = RepairReport(rule="midpoint" if midpoint else "paper",
+                       max_error_before_pct=float(100 * np.abs(err_before).max()),
+                       max_error_after_pct=float(100 * np.abs(err_after).max()),
+                       flight_s_before=T0, flight_s_after=Tn,
+                       jump_height_before_m=float(path[1, 1] ** 2 / (2 * G)),
+                       jump_height_after_m=float(vy ** 2 / (2 * G)))
     return Repair(out, to, ld_n, src, err_before, err_after, rep)

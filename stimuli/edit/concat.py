@@ -54,6 +54,7 @@ from ..body import Body
 from ..flight import _runs, contact_mask, effector_points
 from ..motion.clip import Clip
 from ..physics import momentum, piece_positions
+from .report import Report
 from .reposition import rotate
 from .timing import ratio_retime_frames, sample, slerp, smoothstep
 
@@ -600,11 +601,83 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
 
 # ---------------------------------------------------------------- the method
 @dataclass
+class FeetReport(Report):
+    """What :func:`pin_feet` did: foot slide while pinned, the pinned and released
+    feet (``side:first-last`` frames), the floor height and the lowest foot above it."""
+    foot_slide_cm: float
+    pinned: list
+    released: list
+    floor: float
+    lowest_foot_above_floor_cm: float
+
+
+@dataclass
+class ConcatReport(Report):
+    """What :func:`concatenate` did and measured (eqs. 2-9 of Shum et al. 2009)."""
+    rule: str
+    suggested_rule: str
+    theta_deg: float
+    phases_a: dict
+    phases_b: dict
+    case: str
+    support: str
+    blendable_a: list
+    blendable_b: list
+    T: int
+    f_T: int
+    F: float
+    F_dm: float
+    F_inertia: float
+    F_time: float
+    threshold: float
+    blend: list
+    blend_widened: object
+    smoothing_s: float
+    blend_out: list
+    smoothing: dict | None
+    L_target_blend: float
+    facing_deg_at_fT: float
+    shift_m: list
+    aligned_at: int
+    L_peak_blend_before: float
+    L_peak_blend: float
+    L_mean_blend: float
+    L_main_peak_a: float
+    L_main_peak_b: float
+    frames: int
+    duration_s: float
+    frames_a: int
+    frames_b: int
+    #: the support feet pinned (``None`` without ``fix_feet``)
+    feet: FeetReport | None
+    #: |L| coefficient of variation per flight of the result
+    flights: list
+
+    def to_dict(self) -> dict:
+        """The JSON keys: the feet's flattened in (when pinned), then the flights."""
+        d = super().to_dict()
+        feet, flights = d.pop("feet"), d.pop("flights")
+        return {**d, **(feet or {}), "flights": flights}
+
+
+@dataclass
+class MotionGraphReport(Report):
+    """The motion-graph transition of :func:`motion_graph_join`."""
+    transition_a: int
+    transition_b: int
+    window: int
+    distance: float
+    theta_deg: float
+    frames: int
+    duration_s: float
+
+
+@dataclass
 class Concatenation:
     """The concatenated clip and what was done and measured."""
 
     clip: Clip
-    report: dict
+    report: ConcatReport | MotionGraphReport
 
 
 def suggest_rule(m1: Motion, m2: Motion) -> str:
@@ -636,7 +709,6 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
                           "blending is per joint")
     if abs(a.fps - b.fps) > 1e-9:
         b = sample(b, np.arange(0, b.num_frames - 1 + 1e-9, b.fps / a.fps)).with_fps(a.fps)
-        b.meta.pop("source_frames", None)
     if body is None:
         body = analyse(a).body
     m1 = prepare(a, body, tm=tm_a, main=main_a)
@@ -763,45 +835,42 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
                                        midpoint=True)
             tail = np.arange(src2[-1] + 1.0, out.num_frames - 1 + 1e-9, 1.0)
             out = sample(out, np.concatenate([np.arange(w0, dtype=float), src2, tail]))
-            out.meta.pop("source_frames", None)
             w1 = w0 + src2.size - 1
             Lw = np.linalg.norm(momentum(out, body).L, axis=1)
         applied = {"mode": "profile", "rate": (f1 - f0) / max(w1 - w0, 1), "passes": ratios}
     elif smoothing not in ("uniform", "profile", "none"):
         raise ConcatError(f"smoothing must be 'profile', 'uniform' or 'none', got {smoothing!r}")
-    out.meta.pop("source_frames", None)
     feet = {}
     if fix_feet:
         out, feet = pin_feet(out, body, (w0, w1))
     mo = momentum(out, body)
     Ln = np.linalg.norm(mo.L, axis=1)
-    report = {
-        "rule": rule, "suggested_rule": suggested, "theta_deg": float(np.degrees(theta)),
-        "phases_a": m1.phases.as_dict(), "phases_b": m2_raw.phases.as_dict(),
-        "case": case, "support": support,
-        "blendable_a": [int(s1[0]), int(s1[-1])], "blendable_b": [int(s2[0]), int(s2[-1])],
-        "T": T, "f_T": fT, "F": tmg.F, "F_dm": tmg.F_dm, "F_inertia": tmg.F_inertia,
-        "F_time": tmg.F_time, "threshold": max_cost,
-        "blend": [f0, f1], "blend_widened": widened, "smoothing_s": s,
-        "blend_out": [w0, w1], "smoothing": applied,
-        "L_target_blend": float(0.5 * (ends[0] + ends[1])),
-        "facing_deg_at_fT": float(np.degrees(np.arccos(np.clip(m1.facing[fT] @ m2.facing[fT - T], -1, 1)))),
-        "shift_m": [float(x) for x in shift], "aligned_at": int(fa),
-        "L_peak_blend_before": float(Lb[f0:f1 + 1].max()),
-        "L_peak_blend": float(Ln[w0:w1 + 1].max()),
-        "L_mean_blend": float(Ln[w0:w1 + 1].mean()),
-        "L_main_peak_a": m1.main_peak, "L_main_peak_b": m2_raw.main_peak,
-        "frames": out.num_frames, "duration_s": out.duration,
-        "frames_a": a.num_frames, "frames_b": b.num_frames,
-    }
-    report.update(feet)
     # what an observer of the result sees in its flights (the release of a pinned
     # foot in the air moves a leg there): |L| coefficient of variation per flight
     from ..flight import detect_flights
-    report["flights"] = [{"takeoff": fl.takeoff, "landing": fl.landing,
-                          "L_cv_pct": float(100 * Ln[fl.takeoff:fl.landing + 1].std()
-                                            / max(Ln[fl.takeoff:fl.landing + 1].mean(), 1e-9))}
-                         for fl in sorted(detect_flights(out, body, mo.com), key=lambda f: f.takeoff)]
+    flights = [{"takeoff": fl.takeoff, "landing": fl.landing,
+                "L_cv_pct": float(100 * Ln[fl.takeoff:fl.landing + 1].std()
+                                  / max(Ln[fl.takeoff:fl.landing + 1].mean(), 1e-9))}
+               for fl in sorted(detect_flights(out, body, mo.com), key=lambda f: f.takeoff)]
+    report = ConcatReport(
+        rule=rule, suggested_rule=suggested, theta_deg=float(np.degrees(theta)),
+        phases_a=m1.phases.as_dict(), phases_b=m2_raw.phases.as_dict(),
+        case=case, support=support,
+        blendable_a=[int(s1[0]), int(s1[-1])], blendable_b=[int(s2[0]), int(s2[-1])],
+        T=T, f_T=fT, F=tmg.F, F_dm=tmg.F_dm, F_inertia=tmg.F_inertia,
+        F_time=tmg.F_time, threshold=max_cost,
+        blend=[f0, f1], blend_widened=widened, smoothing_s=s,
+        blend_out=[w0, w1], smoothing=applied,
+        L_target_blend=float(0.5 * (ends[0] + ends[1])),
+        facing_deg_at_fT=float(np.degrees(np.arccos(np.clip(m1.facing[fT] @ m2.facing[fT - T], -1, 1)))),
+        shift_m=[float(x) for x in shift], aligned_at=int(fa),
+        L_peak_blend_before=float(Lb[f0:f1 + 1].max()),
+        L_peak_blend=float(Ln[w0:w1 + 1].max()),
+        L_mean_blend=float(Ln[w0:w1 + 1].mean()),
+        L_main_peak_a=m1.main_peak, L_main_peak_b=m2_raw.main_peak,
+        frames=out.num_frames, duration_s=out.duration,
+        frames_a=a.num_frames, frames_b=b.num_frames,
+        feet=FeetReport(**feet) if feet else None, flights=flights)
     out.meta.update({"name": f"{a.meta.get('name', 'a')}+{b.meta.get('name', 'b')}", "edit": "concatenated"})
     return Concatenation(out, report)
 
@@ -872,9 +941,9 @@ def motion_graph_join(a: Clip, b: Clip, *, body: Body | None = None, window_s: f
     rot = np.concatenate([a.rotations[:i], q, b2.rotations[j + k:]])
     pos = np.concatenate([a.root_pos[:i], root, b2.root_pos[j + k:]])
     out = Clip(a.skeleton, a.fps, pos, rot, None, {**a.meta, "edit": "motion-graph join"})
-    return Concatenation(out, {"transition_a": i, "transition_b": j, "window": k,
-                               "distance": float(D[ii, jj]), "theta_deg": float(np.degrees(theta)),
-                               "frames": out.num_frames, "duration_s": out.duration})
+    return Concatenation(out, MotionGraphReport(transition_a=i, transition_b=j, window=k,
+                                                distance=float(D[ii, jj]), theta_deg=float(np.degrees(theta)),
+                                                frames=out.num_frames, duration_s=out.duration))
 
 
 # ---------------------------------------------------------------- mirroring

@@ -38,6 +38,8 @@ the flight as a small uniform change of |L|.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -45,9 +47,61 @@ from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
 from ..physics import center_of_mass, momentum
 from .multiflip import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle
+from .report import Report
 from .reposition import rotate
 from .similarity import distance_matrix, pose_features, twist_angles
 from .timing import retime, sample, slerp, smoothstep
+
+
+@dataclass
+class JoinPointReport(Report):
+    """Where the two motions are joined: ``first``'s frame ``first`` → ``second``'s
+    frame ``second`` (pose distance, turn error, the root orientations' swing ⟂ L,
+    and what the cross-fade turns: :func:`crossfade_rotation`)."""
+    first: int
+    second: int
+    distance: float
+    turn_error_deg: float
+    flight_frames_at_L_first: int
+    swing_deg: float
+    crossfade: dict
+
+
+@dataclass
+class JoinReport(Report):
+    """What :func:`join_in_flight` did and measured."""
+    yaw_deg: float
+    axis_error_deg: float
+    retime: float
+    join: JoinPointReport
+    turn_deg: float
+    L_cv_pct: float
+    L_mean: float
+    L_first: float
+    L_second_before: float
+    L_target: float
+    L_spread_pct: float
+    flight_s: float
+    flight_s_required: float
+    takeoff: int
+    landing: int
+    analyser_flight: list | None
+    #: linear-momentum jumps at take-off and landing (:func:`momentum_jumps`)
+    dp_takeoff: float
+    dp_landing: float
+    p_takeoff: float
+    dp_takeoff_pct: float
+    dp_landing_pct: float
+    L_cv_bound_pct: float
+
+
+@dataclass
+class Join:
+    """The joined clip, its flight and the report (:func:`join_in_flight`)."""
+    clip: Clip
+    takeoff: int
+    landing: int
+    report: JoinReport
 
 
 def _unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
@@ -99,10 +153,10 @@ def _steps_to(ratio_of, start: float, n: int) -> float:
 def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_deg: float = 30.0,
                    max_turn_error: float = 15.0, blend_s: float = 0.04,
                    duration_weight: float = 10.0, max_swing_deg: float = 30.0,
-                   max_unexplained_deg: float = 30.0, max_L_cv_pct: float = 10.0) -> dict:
+                   max_unexplained_deg: float = 30.0, max_L_cv_pct: float = 10.0) -> Join:
     """Join ``first``'s take-off and early flight to ``second``'s late flight and
-    landing.  Both need the same skeleton.  Returns ``{"clip", "takeoff",
-    "landing", "report"}``.
+    landing.  Both need the same skeleton.  Returns a :class:`Join` (clip, flight,
+    :class:`JoinReport`).
 
     The joined flight must last what ``first``'s take-off velocity v0 and the
     landing height (Δy above the take-off) give a ballistic flight,
@@ -140,7 +194,6 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     if not (0.33 < s < 3.0):
         raise FlipEditError(f"|L| differs by a factor {s:.2f}: too much to match by retiming (0.33-3)")
     bc = retime(bc, s)
-    bc.meta.pop("source_frames", None)
     b = analyse(bc, body=body, estimate=False)
     if b.flight is None:
         raise FlipEditError("the second motion has no flight after retiming")
@@ -240,27 +293,27 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     m = analyse(out, body=body, estimate=False)
     Lm = np.linalg.norm(m.L[to + 2:ld - 1], axis=1)
     s0, s1 = standing_span(out, body, to, ld)
-    report = {"yaw_deg": float(np.degrees(yaw)), "axis_error_deg": float(axis_err), "retime": float(s),
-              "join": {"first": fi, "second": gj, "distance": float(D[i, j]),
-                       "turn_error_deg": float(np.degrees(e)),
-                       "flight_frames_at_L_first": n_free},
-              "turn_deg": turn_angle(out, u, s0, s1), "L_cv_pct": float(100 * Lm.std() / Lm.mean()),
-              "L_mean": float(Lm.mean()), "L_first": a.L_mean, "L_second_before": b0.L_mean,
-              "L_target": float(a.L_mean / c), "L_spread_pct": float(100 * (1.0 / c - 1.0)),
-              "flight_s": T, "flight_s_required": float(T_req), "takeoff": to, "landing": ld,
-              "analyser_flight": [m.takeoff, m.landing] if m.flight is not None else None}
-    report["join"].update({"swing_deg": float(np.degrees(swing[i, j])), "crossfade": xf})
-    report.update(momentum_jumps(out, body, to, ld))
+    cv = float(100 * Lm.std() / Lm.mean())
     cv_bound = max(max_L_cv_pct, a.L_cv_pct, b0.L_cv_pct)
-    report["L_cv_bound_pct"] = float(cv_bound)
-    if report["L_cv_pct"] > cv_bound:
+    report = JoinReport(
+        yaw_deg=float(np.degrees(yaw)), axis_error_deg=float(axis_err), retime=float(s),
+        join=JoinPointReport(first=fi, second=gj, distance=float(D[i, j]),
+                             turn_error_deg=float(np.degrees(e)), flight_frames_at_L_first=n_free,
+                             swing_deg=float(np.degrees(swing[i, j])), crossfade=xf),
+        turn_deg=turn_angle(out, u, s0, s1), L_cv_pct=cv,
+        L_mean=float(Lm.mean()), L_first=a.L_mean, L_second_before=b0.L_mean,
+        L_target=float(a.L_mean / c), L_spread_pct=float(100 * (1.0 / c - 1.0)),
+        flight_s=T, flight_s_required=float(T_req), takeoff=to, landing=ld,
+        analyser_flight=[m.takeoff, m.landing] if m.flight is not None else None,
+        **momentum_jumps(out, body, to, ld), L_cv_bound_pct=float(cv_bound))
+    if report.L_cv_pct > cv_bound:
         raise FlipEditError(
-            f"the joined flight's |L| varies by CV {report['L_cv_pct']:.1f} % (at most {cv_bound:.3g} %: "
+            f"the joined flight's |L| varies by CV {report.L_cv_pct:.1f} % (at most {cv_bound:.3g} %: "
             f"{max_L_cv_pct:g} % or the two motions' own, {a.L_cv_pct:.1f} % and {b0.L_cv_pct:.1f} %; "
             f"join at frame {fi} → its frame {gj}, distance {D[i, j]:.2f}, cross-fade turning "
             f"{xf['turned_perp_deg']:.0f}° ⟂ L of which {xf['explained_perp_deg']:.0f}° explained): "
             f"the angular momentum is not conserved; they cannot be joined")
-    return {"clip": out, "takeoff": to, "landing": ld, "report": report}
+    return Join(out, to, ld, report)
 
 
 def crossfade_rotation(clip: Clip, body, f: int, w: int, L: np.ndarray, pad: int = 1) -> dict:

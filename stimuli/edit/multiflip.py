@@ -27,7 +27,7 @@ from __future__ import annotations
 
 from ..exceptions import FlipstudyError
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -35,6 +35,7 @@ from scipy.spatial.transform import Rotation
 from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
 from ..physics import center_of_mass
+from .report import Report
 from .reposition import ballistic_path
 from .similarity import distance_matrix, pose_features
 from .timing import slerp, smoothstep
@@ -117,6 +118,51 @@ def find_self_loop(D: np.ndarray, phi: np.ndarray, frames: np.ndarray, fps: floa
 
 
 @dataclass
+class SelfLoopReport(Report):
+    """The self-looping sequence: frames ``m``..``n`` of the source, turning ``phi_deg``."""
+    m: int
+    n: int
+    phi_deg: float
+    distance: float
+
+
+@dataclass
+class LandingJoinReport(Report):
+    """Where the last copy joins the landing: source frame ``f_source`` of copy
+    ``f_copy`` → frame ``g``, pose distance, turn error."""
+    f_source: int
+    f_copy: int
+    g: int
+    distance: float
+    turn_error_deg: float
+
+
+@dataclass
+class MultiFlipReport(Report):
+    """What :func:`multiflip` did and measured."""
+    self_loop: SelfLoopReport
+    phi_S_deg: float
+    phi_E_deg: float
+    repetitions: int
+    landing_join: LandingJoinReport
+    flight_s_before_retiming: float
+    k_star: float
+    k: float
+    k_ratio: float
+    k_landing: float
+    flight_s: float
+    takeoff: int
+    landing: int
+    gravity: float
+    #: linear-momentum jumps at take-off and landing (:func:`momentum_jumps`)
+    dp_takeoff: float
+    dp_landing: float
+    p_takeoff: float
+    dp_takeoff_pct: float
+    dp_landing_pct: float
+
+
+@dataclass
 class MultiFlip:
     """The edited clip and what the method did (:func:`multiflip`)."""
 
@@ -124,7 +170,7 @@ class MultiFlip:
     flips: int
     takeoff: int
     landing: int
-    report: dict = field(default_factory=dict)
+    report: MultiFlipReport
 
 
 @dataclass
@@ -409,20 +455,17 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
     shift[ld_n + 1:] = target[-1] - com_new[ld_n]
     meta = {**clip.meta, "edit": f"multiflip {flips}"}
-    meta.pop("source_frames", None)
     out = Clip(clip.skeleton, fps, root_n + raise_before + shift, rot_n, None,
                {**meta, "takeoff": to_n, "landing": ld_n, "flips": flips})
 
-    report = {"self_loop": {"m": m, "n": n, "phi_deg": float(np.degrees(ph)), "distance": loop.distance},
-              "phi_S_deg": float(np.degrees(phi_S)), "phi_E_deg": float(np.degrees(phi_E)),
-              "repetitions": r, "landing_join": {"f_source": s_f, "f_copy": c_f, "g": g,
-                                                 "distance": d_land,
-                                                 "turn_error_deg": float(np.degrees(turn_err))},
-              "flight_s_before_retiming": T_seq, "k_star": kst, "k": kk, "k_ratio": kk / kst,
-              "k_landing": kL,
-              "flight_s": Tn, "takeoff": to_n, "landing": ld_n, "gravity": G}
-    # the output's COM: the new frames' moved by the raise and the repositioning
-    report.update(_jumps(com_new + raise_before + shift, fps, body.total_mass, to_n, ld_n))
+    report = MultiFlipReport(
+        self_loop=SelfLoopReport(m, n, float(np.degrees(ph)), loop.distance),
+        phi_S_deg=float(np.degrees(phi_S)), phi_E_deg=float(np.degrees(phi_E)), repetitions=r,
+        landing_join=LandingJoinReport(s_f, c_f, g, d_land, float(np.degrees(turn_err))),
+        flight_s_before_retiming=T_seq, k_star=kst, k=kk, k_ratio=kk / kst, k_landing=kL,
+        flight_s=Tn, takeoff=to_n, landing=ld_n, gravity=G,
+        # the output's COM: the new frames' moved by the raise and the repositioning
+        **_jumps(com_new + raise_before + shift, fps, body.total_mass, to_n, ld_n))
     return MultiFlip(out, flips, to_n, ld_n, report)
 
 

@@ -21,7 +21,8 @@ from ..motion.clip import Clip
 
 def sample(clip: Clip, src: np.ndarray) -> Clip:
     """A clip whose frame k is the source clip at fractional frame ``src[k]``
-    (clamped to the clip).  Same fps; ``meta`` is kept with ``"source_frames"``.
+    (clamped to the clip).  Same fps and ``meta`` (provenance only: the source
+    frames are ``src``, clamped, and not stored in it).
 
     Example
     -------
@@ -29,9 +30,7 @@ def sample(clip: Clip, src: np.ndarray) -> Clip:
     """
     src = np.clip(np.asarray(src, dtype=np.float64), 0.0, clip.num_frames - 1)
     rot, root, jp = _sample_arrays(clip.rotations, clip.root_pos, clip.joint_pos, src)
-    meta = dict(clip.meta)
-    meta["source_frames"] = src
-    return Clip(clip.skeleton, clip.fps, root, rot, jp, meta)
+    return Clip(clip.skeleton, clip.fps, root, rot, jp, dict(clip.meta))
 
 
 def _sample_arrays(rotations: np.ndarray, root_pos: np.ndarray, joint_pos: np.ndarray | None,

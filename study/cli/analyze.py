@@ -12,6 +12,8 @@ import json
 import sys
 from pathlib import Path
 
+from .common import add_json
+
 
 def add_commands(subparsers) -> None:
     """Add the ``analyze`` subcommand to an argparse subparsers object."""
@@ -52,7 +54,7 @@ def add_commands(subparsers) -> None:
     p.add_argument("--image", action="append", default=[], metavar="[LABEL=]PNG",
                    help="an image for the figure sheet (repeatable; without labels the order is: ghost "
                         "original, ghost strongest error, trail original, trail strongest error)")
-    p.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    add_json(p, "print the summary as one JSON object")
     p.set_defaults(func=handler)
 
 

@@ -1,26 +1,44 @@
 """Options shared by the commands, defined once: a CLIP with ``--scale``/``--fps``,
-``--mass``, ``--json``."""
+``--mass``, ``--json``, ``--out``.  A command whose option means something more
+particular (``concat``'s two files) passes its own help text; type, default and
+destination stay the same everywhere."""
 from __future__ import annotations
 
 import argparse
 
 from flipstudy.stimuli.loading import load_clip
 
-__all__ = ["load_clip", "add_clip_args", "add_mass", "add_json"]
+__all__ = ["load_clip", "add_clip", "add_units", "add_clip_args", "add_mass", "add_json", "add_out"]
 
 
-def add_clip_args(p: argparse.ArgumentParser):
+def add_clip(p: argparse.ArgumentParser) -> None:
+    """The positional CLIP: a built-in name or a BVH path (see :func:`load_clip`)."""
     p.add_argument("clip", metavar="CLIP", help="built-in name (backflip, frontflip, jump) or BVH path")
-    p.add_argument("--scale", type=float, default=None,
-                   help="metres per file unit (default: guessed from the skeleton's size)")
-    p.add_argument("--fps", type=float, default=None,
-                   help="frames per second, overriding the file's Frame Time")
 
 
-def add_mass(p: argparse.ArgumentParser, default: float = 70.0) -> None:
+def add_units(p: argparse.ArgumentParser, *,
+              scale_help: str = "metres per file unit (default: guessed from the skeleton's size)",
+              fps_help: str = "frames per second, overriding the file's Frame Time") -> None:
+    """``--scale`` and ``--fps`` of the clips a command loads (see :func:`load_clip`)."""
+    p.add_argument("--scale", type=float, default=None, help=scale_help)
+    p.add_argument("--fps", type=float, default=None, help=fps_help)
+
+
+def add_clip_args(p: argparse.ArgumentParser) -> None:
+    """CLIP with ``--scale`` and ``--fps``."""
+    add_clip(p)
+    add_units(p)
+
+
+def add_mass(p: argparse.ArgumentParser, default: float = 70.0, *, what: str = "total body mass") -> None:
     p.add_argument("--mass", type=float, default=default,
-                   help=f"total body mass in kg (default {default:g})")
+                   help=f"{what} in kg (default {default:g})")
 
 
-def add_json(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--json", action="store_true", help="print one JSON object")
+def add_json(p: argparse.ArgumentParser, help: str = "print one JSON object") -> None:
+    p.add_argument("--json", action="store_true", help=help)
+
+
+def add_out(p: argparse.ArgumentParser, metavar: str, help: str | None = None) -> None:
+    """The required ``--out`` file or folder a command writes."""
+    p.add_argument("--out", required=True, metavar=metavar, help=help)

@@ -8,6 +8,8 @@ import json
 import sys
 from pathlib import Path
 
+from .common import add_json, add_mass, add_out, add_units
+
 
 def _range(text: str) -> tuple[int, int]:
     try:
@@ -51,77 +53,68 @@ def cmd_concat(args) -> int:
         return 1
     save_bvh(res.clip, args.out)
     r = res.report
-    out = {"out": str(args.out), **r}
+    out = {"out": str(args.out), **r.to_dict()}
     if base is not None:
         bpath = Path(args.out).with_name(Path(args.out).stem + "_motion-graph.bvh")
         save_bvh(base.clip, bpath)
-        out["baseline"] = {"out": str(bpath), **base.report}
+        out["baseline"] = {"out": str(bpath), **base.report.to_dict()}
     if args.plot:
         from flipstudy.render.plots import plot_concat
-        srcs = [("motion 1", a, 0), ("motion 2 at T (before smoothing)", b, r["T"])]
+        srcs = [("motion 1", a, 0), ("motion 2 at T (before smoothing)", b, r.T)]
         plot_concat(res, body, args.plot, baseline=base, sources=srcs,
-                    title=f"{Path(args.out).stem}: {r['rule']} rule")
+                    title=f"{Path(args.out).stem}: {r.rule} rule")
         out["plot"] = str(args.plot)
     if args.ghost:
         from flipstudy.render.figures import ghost_image
-        w0, w1 = r["blend_out"]
+        w0, w1 = r.blend_out
         fps = res.clip.fps
         t0 = max(0.0, w0 / fps - args.ghost_margin)
         t1 = min(res.clip.duration, w1 / fps + args.ghost_margin)
-        # a side view across the first motion's angular momentum: the rotation is seen in profile
         import numpy as np
-        from flipstudy.render.camera import fit_camera
-        from flipstudy.stimuli.physics import momentum
-        from flipstudy.stimuli.edit.concat import torso_facing
+        from flipstudy.render.camera import transition_camera
         f0, f1 = int(t0 * fps), int(np.ceil(t1 * fps)) + 1
-        if args.ghost_view == "across-L":
-            L = momentum(a, body).L
-            d = np.cross([0.0, 1.0, 0.0], L[r["phases_a"]["main"][0]:r["phases_a"]["main"][1] + 1].mean(axis=0))
-        else:
-            # the performer's profile (side) or three-quarter front view at the blend
-            d = torso_facing(res.clip, body)[r["blend_out"][0]]
-            if args.ghost_view == "three-quarter":
-                d = np.array([[0.7071, 0, -0.7071], [0, 1, 0], [0.7071, 0, 0.7071]]) @ d
-        cam = fit_camera(res.clip.joint_positions()[f0:f1], direction=d if np.linalg.norm(d) > 1e-6 else (0, 0, 1))
+        cam = transition_camera(res.clip, a, body, args.ghost_view, main=r.phases_a["main"],
+                                at=r.blend_out[0], frames=(f0, f1))
         ghost_image(res.clip, args.ghost, span=(t0, t1), interval=args.ghost_interval, body=body, camera=cam)
         out["ghost"] = str(args.ghost)
     if args.json:
         print(json.dumps(out, indent=2, default=float))
         return 0
-    pa, pb = r["phases_a"], r["phases_b"]
+    pa, pb = r.phases_a, r.phases_b
     print(f"{args.a} + {args.b} → {args.out}: {res.clip.num_frames} frames "
-          f"({res.clip.duration:.2f} s at {res.clip.fps:g} fps; the two motions: {r['frames_a']} + {r['frames_b']})")
+          f"({res.clip.duration:.2f} s at {res.clip.fps:g} fps; the two motions: {r.frames_a} + {r.frames_b})")
     print(f"  phases                motion 1 main {pa['main'][0]}–{pa['main'][1]} (t_m {pa['tm']}), "
           f"motion 2 main {pb['main'][0]}–{pb['main'][1]} (t_m {pb['tm']})")
-    print(f"  rule                  {r['rule']} (suggested: {r['suggested_rule']}); motion 2 turned "
-          f"θ = {r['theta_deg']:.1f}° about the vertical, shifted {r['shift_m'][0]:+.2f}, {r['shift_m'][2]:+.2f} m; "
-          f"torso facing {r['facing_deg_at_fT']:.0f}° apart at f_T")
-    print(f"  blendable             {r['case']}: motion 1 {r['blendable_a'][0]}–{r['blendable_a'][1]}, "
-          f"motion 2 {r['blendable_b'][0]}–{r['blendable_b'][1]} ({r['support']})")
-    print(f"  timing                T = {r['T']} frames, f_T = {r['f_T']}; F = {r['F']:.2f} "
-          f"(F_dm {r['F_dm']:.2f} + F_inertia {r['F_inertia']:.2f} + F_time {r['F_time']:.2f}; "
-          f"threshold {r['threshold']:.1f})")
-    wid = f", widened {r['blend_widened']}" if r["blend_widened"] else ""
-    print(f"  blend                 frames {r['blend'][0]}–{r['blend'][1]}{wid}; |L| peak "
-          f"{r['L_peak_blend_before']:.1f} before smoothing")
-    sm = r["smoothing"]
+    print(f"  rule                  {r.rule} (suggested: {r.suggested_rule}); motion 2 turned "
+          f"θ = {r.theta_deg:.1f}° about the vertical, shifted {r.shift_m[0]:+.2f}, {r.shift_m[2]:+.2f} m; "
+          f"torso facing {r.facing_deg_at_fT:.0f}° apart at f_T")
+    print(f"  blendable             {r.case}: motion 1 {r.blendable_a[0]}–{r.blendable_a[1]}, "
+          f"motion 2 {r.blendable_b[0]}–{r.blendable_b[1]} ({r.support})")
+    print(f"  timing                T = {r.T} frames, f_T = {r.f_T}; F = {r.F:.2f} "
+          f"(F_dm {r.F_dm:.2f} + F_inertia {r.F_inertia:.2f} + F_time {r.F_time:.2f}; "
+          f"threshold {r.threshold:.1f})")
+    wid = f", widened {r.blend_widened}" if r.blend_widened else ""
+    print(f"  blend                 frames {r.blend[0]}–{r.blend[1]}{wid}; |L| peak "
+          f"{r.L_peak_blend_before:.1f} before smoothing")
+    sm = r.smoothing
     mode = "none" if sm is None else sm["mode"]
-    print(f"  smoothing             eq. 9 factor s = {r['smoothing_s']:.3f} ({mode}); window now "
-          f"{r['blend_out'][0]}–{r['blend_out'][1]}; |L| peak {r['L_peak_blend']:.1f}, mean "
-          f"{r['L_mean_blend']:.1f} (target {r['L_target_blend']:.1f}; main-phase peaks "
-          f"{r['L_main_peak_a']:.1f} and {r['L_main_peak_b']:.1f})")
-    if "foot_slide_cm" in r:
-        print(f"  feet                  pinned {', '.join(r['pinned']) or 'none'} (released "
-              f"{', '.join(r['released']) or '-'}); slide {r['foot_slide_cm']:.2f} cm while pinned; "
-              f"lowest foot {r['lowest_foot_above_floor_cm']:+.2f} cm from the floor")
-    if r["flights"]:
+    print(f"  smoothing             eq. 9 factor s = {r.smoothing_s:.3f} ({mode}); window now "
+          f"{r.blend_out[0]}–{r.blend_out[1]}; |L| peak {r.L_peak_blend:.1f}, mean "
+          f"{r.L_mean_blend:.1f} (target {r.L_target_blend:.1f}; main-phase peaks "
+          f"{r.L_main_peak_a:.1f} and {r.L_main_peak_b:.1f})")
+    if r.feet is not None:
+        ft = r.feet
+        print(f"  feet                  pinned {', '.join(ft.pinned) or 'none'} (released "
+              f"{', '.join(ft.released) or '-'}); slide {ft.foot_slide_cm:.2f} cm while pinned; "
+              f"lowest foot {ft.lowest_foot_above_floor_cm:+.2f} cm from the floor")
+    if r.flights:
         print("  flights               " + "; ".join(
-            f"{f['takeoff']}–{f['landing']} |L| CV {f['L_cv_pct']:.1f} %" for f in r["flights"]))
+            f"{f['takeoff']}–{f['landing']} |L| CV {f['L_cv_pct']:.1f} %" for f in r.flights))
     if base is not None:
         br = base.report
-        print(f"  motion graph          transition {br['transition_a']} → {br['transition_b']} "
-              f"(window {br['window']} frames, distance {br['distance']:.2f}): {br['frames']} frames "
-              f"({br['duration_s']:.2f} s) → {out['baseline']['out']}")
+        print(f"  motion graph          transition {br.transition_a} → {br.transition_b} "
+              f"(window {br.window} frames, distance {br.distance:.2f}): {br.frames} frames "
+              f"({br.duration_s:.2f} s) → {out['baseline']['out']}")
     for k in ("plot", "ghost"):
         if k in out:
             print(f"  {k:<22}{out[k]}")
@@ -156,10 +149,9 @@ def add_commands(subparsers) -> None:
     p.add_argument("--baseline", choices=["motion-graph"], default=None,
                    help="also join the two at their most similar poses (Kovar et al. 2002), written "
                         "beside OUT as OUT_motion-graph.bvh")
-    p.add_argument("--mass", type=float, default=70.0, help="total body mass in kg (default 70)")
-    p.add_argument("--scale", type=float, default=None, help="metres per file unit (both files)")
-    p.add_argument("--fps", type=float, default=None, help="frames per second (both files)")
-    p.add_argument("--out", required=True, metavar="OUT.bvh")
+    add_mass(p)
+    add_units(p, scale_help="metres per file unit (both files)", fps_help="frames per second (both files)")
+    add_out(p, "OUT.bvh")
     p.add_argument("--plot", metavar="L.png", help="|L|(t) against the baseline (Figure 8 style)")
     p.add_argument("--ghost", metavar="GHOST.png", help="ghost composite of the transition")
     p.add_argument("--ghost-interval", type=float, default=0.15, metavar="S",
@@ -169,5 +161,5 @@ def add_commands(subparsers) -> None:
     p.add_argument("--ghost-view", choices=["across-L", "side", "three-quarter"], default="across-L",
                    help="ghost camera: across the first motion's angular momentum (default: a flip or "
                         "cartwheel seen in profile), the performer's side, or three-quarter front")
-    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    add_json(p, "print the report as JSON")
     p.set_defaults(func=cmd_concat)

@@ -17,6 +17,8 @@ import argparse
 import json
 import sys
 
+from .common import add_json, add_mass, add_out
+
 
 def _vec3(text: str):
     try:
@@ -123,13 +125,13 @@ def add_commands(subparsers) -> None:
                    help=f"factor on k (default {STRENGTH:g}; 1 = the thesis's literal constants, too "
                         f"weak with the corrected joint angle)")
     p.add_argument("--scene", choices=SCENES, default="forward", help="scene (default forward)")
-    p.add_argument("--mass", type=float, default=70.0, help="body mass in kg (default 70)")
+    add_mass(p, what="body mass")
     p.add_argument("--height", type=float, default=1.75, help="standing height in m (default 1.75)")
     p.add_argument("--gravity", type=float, default=9.81, help="m/s² (default 9.81)")
     p.add_argument("--fps", type=float, default=120.0, help="frames per second of the clip (default 120)")
-    p.add_argument("--out", required=True, metavar="JUMP.bvh")
+    add_out(p, "JUMP.bvh")
     p.add_argument("--strip", metavar="STRIP.png",
                    help="animation strip: one frame in five at 10 fps, as in the thesis")
     p.add_argument("--composite", metavar="COMP.png", help="composited frames of the flight")
-    p.add_argument("--json", action="store_true", help="print the report as JSON")
+    add_json(p, "print the report as JSON")
     p.set_defaults(func=cmd_jump)

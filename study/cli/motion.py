@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 
-from .common import add_clip_args, add_json, add_mass, load_clip
+from .common import add_clip_args, add_json, add_mass, add_out, load_clip
 
 
 def cmd_inspect(args) -> int:
@@ -118,86 +118,69 @@ def cmd_archive(args) -> int:
 
 def cmd_edit(args) -> int:
     """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit
-    with momentum repair (5.5), measured."""
+    with momentum repair (5.5), measured (:func:`flipstudy.stimuli.edit.pipeline.edit`)."""
     from flipstudy.stimuli import analyse, save_bvh
-    from flipstudy.stimuli.edit.animator import AnimatorEditError, repair_momentum, straighten
-    from flipstudy.stimuli.edit.multiflip import FlipEditError, measure, multiflip
+    from flipstudy.stimuli.edit.animator import AnimatorEditError
+    from flipstudy.stimuli.edit.multiflip import FlipEditError
+    from flipstudy.stimuli.edit.pipeline import edit
     if args.flips is None and not args.straighten and not args.join:
         print("flipstudy edit: error: nothing to do: give --flips N, --straighten legs|arms or --join OTHER",
               file=sys.stderr)
         return 2
     clip = load_clip(args.clip, args.scale, args.fps)
-    a = analyse(clip, total_mass=args.mass)
-    if a.flight is None:
-        print(f"flipstudy edit: error: {args.clip}: no flight phase found", file=sys.stderr)
-        return 1
-    out_clip, lines, plot = clip, [], None
+    other = load_clip(args.join, args.scale, args.fps) if args.join else None
     try:
-        if args.join:
-            from flipstudy.stimuli.edit.join import join_in_flight
-            other = load_clip(args.join, args.scale, args.fps)
-            j = join_in_flight(a, other)
-            r = j["report"]
-            lines.append(f"join {args.join}: turned {r['yaw_deg']:.0f}° about the vertical, retimed ×"
-                         f"{r['retime']:.3f} to match |L|; joined at frame {r['join']['first']} → its "
-                         f"frame {r['join']['second']} (distance {r['join']['distance']:.2f})")
-            xf = r["join"]["crossfade"]
-            lines.append(f"cross-fade            root orientations {r['join']['swing_deg']:.1f}° apart ⟂ L; turns "
-                         f"{xf['turned_perp_deg']:.1f}° ⟂ L ({xf['explained_perp_deg']:.1f}° explained by L, "
-                         f"{xf['unexplained_deg']:.1f}° not) and {xf['turned_about_L_deg']:.1f}° about L "
-                         f"({xf['explained_about_L_deg']:.1f}° explained)")
-            lines.append(f"measured              turn {r['turn_deg']:.1f}°, flight |L| mean {r['L_mean']:.2f} "
-                         f"(first {r['L_first']:.2f}) CV {r['L_cv_pct']:.1f} %, momentum jump take-off "
-                         f"{r['dp_takeoff_pct']:.1f} %, landing {r['dp_landing_pct']:.1f} %")
-            out_clip = j["clip"]
-            plot = ("compare", None)
-            if args.flips is not None or args.straighten:
-                raise FlipEditError("--join is made on its own (not with --flips or --straighten)")
-        if args.straighten:
-            edited = straighten(a, args.straighten, args.t_from, args.t_to)
-            rep = repair_momentum(a, edited, midpoint=args.midpoint)
-            r = rep.report
-            lines.append(f"straighten {args.straighten}: |L| error {r['max_error_before_pct']:.0f} % before "
-                         f"retiming, {r['max_error_after_pct']:.1f} % after ({r['rule']} rule); flight "
-                         f"{r['flight_s_before']:.3f} → {r['flight_s_after']:.3f} s, height "
-                         f"{r['jump_height_before_m']:.2f} → {r['jump_height_after_m']:.2f} m")
-            out_clip = rep.clip
-            plot = ("repair", rep)
-            if args.flips is not None:
-                a = analyse(out_clip, body=a.body, estimate=False)
-        if args.flips is not None:
-            base = a
-            res = multiflip(base, args.flips, k_ratio=args.k_ratio)
-            m = measure(res, base)
-            r = res.report
-            lines += [
-                f"self-looping sequence  frames {r['self_loop']['m']}–{r['self_loop']['n']} "
-                f"(turn {r['self_loop']['phi_deg']:.1f}°, distance {r['self_loop']['distance']:.3f}), "
-                f"repeated {r['repetitions'] + 1}×; landing join {r['landing_join']['f_source']} → "
-                f"{r['landing_join']['g']} (turn error {r['landing_join']['turn_error_deg']:+.1f}°, spread)",
-                f"retiming              k* = {r['k_star']:.3f}, k = {r['k']:.3f} ({r['k_ratio']:.2f} k*), "
-                f"landing phase {r['k_landing']:.3f}; flight {r['flight_s_before_retiming']:.3f} → "
-                f"{r['flight_s']:.3f} s",
-                f"momentum jump         take-off {r['dp_takeoff_pct']:.1f} %, landing "
-                f"{r['dp_landing_pct']:.1f} % of the take-off momentum",
-                f"measured              turn {m['turn_deg']:.1f}° (frames {m['turn_span'][0]}–"
-                f"{m['turn_span'][1]}), flight |L| mean {m['L_mean']:.2f} kg·m²/s CV {m['L_cv_pct']:.2f} %, "
-                f"COM residual {m['com_rms_mm']:.2f} mm, gravity {m['apparent_gravity']:.2f} m/s²"]
-            out_clip = res.clip
-            plot = plot or ("compare", None)
+        res = edit(clip, flips=args.flips, k_ratio=args.k_ratio, straighten=args.straighten,
+                   t_from=args.t_from, t_to=args.t_to, midpoint=args.midpoint, join=other,
+                   total_mass=args.mass)
     except (FlipEditError, AnimatorEditError) as e:
         print(f"flipstudy edit: error: {args.clip}: {e}", file=sys.stderr)
         return 1
+    out_clip, steps, lines = res.clip, res.steps, []
+    if steps.join is not None:
+        r = steps.join.report
+        lines.append(f"join {args.join}: turned {r.yaw_deg:.0f}° about the vertical, retimed ×"
+                     f"{r.retime:.3f} to match |L|; joined at frame {r.join.first} → its "
+                     f"frame {r.join.second} (distance {r.join.distance:.2f})")
+        xf = r.join.crossfade
+        lines.append(f"cross-fade            root orientations {r.join.swing_deg:.1f}° apart ⟂ L; turns "
+                     f"{xf['turned_perp_deg']:.1f}° ⟂ L ({xf['explained_perp_deg']:.1f}° explained by L, "
+                     f"{xf['unexplained_deg']:.1f}° not) and {xf['turned_about_L_deg']:.1f}° about L "
+                     f"({xf['explained_about_L_deg']:.1f}° explained)")
+        lines.append(f"measured              turn {r.turn_deg:.1f}°, flight |L| mean {r.L_mean:.2f} "
+                     f"(first {r.L_first:.2f}) CV {r.L_cv_pct:.1f} %, momentum jump take-off "
+                     f"{r.dp_takeoff_pct:.1f} %, landing {r.dp_landing_pct:.1f} %")
+    if steps.repair is not None:
+        r = steps.repair.report
+        lines.append(f"straighten {args.straighten}: |L| error {r.max_error_before_pct:.0f} % before "
+                     f"retiming, {r.max_error_after_pct:.1f} % after ({r.rule} rule); flight "
+                     f"{r.flight_s_before:.3f} → {r.flight_s_after:.3f} s, height "
+                     f"{r.jump_height_before_m:.2f} → {r.jump_height_after_m:.2f} m")
+    if steps.multiflip is not None:
+        r, m = steps.multiflip.report, steps.measured
+        lines += [
+            f"self-looping sequence  frames {r.self_loop.m}–{r.self_loop.n} "
+            f"(turn {r.self_loop.phi_deg:.1f}°, distance {r.self_loop.distance:.3f}), "
+            f"repeated {r.repetitions + 1}×; landing join {r.landing_join.f_source} → "
+            f"{r.landing_join.g} (turn error {r.landing_join.turn_error_deg:+.1f}°, spread)",
+            f"retiming              k* = {r.k_star:.3f}, k = {r.k:.3f} ({r.k_ratio:.2f} k*), "
+            f"landing phase {r.k_landing:.3f}; flight {r.flight_s_before_retiming:.3f} → "
+            f"{r.flight_s:.3f} s",
+            f"momentum jump         take-off {r.dp_takeoff_pct:.1f} %, landing "
+            f"{r.dp_landing_pct:.1f} % of the take-off momentum",
+            f"measured              turn {m['turn_deg']:.1f}° (frames {m['turn_span'][0]}–"
+            f"{m['turn_span'][1]}), flight |L| mean {m['L_mean']:.2f} kg·m²/s CV {m['L_cv_pct']:.2f} %, "
+            f"COM residual {m['com_rms_mm']:.2f} mm, gravity {m['apparent_gravity']:.2f} m/s²"]
     save_bvh(out_clip, args.out)
     print(f"{args.clip} → {args.out}: {out_clip.num_frames} frames at {out_clip.fps:g} fps")
     for ln in lines:
         print("  " + ln)
     if args.plot:
         from flipstudy.render.plots import plot_compare, plot_repair
-        if plot and plot[0] == "repair" and args.flips is None:
-            plot_repair(plot[1], args.plot, title=f"{Path(str(args.clip)).stem}: straight {args.straighten}")
+        if steps.repair is not None and args.flips is None:
+            plot_repair(steps.repair, args.plot, title=f"{Path(str(args.clip)).stem}: straight {args.straighten}")
         else:
-            orig = analyse(clip, total_mass=args.mass)
+            orig = res.analysis
             plot_compare(analyse(out_clip, body=orig.body, estimate=False), orig, args.plot,
                          title=f"{Path(args.out).stem} over {Path(str(args.clip)).stem}")
         print(f"  plot                  {args.plot}")
@@ -228,7 +211,7 @@ def add_commands(subparsers) -> None:
                        description="Inject the design's errors into its clips, measure every stimulus "
                                    "with the analyser and write .bvh, .npz and manifest.csv (atomically).")
     p.add_argument("design", metavar="DESIGN.toml")
-    p.add_argument("--out", required=True, metavar="STUDY_DIR")
+    add_out(p, "STUDY_DIR")
     p.add_argument("--force", action="store_true",
                    help="replace an existing STUDY_DIR, unless it holds any real participant's "
                         "answer (then move it aside with `flipstudy archive STUDY_DIR`); a study "
@@ -267,7 +250,7 @@ def add_commands(subparsers) -> None:
     p.add_argument("--midpoint", action="store_true",
                    help="second-order variant of the paper's retiming rule for the repair")
     add_mass(p)
-    p.add_argument("--out", required=True, metavar="OUT.bvh")
+    add_out(p, "OUT.bvh")
     p.add_argument("--plot", metavar="FILE.png",
                    help="|L|(t) of the result over the original (with --straighten alone: the error "
                         "before/after repair, the paper's Figure 3)")

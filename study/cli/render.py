@@ -18,6 +18,8 @@ from flipstudy.stimuli.exceptions import FlipstudyError
 import argparse
 import sys
 
+from .common import add_clip, add_out, add_units
+
 
 def _size(text: str):
     from flipstudy.render.study import parse_size
@@ -124,14 +126,14 @@ def add_commands(subparsers) -> None:
         "figure", help="one still of one clip: ghosts, marker trails, strip, composite, overlay",
         description="Draw one figure of CLIP (a built-in name or a BVH path) in the style of "
                     "Ooi (2016, Chapter 4).")
-    f.add_argument("clip", metavar="CLIP", help="built-in name (backflip, frontflip, jump) or BVH path")
+    add_clip(f)
     g = f.add_mutually_exclusive_group()
     g.add_argument("--ghost", action="store_true", help="ghost copies every --interval s (default)")
     g.add_argument("--trail", action="store_true", help="marker trails with a legend")
     g.add_argument("--strip", action="store_true", help="animation strip, panels every --interval s")
     g.add_argument("--composite", action="store_true", help="layered frames (first opaque, rest 75 %%)")
     g.add_argument("--overlay", metavar="OTHER", help="overlay CLIP (yellow) and OTHER (turquoise)")
-    f.add_argument("--out", required=True, metavar="FILE.png", help="output PNG")
+    add_out(f, "FILE.png", "output PNG")
     f.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
                    help="image size (strip: panel height) in pixels (default 640x480)")
     f.add_argument("--interval", type=float, default=None, metavar="S",
@@ -139,8 +141,5 @@ def add_commands(subparsers) -> None:
     f.add_argument("--debug", action="store_true",
                    help="draw COM and its path, L and velocity arrows, support polygon")
     f.add_argument("--style", metavar="STYLE.toml", help="style overrides")
-    f.add_argument("--scale", type=float, default=None,
-                   help="metres per file unit (default: guessed from the skeleton's size)")
-    f.add_argument("--fps", type=float, default=None,
-                   help="frames per second, overriding the file's Frame Time")
+    add_units(f)
     f.set_defaults(func=cmd_figure)

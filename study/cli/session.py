@@ -12,6 +12,7 @@ import json
 import sys
 
 from ..validate import RequestError
+from .common import add_json
 
 
 def _port(text: str) -> int:
@@ -190,7 +191,7 @@ def add_commands(subparsers) -> None:
                     "answered/total (INCOMPLETE when not every trial is answered), started, last "
                     "answer, finished; then the number of real and simulated participants.")
     p.add_argument("study_dir", metavar="STUDY_DIR")
-    p.add_argument("--json", action="store_true", help="print a JSON list")
+    add_json(p, "print a JSON list")
     p.set_defaults(func=cmd_status)
 
     p = subparsers.add_parser(
