@@ -277,11 +277,22 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
 
 
 def _load_image(path: Path, max_px: int = 900):
-    from PIL import Image
-    with Image.open(path) as im:
-        im = im.convert("RGBA")
-        im.thumbnail((max_px, max_px))
-        return np.asarray(im)
+    """An image file as a uint8 RGBA array (OpenImageIO), shrunk to fit ``max_px``."""
+    import OpenImageIO as oiio
+    buf = oiio.ImageBuf(str(path))
+    if buf.has_error:
+        raise OSError(buf.geterror())
+    nc = buf.spec().nchannels
+    order = {1: (0, 0, 0, 1.0), 2: (0, 0, 0, 1), 3: (0, 1, 2, 1.0)}.get(nc, (0, 1, 2, 3))
+    buf = oiio.ImageBufAlgo.channels(buf, order)        # grey → RGB, opaque alpha where none
+    w, h = buf.spec().width, buf.spec().height
+    if max(w, h) > max_px:                              # keep the aspect, only shrink
+        s = max_px / max(w, h)
+        buf = oiio.ImageBufAlgo.resize(buf, roi=oiio.ROI(0, max(1, round(w * s)), 0, max(1, round(h * s)),
+                                                         0, 1, 0, 4))
+    if buf.has_error:
+        raise OSError(buf.geterror())
+    return np.asarray(buf.get_pixels(oiio.UINT8))
 
 
 def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict | None) -> tuple[Figure, list[str]]:
