@@ -407,14 +407,8 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
 
 def _from_euler(order: str, ang: np.ndarray) -> np.ndarray:
     """(..., 4) quaternions of (..., 3) intrinsic Euler angles in degrees, one scipy
-    call; flattened to (N, 3) for a scipy without N-d rotations (before 1.17)."""
-    try:
-        return Rotation.from_euler(order, ang, degrees=True).as_quat()
-    except ValueError:
-        if ang.ndim <= 2:
-            raise
-        flat = Rotation.from_euler(order, ang.reshape(-1, 3), degrees=True).as_quat()
-        return flat.reshape(ang.shape[:-1] + (4,))
+    call (N-d rotations, scipy 1.17+)."""
+    return Rotation.from_euler(order, ang, degrees=True).as_quat()
 
 
 def _detect_tpose(values: np.ndarray, rot_cols: np.ndarray, q: np.ndarray) -> bool:
