@@ -157,6 +157,17 @@ def _fk(clip: Clip, times) -> tuple[np.ndarray, np.ndarray, Clip]:
     return pc.joint_rotations(), pc.joint_positions(), pc
 
 
+def _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds, span, margin, times, interval):
+    """One staged clip posed at ``times`` (or every ``interval`` s over ``span``):
+    (prepared, its clip, its body, times, joint rotations, joint positions)."""
+    prep = _prepare1(clip, body, takeoff, landing, camera, size, style, ground_bounds)
+    c, b = prep.clips[0], prep.bodies[0]
+    t0, t1 = _span(c, span, margin, prep.takeoffs[0], prep.landings[0])
+    ts = np.asarray(times, float) if times is not None else _regular_times(t0, t1, interval)
+    R, P, _ = _fk(c, ts)
+    return prep, c, b, ts, R, P
+
+
 def _placed_boxes(boxes, clip: Clip, placed: Clip) -> list:
     """Boxes (lo, hi) moved like the clip was when staged (a translation: one
     clip is never turned)."""
@@ -352,11 +363,8 @@ def ghost_image(clip: Clip, path=None, *, interval: float = 0.2, span="flight", 
     -------
     >>> img = ghost_image(builtin("backflip"), "ghost.png", interval=0.2)   # doctest: +SKIP
     """
-    prep = _prepare1(clip, body, takeoff, landing, camera, size, style, ground_bounds)
-    c, b = prep.clips[0], prep.bodies[0]
-    t0, t1 = _span(c, span, margin, prep.takeoffs[0], prep.landings[0])
-    ts = np.asarray(times, float) if times is not None else _regular_times(t0, t1, interval)
-    R, P, _ = _fk(c, ts)
+    prep, c, b, ts, R, P = _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds,
+                                  span, margin, times, interval)
     with _scene(scene, prep, style, size) as sc:
         st = sc.style
         for i in range(len(ts)):
@@ -553,11 +561,8 @@ def composite_image(clip: Clip, path=None, *, interval: float = 0.2, span="fligh
     -------
     >>> img = composite_image(clip, "composite.png", interval=0.15)     # doctest: +SKIP
     """
-    prep = _prepare1(clip, body, takeoff, landing, camera, size, style, ground_bounds)
-    c, b = prep.clips[0], prep.bodies[0]
-    t0, t1 = _span(c, span, margin, prep.takeoffs[0], prep.landings[0])
-    ts = np.asarray(times, float) if times is not None else _regular_times(t0, t1, interval)
-    R, P, _ = _fk(c, ts)
+    prep, c, b, ts, R, P = _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds,
+                                  span, margin, times, interval)
     with _scene(scene, prep, style, size) as sc:
         sc.set_boxes(_placed_boxes(boxes, clip, c))
         st = sc.style
