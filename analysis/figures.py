@@ -116,6 +116,19 @@ def ratings_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
     return fig
 
 
+def _label_panels(axes, n: int, ylabel: str, xlabel: str) -> None:
+    """y labels on the first column, x labels on the bottom panel of each column
+    of the first ``n`` panels of a grid; the panels after them hidden."""
+    nrows, ncols = axes.shape
+    for i in range(n):
+        if i % ncols == 0:
+            axes.flat[i].set_ylabel(ylabel)
+        if i >= n - ncols:
+            axes.flat[i].set_xlabel(xlabel)
+    for j in range(n, nrows * ncols):
+        axes.flat[j].set_visible(False)
+
+
 def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
     """d′ against the error level, one panel per group: the pooled d′ (filled,
     as in the paper) and the mean of the participants' d′ (open), each with its
@@ -149,12 +162,7 @@ def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
             ax.set_title(g, color=c, fontweight="bold")
             _level_axis(ax, x)
             ax.set_ylim(lo, hi)
-            if i % ncols == 0:
-                ax.set_ylabel("sensitivity d′")
-            if i >= len(groups) - ncols:
-                ax.set_xlabel("error level (%)")
-        for j in range(len(groups), nrows * ncols):
-            axes.flat[j].set_visible(False)
+        _label_panels(axes, len(groups), "sensitivity d′", "error level (%)")
         handles = [mpl.lines.Line2D([], [], color="0.2", marker="o", ls="-", mec="white", label="pooled d′ (as in the paper)"),
                    mpl.lines.Line2D([], [], color="0.2", marker="o", ls="none", mfc="white",
                                     label="mean of participants' d′")]
@@ -252,12 +260,7 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
             ax.set_title(f.group, color=c, fontweight="bold")
             _level_axis(ax, np.r_[0.0, f.x])
             ax.set_ylim(0, 1)
-            if i % ncols == 0:
-                ax.set_ylabel("P(judged incorrect)")
-            if i >= len(fits) - ncols:
-                ax.set_xlabel("error magnitude |level| (%)")
-        for j in range(len(fits), nrows * ncols):
-            axes.flat[j].set_visible(False)
+        _label_panels(axes, len(fits), "P(judged incorrect)", "error magnitude |level| (%)")
         if len(fits) < nrows * ncols:
             ax = axes.flat[len(fits)]
             ax.set_visible(True)
@@ -277,11 +280,22 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
 
 
 def _load_image(path: Path, max_px: int = 900):
-    from PIL import Image
-    with Image.open(path) as im:
-        im = im.convert("RGBA")
-        im.thumbnail((max_px, max_px))
-        return np.asarray(im)
+    """An image file as a uint8 RGBA array (OpenImageIO), shrunk to fit ``max_px``."""
+    import OpenImageIO as oiio
+    buf = oiio.ImageBuf(str(path))
+    if buf.has_error:
+        raise OSError(buf.geterror())
+    nc = buf.spec().nchannels
+    order = {1: (0, 0, 0, 1.0), 2: (0, 0, 0, 1), 3: (0, 1, 2, 1.0)}.get(nc, (0, 1, 2, 3))
+    buf = oiio.ImageBufAlgo.channels(buf, order)        # grey → RGB, opaque alpha where none
+    w, h = buf.spec().width, buf.spec().height
+    if max(w, h) > max_px:                              # keep the aspect, only shrink
+        s = max_px / max(w, h)
+        buf = oiio.ImageBufAlgo.resize(buf, roi=oiio.ROI(0, max(1, round(w * s)), 0, max(1, round(h * s)),
+                                                         0, 1, 0, 4))
+    if buf.has_error:
+        raise OSError(buf.geterror())
+    return np.asarray(buf.get_pixels(oiio.UINT8))
 
 
 def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict | None) -> tuple[Figure, list[str]]:

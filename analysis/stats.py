@@ -363,7 +363,7 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95, se
                      n_boot: int = 200) -> tuple[list[PsychometricFit], list[str]]:
     """One :class:`PsychometricFit` per group (a group with fewer than two
     magnitudes is skipped with a note), and notes.  ``method``: ``"psignifit"``
-    (falls back to ``"mle"`` with a note when psignifit is missing or fails),
+    (falls back to ``"mle"`` with a note for a group where psignifit fails),
     ``"mle"``, or ``"none"``."""
     method = method.lower()
     if method not in ("psignifit", "mle", "none"):
@@ -371,13 +371,6 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95, se
     fits, notes = [], []
     if method == "none":
         return fits, notes
-    if method == "psignifit":
-        try:
-            import psignifit  # noqa: F401
-        except ImportError:
-            notes.append("psignifit is not installed: psychometric functions fitted by maximum "
-                         "likelihood instead (pip install psignifit for the Bayesian fit)")
-            method = "mle"
     for g in group_order(df["group"].unique()):
         x, k, n = pooled_magnitudes(df[df["group"] == g])
         if len(x) < 2:

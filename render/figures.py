@@ -39,6 +39,7 @@ from .compose import draw_legend, draw_text, find_font, flatten, grid, over, wri
 from .geometry import body_points, poses_at, resample
 from .scene import Scene
 from .style import DEFAULT_STYLE, Style, rgb8
+from .video import h264_writer
 
 #: Default trail joints (Ooi used the pelvis and the leg joints; a legend is a must).
 TRAIL_JOINTS = ("pelvis", "head", "hand_l", "hand_r", "knee_l", "knee_r", "foot_l", "foot_r", "com")
@@ -156,6 +157,17 @@ def _fk(clip: Clip, times) -> tuple[np.ndarray, np.ndarray, Clip]:
     return pc.joint_rotations(), pc.joint_positions(), pc
 
 
+def _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds, span, margin, times, interval):
+    """One staged clip posed at ``times`` (or every ``interval`` s over ``span``):
+    (prepared, its clip, its body, times, joint rotations, joint positions)."""
+    prep = _prepare1(clip, body, takeoff, landing, camera, size, style, ground_bounds)
+    c, b = prep.clips[0], prep.bodies[0]
+    t0, t1 = _span(c, span, margin, prep.takeoffs[0], prep.landings[0])
+    ts = np.asarray(times, float) if times is not None else _regular_times(t0, t1, interval)
+    R, P, _ = _fk(c, ts)
+    return prep, c, b, ts, R, P
+
+
 def _placed_boxes(boxes, clip: Clip, placed: Clip) -> list:
     """Boxes (lo, hi) moved like the clip was when staged (a translation: one
     clip is never turned)."""
@@ -234,10 +246,12 @@ def support_polygon(points: np.ndarray, ground: float = 0.0) -> np.ndarray:
         return p
     p[:, 1] = ground + 0.005
     if p.shape[0] >= 3:
-        from scipy.spatial import ConvexHull, QhullError
+        from scipy.spatial import QhullError
+
+        from flipstudy.stimuli.control.balance import support_polygon as ground_hull
         try:
-            hull = ConvexHull(p[:, [0, 2]])
-            return p[hull.vertices]
+            xz = ground_hull(p)                               # (K,2) counter-clockwise
+            return np.column_stack([xz[:, 0], np.full(len(xz), ground + 0.005), xz[:, 1]])
         except QhullError:
             pass
         d = p[:, [0, 2]] - p[:, [0, 2]].mean(0)
@@ -303,7 +317,6 @@ def render_video(clip: Clip, path, *, fps: float = 60.0, size=(640, 480), style:
     >>> render_video(load_bvh("88_01.bvh", fps=60), "88_01.mp4", size=(640, 480))  # doctest: +SKIP
     PosixPath('88_01.mp4')
     """
-    import imageio_ffmpeg
     W, H = int(size[0]), int(size[1])
     if W % 2 or H % 2:
         raise FlipstudyValueError(f"video size {W}x{H}: width and height must be even for H.264 yuv420p")
@@ -317,12 +330,7 @@ def render_video(clip: Clip, path, *, fps: float = 60.0, size=(640, 480), style:
     if frames_dir is not None:
         Path(frames_dir).mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
-    writer = imageio_ffmpeg.write_frames(
-        str(tmp), (W, H), fps=float(fps), codec="libx264", pix_fmt_in="rgb24",
-        pix_fmt_out="yuv420p", quality=None, macro_block_size=1, ffmpeg_log_level="error",
-        output_params=["-crf", str(int(crf)), "-preset", "medium", "-profile:v", "high",
-                       "-movflags", "+faststart"])
-    writer.send(None)
+    writer = h264_writer(tmp, (W, H), fps, crf=crf)
     try:
         with _scene(scene, prep, style, (W, H)) as sc:
             gz = _gizmos(debug, prep.clips[0], prep.bodies[0])
@@ -355,11 +363,8 @@ def ghost_image(clip: Clip, path=None, *, interval: float = 0.2, span="flight", 
     -------
     >>> img = ghost_image(builtin("backflip"), "ghost.png", interval=0.2)   # doctest: +SKIP
     """
-    prep = _prepare1(clip, body, takeoff, landing, camera, size, style, ground_bounds)
-    c, b = prep.clips[0], prep.bodies[0]
-    t0, t1 = _span(c, span, margin, prep.takeoffs[0], prep.landings[0])
-    ts = np.asarray(times, float) if times is not None else _regular_times(t0, t1, interval)
-    R, P, _ = _fk(c, ts)
+    prep, c, b, ts, R, P = _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds,
+                                  span, margin, times, interval)
     with _scene(scene, prep, style, size) as sc:
         st = sc.style
         for i in range(len(ts)):
@@ -556,11 +561,8 @@ def composite_image(clip: Clip, path=None, *, interval: float = 0.2, span="fligh
     -------
     >>> img = composite_image(clip, "composite.png", interval=0.15)     # doctest: +SKIP
     """
-    prep = _prepare1(clip, body, takeoff, landing, camera, size, style, ground_bounds)
-    c, b = prep.clips[0], prep.bodies[0]
-    t0, t1 = _span(c, span, margin, prep.takeoffs[0], prep.landings[0])
-    ts = np.asarray(times, float) if times is not None else _regular_times(t0, t1, interval)
-    R, P, _ = _fk(c, ts)
+    prep, c, b, ts, R, P = _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds,
+                                  span, margin, times, interval)
     with _scene(scene, prep, style, size) as sc:
         sc.set_boxes(_placed_boxes(boxes, clip, c))
         st = sc.style

@@ -34,6 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
+from flipstudy.stimuli._progress import Progress
+
 #: What ``--what`` can ask for, and the file each writes (``{s}`` = stimulus).
 RENDER_KINDS = {
     "video": "{s}.mp4",
@@ -356,34 +358,6 @@ def _main_thread() -> bool:
     return threading.current_thread() is threading.main_thread()
 
 
-# ------------------------------------------------------------------ progress
-class Progress:
-    """A plain stderr progress bar (no dependency)."""
-
-    def __init__(self, total: int, label: str = "render", enabled: bool = True, stream=None):
-        self.total, self.label, self.enabled = int(total), label, enabled
-        self.n = 0
-        self.t0 = time.perf_counter()
-        self.stream = stream or sys.stderr
-
-    def step(self, what: str = "") -> None:
-        self.n += 1
-        if not self.enabled:
-            return
-        tty = self.stream.isatty()
-        done = self.n >= self.total
-        if not tty and not (done or self.n % max(1, self.total // 10) == 0):
-            return
-        el = time.perf_counter() - self.t0
-        eta = el / self.n * (self.total - self.n)
-        w = 28
-        k = int(w * self.n / max(self.total, 1))
-        line = (f"{self.label} [{'#' * k}{'.' * (w - k)}] {self.n}/{self.total} "
-                f"{el:6.1f} s, eta {eta:5.1f} s {what[:32]}")
-        self.stream.write(f"\r{line:<90}" + ("\n" if done else "") if tty else line + "\n")
-        self.stream.flush()
-
-
 def versions() -> dict:
     """Versions of what renders (recorded in render.json)."""
     import imageio_ffmpeg
@@ -628,6 +602,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         else:
             _run_pool(settings, tasks, jobs, done)
     finally:
+        bar.close()
         import shutil
         shutil.rmtree(settings["partial"], ignore_errors=True)
         (out / ".render.json.tmp").unlink(missing_ok=True)     # a write cut short

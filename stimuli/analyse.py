@@ -218,23 +218,17 @@ class PhysicsAdvice:
     height_m: float             # the body's height at the scale read
     g_fixed: float              # the apparent gravity after the fix
 
+    def _parts(self, fps_fmt: str, scale_fmt: str) -> list[str]:
+        return ([fps_fmt.format(self.fps)] if self.fps is not None else []) + \
+               ([scale_fmt.format(self.scale)] if self.scale is not None else [])
+
     def options(self) -> str:
         """The fix as command-line options (``--fps 60 --scale 0.0564``)."""
-        out = []
-        if self.fps is not None:
-            out.append(f"--fps {self.fps:g}")
-        if self.scale is not None:
-            out.append(f"--scale {self.scale:.4g}")
-        return " ".join(out)
+        return " ".join(self._parts("--fps {:g}", "--scale {:.4g}"))
 
     def keys(self) -> str:
         """The fix as design keys (``fps = 60``, ``scale = 0.0564``)."""
-        out = []
-        if self.fps is not None:
-            out.append(f"fps = {self.fps:g}")
-        if self.scale is not None:
-            out.append(f"scale = {self.scale:.4g}")
-        return ", ".join(out)
+        return ", ".join(self._parts("fps = {:g}", "scale = {:.4g}"))
 
 
 def physics_advice(g_app: float | None, clip: Clip) -> PhysicsAdvice | None:

@@ -317,13 +317,6 @@ class Body:
 _TIP_STUB = {"head": 0.15, "hand": 0.08, "foot": 0.12}
 
 
-def _lca(sk: Skeleton, a: int, b: int) -> int:
-    """Lowest common ancestor of joints a and b."""
-    pa = sk.path_to_root(a)
-    pb = set(sk.path_to_root(b))
-    return next(j for j in pa if j in pb)
-
-
 def _trunk_and_head(sk: Skeleton, idx: dict, tips: dict, pose: tuple):
     """The trunk and head rows, following de Leva's landmarks: trunk from the
     mid-hip point to C7 (taken as the mid-shoulder point), head from C7 to the
@@ -340,8 +333,8 @@ def _trunk_and_head(sk: Skeleton, idx: dict, tips: dict, pose: tuple):
     skeleton is 24 cm long, a flat disc 49 cm wide."""
     P, R = pose
     hl, hr, sl, sr = idx["hip_l"], idx["hip_r"], idx["shoulder_l"], idx["shoulder_r"]
-    sj = _lca(sk, sl, sr)
-    hj = _lca(sk, _lca(sk, hl, hr), sj)               # on the path root → shoulders
+    sj = sk.common_ancestor(sl, sr)
+    hj = sk.common_ancestor(sk.common_ancestor(hl, hr), sj)   # on the path root → shoulders
     mid_hip = (P[:, hl] + P[:, hr]) / 2.0              # (F,3)
     mid_sh = (P[:, sl] + P[:, sr]) / 2.0
     axis = mid_sh - mid_hip

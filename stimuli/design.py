@@ -141,34 +141,14 @@ source = "frontflip"
 [reference]
 clips = ["backflip", "frontflip"]
 
-[[groups]]
-name = "smooth-increase"
+""" + "".join(f"""[[groups]]
+name = "{profile}-{'increase' if sign > 0 else 'decrease'}"
 kind = "angular-momentum"
-profile = "smooth"
-sign = 1
+profile = "{profile}"
+sign = {sign}
 levels = [0, 17, 25, 37, 50]
 
-[[groups]]
-name = "smooth-decrease"
-kind = "angular-momentum"
-profile = "smooth"
-sign = -1
-levels = [0, 17, 25, 37, 50]
-
-[[groups]]
-name = "abrupt-increase"
-kind = "angular-momentum"
-profile = "abrupt"
-sign = 1
-levels = [0, 17, 25, 37, 50]
-
-[[groups]]
-name = "abrupt-decrease"
-kind = "angular-momentum"
-profile = "abrupt"
-sign = -1
-levels = [0, 17, 25, 37, 50]
-
+""" for profile in ("smooth", "abrupt") for sign in (1, -1)) + """\
 [[groups]]
 name = "takeoff-increase"
 kind = "takeoff-angle"

@@ -40,13 +40,13 @@ import os
 import shutil
 import sys
 import tempfile
-import time
 import zipfile
 from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from ._progress import Progress
 from .analyse import analyse
 from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
 from .errors import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
@@ -153,27 +153,6 @@ def clip_arrays(clip: Clip, takeoff: int, landing: int) -> dict:
             "joint_names": np.array(sk.joint_names), "parents": sk.parents, "offsets": sk.offsets}
 
 
-class _Progress:
-    def __init__(self, total: int, label: str, enabled: bool):
-        self.total, self.label, self.enabled, self.n = total, label, enabled, 0
-        self.t0 = time.perf_counter()
-
-    def step(self, what: str = ""):
-        self.n += 1
-        if not self.enabled:
-            return
-        done = self.n == self.total
-        if sys.stderr.isatty():
-            w = 30
-            k = int(w * self.n / max(self.total, 1))
-            sys.stderr.write(f"\r{self.label} [{'#' * k}{'.' * (w - k)}] {self.n}/{self.total} {what[:40]:40s}")
-            if done:
-                sys.stderr.write(f" {time.perf_counter() - self.t0:.1f} s\n")
-        elif done:
-            sys.stderr.write(f"{self.label}: {self.n}/{self.total} in {time.perf_counter() - self.t0:.1f} s\n")
-        sys.stderr.flush()
-
-
 #: the pseudo-group of a clip's shared original (level 0 of every sharing group)
 SHARED_ORIGINAL = Group(SHARED_ORIGINAL_GROUP, "angular-momentum", None, 1, [0.0], "shared")
 
@@ -235,7 +214,7 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
 
 def _build(design: Design, out: Path, force: bool, progress: bool, replace_check) -> list[dict]:
     todo = plan(design)
-    bar = _Progress(len(todo), "stimuli", progress)
+    bar = Progress(len(todo), "stimuli", progress)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
     try:
         base = {}
@@ -306,6 +285,8 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
         raise
+    finally:
+        bar.close()
     return rows
 
 

@@ -20,16 +20,11 @@ DEMO_GROUPS = (("smooth-increase", "angular-momentum", "smooth", 1),
 def write_test_video(path, *, size=(64, 48), frames: int = 30, fps: float = 30.0,
                      color=(230, 180, 40)) -> Path:
     """A small valid MP4 (H.264, yuv420p): a square moving left to right."""
-    import imageio_ffmpeg
+    from flipstudy.render.video import h264_writer
     w, h = size
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    gen = imageio_ffmpeg.write_frames(str(path), (w, h), fps=fps, codec="libx264",
-                                      pix_fmt_in="rgb24", pix_fmt_out="yuv420p", macro_block_size=2,
-                                      quality=None, ffmpeg_log_level="error",
-                                      output_params=["-movflags", "+faststart", "-crf", "30",
-                                                     "-preset", "ultrafast"])
-    gen.send(None)
+    gen = h264_writer(path, (w, h), fps, crf=30, preset="ultrafast")
     s = max(h // 4, 2)
     for i in range(frames):
         img = np.full((h, w, 3), 40, np.uint8)

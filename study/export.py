@@ -27,9 +27,9 @@ from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import csv
 import io
-import os
-import tempfile
 from pathlib import Path
+
+from flipstudy.stimuli._io import atomic_write_text
 
 from . import store
 
@@ -43,25 +43,6 @@ PARTICIPANT_COLUMNS = ["participant", "session", "source", "age", "gender", "ani
 
 def _flag(v) -> str:
     return "true" if v else "false"
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and ``os.replace``."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="", encoding="utf-8") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
 
 
 def _csv(columns, rows) -> str:

@@ -32,6 +32,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from flipstudy.stimuli._progress import Progress
+
 #: the original and its strongest error shown beside the curves on the sheet
 SHEET_ORIGINAL = "backflip_reference"
 SHEET_ERROR = "backflip_abrupt-decrease_50"
@@ -116,16 +118,11 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
         t = stage(4, f"sessions: {participants} simulated participants (observers of the paper's "
                      f"Table 2), exported")
-        done = [0]
-
-        def tick(pid, session):
-            done[0] += 1
-            if not quiet:
-                print(f"\r  {done[0]}/{participants} participants", end="", file=sys.stderr, flush=True)
-
-        simulate(study, participants, seed=seed, progress=tick)
-        if not quiet:
-            print(file=sys.stderr)
+        bar = Progress(participants, "participants", not quiet)
+        try:
+            simulate(study, participants, seed=seed, progress=lambda pid, session: bar.step(pid))
+        finally:
+            bar.close()
         exp = export_responses(study, include_simulated=True)      # marked simulated=true
         seconds["sessions"] = time.perf_counter() - t
 

@@ -171,23 +171,25 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
 
-    async def api_answer(request: Request):
+    async def _submit(request: Request, submit):
+        """(result, None) of ``submit(session, JSON body)``, or (None, the error response)."""
         try:
             obj = await _read_json(request)
-            result = await run_in_threadpool(submit_answer, session, obj)
+            return await run_in_threadpool(submit, session, obj), None
         except RequestError as e:
-            return _error(e.status, e.message)
+            return None, _error(e.status, e.message)
+
+    async def api_answer(request: Request):
+        result, err = await _submit(request, submit_answer)
+        if err is not None:
+            return err
         if on_answer is not None and result["status"] == "stored":
             on_answer(result)
         return JSONResponse(result, headers={"Cache-Control": "no-store"})
 
     async def api_demographics(request: Request):
-        try:
-            obj = await _read_json(request)
-            result = await run_in_threadpool(submit_demographics, session, obj)
-        except RequestError as e:
-            return _error(e.status, e.message)
-        return JSONResponse(result, headers={"Cache-Control": "no-store"})
+        result, err = await _submit(request, submit_demographics)
+        return err if err is not None else JSONResponse(result, headers={"Cache-Control": "no-store"})
 
     async def stimulus(request: Request):
         name = request.path_params["name"]

@@ -47,26 +47,25 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import brentq
+from scipy.special import expit
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+from flipstudy.analysis.simulate import PAPER_TABLE2
+
 from .session import SessionError, load_study, open_session, submit_answer, submit_demographics
 from .validate import DEMOGRAPHIC_FIELDS, PREFER_NOT, parse_json_object
 
-#: Majkowska & Faloutsos 2007, Table 2: mean ratings (% judged correct).  None = the
-#: cell the paper leaves empty (interpolated linearly in :data:`DEFAULT_MODEL`).
-PAPER_RATINGS = {
-    "smooth-increase": ((0, 17, 25, 37, 50), (72, 71, 72, None, 41)),
-    "smooth-decrease": ((0, 17, 25, 37, 50), (72, 79, 78, 78, 62)),
-    "abrupt-increase": ((0, 17, 25, 37, 50), (72, 76, 78, 48, 44)),
-    "abrupt-decrease": ((0, 17, 25, 37, 50), (72, 83, 68, 33, 22)),
-    "takeoff-increase": ((0, 10, 20, 30, 40), (63, 81, 50, 63, 18)),
-    # the angular-momentum groups' shared original (the 72 of their level-0 column)
-    "original": ((0,), (72,)),
-}
+#: Majkowska & Faloutsos 2007, Table 2 (:data:`flipstudy.analysis.simulate.PAPER_TABLE2`):
+#: (levels, mean ratings in % judged correct) per group.  None = the cell the paper
+#: leaves empty (interpolated linearly in :data:`DEFAULT_MODEL`).
+PAPER_RATINGS = {g: (t["levels"], t["rating"]) for g, t in PAPER_TABLE2.items()}
+# the angular-momentum groups' shared original (the 72 of their level-0 column)
+PAPER_RATINGS["original"] = ((0,), (72,))
 DEFAULT_SIGMA = 0.3
 
 
@@ -111,11 +110,7 @@ class ObserverModel:
 
     def probability(self, group: str, level: float, shift: float) -> float:
         """P("correct") for a participant whose logit shift is ``shift``."""
-        return _expit(self.base_logit(group, level) + shift)
-
-
-def _expit(x):
-    return 1.0 / (1.0 + np.exp(-x))
+        return float(expit(self.base_logit(group, level) + shift))
 
 
 _GH_X, _GH_W = np.polynomial.hermite_e.hermegauss(40)
@@ -125,14 +120,9 @@ _GH_W = _GH_W / _GH_W.sum()
 def _calibrate(p: float, sigma: float) -> float:
     if p <= 0.0 or p >= 1.0 or sigma == 0.0:
         return math.inf if p >= 1 else -math.inf if p <= 0 else math.log(p / (1 - p))
-    lo, hi = -30.0, 30.0
-    for _ in range(100):                       # bisection on a monotone function
-        mid = (lo + hi) / 2
-        if float(np.dot(_GH_W, _expit(mid + sigma * _GH_X))) < p:
-            lo = mid
-        else:
-            hi = mid
-    return (lo + hi) / 2
+    # E[expit(b + u)] (Gauss-Hermite) increases with b: its root is the base logit
+    return brentq(lambda b: float(np.dot(_GH_W, expit(b + sigma * _GH_X))) - p, -30.0, 30.0,
+                  xtol=1e-13, rtol=4 * np.finfo(float).eps)
 
 
 def default_model(sigma: float = DEFAULT_SIGMA) -> ObserverModel:

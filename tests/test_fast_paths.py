@@ -145,22 +145,6 @@ def test_nd_from_euler_with_mixed_orders_and_joints_without_rotations(orders):
         np.testing.assert_allclose(q[:, j], ref, rtol=0, atol=1e-15)
 
 
-def test_from_euler_falls_back_to_flat_calls_without_nd_rotations(monkeypatch):
-    """A scipy before 1.17 refuses N-d angles: the reader flattens them instead."""
-    class OldRotation:
-        @staticmethod
-        def from_euler(seq, angles, degrees=False):
-            if np.ndim(angles) > 2:
-                raise ValueError("Expected angles to be at most 2-dimensional")
-            return Rotation.from_euler(seq, angles, degrees=degrees)
-
-    rng = np.random.default_rng(9)
-    ang = rng.uniform(-200, 200, size=(7, 4, 3))
-    ref = bvh_mod._from_euler("ZXY", ang)
-    monkeypatch.setattr(bvh_mod, "Rotation", OldRotation)
-    np.testing.assert_allclose(bvh_mod._from_euler("ZXY", ang), ref, rtol=0, atol=1e-15)
-
-
 # -------------------------------------------------------- forward kinematics
 @pytest.mark.parametrize("name", ALL_BVH)
 def test_fk_equals_stacked_products_on_real_files(name):

@@ -42,6 +42,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid, trapezoid
 from scipy.spatial.transform import Rotation
 
 from ..edit.timing import slerp
@@ -332,13 +333,6 @@ def _solve_com(jumper, com, lean, feet, heel: bool, root0, iterations: int = 10,
                      f"{1000 * np.max(np.abs(err)):.2f} mm after {iterations} rounds)")
 
 
-def _cumtrapz0(y, t):
-    """Cumulative trapezoid integral of y (N,3) at times t (N,), from t[0]."""
-    out = np.zeros_like(y)
-    out[1:] = np.cumsum(0.5 * (y[1:] + y[:-1]) * np.diff(t)[:, None], axis=0)
-    return out
-
-
 def _conserve_momentum(jumper, Qf, com, tf, T, fps, rounds: int = 3):
     """Turn the whole body in flight (the root's rotation) so that its angular
     momentum about the COM is constant while the legs tuck and reach: ω(t) =
@@ -360,12 +354,12 @@ def _conserve_momentum(jumper, Qf, com, tf, T, fps, rounds: int = 3):
         Iinv = np.linalg.inv(mo.inertia)                               # (n,3,3)
         w_now = np.gradient(rv, tf, axis=0, edge_order=2)
         ext = lambda a: np.concatenate([a[:1], a, a[-1:]])            # noqa: E731
-        A = _cumtrapz0(ext(Iinv.reshape(n, 9)), tg)[-1].reshape(3, 3)   # ∫ I⁻¹ dt
-        b = _cumtrapz0(ext(np.einsum("nab,nb->na", Iinv, mo.L)), tg)[-1] - rv[-1] * 0.0
-        c = _cumtrapz0(ext(w_now), tg)[-1]
+        A = trapezoid(ext(Iinv.reshape(n, 9)), tg, axis=0).reshape(3, 3)   # ∫ I⁻¹ dt
+        b = trapezoid(ext(np.einsum("nab,nb->na", Iinv, mo.L)), tg, axis=0) - rv[-1] * 0.0
+        c = trapezoid(ext(w_now), tg, axis=0)
         L0 = np.linalg.solve(A, b - c)
         w = w_now + np.einsum("nab,nb->na", Iinv, L0[None] - mo.L)
-        acc = _cumtrapz0(ext(w), tg)
+        acc = cumulative_trapezoid(ext(w), tg, axis=0, initial=0.0)
         rv = acc[1:-1] - (tg[1:-1] / T)[:, None] * acc[-1][None]       # exactly upright at touch-down
     Q = Qf.copy()
     Q[:, 0] = Rotation.from_rotvec(rv).as_quat()

@@ -46,7 +46,7 @@ from scipy.spatial.transform import Rotation
 from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
 from ..physics import center_of_mass, momentum
-from .multiflip import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle
+from .multiflip import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle, unwrapped_turn
 from .report import Report
 from .reposition import rotate
 from .similarity import distance_matrix, pose_features, twist_angles
@@ -102,11 +102,6 @@ class Join:
     takeoff: int
     landing: int
     report: JoinReport
-
-
-def _unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
-    w = clip.angular_velocities()[:, 0] @ u
-    return np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / clip.fps)])
 
 
 def _assemble(a: Analysis, bc: Clip, b: Analysis, u: np.ndarray, fi: int, gj: int, e: float,
@@ -197,7 +192,7 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     b = analyse(bc, body=body, estimate=False)
     if b.flight is None:
         raise FlipEditError("the second motion has no flight after retiming")
-    th_a, th_b = _unwrapped_turn(a.clip, u), _unwrapped_turn(bc, u)
+    th_a, th_b = unwrapped_turn(a.clip, u), unwrapped_turn(bc, u)
     fa = np.arange(a.takeoff + 2, a.landing - 1)
     fb = np.arange(b.takeoff + 2, b.landing - 1)
     pf_a, pf_b = pose_features(a.clip, body, u, fa), pose_features(bc, body, u, fb)

@@ -73,6 +73,16 @@ def turn_angle(clip: Clip, axis, a: int = 0, b: int | None = None) -> float:
     return float(np.degrees(np.trapezoid(w, dx=1.0 / clip.fps))) if w.size > 1 else 0.0
 
 
+def unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
+    """(F,) radians the root has turned about the unit axis ``u`` since frame 0,
+    unwrapped: its angular velocity along ``u`` integrated (trapezoid).  Written out
+    rather than ``scipy.integrate.cumulative_trapezoid``: that rounds differently
+    (~1e-17), enough to move the multi-flip's discrete choices (its test against
+    ``tests/_multiflip_reference.py`` then differs by 6e-5)."""
+    w = clip.angular_velocities()[:, 0] @ u
+    return np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / clip.fps)])
+
+
 def standing_span(clip: Clip, body, takeoff: int, landing: int, still: float = 0.05,
                   drop: float = 0.05) -> tuple[int, int]:
     """(last standing frame before take-off, first standing frame after landing).
@@ -209,8 +219,7 @@ def prepare(source: Clip | Analysis) -> FlipSource:
     u = flight_axis(a)
     frames = np.arange(to, ld + 1)
     D, phi = distance_matrix(pose_features(clip, body, u, frames))
-    w_u = clip.angular_velocities()[:, 0] @ u
-    theta = np.concatenate([[0.0], np.cumsum(0.5 * (w_u[1:] + w_u[:-1]) / fps)])   # radians, unwrapped
+    theta = unwrapped_turn(clip, u)                                      # radians, unwrapped
     q = clip.rotations[:, 1:]
     q0 = Rotation.from_quat(q[:-1])
     step = (q0.inv() * Rotation.from_quat(q[1:])).as_rotvec()

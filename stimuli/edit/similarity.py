@@ -35,18 +35,13 @@ from ..motion.clip import Clip, angular_velocity
 WEIGHTS = {"root": 2.0, "trunk": 0.7, "thigh": 0.7, "knee": 0.5, "shoulder": 0.3, "elbow": 0.1}
 
 
-def _lca(sk, a: int, b: int) -> int:
-    pb = set(sk.path_to_root(b))
-    return next(j for j in sk.path_to_root(a) if j in pb)
-
-
 def weighted_parts(body: Body) -> list[tuple[str, float, int, int]]:
     """(name, weight, reference joint, joint) of every weighted part but the root:
     the part's orientation is that of ``joint`` relative to ``reference joint``."""
     sk = body.skeleton
     ix = {k: sk.index(v) for k, v in body.landmarks.items() if isinstance(v, str)}
     pelvis = ix["pelvis"]
-    chest = _lca(sk, ix["shoulder_l"], ix["shoulder_r"])
+    chest = sk.common_ancestor(ix["shoulder_l"], ix["shoulder_r"])
     parts = [("trunk", WEIGHTS["trunk"], pelvis, chest)]
     for s in "lr":
         parts += [(f"thigh_{s}", WEIGHTS["thigh"], pelvis, ix[f"hip_{s}"]),

@@ -14,6 +14,7 @@ from ..exceptions import FlipstudyValueError
 from typing import Callable
 
 import numpy as np
+from scipy.integrate import cumulative_trapezoid
 from scipy.spatial.transform import Rotation
 
 from ..motion.clip import Clip
@@ -92,7 +93,7 @@ def source_times(rate: Callable[[np.ndarray], np.ndarray] | np.ndarray, duration
         r = np.asarray(rate(tau), dtype=float)
         if np.any(r <= 0):
             raise ValueError("retiming rate must stay positive")
-        s = np.concatenate([[0.0], np.cumsum(0.5 * (r[1:] + r[:-1]) * dt)])
+        s = cumulative_trapezoid(r, dx=dt, initial=0.0)
         frames = s[::substeps]
     else:
         frames = np.asarray(rate, dtype=float)

@@ -30,7 +30,6 @@ import math
 import os
 import re
 import stat
-import tempfile
 from decimal import Decimal, InvalidOperation
 import warnings
 from pathlib import Path
@@ -38,6 +37,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from .._io import atomic_write_text
 from .clip import Clip
 from .skeleton import POSITION_CHANNELS, ROTATION_CHANNELS, Skeleton
 
@@ -407,14 +407,8 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
 
 def _from_euler(order: str, ang: np.ndarray) -> np.ndarray:
     """(..., 4) quaternions of (..., 3) intrinsic Euler angles in degrees, one scipy
-    call; flattened to (N, 3) for a scipy without N-d rotations (before 1.17)."""
-    try:
-        return Rotation.from_euler(order, ang, degrees=True).as_quat()
-    except ValueError:
-        if ang.ndim <= 2:
-            raise
-        flat = Rotation.from_euler(order, ang.reshape(-1, 3), degrees=True).as_quat()
-        return flat.reshape(ang.shape[:-1] + (4,))
+    call (N-d rotations, scipy 1.17+)."""
+    return Rotation.from_euler(order, ang, degrees=True).as_quat()
 
 
 def _detect_tpose(values: np.ndarray, rot_cols: np.ndarray, q: np.ndarray) -> bool:
@@ -735,24 +729,6 @@ def bvh_text(clip: Clip, scale: float = 1.0) -> str:
     out.append(f"Frames: {F}")
     out.append(f"Frame Time: {1.0 / clip.fps:.10f}")
     return "\n".join(out) + "\n" + body + "\n"
-
-
-def atomic_write_text(path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file and a rename, so a reader
-    never sees a half-written file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", newline="\n") as f:
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
 
 
 def save_bvh(clip: Clip, path, scale: float = 1.0) -> Path:

@@ -130,6 +130,11 @@ class Skeleton:
             out.append(int(self.parents[out[-1]]))
         return out
 
+    def common_ancestor(self, a: int, b: int) -> int:
+        """Lowest common ancestor of joints ``a`` and ``b``."""
+        pb = set(self.path_to_root(b))
+        return next(j for j in self.path_to_root(a) if j in pb)
+
     def end_sites_of(self, j: int) -> list[np.ndarray]:
         return [o for p, o in self.end_sites if p == j]
 

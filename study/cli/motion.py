@@ -71,7 +71,7 @@ def cmd_inspect(args) -> int:
 
 def cmd_init(args) -> int:
     from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
-    from flipstudy.stimuli.motion.bvh import atomic_write_text
+    from flipstudy.stimuli._io import atomic_write_text
     out = Path(args.design)
     if out.exists() and not args.force:
         print(f"flipstudy init: {out} exists; pass --force to overwrite", file=sys.stderr)
