@@ -11,12 +11,31 @@ One import package of four parts, in the order data flows:
 The stable entry points are here:
 
 >>> import flipstudy
->>> clip = flipstudy.builtin("backflip")
->>> a = flipstudy.analyse(clip)
+>>> clip = flipstudy.builtin("backflip")          # a Clip: 120 fps, metres, Y up
+>>> clip.fps, clip.num_frames, clip.joint_positions().shape
+(120.0, 397, (397, 21, 3))
+>>> a = flipstudy.analyse(clip)                   # flight phases, COM, momenta
 >>> a.takeoff < a.landing
 True
+>>> body = flipstudy.Body.from_clip(clip)         # the segment model the physics weighs
+>>> round(body.total_mass, 6)
+70.0
 
-Every user error is a :class:`FlipstudyError`.
+A BVH file round-trips (here in a temporary folder):
+
+>>> import tempfile, pathlib
+>>> with tempfile.TemporaryDirectory() as tmp:
+...     path = flipstudy.save_bvh(clip, pathlib.Path(tmp) / "backflip.bvh")
+...     flipstudy.load_bvh(path, scale=1.0).num_frames
+397
+
+Every user error is a :class:`FlipstudyError`:
+
+>>> try:
+...     flipstudy.builtin("cartwheel")
+... except flipstudy.FlipstudyError as e:
+...     print(e)
+unknown built-in clip 'cartwheel'; valid names: backflip, frontflip, jump
 """
 from flipstudy.stimuli.exceptions import FlipstudyError
 

@@ -190,8 +190,15 @@ class Gizmos:
 
     Example
     -------
-    >>> gz = Gizmos(clip, body)                                # doctest: +SKIP
-    >>> gz.at(0.5)["L"]                                        # doctest: +SKIP
+    >>> import numpy as np
+    >>> from flipstudy import Body, builtin
+    >>> clip = builtin("backflip")
+    >>> gz = Gizmos(clip, Body.from_clip(clip))
+    >>> mid = gz.at(1.5)                                       # seconds: in the air
+    >>> round(float(np.linalg.norm(mid["L"])), 1), len(mid["support"])
+    (46.7, 0)
+    >>> len(gz.at(0.5)["support"])                             # standing: the feet's corners
+    4
     """
 
     def __init__(self, clip: Clip, body: Body, what=DEBUG_ALL):
@@ -314,8 +321,13 @@ def render_video(clip: Clip, path, *, fps: float = 60.0, size=(640, 480), style:
 
     Example
     -------
-    >>> render_video(load_bvh("88_01.bvh", fps=60), "88_01.mp4", size=(640, 480))  # doctest: +SKIP
-    PosixPath('88_01.mp4')
+    >>> import tempfile, pathlib
+    >>> from flipstudy import builtin
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     mp4 = render_video(builtin("backflip"), pathlib.Path(tmp) / "backflip.mp4",
+    ...                        fps=15, size=(160, 120))
+    ...     mp4.name, mp4.stat().st_size > 1000
+    ('backflip.mp4', True)
     """
     W, H = int(size[0]), int(size[1])
     if W % 2 or H % 2:
@@ -361,7 +373,10 @@ def ghost_image(clip: Clip, path=None, *, interval: float = 0.2, span="flight", 
 
     Example
     -------
-    >>> img = ghost_image(builtin("backflip"), "ghost.png", interval=0.2)   # doctest: +SKIP
+    >>> from flipstudy import builtin
+    >>> img = ghost_image(builtin("backflip"), None, interval=0.2, size=(160, 120))  # a path writes a PNG
+    >>> img.shape
+    (120, 160, 3)
     """
     prep, c, b, ts, R, P = _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds,
                                   span, margin, times, interval)
@@ -415,7 +430,10 @@ def trail_image(clip: Clip, path=None, *, joints=TRAIL_JOINTS, rate: float | Non
 
     Example
     -------
-    >>> img = trail_image(clip, "trail.png", joints=("pelvis", "foot_l", "com"))   # doctest: +SKIP
+    >>> from flipstudy import builtin
+    >>> img = trail_image(builtin("backflip"), None, joints=("pelvis", "foot_l", "com"), size=(160, 120))
+    >>> img.shape
+    (120, 160, 3)
     """
     prep = _prepare1(clip, body, takeoff, landing, camera, size, style, ground_bounds)
     c, b = prep.clips[0], prep.bodies[0]
@@ -480,7 +498,10 @@ def strip_image(clip: Clip, path=None, *, every: int | None = None, dt: float | 
 
     Example
     -------
-    >>> img = strip_image(clip, "strip.png", dt=0.15)                 # doctest: +SKIP
+    >>> from flipstudy import builtin
+    >>> img = strip_image(builtin("backflip"), None, dt=0.15, panel_size=(80, 120), columns=4)
+    >>> img.shape                                     # 4 × 2 panels of 80 × 120, 4 px apart
+    (244, 332, 3)
     """
     pw, ph = int(panel_size[0]), int(panel_size[1])
     st0 = scene.style if scene is not None else (style or DEFAULT_STYLE)
@@ -559,7 +580,10 @@ def composite_image(clip: Clip, path=None, *, interval: float = 0.2, span="fligh
 
     Example
     -------
-    >>> img = composite_image(clip, "composite.png", interval=0.15)     # doctest: +SKIP
+    >>> from flipstudy import builtin
+    >>> img = composite_image(builtin("backflip"), None, interval=0.15, size=(160, 120))
+    >>> img.shape
+    (120, 160, 3)
     """
     prep, c, b, ts, R, P = _posed(clip, body, takeoff, landing, camera, size, style, ground_bounds,
                                   span, margin, times, interval)
@@ -597,7 +621,13 @@ def overlay_image(clip: Clip, other: Clip, path=None, *, interval: float = 0.2, 
 
     Example
     -------
-    >>> img = overlay_image(original, edited, "overlay.png")           # doctest: +SKIP
+    >>> from flipstudy import analyse, builtin
+    >>> from flipstudy.stimuli.errors import inject_angular_momentum
+    >>> original = builtin("backflip")
+    >>> edited = inject_angular_momentum(analyse(original), 0.5, "smooth").clip
+    >>> img = overlay_image(original, edited, None, size=(160, 120))
+    >>> img.shape
+    (120, 160, 3)
     """
     prep = prepare([clip, other], bodies=None if body is None else [body, body],
                    takeoffs=None if takeoff is None else [takeoff, takeoff],

@@ -120,9 +120,11 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
 
     Example
     -------
-    >>> v = resample(clip, 60.0)                      # doctest: +SKIP
-    >>> v.fps, v.duration <= clip.duration            # doctest: +SKIP
-    (60.0, True)
+    >>> from flipstudy import builtin
+    >>> clip = builtin("backflip")                    # 120 fps
+    >>> v = resample(clip, 60.0)
+    >>> v.fps, v.num_frames, v.duration <= clip.duration
+    (60.0, 199, True)
     """
     from flipstudy.stimuli.edit.timing import sample
     fps = float(fps)
@@ -165,9 +167,11 @@ class BodyMesh:
 
     Example
     -------
-    >>> bm = BodyMesh(body)                                             # doctest: +SKIP
-    >>> bm.pose(clip.joint_rotations()[0], clip.joint_positions()[0])   # doctest: +SKIP
-    >>> bm.mesh.n_points == len(bm.joint) * bm.points_per_piece         # doctest: +SKIP
+    >>> from flipstudy import Body, builtin
+    >>> clip = builtin("backflip")
+    >>> bm = BodyMesh(Body.from_clip(clip))
+    >>> bm.pose(clip.joint_rotations()[0], clip.joint_positions()[0])
+    >>> bm.mesh.n_points == len(bm.joint) * bm.points_per_piece
     True
     """
 

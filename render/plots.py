@@ -20,7 +20,12 @@ def plot_analysis(a, path, title: str | None = None) -> Path:
 
     Example
     -------
-    >>> plot_analysis(analyse(builtin("backflip")), "backflip.png")   # doctest: +SKIP
+    >>> import tempfile, pathlib
+    >>> from flipstudy import analyse, builtin
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     png = plot_analysis(analyse(builtin("backflip")), pathlib.Path(tmp) / "backflip.png")
+    ...     png.name, png.read_bytes()[:4]
+    ('backflip.png', b'\x89PNG')
     """
     plt = _mpl()
     clip = a.clip
@@ -129,7 +134,16 @@ def plot_concat(result, body, path, baseline=None, sources=(), title: str | None
 
     Example
     -------
-    >>> plot_concat(concatenate(a, a), body, "L.png", baseline=motion_graph_join(a, a))  # doctest: +SKIP
+    >>> import tempfile, pathlib
+    >>> from flipstudy import Body, builtin
+    >>> from flipstudy.stimuli.edit.concat import concatenate, motion_graph_join
+    >>> a = builtin("backflip")
+    >>> body = Body.from_clip(a)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     png = plot_concat(concatenate(a, a, body=body), body, pathlib.Path(tmp) / "L.png",
+    ...                       baseline=motion_graph_join(a, a, body=body))
+    ...     png.name, png.stat().st_size > 0
+    ('L.png', True)
     """
     from flipstudy.stimuli.physics import momentum
     plt = _mpl()

@@ -165,10 +165,16 @@ class Scene:
 
     Example
     -------
-    >>> with Scene(body, size=(320, 240), camera=stage.camera) as sc:   # doctest: +SKIP
+    >>> from flipstudy import Body, builtin
+    >>> from flipstudy.render.camera import stage
+    >>> clip = builtin("backflip")
+    >>> st = stage([clip], size=(320, 240))
+    >>> with Scene(Body.from_clip(clip), size=(320, 240), camera=st.camera) as sc:
     ...     ch = sc.character(0)
     ...     ch.pose(clip.joint_rotations()[0], clip.joint_positions()[0])
-    ...     img = sc.grab()                                          # (240, 320, 3) uint8
+    ...     img = sc.grab()
+    >>> img.shape, img.dtype.name
+    ((240, 320, 3), 'uint8')
     """
 
     def __init__(self, body: Body | None = None, style: Style | None = None, size=(640, 480),

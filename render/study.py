@@ -464,7 +464,36 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
 
     Example
     -------
-    >>> render_study("study/", what=("video", "ghost"), size=(640, 480), jobs=2)   # doctest: +SKIP
+    A study of two stimuli (``flipstudy stimuli`` of a two-level design), their
+    ghost images at a small size, then the same call again:
+
+    >>> import tempfile, pathlib
+    >>> from flipstudy.stimuli.design import parse_design
+    >>> from flipstudy.stimuli.stimset import build_stimuli
+    >>> design = parse_design('''
+    ... [study]
+    ... name = "tiny"
+    ... seed = 7
+    ... [[clips]]
+    ... name = "backflip"
+    ... source = "backflip"
+    ... [[groups]]
+    ... name = "smooth-increase"
+    ... kind = "angular-momentum"
+    ... profile = "smooth"
+    ... sign = 1
+    ... levels = [0, 25]
+    ... ''')
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> study = pathlib.Path(tmp.name) / "study"
+    >>> [r["stimulus"] for r in build_stimuli(design, study, progress=False)]
+    ['backflip_original', 'backflip_smooth-increase_25']
+    >>> rec = render_study(study, what="ghost", size=(96, 64), jobs=1, progress=False)
+    >>> rec["made"], sorted(p.name for p in (study / "render").glob("*.png"))
+    (2, ['backflip_original_ghost.png', 'backflip_smooth-increase_25_ghost.png'])
+    >>> render_study(study, what="ghost", size=(96, 64), jobs=1, progress=False)["made"]   # resumed
+    0
+    >>> tmp.cleanup()
     """
     from .camera import stage
     from .style import Style

@@ -47,7 +47,18 @@ BUILTIN_NAMES = ("backflip", "frontflip", "jump")
 
 def builtin(name: str, **params) -> "Clip":
     """A built-in, physically exact synthetic clip: ``"backflip"``, ``"frontflip"``
-    or ``"jump"`` (see :mod:`flipstudy.stimuli.synth`)."""
+    or ``"jump"`` (see :mod:`flipstudy.stimuli.synth`; keyword parameters such as
+    ``fps`` go to :func:`flipstudy.stimuli.synth.builtin`).
+
+    Example
+    -------
+    >>> from flipstudy import builtin
+    >>> clip = builtin("backflip", fps=60)
+    >>> clip.fps, clip.skeleton.joint_names[0]
+    (60.0, 'Hips')
+    >>> clip.meta["takeoff"] < clip.meta["landing"]      # frames of the exact flight
+    True
+    """
     from .synth import builtin as _builtin
     return _builtin(name, **params)
 

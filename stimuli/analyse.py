@@ -340,8 +340,14 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
 
     Example
     -------
-    >>> a = analyse(builtin("backflip"))                        # doctest: +SKIP
-    >>> a.takeoff, a.landing, round(a.takeoff_angle)            # doctest: +SKIP
+    >>> from flipstudy import analyse, builtin
+    >>> a = analyse(builtin("backflip"))
+    >>> a.takeoff, a.landing, round(a.takeoff_angle)            # frames inside the flight, degrees
+    (157, 237, 82)
+    >>> a.takeoff_time, round(a.landing_time, 4)                # the contact instants, seconds
+    (1.3, 1.9833)
+    >>> a.com.shape == a.L.shape == (a.clip.num_frames, 3)
+    True
     """
     body0 = body if body is not None else Body.from_clip(clip, total_mass)
     m0: Momentum = momentum(clip, body0)

@@ -107,8 +107,17 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
 
     Example
     -------
-    >>> a = analyse(builtin("backflip"))                         # doctest: +SKIP
-    >>> stim = inject_angular_momentum(a, 0.25, "abrupt").clip     # doctest: +SKIP
+    >>> import numpy as np
+    >>> from flipstudy import analyse, builtin
+    >>> from flipstudy.stimuli.physics import momentum
+    >>> a = analyse(builtin("backflip"))
+    >>> stim = inject_angular_momentum(a, 0.25, "abrupt")
+    >>> stim.clip.meta["edit"]
+    'angular-momentum abrupt +0.250'
+    >>> L0 = np.linalg.norm(a.L[a.takeoff:a.landing + 1], axis=1).mean()   # the original's flight mean
+    >>> L = np.linalg.norm(momentum(stim.clip, a.body).L, axis=1)
+    >>> round(float(L[stim.takeoff] / L0), 2), round(float(L[stim.landing] / L0), 2)   # +25 % at mid-flight
+    (1.0, 1.25)
     """
     _need_flight(a)
     if not (-0.9 < error < 5.0):

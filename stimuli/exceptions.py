@@ -10,7 +10,17 @@ from __future__ import annotations
 
 
 class FlipstudyError(Exception):
-    """Base of every flipstudy user error (see :mod:`flipstudy.stimuli.exceptions`)."""
+    """Base of every flipstudy user error (see :mod:`flipstudy.stimuli.exceptions`).
+
+    Example
+    -------
+    >>> from flipstudy import FlipstudyError, load_bvh
+    >>> try:
+    ...     load_bvh("no-such-file.bvh")
+    ... except FlipstudyError as e:
+    ...     print(type(e).__name__, "|", e)
+    BVHError | no-such-file.bvh: cannot read file: ...
+    """
 
 
 class FlipstudyValueError(FlipstudyError, ValueError):

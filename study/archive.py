@@ -10,10 +10,22 @@ column existed).  A database that cannot be read counts as holding real answers.
 
 Example
 -------
->>> answers_in("study/")                                # doctest: +SKIP
-{'real_answers': 300, 'real_participants': ['P01', ...], 'simulated_answers': 0, ...}
->>> archive_study("study/")                             # doctest: +SKIP
-PosixPath('study-archived-20260105T101500Z')
+A tiny study with two simulated participants:
+
+>>> import tempfile, pathlib
+>>> from flipstudy.study.demo import make_demo_study
+>>> from flipstudy.study.simulate import simulate
+>>> tmp = tempfile.TemporaryDirectory()
+>>> study = make_demo_study(pathlib.Path(tmp.name) / "study")
+>>> simulate(study, 2, seed=1)
+['sim001', 'sim002']
+>>> answers_in(study)
+{'real_answers': 0, 'real_participants': [], 'simulated_answers': 16, 'simulated_participants': ['sim001', 'sim002'], ...}
+>>> archive_study(study).name                            # moved aside, under a dated name
+'study-archived-...Z'
+>>> study.exists()
+False
+>>> tmp.cleanup()
 """
 from __future__ import annotations
 

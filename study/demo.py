@@ -4,8 +4,14 @@ square; H.264, yuv420p) — no motion data or renderer needed.
 
 Example
 -------
->>> make_demo_study("/tmp/tiny")          # doctest: +SKIP
-PosixPath('/tmp/tiny')
+>>> import tempfile, pathlib
+>>> tmp = tempfile.TemporaryDirectory()
+>>> study = make_demo_study(pathlib.Path(tmp.name) / "tiny")
+>>> sorted(p.name for p in study.iterdir())
+['design.toml', 'manifest.csv', 'render']
+>>> len(list((study / "render").glob("*.mp4")))     # 2 groups × 2 levels and the reference
+5
+>>> tmp.cleanup()
 """
 from __future__ import annotations
 

@@ -8,9 +8,19 @@ even by SIGKILL, so a lock left by a dead server is simply taken over.
 
 Example
 -------
->>> lock = ParticipantLock("study/", "P01").acquire()     # doctest: +SKIP
->>> lock.update(url="http://127.0.0.1:41233/")            # doctest: +SKIP
->>> lock.release()                                        # doctest: +SKIP
+>>> import tempfile
+>>> study = tempfile.TemporaryDirectory()                  # stands for a study folder
+>>> lock = ParticipantLock(study.name, "P01").acquire()
+>>> lock.update(url="http://127.0.0.1:41233/")
+>>> lock.info["participant"], lock.info["url"]
+('P01', 'http://127.0.0.1:41233/')
+>>> ParticipantLock(study.name, "P01").acquire()           # a second server for P01
+Traceback (most recent call last):
+    ...
+flipstudy.study.lock.ParticipantBusy: participant P01 of ... is already being served by another `flipstudy run` (pid ...
+>>> lock.release()
+>>> ParticipantLock(study.name, "P01").acquire().release()  # free again
+>>> study.cleanup()
 """
 from __future__ import annotations
 

@@ -19,9 +19,20 @@ always gets the same order; the order is stored before the first trial anyway.
 
 Example
 -------
->>> trials = trial_order(design, read_manifest("study/"), "P01")   # doctest: +SKIP
->>> trials[0].trial, trials[0].stimulus, trials[0].repetition       # doctest: +SKIP
-(1, 'frontflip_abrupt-decrease_37', 1)
+A tiny study's design and manifest (two groups of two levels, shown twice):
+
+>>> import tempfile, pathlib
+>>> from flipstudy.stimuli.design import load_design
+>>> from flipstudy.stimuli.stimset import read_manifest
+>>> from flipstudy.study.demo import make_demo_study
+>>> tmp = tempfile.TemporaryDirectory()
+>>> study = make_demo_study(pathlib.Path(tmp.name) / "study", videos=False)
+>>> trials = trial_order(load_design(study / "design.toml"), read_manifest(study), "P01")
+>>> len(trials), trials[0].trial, trials[0].stimulus, trials[0].repetition
+(8, 1, 'backflip_smooth-increase_0', 1)
+>>> trials == trial_order(load_design(study / "design.toml"), read_manifest(study), "P01")
+True
+>>> tmp.cleanup()
 """
 from __future__ import annotations
 

@@ -22,8 +22,22 @@ says were made from the current stimuli with one set of settings.
 
 Example
 -------
+``serve`` runs until it is stopped (Ctrl-C), so it is not run here:
+
 >>> serve("study/", "P01", open_browser=False)        # doctest: +SKIP
 participant page: http://127.0.0.1:41233/
+
+The same app in a background thread (:class:`ServerThread`) on a tiny study:
+
+>>> import json, tempfile, pathlib, urllib.request
+>>> from flipstudy.study.demo import make_demo_study
+>>> tmp = tempfile.TemporaryDirectory()
+>>> session = open_session(load_study(make_demo_study(pathlib.Path(tmp.name) / "study")), "P01")
+>>> with ServerThread(create_app(session)) as srv:
+...     timeline = json.load(urllib.request.urlopen(srv.url + "api/session"))
+>>> timeline["participant"], timeline["n_trials"]
+('P01', 8)
+>>> tmp.cleanup()
 """
 from __future__ import annotations
 
@@ -332,8 +346,14 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
 class ServerThread:
     """Serve an app on 127.0.0.1 in a background thread (tests, notebooks).
 
-    >>> with ServerThread(create_app(session)) as srv:     # doctest: +SKIP
-    ...     print(srv.url)
+    >>> import tempfile, pathlib, urllib.request
+    >>> from flipstudy.study.demo import make_demo_study
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> session = open_session(load_study(make_demo_study(pathlib.Path(tmp.name) / "study")), "P01")
+    >>> with ServerThread(create_app(session)) as srv:
+    ...     print(srv.url.startswith("http://127.0.0.1:"), urllib.request.urlopen(srv.url).status)
+    True 200
+    >>> tmp.cleanup()
     """
 
     def __init__(self, app, host: str = "127.0.0.1", port: int = 0):

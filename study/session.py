@@ -7,12 +7,18 @@ the server's POST handlers call :func:`submit_answer` and
 
 Example
 -------
->>> study = load_study("study/")                                  # doctest: +SKIP
->>> s = open_session(study, "P01")                                # doctest: +SKIP
+On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
+
+>>> import tempfile, pathlib
+>>> from flipstudy.study.demo import make_demo_study
+>>> tmp = tempfile.TemporaryDirectory()
+>>> study = load_study(make_demo_study(pathlib.Path(tmp.name) / "study"))
+>>> s = open_session(study, "P01")
 >>> submit_answer(s, {"participant": "P01", "session": 1, "trial": 1,
 ...                   "stimulus": s.trials[0].stimulus, "response": "correct",
-...                   "rt_ms": 812.0, "shown_ms": 2400.0, "late_frames": 0})  # doctest: +SKIP
+...                   "rt_ms": 812.0, "shown_ms": 2400.0, "late_frames": 0})
 {'status': 'stored', 'trial': 1, 'next_trial': 2, 'finished': False}
+>>> tmp.cleanup()
 """
 from __future__ import annotations
 

@@ -32,8 +32,15 @@ then :func:`flipstudy.study.session.submit_answer`), so it is validated and stor
 
 Example
 -------
->>> simulate("study/", 19, seed=1)          # doctest: +SKIP
-['sim001', 'sim002', ...]
+On a tiny study (:func:`flipstudy.study.demo.make_demo_study`: 8 trials):
+
+>>> import tempfile, pathlib
+>>> from flipstudy.study.demo import make_demo_study
+>>> tmp = tempfile.TemporaryDirectory()
+>>> study = make_demo_study(pathlib.Path(tmp.name) / "study")
+>>> simulate(study, 3, seed=1)
+['sim001', 'sim002', 'sim003']
+>>> tmp.cleanup()
 """
 from __future__ import annotations
 

@@ -523,9 +523,19 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
 
     Example
     -------
-    >>> clip = load_bvh("88_01.bvh", fps=60)            # doctest: +SKIP
-    >>> clip.meta["scale_source"]                        # doctest: +SKIP
-    'guess: CMU/ASF length units (1/0.45 in)'
+    A built-in flip written in centimetres and read back, the unit guessed:
+
+    >>> import tempfile, pathlib
+    >>> from flipstudy import builtin, load_bvh, save_bvh
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = save_bvh(builtin("backflip"), pathlib.Path(tmp) / "backflip.bvh", scale=0.01)
+    ...     clip = load_bvh(path, fps=60)
+    >>> clip.meta["scale_source"], clip.fps
+    ('guess: cm', 60.0)
+
+    A capture of the CMU database (in its ASF length units) reads the same way,
+    ``load_bvh("88_01.bvh", fps=60)``, with ``scale_source`` ``'guess: CMU/ASF
+    length units (1/0.45 in)'``.
     """
     path = Path(path)
     raw = _read_regular_file(path)
@@ -739,7 +749,15 @@ def save_bvh(clip: Clip, path, scale: float = 1.0) -> Path:
 
     Example
     -------
-    >>> save_bvh(builtin("backflip"), "backflip.bvh", scale=0.01)   # doctest: +SKIP
+    >>> import tempfile, pathlib
+    >>> from flipstudy import builtin, save_bvh
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     path = save_bvh(builtin("backflip"), pathlib.Path(tmp) / "backflip.bvh", scale=0.01)
+    ...     text = path.read_text()
+    >>> text.splitlines()[:2]
+    ['HIERARCHY', 'ROOT Hips']
+    >>> "Frames: 397" in text
+    True
     """
     atomic_write_text(path, bvh_text(clip, scale))
     return Path(path)
