@@ -205,8 +205,6 @@ def _render_task(task: dict) -> dict:
     Each output is written under ``render/.partial-<pid>/`` and renamed into
     place only when complete, so an interrupted render never leaves a
     half-written file under an output's name."""
-    import shutil
-
     from . import figures as fg
     t_start = time.perf_counter()
     st = _WORKER["settings"]
@@ -216,7 +214,6 @@ def _render_task(task: dict) -> dict:
     size = tuple(st["size"])
     clip = _load_placed(task["bvh"], task["offset"], task["yaw"])
     body = task["body"]            # measured once in the parent: the same in every worker
-    out = Path(st["out"])
     part = Path(st["partial"])
     part.mkdir(parents=True, exist_ok=True)
     common = dict(camera=cam, body=body, takeoff=task["takeoff"], landing=task["landing"],
@@ -246,15 +243,24 @@ def _render_task(task: dict) -> dict:
                                task["reference"]["yaw"])
             fg.overlay_image(ref, clip, f, size=size, labels=("original", name), **common)
         info = {"bytes": f.stat().st_size, "sha256": file_sha256(f)}
-        if frames_tmp is not None:
-            final = out / "frames" / name
+        # the parent moves the finished file into place and records it in one step
+        # (:func:`_publish`), so no file stands in render/ that render.json does not record
+        files[kind] = {"file": fname, **info, "partial": str(f),
+                       "frames": None if frames_tmp is None else str(frames_tmp)}
+    return {"stimulus": name, "files": files, "seconds": round(time.perf_counter() - t_start, 3)}
+
+
+def _publish(res: dict, out: Path) -> None:
+    """Move a finished task's files from the partial folder into ``out``."""
+    import shutil
+    for f in res["files"].values():
+        if f.get("frames"):
+            final = out / "frames" / res["stimulus"]
             final.parent.mkdir(parents=True, exist_ok=True)
             if final.exists():
                 shutil.rmtree(final)
-            os.replace(frames_tmp, final)
-        os.replace(f, out / fname)
-        files[kind] = {"file": fname, **info}
-    return {"stimulus": name, "files": files, "seconds": round(time.perf_counter() - t_start, 3)}
+            os.replace(f["frames"], final)
+        os.replace(f["partial"], out / f["file"])
 
 
 def _run_local(settings: dict, tasks: list, done) -> None:
@@ -616,10 +622,18 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     bar = Progress(len(tasks), "render", progress)
 
     def done(res: dict) -> None:
-        for kind, f in res["files"].items():
-            outputs[f["file"]] = {**expected[f["file"]], "bytes": f["bytes"], "sha256": f["sha256"]}
-            made[0] += 1
-        write()
+        # moving the files into place and recording them is one step that Ctrl-C does not
+        # cut (SIGINT waits until both are done): no output unrecorded, none recorded absent
+        import signal
+        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        try:
+            _publish(res, out)
+            for kind, f in res["files"].items():
+                outputs[f["file"]] = {**expected[f["file"]], "bytes": f["bytes"], "sha256": f["sha256"]}
+                made[0] += 1
+            write()
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old_mask)
         bar.step(res["stimulus"])
 
     write()                        # drops records of outputs whose files are gone
