@@ -15,34 +15,22 @@ from ..validate import RequestError
 from .common import add_json
 
 
-def _port(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
-    if not 0 <= v <= 65535:
-        raise argparse.ArgumentTypeError(f"a port is 0..65535 (0: a free one), got {v}")
-    return v
+def _int_in(lo: int, hi: int | None = None, what: str = "a whole number", rule: str | None = None):
+    """An argparse type: a whole number in [lo, hi], refused in one line otherwise."""
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if v < lo or (hi is not None and v > hi):
+            raise argparse.ArgumentTypeError(f"{rule or f'expected a number >= {lo}'}, got {v}")
+        return v
+    return parse
 
 
-def _positive_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 1:
-        raise argparse.ArgumentTypeError(f"expected a number >= 1, got {v}")
-    return v
-
-
-def _nonneg_int(text: str) -> int:
-    try:
-        v = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if v < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {v}")
-    return v
+_port = _int_in(0, 65535, "a port number", "a port is 0..65535 (0: a free one)")
+_positive_int = _int_in(1)
+_nonneg_int = _int_in(0)
 
 
 def _fail(cmd: str, e: Exception) -> int:
