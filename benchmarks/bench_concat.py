@@ -53,10 +53,10 @@ def cases():
     for label, make, real in specs:
         clip = make()
         body = analyse(clip).body
-        m1 = C.prepare(clip, body)
+        m1 = C.motion_of(clip, body)
         m2 = C.transformed(m1, C.align_angle(m1.main_L, m1.main_L, "forward"), np.zeros(3))
         (_, f1, f2), = C.blendable_periods(m1, m2, "forward")
-        s1, s2, _ = C._truncate(m1, m2, f1, f2)
+        s1, s2, _ = C.support_frames(m1, m2, f1, f2)
         yield f"{label}, as used", m1, m2, body, s1, s2, real
         F = clip.num_frames
         yield f"{label}, whole clips", m1, m2, body, np.arange(F), np.arange(F), real

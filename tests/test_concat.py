@@ -141,7 +141,7 @@ def test_copy_of_itself_keeps_the_direction_of_L(backflip):
     assert r.report.theta_deg == pytest.approx(0.0, abs=1e-9)
     L = momentum(r.clip, body).L
     n = np.linalg.norm(L, axis=1)
-    u = C.prepare(c, body).main_L
+    u = C.motion_of(c, body).main_L
     u = u / np.linalg.norm(u)
     # from motion 1's main phase to the second landing (the final posterior phase,
     # the landing absorbing the rotation, turns the other way in the original too)
@@ -174,7 +174,8 @@ def test_double_backflip_from_the_builtin(backflip):
 # ------------------------------------------------------------- IK, mirror
 def test_two_bone_ik_reaches_and_keeps_the_foot(backflip):
     c, body = backflip
-    hip, knee, ankle = (C._lm_index(body, f"{k}_l") for k in ("hip", "knee", "ankle"))
+    from flipstudy.stimuli.edit.concat.motion import _lm_index
+    hip, knee, ankle = (_lm_index(body, f"{k}_l") for k in ("hip", "knee", "ankle"))
     frames = np.arange(0, 150, 7)
     P = c.joint_positions()
     tgt = P[frames, ankle] + np.array([0.04, 0.03, -0.05])
