@@ -6,9 +6,9 @@ same run (the Appendix A distance computed pair by pair in Python, the way the
 search reads in the paper).
 
 Pre-processing is what depends on the source alone, done once per clip: the
-paper's (``analyse``: flight, masses, momentum) and ``prepare`` (pose features,
+paper's (``analyse``: flight, masses, momentum) and ``flip_source`` (pose features,
 the all-pairs distance table the search reads, the root's turn, standing
-frames, COM).  The table also prints ``prepare`` + run time, i.e. the cost when
+frames, COM).  The table also prints ``flip_source`` + run time, i.e. the cost when
 the distance table is counted as part of the run-time search instead.
 
 Run: python benchmarks/bench_multiflip.py        (paper target: under 1 ms for two flips)
@@ -58,12 +58,13 @@ def _one(f, i):
 def main() -> int:
     import numpy as np
     from flipstudy.stimuli import analyse, builtin
-    from flipstudy.stimuli.edit.multiflip import flight_axis, multiflip, prepare
+    from flipstudy.stimuli.edit.flight_measures import flight_axis
+    from flipstudy.stimuli.edit.multiflip import flip_source, multiflip
     from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features
     a = analyse(builtin("backflip"))
     t_pre = median_ms(lambda: analyse(builtin("backflip")), 5)
-    t_prep = median_ms(lambda: prepare(a), 10)
-    pre = prepare(a)
+    t_prep = median_ms(lambda: flip_source(a), 10)
+    pre = flip_source(a)
     u = flight_axis(a)
     feat = pose_features(a.clip, a.body, u, np.arange(a.takeoff, a.landing + 1))
     t_vec = median_ms(lambda: distance_matrix(feat), 20)
@@ -72,16 +73,16 @@ def main() -> int:
     t_naive = 1000 * (time.perf_counter() - t0)
     assert np.allclose(Dn, distance_matrix(feat)[0], atol=1e-9)
     print(f"built-in backflip, 120 fps, flight {feat.frames.size} frames; pre-processing: "
-          f"analyse {t_pre:.0f} ms, prepare {t_prep:.1f} ms")
-    print(f"all-pairs distance (in prepare): vectorised {t_vec:.2f} ms, naive pair loop "
+          f"analyse {t_pre:.0f} ms, flip_source {t_prep:.1f} ms")
+    print(f"all-pairs distance (in flip_source): vectorised {t_vec:.2f} ms, naive pair loop "
           f"{t_naive:.0f} ms ({t_naive / t_vec:.0f}x), same values")
-    print(f"{'flips':>5s} {'ours ms':>8s} {'paper ms':>9s} {'ours/paper':>11s} {'prepare+ours ms':>16s}")
+    print(f"{'flips':>5s} {'ours ms':>8s} {'paper ms':>9s} {'ours/paper':>11s} {'flip_source+ours ms':>16s}")
     run = {}
     for n in (2, 3, 4):
         run[n] = t = median_ms(lambda: multiflip(pre, n, k_ratio=1.0))
         t_all = median_ms(lambda: multiflip(a, n, k_ratio=1.0), 7)
         print(f"{n:5d} {t:8.2f} {PAPER_MS[n]:9.2f} {t / PAPER_MS[n]:10.2f}x {t_all:16.1f}")
-    print("ours: multiflip(prepare(analysis), n) — search (on the prepared distance table) +")
+    print("ours: multiflip(flip_source(analysis), n) — search (on the prepared distance table) +")
     print("sequencing + slerp joins + retiming + repositioning + momentum report; median of 15")
     met = "met" if run[2] < 1.0 else "missed"
     print(f"target under 1 ms for two flips: {met} ({run[2]:.2f} ms)")

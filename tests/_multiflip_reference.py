@@ -25,7 +25,9 @@ analyser (:func:`measure`).
 """
 # The implementation of stimuli/edit/multiflip.py before its pre-processing was split
 # out (commit 36cbc1e): the functions the fast path changed, kept verbatim as the plain
-# path tests/test_fast_paths.py compares the fast one with; the rest is imported.
+# path tests/test_fast_paths.py compares the fast one with; the rest is imported (the
+# flight measures it shares with the module from stimuli/edit/flight_measures.py; its
+# own copy of measure, which no test called, is gone).
 from __future__ import annotations
 
 import math
@@ -40,7 +42,8 @@ from flipstudy.stimuli.edit.reposition import ballistic_path
 from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features
 # unchanged by the fast path: shared with the module rather than copied
 from flipstudy.stimuli.edit.multiflip import (FlipEditError, MultiFlip, SelfLoop, find_self_loop,  # noqa: F401
-                                    flight_axis, k_star, piecewise_source, turn_angle)
+                                    k_star, piecewise_source)
+from flipstudy.stimuli.edit.flight_measures import flight_axis, momentum_jumps, standing_span
 from flipstudy.stimuli.edit.timing import smoothstep as _smooth
 
 
@@ -64,23 +67,6 @@ def sample(clip: Clip, src: np.ndarray) -> Clip:
     meta = dict(clip.meta)
     meta["source_frames"] = src
     return Clip(clip.skeleton, clip.fps, root, rot, jp, meta)
-
-
-def standing_span(clip: Clip, body, takeoff: int, landing: int, still: float = 0.05,
-                  drop: float = 0.05) -> tuple[int, int]:
-    """(last standing frame before take-off, first standing frame after landing).
-    Standing: the COM moves slower than ``still`` m/s and is at most ``drop`` m
-    below its height in the clip's first (before) or last (after) frame — so the
-    bottom of a crouch, where the COM also stops, is not taken for standing.  The
-    clip's ends when no frame qualifies."""
-    from flipstudy.stimuli.physics import momentum
-    m = momentum(clip, body)
-    v = np.linalg.norm(m.v_com, axis=1)
-    y = m.com[:, 1]
-    before = np.flatnonzero((v[:takeoff + 1] < still) & (y[:takeoff + 1] >= y[0] - drop))
-    after = np.flatnonzero((v[landing:] < still) & (y[landing:] >= y[-1] - drop))
-    return (int(before[-1]) if before.size else 0,
-            int(landing + after[0]) if after.size else clip.num_frames - 1)
 
 
 def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, k: float | None = None,
@@ -272,7 +258,7 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
     shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
     shift[ld_n + 1:] = target[-1] - com_new[ld_n]
     out = new.replace(root_pos=new.root_pos + shift,
-                      meta={**new.meta, "takeoff": to_n, "landing": ld_n, "flips": flips})
+                      meta=new.meta)
 
     report = {"self_loop": {"m": m, "n": n, "phi_deg": float(np.degrees(ph)), "distance": loop.distance},
               "phi_S_deg": float(np.degrees(phi_S)), "phi_E_deg": float(np.degrees(phi_E)),
@@ -283,45 +269,4 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
               "k_landing": kL,
               "flight_s": Tn, "takeoff": to_n, "landing": ld_n, "gravity": G}
     report.update(momentum_jumps(out, body, to_n, ld_n))
-    return MultiFlip(out, flips, to_n, ld_n, report)
-
-
-def momentum_jumps(clip: Clip, body, takeoff: int, landing: int) -> dict:
-    """Linear-momentum discontinuity at take-off and landing: the COM velocity
-    one frame either side of each (one-sided differences), as a fraction of the
-    take-off momentum."""
-    com = center_of_mass(clip, body)
-    fps = clip.fps
-    M = body.total_mass
-    v_in = (com[takeoff] - com[takeoff - 1]) * fps if takeoff >= 1 else np.zeros(3)
-    v_out = (com[takeoff + 1] - com[takeoff]) * fps
-    l_in = (com[landing] - com[landing - 1]) * fps
-    l_out = (com[landing + 1] - com[landing]) * fps if landing + 1 < clip.num_frames else l_in
-    g = np.array([0.0, -9.81, 0.0])
-    # gravity alone changes the velocity by g/fps over a frame; remove that part
-    dp_to = M * np.linalg.norm(v_out - v_in - g / fps)
-    dp_ld = M * np.linalg.norm(l_out - l_in - g / fps)
-    p_to = M * np.linalg.norm(v_out)
-    return {"dp_takeoff": float(dp_to), "dp_landing": float(dp_ld), "p_takeoff": float(p_to),
-            "dp_takeoff_pct": float(100 * dp_to / p_to), "dp_landing_pct": float(100 * dp_ld / p_to)}
-
-
-def measure(result: MultiFlip, original: Analysis) -> dict:
-    """What the edited clip has, by the analyser (with the original's body): the
-    root's turn about L from the last standing frame before take-off to the first
-    after landing, flight |L| CV, COM residual from a parabola in flight."""
-    clip = result.clip
-    a = analyse(clip, body=original.body, estimate=False)
-    u = flight_axis(original)
-    to, ld = result.takeoff, result.landing
-    s0, s1 = standing_span(clip, original.body, to, ld)
-    Lm = np.linalg.norm(a.L[to + 2:ld - 1], axis=1)
-    from flipstudy.stimuli.flight import fit_path, path_values
-    com = a.com[to:ld + 1]
-    coef = fit_path(com, clip.fps)
-    res = com - path_values(coef, np.arange(com.shape[0]) / clip.fps)
-    return {"turn_deg": turn_angle(clip, u, s0, s1), "turn_span": [s0, s1],
-            "L_mean": float(Lm.mean()), "L_cv_pct": float(100 * Lm.std() / Lm.mean()),
-            "com_rms_mm": float(1000 * np.sqrt(np.mean(np.sum(res ** 2, axis=1)))),
-            "analyser_flight": [a.takeoff, a.landing] if a.flight is not None else None,
-            "apparent_gravity": a.apparent_gravity}
+    return MultiFlip(out, to_n, ld_n, report, flips=flips)

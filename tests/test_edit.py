@@ -119,7 +119,7 @@ def test_edit_pipeline_straightens_then_flips_the_repaired_clip():
     np.testing.assert_array_equal(r.clip.rotations, by_hand.clip.rotations)
     np.testing.assert_array_equal(r.clip.root_pos, by_hand.clip.root_pos)
     assert r.steps.repair is not None and r.steps.join is None
-    assert r.steps.measured["turn_deg"] == pytest.approx(720.0, abs=5.0)
+    assert r.report.measured.turn_deg == pytest.approx(720.0, abs=5.0)
     with pytest.raises(FlipEditError, match="nothing to do"):
         edit(clip)
     with pytest.raises(FlipEditError, match="no flight"):
@@ -131,3 +131,48 @@ def test_sample_keeps_meta_as_provenance_only():
     clip = builtin("backflip")
     s = sample(clip, np.arange(0, 20, 0.5))
     assert set(s.meta) == set(clip.meta)
+
+
+def test_editing_methods_return_results_with_provenance_only_meta():
+    """Every editing method returns a Result (clip, flight, typed report); the
+    clip's meta is the source's provenance plus the edit's description, with
+    nothing the method measured (flight frames, flips, asymmetry) in it."""
+    from flipstudy.stimuli import analyse, builtin
+    from flipstudy.stimuli.edit.animator import repair_momentum, straighten
+    from flipstudy.stimuli.edit.concat import concatenate, mirror, motion_graph_join
+    from flipstudy.stimuli.edit.join import join_in_flight
+    from flipstudy.stimuli.edit.multiflip import multiflip
+    from flipstudy.stimuli.edit.pipeline import edit
+    from flipstudy.stimuli.edit.report import Report
+    from flipstudy.stimuli.result import Result
+    clip = builtin("backflip")
+    a = analyse(clip)
+    source = set(clip.meta)
+    results = {"multiflip": multiflip(a, 2), "repair": repair_momentum(a, straighten(a, "legs")),
+               "join": join_in_flight(a, a), "concat": concatenate(clip, clip, body=a.body),
+               "motion graph": motion_graph_join(clip, clip, body=a.body), "edit": edit(a, flips=2)}
+    for name, r in results.items():
+        assert isinstance(r, Result) and isinstance(r.report, Report), name
+        assert set(r.clip.meta) - source <= {"edit"}, (name, set(r.clip.meta) - source)
+        if name not in ("concat", "motion graph"):
+            # the clip's flight, where the analyser finds it
+            b = analyse(r.clip, body=a.body, estimate=False)
+            assert abs(b.takeoff - r.takeoff) <= 2 and abs(b.landing - r.landing) <= 2, name
+    assert results["multiflip"].clip.meta["edit"] == "multiflip 2" and results["multiflip"].flips == 2
+    # two flips: no single flight (the report lists both)
+    c = results["concat"]
+    assert (c.takeoff, c.landing) == (None, None) and len(c.report.flights) == 2
+    assert (results["edit"].takeoff, results["edit"].landing) == (results["edit"].steps.multiflip.takeoff,
+                                                                  results["edit"].steps.multiflip.landing)
+    assert set(mirror(clip).meta) - source <= {"edit"}
+
+
+def test_rest_asymmetry_names_the_joint_mirroring_cannot_match():
+    from flipstudy.stimuli import Skeleton, builtin
+    from flipstudy.stimuli.edit.concat import rest_asymmetry
+    sk = builtin("backflip").skeleton
+    assert rest_asymmetry(sk)[0] < 1e-9
+    off = np.array(sk.offsets, float)
+    off[sk.index("LeftHand"), 0] += 0.03               # a left forearm 3 cm longer (the hand a leaf)
+    d, joint = rest_asymmetry(Skeleton(sk.joint_names, sk.parents, off, sk.channels, sk.end_sites))
+    assert d == pytest.approx(0.03) and joint in ("LeftHand", "RightHand")

@@ -207,11 +207,11 @@ def builtin_flips():
                                 dict(flips=3, k=1.2, blend_s=0.05)])
 def test_multiflip_on_prepared_source_equals_the_plain_implementation(builtin_flips, name, kw):
     import _multiflip_reference as ref
-    from flipstudy.stimuli.edit.multiflip import multiflip, prepare
+    from flipstudy.stimuli.edit.multiflip import flip_source, multiflip
     a = builtin_flips[name]
     r0 = ref.multiflip(a, **kw)
     _assert_same_multiflip(r0, multiflip(a, **kw))
-    _assert_same_multiflip(r0, multiflip(prepare(a), **kw))
+    _assert_same_multiflip(r0, multiflip(flip_source(a), **kw))
 
 
 @pytest.mark.parametrize("name", ["88_01.bvh", "87_03.bvh", "90_11.bvh"])
@@ -220,9 +220,9 @@ def test_multiflip_of_real_cmu_equals_the_plain_implementation(name):
     sequenced clip's COM is read (and computed for them alone)."""
     import _multiflip_reference as ref
     from flipstudy.stimuli import analyse
-    from flipstudy.stimuli.edit.multiflip import FlipEditError, multiflip, prepare
+    from flipstudy.stimuli.edit.multiflip import FlipEditError, flip_source, multiflip
     a = analyse(load_bvh(shared_file(name)))
-    pre = prepare(a)
+    pre = flip_source(a)
     for flips in (2, 3):
         for kw in (dict(k_ratio=1.0), dict(blend_s=0.1), dict(takeoff_height=0.2)):
             try:

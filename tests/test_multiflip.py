@@ -8,8 +8,8 @@ from scipy.spatial.transform import Rotation
 
 from flipstudy.stimuli import analyse, builtin, load_bvh
 from flipstudy.stimuli.edit import rotate
-from flipstudy.stimuli.edit.multiflip import (FlipEditError, find_self_loop, flight_axis, k_star, measure,
-                                    multiflip, piecewise_source)
+from flipstudy.stimuli.edit.flight_measures import flight_axis, measure
+from flipstudy.stimuli.edit.multiflip import FlipEditError, find_self_loop, k_star, multiflip, piecewise_source
 from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features, twist_angles
 from flipstudy.stimuli.physics import momentum
 
@@ -123,19 +123,19 @@ def test_multiflip_on_builtin_flips(flips, name, n):
     r = multiflip(a, n, k_ratio=1.0)
     m = measure(r, a)
     one = measure(type("R", (), {"clip": a.clip, "takeoff": a.takeoff, "landing": a.landing})(), a)
-    assert abs(one["turn_deg"] - 360) < 10                     # the measure on the source
-    assert abs(m["turn_deg"] - 360 * n) < 10, m
-    assert m["L_cv_pct"] < 2.0
-    assert m["com_rms_mm"] < 1.0
+    assert abs(one.turn_deg - 360) < 10                     # the measure on the source
+    assert abs(m.turn_deg - 360 * n) < 10, m
+    assert m.L_cv_pct < 2.0
+    assert m.com_rms_mm < 1.0
     rep = r.report
     assert rep.k == pytest.approx(rep.k_star)
     assert rep.dp_takeoff_pct < 5.0 and rep.dp_landing_pct < 5.0, rep
     # the analyser finds the flight where the method put it, and earth's gravity
-    fl = m["analyser_flight"]
+    fl = m.analyser_flight
     assert abs(fl[0] - r.takeoff) <= 2 and abs(fl[1] - r.landing) <= 2
-    assert m["apparent_gravity"] == pytest.approx(9.81, rel=0.02)
+    assert m.apparent_gravity == pytest.approx(9.81, rel=0.02)
     # faster rotation: the flight's |L| is k* times the original's
-    assert m["L_mean"] == pytest.approx(rep.k * a.L_mean, rel=0.05)
+    assert m.L_mean == pytest.approx(rep.k * a.L_mean, rel=0.05)
 
 
 def test_default_k_is_the_papers_and_its_jump_is_reported(flips):
@@ -143,7 +143,7 @@ def test_default_k_is_the_papers_and_its_jump_is_reported(flips):
     r = multiflip(a, 2)
     assert r.report.k_ratio == pytest.approx(0.7)
     m = measure(r, a)
-    assert abs(m["turn_deg"] - 720) < 10
+    assert abs(m.turn_deg - 720) < 10
     # a slower take-off than the flight needs: a measured, reported jump in momentum
     assert r.report.dp_takeoff_pct > 20
 
@@ -163,13 +163,13 @@ def test_double_backflip_from_real_cmu(name):
     m = measure(r, a)
     src = measure(type("R", (), {"clip": clip, "takeoff": a.takeoff, "landing": a.landing})(), a)
     # one more turn than the performer made (real flips are not exactly 360°)
-    assert abs(m["turn_deg"] - src["turn_deg"] - 360) < 20
-    assert m["com_rms_mm"] < 1.0
+    assert abs(m.turn_deg - src.turn_deg - 360) < 20
+    assert m.com_rms_mm < 1.0
     # no worse than the capture's own noise: 88_01 with the de Leva masses (its fit
     # leaves the band, the prior is kept) 16.9 % against 13.8 %; the old over-fitted
     # masses (head 8.9 kg) gave 14.0 % against 12.7 %
-    assert m["L_cv_pct"] < src["L_cv_pct"] + 3.5
-    assert m["analyser_flight"] is not None
+    assert m.L_cv_pct < src.L_cv_pct + 3.5
+    assert m.analyser_flight is not None
 
 
 # ------------------------------------------------------------------ 5.5 animator edits
@@ -311,8 +311,8 @@ def test_landing_join_on_the_landing_frame_itself():
     r = multiflip(a, 3)
     assert r.report.landing_join.g == a.landing
     m = measure(r, a)
-    assert m["analyser_flight"] == [r.takeoff, r.landing]
-    assert m["turn_deg"] > 600
+    assert m.analyser_flight == [r.takeoff, r.landing]
+    assert m.turn_deg > 600
 
 
 def test_join_of_two_real_backflips_is_allowed():

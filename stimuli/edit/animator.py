@@ -23,6 +23,7 @@ from scipy.spatial.transform import Rotation
 from ..analyse import Analysis
 from ..motion.clip import Clip
 from ..physics import center_of_mass, momentum
+from ..result import Result
 from .report import Report
 from .reposition import ballistic_path
 from .timing import ratio_retime_frames, sample
@@ -88,14 +89,12 @@ class RepairReport(Report):
 
 
 @dataclass
-class Repair:
-    clip: Clip
-    takeoff: int
-    landing: int
+class Repair(Result[RepairReport]):
+    """The repaired clip, its flight and the :class:`RepairReport`
+    (:func:`repair_momentum`), with the retiming and the errors per frame."""
     src: np.ndarray              # fractional frame of the edited clip shown at each new frame
     error_before: np.ndarray     # |L| relative error per flight frame of the edit, before
     error_after: np.ndarray      # ... after the repair (against the original at the same source frame)
-    report: RepairReport
 
 
 def _L_on_grid(clip: Clip, body, start: int, stop: int, sub: int) -> tuple[np.ndarray, np.ndarray]:
@@ -135,9 +134,7 @@ def retime_flight(clip: Clip, body, to: int, ld: int, grid: np.ndarray, ratio: n
     shift = np.zeros_like(new.root_pos)
     shift[to:ld_n + 1] = target - com[to:ld_n + 1]
     shift[ld_n + 1:] = shift[ld_n]
-    out = new.replace(root_pos=new.root_pos + shift,
-                      meta={**clip.meta, "takeoff": to, "landing": ld_n})
-    return out, src, ld_n, Tn, vy
+    return new.replace(root_pos=new.root_pos + shift), src, ld_n, Tn, vy
 
 
 def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bool = False) -> Repair:
@@ -159,7 +156,7 @@ def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bo
 
     out, src, ld_n, Tn, vy = retime_flight(edited, body, to, ld, g1, ratio, original.path,
                                            midpoint=midpoint)
-    out.meta["edit"] = "animator edit, momentum repaired"
+    out = out.replace(meta={**out.meta, "edit": "animator edit, momentum repaired"})
     path, G, T0 = original.path, -2.0 * original.path[1, 0], (ld - to) / fps
     # errors, per frame, against the original at the same source frame
     L_new = np.linalg.norm(momentum(out, body).L, axis=1)
@@ -174,4 +171,4 @@ def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bo
                        flight_s_before=T0, flight_s_after=Tn,
                        jump_height_before_m=float(path[1, 1] ** 2 / (2 * G)),
                        jump_height_after_m=float(vy ** 2 / (2 * G)))
-    return Repair(out, to, ld_n, src, err_before, err_after, rep)
+    return Repair(out, to, ld_n, rep, src=src, error_before=err_before, error_after=err_after)

@@ -46,7 +46,8 @@ from scipy.spatial.transform import Rotation
 from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
 from ..physics import center_of_mass, momentum
-from .multiflip import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle, unwrapped_turn
+from ..result import Result
+from .flight_measures import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle, unwrapped_turn
 from .report import Report
 from .reposition import rotate
 from .similarity import distance_matrix, pose_features, twist_angles
@@ -96,12 +97,8 @@ class JoinReport(Report):
 
 
 @dataclass
-class Join:
+class Join(Result[JoinReport]):
     """The joined clip, its flight and the report (:func:`join_in_flight`)."""
-    clip: Clip
-    takeoff: int
-    landing: int
-    report: JoinReport
 
 
 def _assemble(a: Analysis, bc: Clip, b: Analysis, u: np.ndarray, fi: int, gj: int, e: float,
@@ -284,7 +281,6 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     c = hi
     ratio = c * base
     out, _, ld, T, _ = retime_flight(joined, body, to, ld, grid, ratio, a.path, keep_landing_point=False)
-    out.meta["edit"] = "joined in flight"
     m = analyse(out, body=body, estimate=False)
     Lm = np.linalg.norm(m.L[to + 2:ld - 1], axis=1)
     s0, s1 = standing_span(out, body, to, ld)

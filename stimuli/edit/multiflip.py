@@ -21,11 +21,17 @@ A single flip becomes a double, triple or quadruple one in four steps:
    everything after landing follows on from where the flight now ends.
 
 The rotation and angular momentum of the result are then measured by the
-analyser (:func:`measure`).
+analyser (:func:`~flipstudy.stimuli.edit.flight_measures.measure`).
+
+>>> from flipstudy.stimuli import analyse, builtin
+>>> from flipstudy.stimuli.edit.multiflip import flip_source, multiflip
+>>> source = flip_source(analyse(builtin("backflip")))   # once per clip
+>>> double = multiflip(source, 2)
+>>> double.flips, double.takeoff < double.landing, round(double.report.k_ratio, 2)
+(2, True, 0.7)
 """
 from __future__ import annotations
 
-from ..exceptions import FlipstudyError
 import math
 from dataclasses import dataclass
 
@@ -35,14 +41,12 @@ from scipy.spatial.transform import Rotation
 from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
 from ..physics import center_of_mass
+from ..result import Result
+from .flight_measures import FlipEditError, _jumps, flight_axis, standing_span, unwrapped_turn
 from .report import Report
 from .reposition import ballistic_path
 from .similarity import distance_matrix, pose_features
 from .timing import slerp, smoothstep
-
-
-class FlipEditError(FlipstudyError, ValueError):
-    """A multi-flip edit that cannot be made; the message says why."""
 
 
 def k_star(g: float, T: float, v0: float, dy: float) -> float:
@@ -54,50 +58,6 @@ def k_star(g: float, T: float, v0: float, dy: float) -> float:
         raise FlipEditError(f"k*: the flight needs T > 0 and v0 > Δy/T (T={T:.3f} s, v0={v0:.3f} m/s, "
                             f"Δy={dy:.3f} m)")
     return math.sqrt(0.5 * g * T / den)
-
-
-def flight_axis(a: Analysis) -> np.ndarray:
-    """Unit direction of the mean angular momentum in flight."""
-    L = a.L[a.takeoff:a.landing + 1].mean(axis=0)
-    n = np.linalg.norm(L)
-    if n < 1e-6:
-        raise FlipEditError("the flight has no angular momentum to turn about (a jump, not a flip)")
-    return L / n
-
-
-def turn_angle(clip: Clip, axis, a: int = 0, b: int | None = None) -> float:
-    """Degrees the root turns about ``axis`` from frame ``a`` to ``b``: the root's
-    angular velocity along the axis, integrated (trapezoid)."""
-    b = clip.num_frames - 1 if b is None else b
-    w = clip.angular_velocities()[a:b + 1, 0] @ (np.asarray(axis, float) / np.linalg.norm(axis))
-    return float(np.degrees(np.trapezoid(w, dx=1.0 / clip.fps))) if w.size > 1 else 0.0
-
-
-def unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
-    """(F,) radians the root has turned about the unit axis ``u`` since frame 0,
-    unwrapped: its angular velocity along ``u`` integrated (trapezoid).  Written out
-    rather than ``scipy.integrate.cumulative_trapezoid``: that rounds differently
-    (~1e-17), enough to move the multi-flip's discrete choices (its test against
-    ``tests/_multiflip_reference.py`` then differs by 6e-5)."""
-    w = clip.angular_velocities()[:, 0] @ u
-    return np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / clip.fps)])
-
-
-def standing_span(clip: Clip, body, takeoff: int, landing: int, still: float = 0.05,
-                  drop: float = 0.05) -> tuple[int, int]:
-    """(last standing frame before take-off, first standing frame after landing).
-    Standing: the COM moves slower than ``still`` m/s and is at most ``drop`` m
-    below its height in the clip's first (before) or last (after) frame — so the
-    bottom of a crouch, where the COM also stops, is not taken for standing.  The
-    clip's ends when no frame qualifies."""
-    from ..physics import momentum
-    m = momentum(clip, body)
-    v = np.linalg.norm(m.v_com, axis=1)
-    y = m.com[:, 1]
-    before = np.flatnonzero((v[:takeoff + 1] < still) & (y[:takeoff + 1] >= y[0] - drop))
-    after = np.flatnonzero((v[landing:] < still) & (y[landing:] >= y[-1] - drop))
-    return (int(before[-1]) if before.size else 0,
-            int(landing + after[0]) if after.size else clip.num_frames - 1)
 
 
 @dataclass
@@ -164,7 +124,8 @@ class MultiFlipReport(Report):
     takeoff: int
     landing: int
     gravity: float
-    #: linear-momentum jumps at take-off and landing (:func:`momentum_jumps`)
+    #: linear-momentum jumps at take-off and landing
+    #: (:func:`~flipstudy.stimuli.edit.flight_measures.momentum_jumps`)
     dp_takeoff: float
     dp_landing: float
     p_takeoff: float
@@ -173,22 +134,19 @@ class MultiFlipReport(Report):
 
 
 @dataclass
-class MultiFlip:
-    """The edited clip and what the method did (:func:`multiflip`)."""
+class MultiFlip(Result[MultiFlipReport]):
+    """The edited clip, its flight (the first and last frames strictly inside it)
+    and what the method did (:func:`multiflip`); ``flips``: the number of flips made."""
 
-    clip: Clip
     flips: int
-    takeoff: int
-    landing: int
-    report: MultiFlipReport
 
 
 @dataclass
 class FlipSource:
     """The pre-processing of a single flip for :func:`multiflip`: what depends on the
     source alone, computed once (the paper's pre-processing stage, Section 4, plus the
-    per-frame tables its run-time search reads).  Build it with :func:`prepare` and
-    pass it to :func:`multiflip` as often as needed.
+    per-frame tables its run-time search reads).  Build it with :func:`flip_source`
+    and pass it to :func:`multiflip` as often as needed.
 
     ``D``/``phi`` are the Appendix A distances and turns of every pair of flight
     frames; ``theta`` the root's unwrapped turn about ``axis`` per frame (radians);
@@ -209,8 +167,9 @@ class FlipSource:
     step: np.ndarray
 
 
-def prepare(source: Clip | Analysis) -> FlipSource:
-    """Pre-process a single flip (a clip or its analysis) for :func:`multiflip`."""
+def flip_source(source: Clip | Analysis) -> FlipSource:
+    """The :class:`FlipSource` of a single flip (a clip or its analysis): its
+    pre-processing for :func:`multiflip`."""
     a = source if isinstance(source, Analysis) else analyse(source)
     if a.flight is None:
         raise FlipEditError(f"{a.clip.meta.get('name', 'clip')}: no flight phase to add flips to")
@@ -286,7 +245,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
               k: float | None = None, blend_s: float = 0.025, max_turn_error: float = 10.0,
               takeoff_height: float = 0.0, min_turn_deg: float = 45.0) -> MultiFlip:
     """Make a ``flips``-flip motion from a single flip (a clip, its analysis or its
-    pre-processing from :func:`prepare`, which saves redoing it for every edit).
+    pre-processing from :func:`flip_source`, which saves redoing it for every edit).
 
     ``k_ratio``: retiming factor as a fraction of k* (the paper's 0.7 by default;
     1 gives continuous momentum); ``k`` overrides it.  ``blend_s``: half-width of
@@ -297,7 +256,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     """
     if isinstance(flips, bool) or not isinstance(flips, (int, np.integer)) or not 1 <= flips <= 6:
         raise FlipEditError(f"flips must be a whole number from 1 to 6, got {flips!r}")
-    pre = source if isinstance(source, FlipSource) else prepare(source)
+    pre = source if isinstance(source, FlipSource) else flip_source(source)
     a = pre.analysis
     clip, body, fps = a.clip, a.body, a.clip.fps
     to, ld = a.takeoff, a.landing
@@ -463,9 +422,8 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     shift = np.zeros_like(root_n)
     shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
     shift[ld_n + 1:] = target[-1] - com_new[ld_n]
-    meta = {**clip.meta, "edit": f"multiflip {flips}"}
     out = Clip(clip.skeleton, fps, root_n + raise_before + shift, rot_n, None,
-               {**meta, "takeoff": to_n, "landing": ld_n, "flips": flips})
+               {**clip.meta, "edit": f"multiflip {flips}"})
 
     report = MultiFlipReport(
         self_loop=SelfLoopReport(m, n, float(np.degrees(ph)), loop.distance),
@@ -475,7 +433,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
         flight_s=Tn, takeoff=to_n, landing=ld_n, gravity=G,
         # the output's COM: the new frames' moved by the raise and the repositioning
         **_jumps(com_new + raise_before + shift, fps, body.total_mass, to_n, ld_n))
-    return MultiFlip(out, flips, to_n, ld_n, report)
+    return MultiFlip(out, to_n, ld_n, report, flips=flips)
 
 
 def piecewise_source(bounds, rates) -> np.ndarray:
@@ -491,47 +449,3 @@ def piecewise_source(bounds, rates) -> np.ndarray:
         out.append(np.linspace(a, b, n + 1)[:-1])
     out.append(np.array([float(bounds[-1])]))
     return np.concatenate(out)
-
-
-def momentum_jumps(clip: Clip, body, takeoff: int, landing: int) -> dict:
-    """Linear-momentum discontinuity at take-off and landing: the COM velocity
-    one frame either side of each (one-sided differences), as a fraction of the
-    take-off momentum."""
-    return _jumps(center_of_mass(clip, body), clip.fps, body.total_mass, takeoff, landing)
-
-
-def _jumps(com: np.ndarray, fps: float, M: float, takeoff: int, landing: int) -> dict:
-    """:func:`momentum_jumps` from the COM (F,3); only the frames next to take-off and
-    landing are read."""
-    v_in = (com[takeoff] - com[takeoff - 1]) * fps if takeoff >= 1 else np.zeros(3)
-    v_out = (com[takeoff + 1] - com[takeoff]) * fps
-    l_in = (com[landing] - com[landing - 1]) * fps
-    l_out = (com[landing + 1] - com[landing]) * fps if landing + 1 < com.shape[0] else l_in
-    g = np.array([0.0, -9.81, 0.0])
-    # gravity alone changes the velocity by g/fps over a frame; remove that part
-    dp_to = M * np.linalg.norm(v_out - v_in - g / fps)
-    dp_ld = M * np.linalg.norm(l_out - l_in - g / fps)
-    p_to = M * np.linalg.norm(v_out)
-    return {"dp_takeoff": float(dp_to), "dp_landing": float(dp_ld), "p_takeoff": float(p_to),
-            "dp_takeoff_pct": float(100 * dp_to / p_to), "dp_landing_pct": float(100 * dp_ld / p_to)}
-
-
-def measure(result: MultiFlip, original: Analysis) -> dict:
-    """What the edited clip has, by the analyser (with the original's body): the
-    root's turn about L from the last standing frame before take-off to the first
-    after landing, flight |L| CV, COM residual from a parabola in flight."""
-    clip = result.clip
-    a = analyse(clip, body=original.body, estimate=False)
-    u = flight_axis(original)
-    to, ld = result.takeoff, result.landing
-    s0, s1 = standing_span(clip, original.body, to, ld)
-    Lm = np.linalg.norm(a.L[to + 2:ld - 1], axis=1)
-    from ..flight import fit_path, path_values
-    com = a.com[to:ld + 1]
-    coef = fit_path(com, clip.fps)
-    res = com - path_values(coef, np.arange(com.shape[0]) / clip.fps)
-    return {"turn_deg": turn_angle(clip, u, s0, s1), "turn_span": [s0, s1],
-            "L_mean": float(Lm.mean()), "L_cv_pct": float(100 * Lm.std() / Lm.mean()),
-            "com_rms_mm": float(1000 * np.sqrt(np.mean(np.sum(res ** 2, axis=1)))),
-            "analyser_flight": [a.takeoff, a.landing] if a.flight is not None else None,
-            "apparent_gravity": a.apparent_gravity}

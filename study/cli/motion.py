@@ -121,7 +121,7 @@ def cmd_edit(args) -> int:
     with momentum repair (5.5), measured (:func:`flipstudy.stimuli.edit.pipeline.edit`)."""
     from flipstudy.stimuli import analyse, save_bvh
     from flipstudy.stimuli.edit.animator import AnimatorEditError
-    from flipstudy.stimuli.edit.multiflip import FlipEditError
+    from flipstudy.stimuli.edit.flight_measures import FlipEditError
     from flipstudy.stimuli.edit.pipeline import edit
     if args.flips is None and not args.straighten and not args.join:
         print("flipstudy edit: error: nothing to do: give --flips N, --straighten legs|arms or --join OTHER",
@@ -138,7 +138,7 @@ def cmd_edit(args) -> int:
         return 1
     out_clip, steps, lines = res.clip, res.steps, []
     if steps.join is not None:
-        r = steps.join.report
+        r = res.report.join
         lines.append(f"join {args.join}: turned {r.yaw_deg:.0f}° about the vertical, retimed ×"
                      f"{r.retime:.3f} to match |L|; joined at frame {r.join.first} → its "
                      f"frame {r.join.second} (distance {r.join.distance:.2f})")
@@ -151,13 +151,13 @@ def cmd_edit(args) -> int:
                      f"(first {r.L_first:.2f}) CV {r.L_cv_pct:.1f} %, momentum jump take-off "
                      f"{r.dp_takeoff_pct:.1f} %, landing {r.dp_landing_pct:.1f} %")
     if steps.repair is not None:
-        r = steps.repair.report
+        r = res.report.repair
         lines.append(f"straighten {args.straighten}: |L| error {r.max_error_before_pct:.0f} % before "
                      f"retiming, {r.max_error_after_pct:.1f} % after ({r.rule} rule); flight "
                      f"{r.flight_s_before:.3f} → {r.flight_s_after:.3f} s, height "
                      f"{r.jump_height_before_m:.2f} → {r.jump_height_after_m:.2f} m")
     if steps.multiflip is not None:
-        r, m = steps.multiflip.report, steps.measured
+        r, m = res.report.multiflip, res.report.measured
         lines += [
             f"self-looping sequence  frames {r.self_loop.m}–{r.self_loop.n} "
             f"(turn {r.self_loop.phi_deg:.1f}°, distance {r.self_loop.distance:.3f}), "
@@ -168,9 +168,9 @@ def cmd_edit(args) -> int:
             f"{r.flight_s:.3f} s",
             f"momentum jump         take-off {r.dp_takeoff_pct:.1f} %, landing "
             f"{r.dp_landing_pct:.1f} % of the take-off momentum",
-            f"measured              turn {m['turn_deg']:.1f}° (frames {m['turn_span'][0]}–"
-            f"{m['turn_span'][1]}), flight |L| mean {m['L_mean']:.2f} kg·m²/s CV {m['L_cv_pct']:.2f} %, "
-            f"COM residual {m['com_rms_mm']:.2f} mm, gravity {m['apparent_gravity']:.2f} m/s²"]
+            f"measured              turn {m.turn_deg:.1f}° (frames {m.turn_span[0]}–"
+            f"{m.turn_span[1]}), flight |L| mean {m.L_mean:.2f} kg·m²/s CV {m.L_cv_pct:.2f} %, "
+            f"COM residual {m.com_rms_mm:.2f} mm, gravity {m.apparent_gravity:.2f} m/s²"]
     save_bvh(out_clip, args.out)
     print(f"{args.clip} → {args.out}: {out_clip.num_frames} frames at {out_clip.fps:g} fps")
     for ln in lines:
