@@ -36,7 +36,7 @@ def main() -> int:
     import numpy as np
     from flipstudy.stimuli import save_bvh
     from flipstudy.stimuli.control import Jumper, jump, make_scene
-    from flipstudy.stimuli.control import windup as W
+    from flipstudy.stimuli.control import samples as W
 
     def fresh_field():
         W._CACHE.clear()

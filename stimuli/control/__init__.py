@@ -8,7 +8,9 @@ True
 
 Modules: :mod:`.path` (3.5.1 path estimation), :mod:`.muscles` (3.2.3 spring
 muscles, Table 5.1 presets), :mod:`.ik` (3.4 CCD), :mod:`.balance` (3.3),
-:mod:`.windup` (3.6 sample field, choice, PD approach, energy assignment),
+:mod:`.samples` (3.6 the sample field), :mod:`.uneven` (uneven legs: pelvis roll,
+balance target), :mod:`.windup` (3.6 choice, PD approach), :mod:`.assignment`
+(3.6.2 energy assignment),
 :mod:`.controller` (thrust, flight, landing, scenes).
 """
 import importlib
@@ -20,7 +22,7 @@ _WHERE = {**dict.fromkeys(("Box", "JumpResult", "Scene", "jump", "make_scene", "
           **dict.fromkeys(("MUSCLES", "PRESETS", "parse_k", "spring_displacement", "spring_energy",
                            "spring_force"), ".muscles"),
           **dict.fromkeys(("JumpPath", "estimate_path", "kinetic_energy"), ".path"),
-          **dict.fromkeys(("assign_energy", "choose", "sample_field"), ".windup")}
+          "assign_energy": ".assignment", "choose": ".windup", "sample_field": ".samples"}
 
 
 def __getattr__(name: str):

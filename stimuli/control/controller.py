@@ -8,7 +8,7 @@ Stages (continuous time, sampled at ``fps``):
    iteration per equal time step, eased in and out over ``crouch_time``; the
    balance PD controller bends the upper body; feet flat and fixed.  Uneven
    legs: the pelvis rolls down on the stronger side as it sinks, so the
-   stronger leg bends more (:func:`.windup.pelvis_roll`; the roll grows in
+   stronger leg bends more (:func:`.uneven.pelvis_roll`; the roll grows in
    proportion to the depth); it unwinds with the lean over the thrust (level
    at take-off), comes back over the landing's absorption (level at
    touch-down) and unwinds again as the jumper stands up.
@@ -51,8 +51,9 @@ from .ik import EX, heel_pitch, reach, solve_legs
 from .model import SIDES, Jumper
 from .muscles import MUSCLES, STRENGTH, parse_k
 from .path import SCENES, estimate_path, gravity_vector, kinetic_energy
-from .windup import (EPSILON, MAX_HEEL_PITCH, Choice, approach, choose, leg_asymmetry, pelvis_roll,
-                     sample_field)
+from .samples import sample_field
+from .uneven import leg_asymmetry, pelvis_roll
+from .windup import EPSILON, MAX_HEEL_PITCH, Choice, approach, choose
 
 T_STAND, T_CROUCH, T_RECOVER, T_HOLD = 0.3, 0.8, 0.8, 0.4
 TOUCHDOWN_EXTENSION = 0.96      # hip–ankle distance at touch-down / leg length
@@ -180,7 +181,7 @@ class Plan:
 
 def _pose(jumper, pelvis, lean, feet, pitch=None, warm=None, roll=None):
     """Legs solved for pelvis positions (N,3) with leans (N,2); returns (quats,
-    stance); ``roll`` (N,): the pelvis's roll (:func:`.windup.pelvis_roll`)."""
+    stance); ``roll`` (N,): the pelvis's roll (:func:`.uneven.pelvis_roll`)."""
     pelvis = np.atleast_2d(pelvis)
     N = pelvis.shape[0]
     Q = jumper.rest_quats(N)
