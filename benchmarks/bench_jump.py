@@ -35,8 +35,8 @@ def median_s(fn, n=7):
 def main() -> int:
     import numpy as np
     from flipstudy.stimuli import save_bvh
-    from flipstudy.stimuli.control import Jumper, jump, make_scene
-    from flipstudy.stimuli.control import windup as W
+    from flipstudy.stimuli.control import Jumper, jump, make_course
+    from flipstudy.stimuli.control import samples as W
 
     def fresh_field():
         W._CACHE.clear()
@@ -55,9 +55,9 @@ def main() -> int:
           f"{NAIVE_SAMPLES} samples, scaled) = {t_naive / t_field:.0f}x slower; same values")
     cases = [("forward 1.3 m", dict(target=(0.0, 0.0, 1.3))),
              ("forward 1.9 m", dict(target=(0.0, 0.0, 1.9))),
-             ("sideways 1.3 m", dict(target=(-1.3, 0.0, 0.0), scene="sideways")),
-             ("box 0.75 m", dict(scene=make_scene("box", box_height=0.75))),
-             ("jump-over", dict(scene="over"))]
+             ("sideways 1.3 m", dict(target=(-1.3, 0.0, 0.0), course="sideways")),
+             ("box 0.75 m", dict(course=make_course("box", box_height=0.75))),
+             ("jump-over", dict(course="over"))]
     tmp = Path(tempfile.mkdtemp())
     print(f"one jump after the field (plan, windup PD, thrust, flight, landing, checks, BVH); "
           f"target {TARGET_S:.1f} s")

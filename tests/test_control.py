@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from flipstudy.stimuli import analyse, load_bvh, save_bvh
 from flipstudy.stimuli.body import Body
-from flipstudy.stimuli.control import (PRESETS, Jumper, assign_energy, choose, estimate_path, jump, make_scene,
+from flipstudy.stimuli.control import (PRESETS, Jumper, assign_energy, choose, estimate_path, jump, make_course,
                              parse_k, sample_field, spring_displacement, spring_energy, spring_force)
 from flipstudy.stimuli.control.balance import inside, polygon_centre, support_polygon
 from flipstudy.stimuli.control.controller import STRENGTH
@@ -135,9 +135,9 @@ def test_bad_input_names_the_parameter():
     with pytest.raises(ValueError, match="air"):
         jump((0, 0, 1), t_air=-0.5)
     with pytest.raises(ValueError, match="scene"):
-        make_scene("moon")
+        make_course("moon")
     with pytest.raises(ValueError, match="no surface at height 0.5"):
-        make_scene("forward", target=(0, 0.5, 1.0))
+        make_course("forward", target=(0, 0.5, 1.0))
 
 
 def test_presets_are_table_5_1():
@@ -153,7 +153,7 @@ def test_unreachable_target_is_refused_with_advice():
     with pytest.raises(ValueError, match="target unreachable.*store at most"):
         jump((0, 0, 2.4))
     with pytest.raises(ValueError, match="target unreachable.*store at most"):
-        jump(scene=make_scene("box", box_height=0.75), strength=2.5)
+        jump(course=make_course("box", box_height=0.75), strength=2.5)
     # the thesis's literal constants cannot store even a 1 m jump with the correct angle
     with pytest.raises(ValueError, match="target unreachable.*--strength"):
         jump((0, 0, 1.0), strength=1.0)
@@ -248,12 +248,12 @@ SCENES = [("forward", 1.0), ("forward", 1.3), ("forward", 1.6), ("forward", 1.9)
 
 def _make(name, x):
     if name == "forward":
-        return jump((0.0, 0.0, x), scene="forward")
+        return jump((0.0, 0.0, x), course="forward")
     if name == "sideways":
-        return jump((-x, 0.0, 0.0), scene="sideways")
+        return jump((-x, 0.0, 0.0), course="sideways")
     if name == "box":
-        return jump(scene=make_scene("box", box_height=x))
-    return jump(scene="over")
+        return jump(course=make_course("box", box_height=x))
+    return jump(course="over")
 
 
 @pytest.fixture(scope="module")
@@ -279,7 +279,7 @@ def _feet_at(clip, frame):
 def test_lands_on_target(jumps, key):
     res, bvh = jumps[key]
     m = res.clip.meta
-    td = m["touchdown"]
+    td = res.report.touchdown
     a = _feet_at(bvh, td)
     target = np.array(m["target"])
     j = Jumper()
@@ -299,17 +299,16 @@ def test_inspect_measures_takeoff_and_gravity(jumps, key):
     planned one and the take-off velocity there within 2 % of the path estimate;
     the first frame strictly inside the flight is the one after the instant."""
     res, bvh = jumps[key]
-    m = res.clip.meta
     a = analyse(bvh)
     assert a.flight is not None
     assert len(a.flights) == 1
     assert abs(a.apparent_gravity / 9.81 - 1) < 0.02
-    lag = a.takeoff_time - m["takeoff_s"]
+    lag = a.takeoff_time - res.report.takeoff_s
     assert abs(lag) <= 1.0 / bvh.fps
     assert a.takeoff == int(np.floor(a.takeoff_time * bvh.fps + 1e-6)) + 1
-    v_plan = np.array(m["v0"]) + np.array([0.0, -9.81, 0.0]) * lag
+    v_plan = np.array(res.report.v0) + np.array([0.0, -9.81, 0.0]) * lag
     assert np.linalg.norm(a.takeoff_velocity - v_plan) / np.linalg.norm(v_plan) < 0.02
-    assert a.landing < m["touchdown"]
+    assert a.landing < res.report.touchdown
     # the body turns in the air so that the tuck keeps the angular momentum constant
     assert a.L_cv_pct < 10
 
@@ -333,7 +332,7 @@ def test_windup_feet_still_and_balanced(jumps, key):
     res, bvh = jumps[key]
     m = res.clip.meta
     j = Jumper()
-    w0, w1 = m["windup_frames"]
+    w0, w1 = res.report.windup_frames
     sk = bvh.skeleton
     P = bvh.joint_positions()[w0:w1 + 1]
     E = bvh.end_site_positions()[w0:w1 + 1]
@@ -371,7 +370,7 @@ def test_uneven_legs_load_the_stronger_leg(tmp_path):
         save_bvh(res.clip, path)
         bvh = load_bvh(path)
         sk = bvh.skeleton
-        w1 = res.clip.meta["windup_frames"][1]
+        w1 = res.report.windup_frames[1]
         P = bvh.joint_positions()[w1]
         com = center_of_mass(bvh, Body.from_clip(bvh))[w1]
         J = {s: [P[sk.index(f"{s}{n}")] for n in ("UpLeg", "Leg", "Foot")] for s in ("Left", "Right")}
@@ -395,6 +394,44 @@ def test_uneven_legs_load_the_stronger_leg(tmp_path):
     assert knees["uneven-varying-normal"][1] - knees["uneven-varying-normal"][0] > 3.0  # left stronger
     for name in ("uneven-global-normal", "uneven-varying-normal"):
         assert 60.0 < min(knees[name]) and max(knees[name]) < 170.0                      # both bent
+
+
+#: the keys of `flipstudy jump --json` before the report was typed, in their order
+CLI_KEYS = ["scene", "start", "target", "landing_point", "landing_error_m", "t_air", "t_windup", "v0", "a",
+            "displacement", "E_k", "E_el_crouch", "E_land", "E_el_landing", "landing_energy_met", "k", "k_used",
+            "strength", "crouch_pelvis", "crouch_lean_deg", "takeoff", "touchdown", "takeoff_s", "touchdown_s",
+            "windup_foot_motion_m", "obstacle_clearance_m", "windup_iterations", "energy_met_at_iteration",
+            "build_s"]
+
+
+def test_jump_result_is_typed_and_meta_is_provenance(jumps):
+    """jump() returns the one result type (clip, flight frames, typed report) plus
+    its plan; what the controller planned and measured is in the report, and the
+    clip's meta says only how the clip was made."""
+    from flipstudy.stimuli.control import JumpReport, JumpResult
+    from flipstudy.stimuli.edit.report import Report
+    from flipstudy.stimuli.result import Result
+    res, _ = jumps[("box", 0.5)]
+    assert isinstance(res, JumpResult) and isinstance(res, Result)
+    assert isinstance(res.report, JumpReport) and isinstance(res.report, Report)
+    r, fps = res.report, res.clip.fps
+    # the flight's frames: the first and last strictly inside the airborne span
+    assert res.takeoff == r.takeoff and res.landing == r.touchdown - 1 == r.touchdown_detected - 1
+    assert r.takeoff_s < res.takeoff / fps and res.landing / fps < r.touchdown_s <= r.touchdown / fps + 1e-9
+    assert res.flight_frames == r.touchdown - r.takeoff
+    d = r.to_dict()
+    assert list(d)[:len(CLI_KEYS)] == CLI_KEYS
+    assert d["landing_error_m"] == r.landing_error_m < 0.05 and d["scene"] == "box"
+    assert set(res.clip.meta) == {"name", "source", "scene", "start", "target", "boxes", "g", "total_mass",
+                                  "height", "t_air", "t_windup", "crouch_time", "k", "k_used", "strength",
+                                  "muscles", "warnings"}
+    assert res.clip.meta["boxes"] == [[[-0.5, 0.0, 0.5], [0.5, 0.5, 1.3]]]
+
+
+def test_jump_without_checks_leaves_their_fields_empty():
+    r = jump((0.0, 0.0, 1.0), fps=30, check=False).report
+    assert r.landing_error_m is None and r.touchdown_detected is None and r.windup_foot_motion_m is None
+    assert r.touchdown > r.takeoff and r.E_k > 0
 
 
 # ------------------------------------------------------------------------ CLI
@@ -440,7 +477,7 @@ def test_boxes_are_drawn(jumps):
     from flipstudy.render.figures import composite_image
     res, _ = jumps[("box", 0.5)]
     clip = res.clip
-    kw = dict(size=(160, 120), interval=0.25, takeoff=clip.meta["takeoff"], landing=clip.meta["touchdown"] - 1)
+    kw = dict(size=(160, 120), interval=0.25, takeoff=res.takeoff, landing=res.landing)
     with_boxes = composite_image(clip, boxes=clip.meta["boxes"], **kw)
     without = composite_image(clip, **kw)
 

@@ -16,6 +16,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from flipstudy.stimuli.motion import BVHError, Clip, Skeleton, load_bvh
+from flipstudy.stimuli.motion import _bvh_parse as parse_mod
 from flipstudy.stimuli.motion import bvh as bvh_mod
 from flipstudy.stimuli.motion.skeleton import ROTATION_CHANNELS
 
@@ -27,9 +28,9 @@ def _blocks(path):
     """(hierarchy, data lines, frames, channels, first data line) of a file."""
     text = path.read_bytes().decode("utf-8-sig")
     lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
-    h, motion_at = bvh_mod._parse_hierarchy(lines, path)
+    h, motion_at = parse_mod.parse_hierarchy(lines, path)
     n_ch = sum(len(c) for c in h["channels"])
-    n_frames, _, _, values, first = bvh_mod._parse_motion(lines, motion_at, n_ch, path)
+    n_frames, _, _, values, first = parse_mod.parse_motion(lines, motion_at, n_ch, path)
     return h, lines[first:first + n_frames], n_frames, n_ch, first, values
 
 
@@ -60,9 +61,9 @@ def plain_fk(clip):
 def test_loadtxt_reads_the_motion_block_bit_for_bit(name):
     path = shared_file(name)
     _, data_lines, n_frames, n_ch, first, values = _blocks(path)
-    fast = bvh_mod._fast_values(data_lines, n_frames, n_ch)
+    fast = parse_mod.fast_values(data_lines, n_frames, n_ch)
     assert fast is not None, "a plain real file must take the fast path"
-    checked = bvh_mod._checked_values(data_lines, n_frames, n_ch, first, path)
+    checked = parse_mod.checked_values(data_lines, n_frames, n_ch, first, path)
     assert fast.dtype == checked.dtype and fast.shape == checked.shape
     assert np.array_equal(fast, checked)
     assert np.array_equal(values, checked)
@@ -79,7 +80,7 @@ def test_loadtxt_reads_the_motion_block_bit_for_bit(name):
     (["1 2 x", "4 5 6"], "non-numeric"),
 ])
 def test_anything_but_plain_numbers_leaves_the_fast_path(lines, why):
-    assert bvh_mod._fast_values(lines, len(lines), 3) is None, why
+    assert parse_mod.fast_values(lines, len(lines), 3) is None, why
 
 
 def test_numbers_only_pythons_float_reads_still_load(tmp_path):

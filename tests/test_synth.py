@@ -253,6 +253,8 @@ def test_phases_and_meta(name):
     meta = clip.meta
     for k in ("name", "takeoff", "landing", "flight_s", "L_flight", "v0", "g", "total_mass", "source"):
         assert k in meta
+    assert "build_s" not in meta            # provenance only: no transient timing
+    assert sum(meta["segment_masses"].values()) == pytest.approx(meta["total_mass"])
     assert meta["name"] == name and meta["source"] == "builtin" and meta["g"] == G
     assert meta["total_mass"] == 70.0 and clip.fps == 120
     assert meta["touchdown"] == meta["landing"] + 1

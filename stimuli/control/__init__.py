@@ -3,24 +3,30 @@ jumps to a target generated from physical parameters, written as clips.
 
 >>> from flipstudy.stimuli.control import jump
 >>> res = jump((0, 0, 1.3), fps=30)          # 1.3 m forward, a clip at 30 fps
->>> res.clip.meta["landing_error_m"] < 0.05
+>>> res.report.landing_error_m < 0.05       # the typed report: what was planned and measured
 True
 
 Modules: :mod:`.path` (3.5.1 path estimation), :mod:`.muscles` (3.2.3 spring
 muscles, Table 5.1 presets), :mod:`.ik` (3.4 CCD), :mod:`.balance` (3.3),
-:mod:`.windup` (3.6 sample field, choice, PD approach, energy assignment),
-:mod:`.controller` (thrust, flight, landing, scenes).
+:mod:`.samples` (3.6 the sample field), :mod:`.uneven` (uneven legs: pelvis
+roll, balance target), :mod:`.windup` (3.6 choice, PD approach),
+:mod:`.assignment` (3.6.2 energy assignment), :mod:`.course` (the courses of
+Chapter 5's scenes: start, target, boxes), :mod:`.planning` (the fixed point
+that makes the stages meet), :mod:`.stages` (the frames: stand, windup,
+thrust, flight, landing), :mod:`.checks` (ray casts, collisions, the landing
+point), :mod:`.controller` (:func:`jump`, its result and report).
 """
 import importlib
 
 #: each public name and the module it is defined in, imported on first use (the
-#: controller needs scipy; the CLI's parser reads PRESETS, SCENES, STRENGTH only)
-_WHERE = {**dict.fromkeys(("Box", "JumpResult", "Scene", "jump", "make_scene", "plan"), ".controller"),
-          "Jumper": ".model", "SCENES": ".path", "STRENGTH": ".muscles",
+#: controller needs scipy; the CLI's parser reads PRESETS, COURSES, STRENGTH only)
+_WHERE = {**dict.fromkeys(("JumpReport", "JumpResult", "jump"), ".controller"),
+          **dict.fromkeys(("COURSES", "Box", "Course", "make_course"), ".course"),
+          "plan": ".planning", "Jumper": ".model", "STRENGTH": ".muscles",
           **dict.fromkeys(("MUSCLES", "PRESETS", "parse_k", "spring_displacement", "spring_energy",
                            "spring_force"), ".muscles"),
           **dict.fromkeys(("JumpPath", "estimate_path", "kinetic_energy"), ".path"),
-          **dict.fromkeys(("assign_energy", "choose", "sample_field"), ".windup")}
+          "assign_energy": ".assignment", "choose": ".windup", "sample_field": ".samples"}
 
 
 def __getattr__(name: str):
@@ -35,6 +41,6 @@ def __dir__():
     return sorted(set(globals()) | set(_WHERE))
 
 
-__all__ = ["SCENES", "STRENGTH", "Box", "JumpResult", "Scene", "jump", "make_scene", "plan", "Jumper",
-           "MUSCLES", "PRESETS", "parse_k", "spring_displacement", "spring_energy", "spring_force",
+__all__ = ["COURSES", "STRENGTH", "Box", "Course", "JumpReport", "JumpResult", "jump", "make_course", "plan",
+           "Jumper", "MUSCLES", "PRESETS", "parse_k", "spring_displacement", "spring_energy", "spring_force",
            "JumpPath", "estimate_path", "kinetic_energy", "assign_energy", "choose", "sample_field"]

@@ -183,7 +183,7 @@ def solve_legs(jumper: Jumper, root, quats, ankles: dict, pitch: dict | None = N
                iterations: int = 100, stop: float = 1e-3, roll=None) -> Stance:
     """Place both legs of N poses: CCD from the hips (pelvis at ``root``, upright,
     or rolled by ``roll`` (N,) rad about the forward axis Z — positive lowers the
-    right hip, see :func:`.windup.pelvis_roll`) to the ankle targets
+    right hip, see :func:`.uneven.pelvis_roll`) to the ankle targets
     ``ankles[side]`` (N,3), the feet pitched by ``pitch[side]`` (N,) about the
     ball (0 = flat) and the toes flat on the ground.  ``quats`` (N,J,4) supplies
     the other joints (its root rotation is replaced when ``roll`` is given);

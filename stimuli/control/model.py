@@ -4,7 +4,7 @@ and batched forward kinematics for the controller.
 Poses are arrays with a leading batch axis: root position (N,3) and local joint
 rotations (N,J,4) as scipy quaternions (x, y, z, w).  The pelvis (root) faces
 +Z, upright — rolled about the forward axis in the crouches of uneven legs
-(:func:`.windup.pelvis_roll`) and turned in flight; the controller moves its
+(:func:`.uneven.pelvis_roll`) and turned in flight; the controller moves its
 position, the legs (hip, knee, ankle, toe) and the upper body (Spine, Spine1).
 """
 from __future__ import annotations

@@ -23,9 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-#: the scenes of Chapter 5 (:func:`flipstudy.stimuli.control.controller.make_scene`)
-SCENES = ("forward", "sideways", "box", "over")
-
 G = 9.81
 
 

@@ -86,7 +86,11 @@ def builtin(name: str, fps: float = 120, total_mass: float = 70.0,
     frame of the heel rise), ``params`` and diagnostics
     (``takeoff_pitch_rate``, ``max_pitch_rate``, ``landing_pitch_rate`` in
     rad/s, ``com_rise_m``, ``push_rise_m``, ``rotation_deg``,
-    ``flight_rotation_deg``, ``build_s``).
+    ``flight_rotation_deg``).  They are provenance: what the clip was built
+    with and to, exact by construction (the tests use them as ground truth); a
+    clip made from it by an edit keeps them as its source's, beside its own
+    ``edit``.  Nothing measured or transient is kept (time the call to know
+    how long a build takes).
 
     Raises ``ValueError`` for an unknown name or parameter (listing the valid
     ones) or a value out of range, and :class:`SynthError` (a ``ValueError``)

@@ -34,15 +34,16 @@ def _vec3(text: str):
 STRIP_DT = 0.5
 
 
-def jump_figures(clip, strip=None, composite=None, *, strip_dt: float = STRIP_DT, size=(640, 480),
+def jump_figures(res, strip=None, composite=None, *, strip_dt: float = STRIP_DT, size=(640, 480),
                  interval: float = 0.1) -> dict:
     """The animation strip (one frame in five at 10 fps, the whole clip) and the
-    composite (flight ± 0.25 s every ``interval`` s) of a jump clip, with its
-    boxes.  Returns the paths written."""
+    composite (flight ± 0.25 s every ``interval`` s) of a jump
+    (:class:`flipstudy.stimuli.control.JumpResult`), with the boxes of its
+    course.  Returns the paths written."""
     from flipstudy.render import figures as fg
-    m = clip.meta
-    kw = dict(takeoff=m.get("takeoff"), landing=max(m.get("touchdown", 1) - 1, m.get("takeoff", 0)),
-              boxes=[tuple(b) for b in m.get("boxes", [])])
+    clip = res.clip
+    kw = dict(takeoff=res.takeoff, landing=max(res.landing, res.takeoff),
+              boxes=[tuple(b) for b in clip.meta.get("boxes", [])])
     out = {}
     if strip:
         h = size[1]
@@ -58,45 +59,40 @@ def jump_figures(clip, strip=None, composite=None, *, strip_dt: float = STRIP_DT
 def cmd_jump(args) -> int:
     """``flipstudy jump``: generate, write, report."""
     from flipstudy.stimuli import save_bvh
-    from flipstudy.stimuli.control import make_scene
     from flipstudy.stimuli.control import jump as make_jump
+    from flipstudy.stimuli.control import make_course
     try:
-        scene = args.scene
+        course = args.scene
         if args.scene == "box" and args.to is not None:
-            scene = make_scene("box", box_height=args.to[1], target=args.to)
-        res = make_jump(args.to, scene=scene, t_air=args.air, t_windup=args.windup, k=args.k,
+            course = make_course("box", box_height=args.to[1], target=args.to)
+        res = make_jump(args.to, course=course, t_air=args.air, t_windup=args.windup, k=args.k,
                         strength=args.strength, g=args.gravity, mass=args.mass, height=args.height,
                         fps=args.fps)
         clip = res.clip
         save_bvh(clip, args.out)
-        figs = jump_figures(clip, args.strip, args.composite) if (args.strip or args.composite) else {}
+        figs = jump_figures(res, args.strip, args.composite) if (args.strip or args.composite) else {}
     except FlipstudyError as e:
         print(f"flipstudy jump: error: {e}", file=sys.stderr)
         return 1
-    m = clip.meta
+    r = res.report
     if args.json:
-        keys = ("scene", "start", "target", "landing_point", "landing_error_m", "t_air", "t_windup", "v0",
-                "a", "displacement", "E_k", "E_el_crouch", "E_land", "E_el_landing", "landing_energy_met",
-                "k", "k_used", "strength", "crouch_pelvis", "crouch_lean_deg", "takeoff", "touchdown",
-                "takeoff_s", "touchdown_s", "windup_foot_motion_m", "obstacle_clearance_m",
-                "windup_iterations", "energy_met_at_iteration", "build_s")
-        print(json.dumps({**{k: m.get(k) for k in keys}, "out": args.out, **figs}, indent=2))
+        print(json.dumps({**r.to_dict(), "out": args.out, **figs}, indent=2))
         return 0
     f3 = lambda v: "(" + ", ".join(f"{x:.3f}" for x in v) + ")"  # noqa: E731
-    print(f"jump ({m['scene']}): {f3(m['start'])} → {f3(m['target'])}, {clip.num_frames} frames at "
+    print(f"jump ({r.scene}): {f3(r.start)} → {f3(r.target)}, {clip.num_frames} frames at "
           f"{clip.fps:g} fps, written to {args.out}")
-    print(f"  path       v0 {f3(m['v0'])} m/s, thrust a {f3(m['a'])} m/s² over {m['t_windup']:g} s, "
-          f"{m['t_air']:g} s in the air (COM displacement {f3(m['displacement'])} m)")
-    print(f"  windup     E_k {m['E_k']:.0f} J, stored {m['E_el_crouch']:.0f} J in the crouch (pelvis "
-          f"{f3(m['crouch_pelvis'])} from the feet, upper body leaning {m['crouch_lean_deg'][0]:+.1f}° (+ forward)); "
-          f"PD: {m['windup_iterations']} iterations, energy met at {m['energy_met_at_iteration']}; "
-          f"feet moved {1000 * m['windup_foot_motion_m']:.2f} mm")
-    land = "absorbed" if m["landing_energy_met"] else "partly absorbed (the rest dissipated)"
-    print(f"  landing    touch-down frame {m['touchdown']}, {100 * m['landing_error_m']:.2f} cm from the "
-          f"target; E {m['E_land']:.0f} J {land} by a {m['E_el_landing']:.0f} J crouch")
-    if m.get("obstacle_clearance_m") is not None:
-        print(f"  clearance  {100 * m['obstacle_clearance_m']:.1f} cm over the obstacle")
-    print(f"  springs    k = {', '.join(f'{v:g}' for v in m['k'])} × strength {m['strength']:g}")
+    print(f"  path       v0 {f3(r.v0)} m/s, thrust a {f3(r.a)} m/s² over {r.t_windup:g} s, "
+          f"{r.t_air:g} s in the air (COM displacement {f3(r.displacement)} m)")
+    print(f"  windup     E_k {r.E_k:.0f} J, stored {r.E_el_crouch:.0f} J in the crouch (pelvis "
+          f"{f3(r.crouch_pelvis)} from the feet, upper body leaning {r.crouch_lean_deg[0]:+.1f}° (+ forward)); "
+          f"PD: {r.windup_iterations} iterations, energy met at {r.energy_met_at_iteration}; "
+          f"feet moved {1000 * r.windup_foot_motion_m:.2f} mm")
+    land = "absorbed" if r.landing_energy_met else "partly absorbed (the rest dissipated)"
+    print(f"  landing    touch-down frame {r.touchdown}, {100 * r.landing_error_m:.2f} cm from the "
+          f"target; E {r.E_land:.0f} J {land} by a {r.E_el_landing:.0f} J crouch")
+    if r.obstacle_clearance_m is not None:
+        print(f"  clearance  {100 * r.obstacle_clearance_m:.1f} cm over the obstacle")
+    print(f"  springs    k = {', '.join(f'{v:g}' for v in r.k)} × strength {r.strength:g}")
     for k, v in figs.items():
         print(f"  {k:<10s} {v}")
     return 0
@@ -104,7 +100,7 @@ def cmd_jump(args) -> int:
 
 def add_commands(subparsers) -> None:
     """Add the ``jump`` subcommand to an argparse subparsers object (sets ``func``)."""
-    from flipstudy.stimuli.control import PRESETS, SCENES, STRENGTH
+    from flipstudy.stimuli.control import COURSES, PRESETS, STRENGTH
     p = subparsers.add_parser(
         "jump", help="a standing jump to a target from physical parameters (Ooi 2016)",
         description="Generate a standing jump with the energy-based controller of Ooi (2016): "
@@ -124,7 +120,7 @@ def add_commands(subparsers) -> None:
     p.add_argument("--strength", type=float, default=STRENGTH,
                    help=f"factor on k (default {STRENGTH:g}; 1 = the thesis's literal constants, too "
                         f"weak with the corrected joint angle)")
-    p.add_argument("--scene", choices=SCENES, default="forward", help="scene (default forward)")
+    p.add_argument("--scene", choices=COURSES, default="forward", help="scene (default forward)")
     add_mass(p, what="body mass")
     p.add_argument("--height", type=float, default=1.75, help="standing height in m (default 1.75)")
     p.add_argument("--gravity", type=float, default=9.81, help="m/s² (default 9.81)")
