@@ -36,7 +36,7 @@ def timed(fn, n):
 def naive(design) -> int:
     """One stimulus at a time, the base clip analysed again for each one."""
     from flipstudy.stimuli import analyse
-    from flipstudy.stimuli.errors import inject_angular_momentum, inject_takeoff_angle, measure
+    from flipstudy.stimuli.injection import inject_angular_momentum, inject_takeoff_angle, measure
     from flipstudy.stimuli.stimset import load_base_clip
     n = 0
     for spec in design.clips:

@@ -30,7 +30,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-from .errors import COM_POLICIES, KINDS, PROFILES
+from .injection import COM_POLICIES, KINDS, PROFILES
 
 
 class DesignError(FlipstudyError, ValueError):
