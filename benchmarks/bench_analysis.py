@@ -147,8 +147,6 @@ def main(argv=None) -> int:
         checked = load_responses(csv)
         t_gee, _ = best_of(lambda: gee_levels(checked), n=1)
         print(f"{'  outside the core: GEE, 5 groups':58s} {t_gee:8.3f} s")
-        t_mle, _ = best_of(lambda: fit_psychometric(checked, "mle"), n=1)
-        print(f"{'  outside the core: psychometric fits, mle (5 groups)':58s} {t_mle:8.3f} s")
         if not args.quick:
             t_ps, _ = best_of(lambda: fit_psychometric(checked, "psignifit"), n=1)
             print(f"{'  outside the core: psychometric fits, psignifit (5 groups)':58s} {t_ps:8.3f} s")
