@@ -36,6 +36,8 @@ from scipy.stats import norm
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from _common import wall_times  # noqa: E402
+
 from flipstudy.analysis import load_responses, summarize  # noqa: E402
 from flipstudy.analysis.core import bootstrap_counts, expanded_level  # noqa: E402
 from flipstudy.analysis.simulate import paper_panel  # noqa: E402
@@ -45,11 +47,7 @@ TARGET_S = 2.0
 
 
 def best_of(fn, n=3):
-    times, out = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
+    times, out = wall_times(fn, n)
     return min(times), out
 
 
