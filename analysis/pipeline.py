@@ -94,7 +94,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     a mapping label → PNG path or a list of up to four paths (ghost original,
     ghost strongest error, trail original, trail strongest error).
     ``seed``: every random draw (bootstrap, posterior samples).
-    ``psychometric``: ``"psignifit"``, ``"mle"`` or ``"none"``.
+    ``psychometric``: ``"psignifit"`` (a psychometric function per group) or ``"none"``.
     ``include_simulated`` / ``include_incomplete``: keep simulated participants
     (column ``simulated``) / sessions marked ``complete`` = false, which are
     left out by default (:func:`flipstudy.analysis.io.select_participants`); which
@@ -165,15 +165,13 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     thresholds = pd.DataFrame([f.row() for f in fits]) if fits else pd.DataFrame(
         columns=["group", "method", "threshold", "threshold_ci_low", "threshold_ci_high", "reached"])
     if fits:
-        used = sorted(set(f.method for f in fits))
         notes.append(
             "Psychometric functions: P(incorrect) = γ + (1 − γ − λ)·Φ((|level| − m)/s) per group "
-            f"({', '.join(used)}; see analysis.stats). Detection threshold x*: the error at which "
+            "(psignifit; see analysis.stats). Detection threshold x*: the error at which "
             "P(incorrect) is halfway between the base rate γ and 1, P(x*) = (1 + γ)/2; "
             "'not reached' when x* lies beyond the largest tested level.")
-        if "psignifit" in used:
-            notes.append("psignifit 4: Schütt, Harmeling, Macke & Wichmann (2016), Vision Research 122, "
-                         "105–123; intervals of x* are 95 % credible intervals from its posterior.")
+        notes.append("psignifit 4: Schütt, Harmeling, Macke & Wichmann (2016), Vision Research 122, "
+                     "105–123; intervals of x* are 95 % credible intervals from its posterior.")
         for f in fits:
             if not f.reached:
                 why = next((p for p in f.note.split("; ") if p.startswith("not reached")), "not reached")
@@ -219,9 +217,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
             for p in save(_labelled(fig, label), out / name):
                 files[p.name] = p
         if fits:
-            method_note = ("psignifit 4 (Bayesian, MAP)" if any(f.method == "psignifit" for f in fits)
-                           else "maximum likelihood")
-            for p in save(_labelled(psychometric_figure(fits, table, method_note), label),
+            for p in save(_labelled(psychometric_figure(fits, table, "psignifit 4 (Bayesian, MAP)"), label),
                           out / "psychometric"):
                 files[p.name] = p
         imgs = _normalise_images(images)

@@ -24,20 +24,23 @@ Psychometric function
     when ``x*`` lies beyond the largest tested level or the fitted curve never
     climbs that high (``F* ≥ 1``).
 
-    ``method="psignifit"`` (default): Bayesian fit with psignifit 4 (Schütt,
+    The one fit is Bayesian, with psignifit 4 (Schütt,
     Harmeling, Macke & Wichmann 2016, *Painfree and accurate Bayesian estimation
     of psychometric functions for (potentially) overdispersed data*, Vision
     Research 122, 105–123): yes/no design, cumulative normal, overdispersion
     ``η`` free, a uniform prior on ``γ`` over [0, 0.9] (the base rate of an
     "is this motion correct?" task is not a small guess rate), psignifit's
     default priors elsewhere.  Point estimate: MAP; interval: 95 % credible
-    interval of ``x*`` from posterior samples.
+    interval of ``x*`` from posterior samples.  psignifit is a dependency of
+    flipstudy, validated by its authors, and its overdispersion term and
+    credible intervals suit pooled answers of few participants; an own
+    maximum-likelihood fit beside it was removed (one fit path).
 
-    ``method="mle"``: maximum likelihood (binomial, same function) with
-    ``λ ∈ [0, 0.06]`` (Wichmann & Hill 2001), ``γ ∈ [0, 0.9]``, found on a
-    parameter grid and refined by Levenberg–Marquardt (Fisher scoring);
-    interval: parametric bootstrap (``n_boot`` = 200 binomial data sets drawn
-    from the fitted curve, all refitted at once), percentile 95 %.
+>>> x, n = np.array([0, 17, 25, 37, 50.0]), np.full(5, 76.0)
+>>> k = np.round(n * psychometric_curve(x, 32, 15, 0.25, 0.0))     # a curve's counts
+>>> f = fit_psignifit("smooth-increase", x, k, n, seed=0)
+>>> f.method, f.reached, bool(f.ci_low <= detection_threshold(32, 15, 0.25, 0.0) <= f.ci_high)
+('psignifit', True, True)
 """
 from __future__ import annotations
 
@@ -169,11 +172,11 @@ class PsychometricFit:
     x: np.ndarray                    # tested |levels|
     k: np.ndarray                    # "incorrect" answers per |level|
     n: np.ndarray                    # trials per |level|
-    params: dict                     # threshold (m), width, gamma, lambda (and eta for psignifit)
+    params: dict                     # threshold (m), width, gamma, lambda, eta
     threshold: float                 # x*, NaN when not reached
     ci_low: float
     ci_high: float                   # NaN when the upper limit is open
-    p_reached: float                 # share of posterior / bootstrap samples with x* <= max level
+    p_reached: float                 # share of posterior samples with x* <= max level
     threshold_extrapolated: float    # x* of the point estimate, even beyond the range (inf: never)
     note: str = ""
     samples: np.ndarray = field(default=None, repr=False)
@@ -241,6 +244,9 @@ def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_not
                            x_hat, "; ".join(notes), samples=xs_samples)
 
 
+#: the values of ``method`` (of :func:`fit_psychometric`, ``analyze`` and ``--psychometric``)
+METHODS = ("psignifit", "none")
+
 #: psignifit's posterior grid, coarser than its default (40/40/20/20/20) to keep a fit near 1 s;
 #: the MAP and credible intervals move by well under a grid step on the paper's design
 PSIGNIFIT_GRID = {"threshold": 30, "width": 25, "lambda": 12, "gamma": 15, "eta": 10}
@@ -272,102 +278,17 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000) -> Psychom
     return _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note)
 
 
-def _mle_grid(x):
-    xmax = float(x.max())
-    span = max(xmax - float(x.min()), 1e-9)
-    dmin = float(np.diff(x).min()) if len(x) > 1 else span
-    thr = np.linspace(x.min() - 0.5 * span, xmax + 0.5 * span, 37)
-    width = np.geomspace(max(dmin / 2, span / 100), 4.5 * span, 22)
-    gamma = np.linspace(0.0, 0.9, 31)
-    lam = np.array([0.0, 0.03, 0.06])
-    T, W, G, L = np.meshgrid(thr, width, gamma, lam, indexing="ij")
-    return np.column_stack([T.ravel(), W.ravel(), G.ravel(), L.ravel()]), (thr, width)
-
-
-def _grid_logs(grid, x):
-    P = psychometric_curve(x[None, :], grid[:, :1], grid[:, 1:2], grid[:, 2:3], grid[:, 3:4])
-    P = np.clip(P, 1e-9, 1 - 1e-9)
-    return np.log(P).T, np.log1p(-P).T                          # (L, G) each
-
-
-def _loglik_grid(logs, K, N):
-    logP, log1mP = logs
-    return K @ logP + (N - K) @ log1mP                           # (B, G)
-
-
-def _loglik_batch(theta, x, K, N):
-    P = np.clip(psychometric_curve(x[None, :], theta[:, :1], theta[:, 1:2], theta[:, 2:3], theta[:, 3:4]),
-                1e-12, 1 - 1e-12)
-    return (K * np.log(P) + (N - K) * np.log1p(-P)).sum(1)
-
-
-def _refine(theta, x, K, N, lo, hi, iters: int = 60):
-    """Batched Levenberg–Marquardt (Fisher scoring) on the binomial likelihood,
-    one independent fit per row of ``theta`` (B, 4), kept inside the box [lo, hi]."""
-    theta = theta.copy()
-    B = len(theta)
-    mu = np.full(B, 1e-3)
-    ll = _loglik_batch(theta, x, K, N)
-    for _ in range(iters):
-        m, w, g, lam = (theta[:, i:i + 1] for i in range(4))
-        s = w / _WSCALE
-        u = (x[None, :] - m) / s
-        phi, Phi = np.exp(-0.5 * u * u) / np.sqrt(2 * np.pi), ndtr(u)
-        A = 1 - g - lam
-        P = np.clip(g + A * Phi, 1e-12, 1 - 1e-12)
-        J = np.stack([-A * phi / s, -A * phi * u / w, 1 - Phi, -Phi], axis=2)        # (B, L, 4)
-        wgt = N / (P * (1 - P))
-        score = np.einsum("blp,bl->bp", J, (K - N * P) / (P * (1 - P)))
-        info = np.einsum("blp,bl,blq->bpq", J, wgt, J)
-        d = np.einsum("bpp->bp", info)
-        lhs = info + (mu[:, None] * d + 1e-12 * (1 + d.max(1, keepdims=True)))[:, :, None] * np.eye(4)
-        step = np.linalg.solve(lhs, score[:, :, None])[:, :, 0]
-        cand = np.clip(theta + step, lo, hi)
-        ll_new = _loglik_batch(cand, x, K, N)
-        better = ll_new > ll + 1e-12
-        theta[better], ll[better] = cand[better], ll_new[better]
-        mu = np.where(better, mu / 3, mu * 5)
-        if np.all(mu > 1e8):
-            break
-    return theta
-
-
-def fit_mle(group, x, k, n, *, ci=0.95, seed=0, n_boot=200) -> PsychometricFit:
-    """Maximum-likelihood fit with a parametric bootstrap (see module doc).
-
-    The likelihood is maximised on a parameter grid, then refined by a batched
-    Levenberg–Marquardt iteration; the ``n_boot`` binomial resamples from the
-    fitted curve are refitted the same way, all at once."""
-    grid, (thr, width) = _mle_grid(x)
-    lo = np.array([thr[0], width[0], 0.0, 0.0])
-    hi = np.array([thr[-1], width[-1], 0.9, 0.06])
-    logs = _grid_logs(grid, x)
-    start = grid[np.argmax(_loglik_grid(logs, k[None, :], n[None, :])[0])]
-    th = _refine(start[None, :], x, k[None, :], n[None, :], lo, hi)[0]
-    params = {"threshold": float(th[0]), "width": float(th[1]), "gamma": float(th[2]),
-              "lambda": float(th[3])}
-    rng = np.random.default_rng(seed)
-    p_hat = psychometric_curve(x, *th)
-    Kb = rng.binomial(n.astype(np.int64)[None, :], p_hat[None, :], size=(n_boot, len(x))).astype(float)
-    Nb = np.broadcast_to(n, Kb.shape)
-    best = np.empty((n_boot, 4))
-    for i in range(0, n_boot, 50):                      # blocks bound the (B, G) matrix
-        best[i:i + 50] = grid[np.argmax(_loglik_grid(logs, Kb[i:i + 50], Nb[i:i + 50]), axis=1)]
-    best = _refine(best, x, Kb, Nb, lo, hi)
-    xs = detection_threshold(best[:, 0], best[:, 1], best[:, 2], best[:, 3])
-    return _summarise_samples(group, "mle", x, k, n, params, xs, ci,
-                              f"95 % parametric-bootstrap interval ({n_boot} resamples)")
-
-
-def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95, seed=0,
-                     n_boot: int = 200) -> tuple[list[PsychometricFit], list[str]]:
+def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
+                     seed=0) -> tuple[list[PsychometricFit], list[str]]:
     """One :class:`PsychometricFit` per group (a group with fewer than two
-    magnitudes is skipped with a note), and notes.  ``method``: ``"psignifit"``
-    (falls back to ``"mle"`` with a note for a group where psignifit fails),
-    ``"mle"``, or ``"none"``."""
+    magnitudes, or one psignifit cannot fit, is skipped with a note), and notes.
+    ``method``: ``"psignifit"`` or ``"none"`` (no fits)."""
     method = method.lower()
-    if method not in ("psignifit", "mle", "none"):
-        raise FlipstudyValueError(f"unknown psychometric method {method!r}: expected psignifit, mle or none")
+    if method not in METHODS:
+        hint = " (the own maximum-likelihood fit was removed: psignifit is the one fit)" \
+            if method == "mle" else ""
+        raise FlipstudyValueError(f"unknown psychometric method {method!r}: expected psignifit or "
+                                  f"none{hint}")
     fits, notes = [], []
     if method == "none":
         return fits, notes
@@ -376,11 +297,8 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95, se
         if len(x) < 2:
             notes.append(f"{g}: a single error magnitude, no psychometric function fitted")
             continue
-        if method == "psignifit":
-            try:
-                fits.append(fit_psignifit(g, x, k, n, ci=ci, seed=seed))
-                continue
-            except Exception as e:  # noqa: BLE001
-                notes.append(f"{g}: psignifit failed ({type(e).__name__}: {e}); maximum-likelihood fit used")
-        fits.append(fit_mle(g, x, k, n, ci=ci, seed=seed, n_boot=n_boot))
+        try:
+            fits.append(fit_psignifit(g, x, k, n, ci=ci, seed=seed))
+        except Exception as e:  # noqa: BLE001 — a group psignifit cannot fit is a note, never a crash
+            notes.append(f"{g}: psignifit failed ({type(e).__name__}: {e}); no psychometric function fitted")
     return fits, notes

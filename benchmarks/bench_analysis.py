@@ -36,6 +36,8 @@ from scipy.stats import norm
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from _common import wall_times  # noqa: E402
+
 from flipstudy.analysis import load_responses, summarize  # noqa: E402
 from flipstudy.analysis.core import bootstrap_counts, expanded_level  # noqa: E402
 from flipstudy.analysis.simulate import paper_panel  # noqa: E402
@@ -45,11 +47,7 @@ TARGET_S = 2.0
 
 
 def best_of(fn, n=3):
-    times, out = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
+    times, out = wall_times(fn, n)
     return min(times), out
 
 
@@ -147,8 +145,6 @@ def main(argv=None) -> int:
         checked = load_responses(csv)
         t_gee, _ = best_of(lambda: gee_levels(checked), n=1)
         print(f"{'  outside the core: GEE, 5 groups':58s} {t_gee:8.3f} s")
-        t_mle, _ = best_of(lambda: fit_psychometric(checked, "mle"), n=1)
-        print(f"{'  outside the core: psychometric fits, mle (5 groups)':58s} {t_mle:8.3f} s")
         if not args.quick:
             t_ps, _ = best_of(lambda: fit_psychometric(checked, "psignifit"), n=1)
             print(f"{'  outside the core: psychometric fits, psignifit (5 groups)':58s} {t_ps:8.3f} s")

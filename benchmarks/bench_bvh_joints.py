@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 import numpy as np
@@ -27,17 +26,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 
+from _common import best_s  # noqa: E402
+
 from _bvh_gen import many_joints_bvh  # noqa: E402
 from flipstudy.stimuli import load_bvh  # noqa: E402
-
-
-def best(f, repeat):
-    t = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        f()
-        t.append(time.perf_counter() - t0)
-    return min(t)
 
 
 def main(argv=None) -> int:
@@ -56,8 +48,8 @@ def main(argv=None) -> int:
             data = [ln for ln in lines[m + 3:] if ln]
             clip = load_bvh(p)
             assert clip.skeleton.num_joints == J
-            t_load = best(lambda: load_bvh(p), args.repeat)
-            t_num = best(lambda: np.loadtxt(data, ndmin=2), args.repeat)
+            t_load = best_s(lambda: load_bvh(p), args.repeat)
+            t_num = best_s(lambda: np.loadtxt(data, ndmin=2), args.repeat)
             print(f"{J:>8} {args.frames:>6} {t_load:>11.3f} {t_num:>10.3f} {t_load / t_num:>6.1f}")
     return 0
 

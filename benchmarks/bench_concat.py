@@ -20,23 +20,20 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from _common import wall_times  # noqa: E402
 SHARED = ROOT.parent / "shared" / "mocap"
 TARGET_RATIO, TARGET_S = 100.0, 0.1
 
 
 def best(fn, n):
-    out, res = [], None
-    for _ in range(n):
-        t = time.perf_counter()
-        res = fn()
-        out.append(time.perf_counter() - t)
+    out, res = wall_times(fn, n)
     return min(out), statistics.median(out), res
 
 

@@ -11,22 +11,14 @@ from __future__ import annotations
 
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from _common import best_s  # noqa: E402
 SHARED = ROOT.parent / "shared" / "mocap"
 PAPER_S = 3.0
-
-
-def best_of(fn, n=5):
-    times = []
-    for _ in range(n):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return min(times)
 
 
 def main() -> int:
@@ -48,7 +40,7 @@ def main() -> int:
                             ("iClone 100 joints, 1376 frames", SHARED / "01_01_iclone-retarget.bvh")):
             if not path.exists():
                 continue
-            t = best_of(lambda: analyse(load_bvh(path)).to_dict())
+            t = best_s(lambda: analyse(load_bvh(path)).to_dict(), 5)
             a = analyse(load_bvh(path))
             rows.append((label, t, len(a.flights)))
     print(f"{'clip':34s} {'inspect (s)':>12s} {'paper (s)':>10s} {'speed-up':>9s} {'flights':>8s}")

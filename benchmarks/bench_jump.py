@@ -10,7 +10,6 @@ Run: python benchmarks/bench_jump.py        (target: under 0.5 s per jump after 
 from __future__ import annotations
 
 import os
-import statistics
 import sys
 import tempfile
 import time
@@ -18,18 +17,10 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from _common import median_s  # noqa: E402
 TARGET_S = 0.5
 NAIVE_SAMPLES = 300
-
-
-def median_s(fn, n=7):
-    fn()
-    out = []
-    for _ in range(n):
-        t = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t)
-    return statistics.median(out)
 
 
 def main() -> int:
@@ -42,7 +33,7 @@ def main() -> int:
         W._CACHE.clear()
         return W.sample_field(Jumper())
 
-    t_field = median_s(fresh_field, 3)
+    t_field = median_s(fresh_field, 3, warmup=True)
     f = W.sample_field(Jumper())
     t0 = time.perf_counter()
     naive = W.sample_field_naive(Jumper(), limit=NAIVE_SAMPLES)
@@ -68,7 +59,7 @@ def main() -> int:
             res = jump(kw.get("target"), **{k: v for k, v in kw.items() if k != "target"})
             save_bvh(res.clip, tmp / "j.bvh")
             return res
-        t = median_s(run, 5)
+        t = median_s(run, 5, warmup=True)
         worst = max(worst, t)
         print(f"{name:>16s} {run().clip.num_frames:7d} {t:7.3f} {TARGET_S / t:11.2f}x")
     verdict = "met" if worst < TARGET_S else "missed"

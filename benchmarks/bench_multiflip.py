@@ -15,24 +15,19 @@ Run: python benchmarks/bench_multiflip.py        (paper target: under 1 ms for t
 """
 from __future__ import annotations
 
-import statistics
 import sys
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from _common import median_s  # noqa: E402
 PAPER_MS = {2: 3.69, 3: 4.60, 4: 5.09}
 
 
 def median_ms(fn, n=15):
-    fn()
-    out = []
-    for _ in range(n):
-        t = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t)
-    return 1000 * statistics.median(out)
+    return 1000 * median_s(fn, n, warmup=True)
 
 
 def naive_distances(feat):

@@ -12,31 +12,22 @@ when ../shared/ is present.  Output goes to a temporary folder.
 """
 from __future__ import annotations
 
-import statistics
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from _common import median_s  # noqa: E402
 MOCAP = ROOT.parent / "shared" / "mocap"
 PAPER_S = 3.0
-
-
-def timed(fn, n):
-    out = []
-    for _ in range(n):
-        t = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t)
-    return out
 
 
 def naive(design) -> int:
     """One stimulus at a time, the base clip analysed again for each one."""
     from flipstudy.stimuli import analyse
-    from flipstudy.stimuli.errors import inject_angular_momentum, inject_takeoff_angle, measure
+    from flipstudy.stimuli.injection import inject_angular_momentum, inject_takeoff_angle, measure
     from flipstudy.stimuli.stimset import load_base_clip
     n = 0
     for spec in design.clips:
@@ -73,9 +64,8 @@ def main() -> int:
             def ours():
                 rows[:] = build_stimuli(design, Path(tmp) / "study", progress=False, force=True)
 
-            ours()                                              # warm-up (imports, caches)
-            t_ours = statistics.median(timed(ours, 3))
-        t_naive = statistics.median(timed(lambda: naive(design), 1))
+            t_ours = median_s(ours, 3, warmup=True)
+        t_naive = median_s(lambda: naive(design), 1)
         print(f"{label:28s} {len(rows):7d} {t_ours:8.2f} {t_naive:8.2f} {t_naive / t_ours:9.1f}x "
               f"{PAPER_S:7.1f} {PAPER_S / t_ours:9.1f}x  {'met' if t_ours < PAPER_S else 'MISSED'}")
     print("ours: build_stimuli (analyse each base clip once, inject, measure, check, write atomically)")

@@ -622,7 +622,7 @@ def overlay_image(clip: Clip, other: Clip, path=None, *, interval: float = 0.2, 
     Example
     -------
     >>> from flipstudy import analyse, builtin
-    >>> from flipstudy.stimuli.errors import inject_angular_momentum
+    >>> from flipstudy.stimuli.injection import inject_angular_momentum
     >>> original = builtin("backflip")
     >>> edited = inject_angular_momentum(analyse(original), 0.5, "smooth").clip
     >>> img = overlay_image(original, edited, None, size=(160, 120))

@@ -2,7 +2,10 @@
 
 A design names the base clips, the error groups (kind, profile, sign, levels),
 how often each motion is shown, the reference (practice) clips, the frame rate
-and the seed.  ``PAPER_DESIGN`` is the study of Majkowska & Faloutsos 2007,
+and the seed (the ``[study]`` table and the ones after it: what the stimuli are),
+and how the sessions present them (the ``[session]`` table, read into
+:class:`SessionSettings`: ``replay``, ``break_every``; these change no
+stimulus).  ``PAPER_DESIGN`` is the study of Majkowska & Faloutsos 2007,
 Section 7: forward and backward somersaults; smooth and abrupt angular-momentum
 increases and decreases at 0/17/25/37/50 %; take-off angle increases at
 0/10/20/30/40 %; each motion shown twice.  As in the paper (its Table 2 gives the
@@ -14,12 +17,24 @@ Designs are strict: an unknown key (``repetitons``) is refused with a
 did-you-mean, every number is bounded, names, clips, references and levels are
 not repeated; every invalid field raises :class:`DesignError` naming the file,
 section and key and the value as written (levels in percent).
+
+Designs written before the ``[session]`` table held ``replay`` and
+``break_every`` in ``[study]``; they are still read, the same way, with a
+``FutureWarning`` that names the file and asks to move them to ``[session]``
+(both places at once is refused).
+
+>>> d = parse_design(PAPER_DESIGN)
+>>> d.session
+SessionSettings(replay=False, break_every=40)
+>>> d.repetitions, len(d.stimulus_names())
+(2, 46)
 """
 
 from __future__ import annotations
 
 import difflib
 import math
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,7 +45,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
-from .errors import COM_POLICIES, KINDS, PROFILES
+from .injection import COM_POLICIES, KINDS, PROFILES
 
 
 class DesignError(FlipstudyError, ValueError):
@@ -58,6 +73,16 @@ class Group:
     original: str = "own"       # "shared": its level 0 is the clip's shared original
 
 
+@dataclass(frozen=True)
+class SessionSettings:
+    """How the sessions present a design's stimuli: the design file's ``[session]``
+    table.  None of these changes a stimulus; the session code in
+    :mod:`flipstudy.study` reads them from ``design.session``."""
+
+    replay: bool = False              # may a participant replay a motion before answering
+    break_every: int = 40             # trials between breaks
+
+
 @dataclass
 class Design:
     name: str
@@ -70,11 +95,10 @@ class Design:
     reference: list[str] = field(default_factory=list)
     com_policy: str = "angle"
     tolerance_pct: float = 1.0        # refuse stimuli whose measured error misses by more
-    replay: bool = False              # may a participant replay a motion (sessions)
-    break_every: int = 40             # trials between breaks (sessions)
     original: str = "shared"          # "shared": AM groups share one original per clip
     fps_given: bool = True            # [study] fps written: BVH clips are resampled to it
     path: Path | None = None
+    session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
 
     def clip(self, name: str) -> ClipSpec:
         for c in self.clips:
@@ -116,11 +140,14 @@ repetitions = 2           # each motion shown twice (1 to 20)
 total_mass = 70.0         # kg, for the body model
 com_policy = "angle"      # AM errors keep the take-off angle ("landing": keep the landing point)
 tolerance_pct = 1.0       # refuse a stimulus whose measured error misses the nominal by more
-replay = false            # participants may not replay a motion
-break_every = 40          # a break every 40 trials
 original = "shared"       # the angular-momentum groups share one original per clip, shown
                           # `repetitions` times; the take-off group has its own ("per-group":
                           # every group its own level 0, as a [[groups]] original = "own" does)
+
+# How the sessions show the stimuli (changes no stimulus).
+[session]
+replay = false            # participants may not replay a motion
+break_every = 40          # a break every 40 trials
 
 # Base clips: a built-in name (backflip, frontflip, jump) or a BVH path relative to
 # this file, with optional scale (metres per file unit) and fps (override the header),
@@ -159,11 +186,12 @@ levels = [0, 10, 20, 30, 40]
 
 #: the keys each section may hold (anything else is refused with a did-you-mean)
 STUDY_KEYS = ("name", "seed", "fps", "repetitions", "total_mass", "com_policy", "tolerance_pct",
-              "replay", "break_every", "original")
+              "original")
+SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
 CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
 GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original")
 REFERENCE_KEYS = ("clips",)
-SECTIONS = ("study", "clips", "groups", "reference")
+SECTIONS = ("study", "session", "clips", "groups", "reference")
 ORIGINAL_MODES = ("shared", "per-group")   # [study] original
 GROUP_ORIGINAL = ("shared", "own")         # [[groups]] original
 #: the group name of the shared original in the manifest and the responses
@@ -264,13 +292,13 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         if k not in SECTIONS:
             close = difflib.get_close_matches(str(k), SECTIONS, n=1, cutoff=0.6)
             hint = f"; did you mean [{close[0]}]?" if close else ""
-            raise DesignError(f"{src}: unknown section [{k}]{hint} (expected study, clips, groups, "
-                              f"reference)")
+            raise DesignError(f"{src}: unknown section [{k}]{hint} (expected "
+                              f"{', '.join(SECTIONS)})")
     st = d.get("study")
     if not isinstance(st, dict):
         raise DesignError(f"{src}: missing [study] section")
     w = f"{src}: [study]"
-    _check_keys(st, STUDY_KEYS, w)
+    _check_keys({k: v for k, v in st.items() if k not in SESSION_KEYS}, STUDY_KEYS, w)
     design = Design(
         name=_get(st, "name", str, w, check=lambda v: None if 0 < len(v) <= 200 else
                   "expected 1 to 200 characters"),
@@ -285,12 +313,11 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         tolerance_pct=_get(st, "tolerance_pct", float, w, 1.0,
                            lambda v: None if 0 < v <= TOLERANCE_MAX else
                            f"expected more than 0 and at most {TOLERANCE_MAX:g} (percent)"),
-        replay=_get(st, "replay", bool, w, False),
-        break_every=_get(st, "break_every", int, w, 40, _between(1, BREAK_EVERY_MAX, " trials")),
         original=_get(st, "original", str, w, "shared",
                       lambda v: None if v in ORIGINAL_MODES else f"must be one of {list(ORIGINAL_MODES)}"),
         fps_given="fps" in st,
         path=Path(path) if str(path) != "<design>" else None,
+        session=_parse_session(d, st, src),
     )
     clips = d.get("clips")
     if not isinstance(clips, list) or not clips:
@@ -399,6 +426,33 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
                           f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "
                           f"(fewer repetitions, clips, groups or levels)")
     return design
+
+
+def _parse_session(d: dict, st: dict, src: str) -> SessionSettings:
+    """The ``[session]`` table; its keys written in ``[study]`` (designs before the
+    table) are read the same way, with a ``FutureWarning``."""
+    se = d.get("session", {})
+    if not isinstance(se, dict):
+        raise DesignError(f"{src}: [session]: expected a table ({', '.join(SESSION_KEYS)})")
+    _check_keys(se, SESSION_KEYS, f"{src}: [session]")
+    old = [k for k in SESSION_KEYS if k in st]
+    for k in old:
+        if k in se:
+            raise DesignError(f"{src}: [study].{k} and [session].{k} are both given; {k} is a "
+                              f"session setting: keep the one in [session]")
+
+    def get(key, typ, default, check=None):
+        table, where = (st, f"{src}: [study]") if key in st else (se, f"{src}: [session]")
+        return _get(table, key, typ, where, default, check)
+
+    settings = SessionSettings(replay=get("replay", bool, False),
+                               break_every=get("break_every", int, 40,
+                                               _between(1, BREAK_EVERY_MAX, " trials")))
+    if old:
+        warnings.warn(f"{src}: [study] {', '.join(old)}: session settings go in a [session] table "
+                      f"now; read as [session] {', '.join(old)} (move them there)",
+                      FutureWarning, stacklevel=3)
+    return settings
 
 
 def _name_ok(v: str):

@@ -49,7 +49,7 @@ import numpy as np
 from ._progress import Progress
 from .analyse import analyse
 from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
-from .errors import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
+from .injection import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
 from .exceptions import FlipstudyError
 from .motion.bvh import bvh_text, load_bvh
 from .motion.clip import Clip

@@ -48,9 +48,9 @@ def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_
     """A demo design.  ``original``: written as ``[study] original`` — the demo keeps
     every group's own level 0 ("per-group") so its trial counts stay simple;
     "shared" (or None: the default) gives the paper's shared original."""
-    lines = ["[study]", f'name = "{name}"', f"seed = {seed}", f"repetitions = {repetitions}",
-             f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}"]
+    lines = ["[study]", f'name = "{name}"', f"seed = {seed}", f"repetitions = {repetitions}"]
     lines += ([f'original = "{original}"'] if original else []) + [""]
+    lines += ["[session]", f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}", ""]
     for c in clips:
         lines += ["[[clips]]", f'name = "{c}"', f'source = "{c}"', ""]
     if reference:

@@ -66,7 +66,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
     >>> r = reproduce("paper/")                  # doctest: +SKIP
     >>> sorted(r["files"])[:3]                   # doctest: +SKIP
-    ['analysis', 'design', 'figure_sheet']
+    ['analysis', 'design', 'figure_dprime']
     """
     from flipstudy.analysis.pipeline import analyze
     from flipstudy.analysis.tables import to_markdown

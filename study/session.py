@@ -208,7 +208,7 @@ def submit_answer(session: Session, payload: dict, *, timestamp: str | None = No
     if not isinstance(payload, dict):
         raise RequestError(400, "an answer must be a JSON object")
     ans = parse_answer(payload, participant=session.participant, session=session.session,
-                       n_trials=session.n_trials, replay_allowed=bool(session.study.design.replay))
+                       n_trials=session.n_trials, replay_allowed=bool(session.study.design.session.replay))
     if (ans["input"] == "simulated") != (session.source == "simulated"):
         raise RequestError(400, f"input: {ans['input']!r} does not fit a {session.source} session")
     with session.db() as conn:

@@ -53,14 +53,14 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
     """The screens of ``session`` (:class:`flipstudy.study.session.Session`) and where to
     start, given its ``state`` (:meth:`Session.state`)."""
     state = state or session.state()
-    design = session.study.design
+    settings = session.study.design.session          # the design's [session] table
     keys = dict(KEYS)
-    replay = bool(design.replay)
+    replay = bool(settings.replay)
     paragraphs = INSTRUCTIONS + [
         _keys_sentence(keys)
         + (" You may replay a motion before answering." if replay else
            " Each motion plays once, then you answer."),
-    ] + (["There will be short breaks along the way."] if session.n_trials > design.break_every else [])
+    ] + (["There will be short breaks along the way."] if session.n_trials > settings.break_every else [])
     screens = [{"type": "instructions", "id": "instructions", "title": "Judging motions",
                 "paragraphs": paragraphs, "button": "Continue"}]
     screens.append({"type": "demographics", "id": "demographics", "title": "About you",
@@ -80,7 +80,7 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
             "button": "Start the test"})
     first_trial = len(screens)
     n = session.n_trials
-    every = max(int(design.break_every), 1)
+    every = max(int(settings.break_every), 1)
     for t in session.trials:
         screens.append({"type": "trial", "id": f"trial-{t.trial}", "trial": t.trial, "of": n,
                         "stimulus": t.stimulus, "video": video_url.format(name=t.stimulus),

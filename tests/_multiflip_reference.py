@@ -1,4 +1,10 @@
-"""Multi-flip editing (Majkowska & Faloutsos 2007, Section 5 and Appendix B).
+"""A test's reference copy, kept on purpose: the plain multi-flip implementation
+(one call does everything, nothing prepared or cached) that
+``tests/test_fast_paths.py`` compares :mod:`flipstudy.stimuli.edit.multiflip`
+with, result for result.  It repeats much of that module by design (the
+``duplicates`` pairs between the two are this copy); the package never imports it.
+
+Multi-flip editing (Majkowska & Faloutsos 2007, Section 5 and Appendix B).
 
 A single flip becomes a double, triple or quadruple one in four steps:
 

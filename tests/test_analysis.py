@@ -11,11 +11,12 @@ import pandas as pd
 import pytest
 from scipy.stats import norm
 
+from flipstudy import FlipstudyError
 from flipstudy import analysis
 from flipstudy.analysis import analyze, corrected_rate, criterion, dprime, load_responses, summarize
 from flipstudy.study.cli.analyze import add_commands
 from flipstudy.analysis.simulate import PAPER_TABLE2, paper_panel, sdt_observers
-from flipstudy.analysis.stats import detection_threshold, fit_mle, fit_psychometric, gee_levels, psychometric_curve
+from flipstudy.analysis.stats import detection_threshold, fit_psychometric, gee_levels, psychometric_curve
 from flipstudy.analysis.tables import fmt_cell, fmt_dprime, paper_layout, to_latex, to_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -232,17 +233,6 @@ def _curve_counts(m, w, gam, lam, x, n):
     return np.round(p * n)
 
 
-def test_mle_threshold_recovered_and_flat_curve_not_reached():
-    x = np.array([0, 10, 20, 30, 40, 50.0])
-    n = np.full(6, 400.0)
-    truth = detection_threshold(30, 20, 0.2, 0.0)
-    f = fit_mle("steep", x, _curve_counts(30, 20, 0.2, 0.0, x, n), n, seed=1)
-    assert f.reached and abs(f.threshold - truth) < 2.5
-    assert f.ci_low <= truth <= f.ci_high
-    flat = fit_mle("flat", x, np.full(6, 100.0), n, seed=1)
-    assert not flat.reached and np.isnan(flat.threshold) and "not reached" in flat.note
-
-
 def test_psignifit_fit_and_flat_group():
     pytest.importorskip("psignifit")
     x = np.array([0, 17, 25, 37, 50.0])
@@ -258,9 +248,16 @@ def test_psignifit_fit_and_flat_group():
 
 def test_fit_psychometric_skips_single_level_group():
     df = load_responses(make_responses({("one", 0): (3, 12), ("two", 0): (3, 40), ("two", 30): (30, 40)}))
-    fits, notes = fit_psychometric(df, "mle", seed=0)
+    fits, notes = fit_psychometric(df, "psignifit", seed=0)
     assert [f.group for f in fits] == ["two"]
     assert any("one" in n for n in notes)
+
+
+def test_fit_psychometric_refuses_an_unknown_method_naming_the_valid_ones():
+    df = load_responses(make_responses({("two", 0): (3, 40), ("two", 30): (30, 40)}))
+    assert fit_psychometric(df, "none") == ([], [])
+    with pytest.raises(FlipstudyError, match="expected psignifit or none.*one fit"):
+        fit_psychometric(df, "mle")                  # the own maximum-likelihood fit is gone
 
 
 # -------------------------------------------------------------------- tables
@@ -301,7 +298,7 @@ def paper_run(tmp_path_factory):
     fig = Figure(figsize=(2, 1.5))
     fig.add_subplot().plot([0, 1], [0, 1])
     fig.savefig(img, dpi=60)
-    res = analyze(csv, out / "run1", psychometric="mle", n_boot=500, seed=3,
+    res = analyze(csv, out / "run1", psychometric="psignifit", n_boot=500, seed=3,
                   images={"ghost original": img, "trail original": out / "missing.png"})
     return out, csv, res
 
@@ -330,7 +327,7 @@ def test_analyze_writes_everything(paper_run):
 
 def test_analyze_is_byte_identical_for_a_seed(paper_run, tmp_path):
     out, csv, res = paper_run
-    again = analyze(csv, tmp_path, psychometric="mle", n_boot=500, seed=3, figures=False)
+    again = analyze(csv, tmp_path, psychometric="psignifit", n_boot=500, seed=3, figures=False)
     for name in ("table.csv", "thresholds.csv", "table_paper.tex", "participants.csv"):
         assert Path(again.files[name]).read_bytes() == Path(res.files[name]).read_bytes(), name
     from flipstudy.analysis.figures import ratings_figure, save
@@ -410,17 +407,12 @@ def test_analysis_imports_nothing_of_the_other_packages():
                 assert part not in {"study", "render", "stimuli"}, (f.name, m)
 
 
-@pytest.mark.parametrize("method", ["mle", "psignifit"])
-def test_degenerate_groups_never_crash(method):
+def test_degenerate_groups_never_crash():
     """Every answer alike (all correct, all incorrect): no threshold, a note, sane parameters."""
-    if method == "psignifit":
-        pytest.importorskip("psignifit")
     x = np.array([0, 17, 25, 37, 50.0])
     n = np.full(5, 20.0)
     from flipstudy.analysis.stats import fit_psignifit
-    fit = fit_mle if method == "mle" else fit_psignifit
-    cases = (np.zeros(5), n.copy()) if method == "mle" else (np.zeros(5),)     # psignifit: ~1 s a fit
-    for k in cases:
-        f = fit("g", x, k, n, seed=0)
+    for k in (np.zeros(5), n.copy()):
+        f = fit_psignifit("g", x, k, n, seed=0)
         assert np.isnan(f.threshold) and f.note
         assert 0 <= f.params["gamma"] <= 0.9 and 0 <= f.params["lambda"] <= 0.5

@@ -105,7 +105,7 @@ def test_table2_panel_full_analysis_with_figures(tmp_path):
     pipeline writing every figure (it crashed in the d' figure before)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = analyze(table2_ratings_panel(19), tmp_path, n_boot=100, seed=1, psychometric="mle")
+        res = analyze(table2_ratings_panel(19), tmp_path, n_boot=100, seed=1, psychometric="psignifit")
     for name in ("dprime.pdf", "dprime.png", "ratings.pdf", "psychometric.pdf", "sheet.png"):
         assert (tmp_path / name).stat().st_size > 5000, name
     assert len(res.table) == 25 and len(res.thresholds) == 5
@@ -116,13 +116,15 @@ def test_table2_panel_full_analysis_with_figures(tmp_path):
 @example(df=table2_ratings_panel(19))
 @given(df=response_tables())
 def test_analyze_never_crashes_on_a_valid_table(df, monkeypatch_save):
+    """The whole pipeline but the psychometric fits (psignifit takes ~1 s a group;
+    the next test gives it fewer tables)."""
     with tempfile.TemporaryDirectory(prefix="analyze") as d:
         out = Path(d)
         csv = out / "responses.csv"
         df.to_csv(csv, index=False)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")          # statsmodels/psignifit convergence chatter
-            res = analyze(csv, out / "analysis", n_boot=60, seed=1, psychometric="mle")
+            res = analyze(csv, out / "analysis", n_boot=60, seed=1, psychometric="none")
         files = {p.name for p in (out / "analysis").iterdir()}
         for name in ("table.csv", "table_paper.tex", "dprime.pdf", "ratings.png", "sheet.pdf",
                      "summary.json", "notes.md"):
@@ -135,6 +137,28 @@ def test_analyze_never_crashes_on_a_valid_table(df, monkeypatch_save):
             assert got.loc[(g, lv), "n"] == n and got.loc[(g, lv), "n_incorrect"] == k
         tex = (out / "analysis" / "table_paper.tex").read_text(encoding="utf-8")
         assert tex.isascii()
+
+
+@settings(max_examples=5, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(df=response_tables())
+def test_psychometric_fits_and_their_figures_never_crash_on_a_valid_table(df, monkeypatch_save):
+    """psignifit on random tables (all-alike cells, one participant, one level): every
+    group is fitted or named in a note, a threshold lies in the tested range or is
+    NaN with a note, and the psychometric figure and sheet are drawn."""
+    with tempfile.TemporaryDirectory(prefix="analyze") as d:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")          # psignifit/statsmodels chatter
+            res = analyze(df, Path(d), n_boot=20, seed=1, psychometric="psignifit", gee=False)
+        fitted = {f.group for f in res.fits}
+        for g in dict.fromkeys(res.table["group"]):
+            assert g in fitted or any(n.startswith(f"{g}: ") for n in res.notes), g
+        for f in res.fits:
+            assert f.note and 0 <= f.params["gamma"] <= 0.9 and 0 <= f.params["lambda"] <= 0.5
+            assert np.isnan(f.threshold) or f.x.min() <= f.threshold <= f.x.max(), f
+        assert len(res.thresholds) == len(res.fits)
+        drawn = {p.name for p in Path(d).iterdir()}
+        assert "sheet.pdf" in drawn and ("psychometric.pdf" in drawn) == bool(res.fits)
 
 
 def test_table2_panel_pools_to_table2():

@@ -88,6 +88,30 @@ def test_numbers_are_bounded_and_reported_as_written(tmp_path, line, field, show
     assert field in msg and f"got {shown}" in msg, msg
 
 
+# ------------------------------------------------------------------ session settings
+def test_session_settings_are_read_from_the_session_table(tmp_path):
+    text = ONE_CLIP.format(study="", clip="", source="backflip") + "\n[session]\nreplay = true\nbreak_every = 7\n"
+    d = load_design(design_file(tmp_path, text=text))
+    assert d.session.replay is True and d.session.break_every == 7
+    assert parse_design(PAPER_DESIGN).session.replay is False
+    assert parse_design(PAPER_DESIGN).session.break_every == 40
+    msg = refused(tmp_path, text=text.replace("break_every = 7", "break_every = -3"))
+    assert "[session].break_every" in msg and "got -3" in msg, msg
+    msg = refused(tmp_path, text=text.replace("replay = true", "replya = true"))
+    assert "[session]" in msg and "unknown key 'replya'" in msg and "did you mean 'replay'" in msg
+
+
+def test_session_settings_in_the_study_table_are_still_read_with_a_note(tmp_path):
+    p = design_file(tmp_path, study="replay = true\nbreak_every = 7")
+    with pytest.warns(FutureWarning, match=r"\[study\] replay, break_every: .*\[session\]") as w:
+        d = load_design(p)
+    assert str(p) in str(w[0].message)
+    assert d.session.replay is True and d.session.break_every == 7
+    text = p.read_text() + "\n[session]\nreplay = false\n"
+    msg = refused(tmp_path, text=text)
+    assert "[study].replay and [session].replay are both given" in msg, msg
+
+
 def test_seed_must_be_a_non_negative_whole_number(tmp_path):
     text = ONE_CLIP.format(study="", clip="", source="backflip")
     assert "[study].seed" in refused(tmp_path, text=text.replace("seed = 1", "seed = -1"))

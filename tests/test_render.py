@@ -318,7 +318,7 @@ def test_stimuli_of_one_clip_are_pixel_identical_before_takeoff():
                     reason=f"needs ../shared/mocap/88_01.bvh (not found under {SHARED})")
 def test_real_edited_flip_pixel_identical_before_takeoff():
     from flipstudy.stimuli import analyse, load_bvh
-    from flipstudy.stimuli.errors import inject_angular_momentum
+    from flipstudy.stimuli.injection import inject_angular_momentum
     a = analyse(load_bvh(SHARED / "mocap" / "88_01.bvh", fps=60))
     e = inject_angular_momentum(a, 0.25, "smooth").clip           # a real stimulus edit
     st = stage([a.clip, e], [a.takeoff] * 2, [a.landing] * 2, size=(96, 72))

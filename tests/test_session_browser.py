@@ -11,14 +11,9 @@ Set ``FLIPSTUDY_SCREENSHOTS=DIR`` to keep the screenshots.
 """
 import csv
 import os
-import queue
 import shutil
-import signal
 import socket
 import sqlite3
-import subprocess
-import sys
-import threading
 import time
 from pathlib import Path
 
@@ -27,13 +22,13 @@ import pytest
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-ROOT = Path(__file__).resolve().parents[1]
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
                                 reason=f"needs Debian's chromium at {CHROMIUM} "
                                        f"(apt-get install -y chromium)")
 sync_api = pytest.importorskip("playwright.sync_api", reason="needs playwright (pip install playwright)")
 
+from _run_server import Run  # noqa: E402
 from flipstudy.study.demo import make_demo_study  # noqa: E402
 from flipstudy.study import store  # noqa: E402
 from flipstudy.study.export import export_responses  # noqa: E402
@@ -209,58 +204,15 @@ def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
 
 # --- kill -9 in the middle of a session ----------------------------------------------------
 
-def _cli_module():
-    """The module that ``python -m`` runs for the CLI."""
-    return "flipstudy.study.cli"
-
-
 def _free_port():
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
 
 
-class Server:
+def Server(study_dir, participant, port):
     """``flipstudy run … --no-browser --port P`` as a subprocess."""
-
-    def __init__(self, study_dir, participant, port):
-        self.args = [sys.executable, "-m", _cli_module(), "run", str(study_dir), "--participant",
-                     participant, "--no-browser", "--port", str(port), "--iti-ms", "50"]
-        self.proc = None
-        self.lines = queue.Queue()
-
-    def start(self):
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen(self.args, cwd=ROOT, stdout=subprocess.PIPE,
-                                     stderr=subprocess.STDOUT, text=True, env=env)
-        threading.Thread(target=self._pump, args=(self.proc,), daemon=True).start()
-        deadline = time.monotonic() + 30
-        while time.monotonic() < deadline:
-            try:
-                line = self.lines.get(timeout=0.5)
-            except queue.Empty:
-                assert self.proc.poll() is None, f"server exited with {self.proc.returncode}"
-                continue
-            if line.startswith("participant page: "):
-                return line.split(": ", 1)[1].strip()
-        raise AssertionError("the server did not print its URL")
-
-    def _pump(self, proc):
-        for line in proc.stdout:
-            self.lines.put(line)
-
-    def kill9(self):
-        os.kill(self.proc.pid, signal.SIGKILL)
-        assert self.proc.wait(timeout=10) == -signal.SIGKILL
-
-    def stop(self):
-        if self.proc and self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+    return Run(study_dir, participant, "--port", str(port), "--iti-ms", "50")
 
 
 def answers_in_db(study_dir):

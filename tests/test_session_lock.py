@@ -6,78 +6,24 @@ Servers run as real `flipstudy run` subprocesses (bounded waits)."""
 import http.client
 import json
 import os
-import queue
 import signal
 import socket
 import sqlite3
-import subprocess
-import sys
 import threading
-import time
-from pathlib import Path
 
 import pytest
 
+from _run_server import Run
 from flipstudy.study import store
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.server import allowed_host_names
 from flipstudy.study.session import SessionError, load_study, open_session
 
-ROOT = Path(__file__).resolve().parents[1]
-
 
 @pytest.fixture
 def demo(tmp_path):
     return make_demo_study(tmp_path / "study", video_frames=6)
-
-
-class Run:
-    """``flipstudy run STUDY --participant ID --no-browser ...`` as a subprocess."""
-
-    def __init__(self, study_dir, participant, *extra):
-        self.args = [sys.executable, "-m", "flipstudy.study.cli", "run", str(study_dir), "--participant",
-                     participant, "--no-browser", *extra]
-        self.proc = None
-        self.lines: queue.Queue = queue.Queue()
-        self.out: list[str] = []
-
-    def start(self, expect_url=True, timeout=40):
-        env = dict(os.environ, PYTHONUNBUFFERED="1", PYTHONPATH=str(ROOT))
-        self.proc = subprocess.Popen(self.args, cwd=ROOT, stdout=subprocess.PIPE,
-                                     stderr=subprocess.STDOUT, text=True, env=env)
-        threading.Thread(target=self._pump, daemon=True).start()
-        if not expect_url:
-            self.proc.wait(timeout=timeout)
-            time.sleep(0.1)
-            return None
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            try:
-                line = self.lines.get(timeout=0.5)
-            except queue.Empty:
-                assert self.proc.poll() is None, f"server exited: {''.join(self.out)}"
-                continue
-            if line.startswith("participant page: "):
-                return line.split(": ", 1)[1].strip()
-        raise AssertionError(f"the server did not print its URL: {''.join(self.out)}")
-
-    def _pump(self):
-        for line in self.proc.stdout:
-            self.out.append(line)
-            self.lines.put(line)
-
-    def text(self) -> str:
-        return "".join(self.out)
-
-    def stop(self):
-        if self.proc and self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
 
 
 def get(port, path, host_header):

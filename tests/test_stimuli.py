@@ -7,7 +7,7 @@ import pytest
 
 from flipstudy.stimuli import analyse, load_bvh
 from flipstudy.stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
-from flipstudy.stimuli.errors import StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
+from flipstudy.stimuli.injection import StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
 from flipstudy.stimuli.stimset import build_stimuli, read_manifest
 
 from _shared import MOCAP, shared_file

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -183,13 +184,26 @@ def _env():
     return {**os.environ, "PYTHONPATH": f"{ROOT}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"}
 
 
-def test_two_concurrent_builds_the_second_fails_at_once(tmp_path):
-    out = tmp_path / "study"
+@contextmanager
+def slow_build(tmp_path, seed, out):
+    """A ``SLOW_BUILD`` subprocess of the design of ``seed`` into ``out``, holding the
+    lock (it has printed "locked") until ``tmp_path / "go"`` exists; yields the
+    process and that path, and kills the process on the way out if it still runs."""
     go = tmp_path / "go"
-    a = subprocess.Popen([sys.executable, "-c", SLOW_BUILD, str(design_file(tmp_path, 3)), str(out),
+    a = subprocess.Popen([sys.executable, "-c", SLOW_BUILD, str(design_file(tmp_path, seed)), str(out),
                           str(go)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env())
     try:
         assert a.stdout.readline().strip() == "locked"
+        yield a, go
+    finally:
+        if a.poll() is None:
+            a.kill()
+            a.wait()
+
+
+def test_two_concurrent_builds_the_second_fails_at_once(tmp_path):
+    out = tmp_path / "study"
+    with slow_build(tmp_path, 3, out) as (a, go):
         b = subprocess.run([sys.executable, "-m", "flipstudy.study.cli", "stimuli",
                             str(design_file(tmp_path, 4)), "--out", str(out), "--force", "--quiet"],
                            capture_output=True, text=True, env=_env(), timeout=60)
@@ -198,10 +212,6 @@ def test_two_concurrent_builds_the_second_fails_at_once(tmp_path):
         assert "is writing this study folder right now" in b.stderr and "pid" in b.stderr
         go.touch()
         assert a.wait(timeout=60) == 0, a.stderr.read()
-    finally:
-        if a.poll() is None:
-            a.kill()
-            a.wait()
     assert complete(out) == "" and read_manifest(out)[0]["seed"] != ""
     # the study is the first build's (design seed 3), and the lock file is gone
     assert (out / "design.toml").read_text() == DESIGN.format(seed=3)
@@ -222,11 +232,7 @@ def test_lock_is_exclusive_in_process_and_released(tmp_path):
 
 def test_a_study_copied_to_out_while_a_build_runs_is_kept(study, tmp_path):
     out = tmp_path / "late"
-    go = tmp_path / "go"
-    a = subprocess.Popen([sys.executable, "-c", SLOW_BUILD, str(design_file(tmp_path, 4)), str(out),
-                          str(go)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env())
-    try:
-        assert a.stdout.readline().strip() == "locked"
+    with slow_build(tmp_path, 4, out) as (a, go):
         s = open_session(load_study(study), "P01")
         answer(s, 1)
         s.close()
@@ -236,10 +242,6 @@ def test_a_study_copied_to_out_while_a_build_runs_is_kept(study, tmp_path):
         go.touch()
         assert a.wait(timeout=60) != 0
         assert "appeared while the build ran" in a.stderr.read()
-    finally:
-        if a.poll() is None:
-            a.kill()
-            a.wait()
     assert snapshot(out) == before and leftovers(tmp_path, "late") == []
 
 

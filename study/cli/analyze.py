@@ -41,9 +41,8 @@ def add_commands(subparsers) -> None:
     p.add_argument("--seed", type=int, default=0, help="seed of every random draw (default 0)")
     p.add_argument("--n-boot", type=int, default=2000, help="bootstrap resamples (default 2000)")
     p.add_argument("--ci", type=float, default=0.95, help="confidence level (default 0.95)")
-    p.add_argument("--psychometric", choices=("psignifit", "mle", "none"), default="psignifit",
-                   help="psychometric fit: psignifit (Bayesian, default), mle (maximum likelihood "
-                        "with parametric bootstrap) or none")
+    p.add_argument("--psychometric", choices=("psignifit", "none"), default="psignifit",
+                   help="psychometric fit: psignifit (Bayesian, the default) or none")
     p.add_argument("--include-simulated", action="store_true",
                    help="keep simulated participants (column simulated=true; left out by default)")
     p.add_argument("--include-incomplete", action="store_true",

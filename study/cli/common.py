@@ -1,5 +1,5 @@
 """Options shared by the commands, defined once: a CLIP with ``--scale``/``--fps``,
-``--mass``, ``--json``, ``--out``.  A command whose option means something more
+``--mass``, ``--json``, ``--out``, a STUDY_DIR.  A command whose option means something more
 particular (``concat``'s two files) passes its own help text; type, default and
 destination stay the same everywhere."""
 from __future__ import annotations
@@ -8,7 +8,8 @@ import argparse
 
 from flipstudy.stimuli.loading import load_clip
 
-__all__ = ["load_clip", "add_clip", "add_units", "add_clip_args", "add_mass", "add_json", "add_out"]
+__all__ = ["load_clip", "add_clip", "add_units", "add_clip_args", "add_mass", "add_json", "add_out",
+           "add_study_dir"]
 
 
 def add_clip(p: argparse.ArgumentParser) -> None:
@@ -42,3 +43,8 @@ def add_json(p: argparse.ArgumentParser, help: str = "print one JSON object") ->
 def add_out(p: argparse.ArgumentParser, metavar: str, help: str | None = None) -> None:
     """The required ``--out`` file or folder a command writes."""
     p.add_argument("--out", required=True, metavar=metavar, help=help)
+
+
+def add_study_dir(p: argparse.ArgumentParser, help: str | None = None) -> None:
+    """The positional STUDY_DIR, the study folder a command works on."""
+    p.add_argument("study_dir", metavar="STUDY_DIR", help=help)

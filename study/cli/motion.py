@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 
-from .common import add_clip_args, add_json, add_mass, add_out, load_clip
+from .common import add_clip_args, add_json, add_mass, add_out, add_study_dir, load_clip
 
 
 def cmd_inspect(args) -> int:
@@ -225,7 +225,7 @@ def add_commands(subparsers) -> None:
                                    "(one rename: nothing is copied or deleted), so that a fresh "
                                    "study can be built at STUDY_DIR. Waits for no build: fails "
                                    "at once while a build holds the study.")
-    p.add_argument("study_dir", metavar="STUDY_DIR")
+    add_study_dir(p)
     p.add_argument("--to", metavar="DIR", default=None,
                    help="where to move it (default: STUDY_DIR-archived-DATE beside it; same file system)")
     p.set_defaults(func=cmd_archive)

@@ -18,7 +18,7 @@ from flipstudy.stimuli.exceptions import FlipstudyError
 import argparse
 import sys
 
-from .common import add_clip, add_out, add_units
+from .common import add_clip, add_out, add_study_dir, add_units
 
 
 def _size(text: str):
@@ -100,8 +100,7 @@ def add_commands(subparsers) -> None:
         "render", help="render a study's stimuli (videos, ghosts, trails, strips, composites)",
         description="Render every stimulus of STUDY_DIR/manifest.csv with one style, one camera "
                     "and one take-off spot; outputs and render.json go to STUDY_DIR/render/.")
-    p.add_argument("study_dir", metavar="STUDY_DIR",
-                   help="folder with manifest.csv and the stimuli's .bvh")
+    add_study_dir(p, "folder with manifest.csv and the stimuli's .bvh")
     p.add_argument("--what", default="video",
                    help="comma-separated outputs: video, ghost, trail, strip, composite, overlay "
                         "(overlay: each stimulus over its clip's reference; default: video)")

@@ -12,7 +12,7 @@ import json
 import sys
 
 from ..validate import RequestError
-from .common import add_json
+from .common import add_json, add_study_dir
 
 
 def _int_in(lo: int, hi: int | None = None, what: str = "a whole number", rule: str | None = None):
@@ -136,8 +136,7 @@ def add_commands(subparsers) -> None:
                     "examples of correct motions, the test trials (with breaks), the end. "
                     "Answers are stored in STUDY_DIR/sessions.sqlite as they are given; run the "
                     "same command again to resume an interrupted session.")
-    p.add_argument("study_dir", metavar="STUDY_DIR",
-                   help="study folder (manifest.csv, design.toml, render/<stimulus>.mp4)")
+    add_study_dir(p, "study folder (manifest.csv, design.toml, render/<stimulus>.mp4)")
     p.add_argument("--participant", required=True, metavar="ID",
                    help="participant ID: 1-32 letters, digits, '_' or '-'")
     p.add_argument("--port", type=_port, default=0, help="TCP port (default: a free one)")
@@ -162,7 +161,7 @@ def add_commands(subparsers) -> None:
                     "demographics as participants.csv beside it; both atomically. Simulated "
                     "participants are left out unless --include-simulated; sessions that did not "
                     "answer every trial are marked complete=false.")
-    p.add_argument("study_dir", metavar="STUDY_DIR")
+    add_study_dir(p)
     p.add_argument("--out", metavar="responses.csv", default=None,
                    help="output file (default STUDY_DIR/responses.csv)")
     p.add_argument("--participants-out", metavar="participants.csv", default=None,
@@ -178,7 +177,7 @@ def add_commands(subparsers) -> None:
         description="One line per participant session: source (browser/simulated), "
                     "answered/total (INCOMPLETE when not every trial is answered), started, last "
                     "answer, finished; then the number of real and simulated participants.")
-    p.add_argument("study_dir", metavar="STUDY_DIR")
+    add_study_dir(p)
     add_json(p, "print a JSON list")
     p.set_defaults(func=cmd_status)
 
@@ -188,7 +187,7 @@ def add_commands(subparsers) -> None:
                     "storage as the participant page. The observer model gives P(correct) per "
                     "group and level (default: the paper's Table 2 ratings) with a per-participant "
                     "logit shift ~ N(0, sigma).")
-    p.add_argument("study_dir", metavar="STUDY_DIR")
+    add_study_dir(p)
     p.add_argument("--participants", type=_positive_int, required=True, metavar="N",
                    help="number of simulated participants (IDs sim001..)")
     p.add_argument("--model", metavar="MODEL.toml", default=None,

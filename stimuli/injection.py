@@ -1,4 +1,5 @@
-"""Controlled physical errors: the conditions of the paper's study (Section 7).
+"""Error injection: the controlled physical errors that are the conditions of the
+paper's study (Section 7), and the measurement that checks each stimulus.
 
 The motion is split into the COM path and the motion relative to the COM.
 
@@ -27,9 +28,6 @@ contact instants (what a different push or landing would do), never in the air.
 
 from __future__ import annotations
 
-from .exceptions import FlipstudyValueError
-
-from .exceptions import FlipstudyError
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,6 +35,7 @@ import numpy as np
 from .analyse import Analysis, analyse
 from .edit.reposition import ballistic_path
 from .edit.timing import sample
+from .exceptions import FlipstudyError, FlipstudyValueError
 from .flight import path_values
 from .motion.clip import Clip
 from .physics import center_of_mass
