@@ -438,11 +438,12 @@ def test_boxes_are_drawn(jumps):
     composite) and nothing of them without."""
     pytest.importorskip("pyvista")
     from flipstudy.render.figures import composite_image
+    from flipstudy.render.staging import stage
     res, _ = jumps[("box", 0.5)]
     clip = res.clip
-    kw = dict(size=(160, 120), interval=0.25, takeoff=clip.meta["takeoff"], landing=clip.meta["touchdown"] - 1)
-    with_boxes = composite_image(clip, boxes=clip.meta["boxes"], **kw)
-    without = composite_image(clip, **kw)
+    kw = dict(size=(160, 120), takeoffs=[clip.meta["takeoff"]], landings=[clip.meta["touchdown"] - 1])
+    with_boxes = composite_image(stage([clip], boxes=clip.meta["boxes"], **kw), interval=0.25)
+    without = composite_image(stage([clip], **kw), interval=0.25)
 
     def warm(img):          # the light-wood boxes: red well above blue (ground grey, body blue)
         img = img.astype(int)

@@ -40,17 +40,18 @@ def jump_figures(clip, strip=None, composite=None, *, strip_dt: float = STRIP_DT
     composite (flight ± 0.25 s every ``interval`` s) of a jump clip, with its
     boxes.  Returns the paths written."""
     from flipstudy.render import figures as fg
+    from flipstudy.render.staging import stage
     m = clip.meta
-    kw = dict(takeoff=m.get("takeoff"), landing=max(m.get("touchdown", 1) - 1, m.get("takeoff", 0)),
-              boxes=[tuple(b) for b in m.get("boxes", [])])
+    st = stage([clip], [m.get("takeoff")], [max(m.get("touchdown", 1) - 1, m.get("takeoff", 0))],
+               size=size, boxes=[tuple(b) for b in m.get("boxes", [])])
     out = {}
     if strip:
         h = size[1]
-        fg.strip_image(clip, strip, dt=strip_dt, span="clip", panel_size=(2 * int(round(0.35 * h)), h),
-                       label="t = {t:.1f} s", **kw)
+        fg.strip_image(st, strip, dt=strip_dt, span="clip", panel_size=(2 * int(round(0.35 * h)), h),
+                       label="t = {t:.1f} s")
         out["strip"] = str(strip)
     if composite:
-        fg.composite_image(clip, composite, interval=interval, span="flight", margin=0.25, size=size, **kw)
+        fg.composite_image(st, composite, interval=interval, span="flight", margin=0.25)
         out["composite"] = str(composite)
     return out
 

@@ -60,31 +60,32 @@ def cmd_figure(args) -> int:
     from .common import load_clip
 
     from flipstudy.render import figures as fg
+    from flipstudy.render.staging import stage
     try:
-        clip = load_clip(args.clip, args.scale, args.fps)
-        style = _style(args.style)
-        kw = dict(size=args.size, style=style)
+        clips = [load_clip(args.clip, args.scale, args.fps)]
+        if args.overlay:
+            clips.append(load_clip(args.overlay, args.scale, args.fps))
+        st = stage(clips, size=args.size, style=_style(args.style))
         debug = ("com", "path", "L", "v", "support") if args.debug else ()
         interval = args.interval
         if args.overlay:
-            other = load_clip(args.overlay, args.scale, args.fps)
             from pathlib import Path
             labels = (Path(args.clip).stem, Path(args.overlay).stem)
-            fg.overlay_image(clip, other, args.out, interval=interval or 0.2, labels=labels, **kw)
+            fg.overlay_image(st, args.out, interval=interval or 0.2, labels=labels)
             kind = "overlay"
         elif args.trail:
-            fg.trail_image(clip, args.out, debug=debug, **kw)
+            fg.trail_image(st, args.out, debug=debug)
             kind = "trail"
         elif args.strip:
             h = args.size[1]
-            fg.strip_image(clip, args.out, dt=interval or 0.1, panel_size=(2 * int(round(0.35 * h)), h),
-                           style=style, debug=debug)
+            fg.strip_image(st, args.out, dt=interval or 0.1, panel_size=(2 * int(round(0.35 * h)), h),
+                           debug=debug)
             kind = "strip"
         elif args.composite:
-            fg.composite_image(clip, args.out, interval=interval or 0.2, debug=debug, **kw)
+            fg.composite_image(st, args.out, interval=interval or 0.2, debug=debug)
             kind = "composite"
         else:
-            fg.ghost_image(clip, args.out, interval=interval or 0.2, debug=debug, **kw)
+            fg.ghost_image(st, args.out, interval=interval or 0.2, debug=debug)
             kind = "ghost"
     except FlipstudyError as e:
         print(f"flipstudy figure: error: {e}", file=sys.stderr)
