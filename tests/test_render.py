@@ -571,6 +571,32 @@ def test_cli_render_and_figure(tmp_path, capsys):
     assert set(RENDER_KINDS) >= {"video", "ghost", "trail", "strip", "composite"}
 
 
+def test_cli_fps_is_the_clips_frame_rate_and_video_fps_the_videos(tmp_path, capsys):
+    """``--fps`` means one thing in every command (a clip's frame rate);
+    ``render``'s video rate is ``--video-fps``, its old ``--fps`` still works
+    with a warning and says so in --help."""
+    import argparse
+
+    from flipstudy.study.cli.render import add_commands
+    ap = argparse.ArgumentParser(prog="flipstudy")
+    sub = ap.add_subparsers(dest="command")
+    add_commands(sub)
+    assert ap.parse_args(["render", "S"]).video_fps == 60.0
+    assert ap.parse_args(["render", "S", "--video-fps", "24"]).video_fps == 24.0
+    assert "deprecated" not in capsys.readouterr().err
+    assert ap.parse_args(["render", "S", "--fps", "25"]).video_fps == 25.0
+    err = capsys.readouterr().err
+    assert "--fps is deprecated" in err and "--video-fps" in err
+    sub.choices["render"].print_help()
+    helptext = " ".join(capsys.readouterr().out.split())
+    assert "--video-fps FPS frame rate of the videos" in helptext
+    assert "--fps FPS deprecated spelling of --video-fps" in helptext
+    args = ap.parse_args(["figure", "backflip", "--fps", "30", "--out", str(tmp_path / "f.png")])
+    assert args.fps == 30.0 and not hasattr(args, "video_fps")
+    from flipstudy.study.cli.common import load_clip
+    assert load_clip(args.clip, args.scale, args.fps).fps == 30.0
+
+
 # ----------------------------------------------------- real and built-in clips
 @pytest.mark.skipif(not (SHARED / "mocap" / "88_01.bvh").exists(),
                     reason=f"needs ../shared/mocap/88_01.bvh (not found under {SHARED})")

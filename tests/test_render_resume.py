@@ -110,7 +110,7 @@ def tiny_study(folder: Path, n: int) -> Path:
     return folder
 
 
-RENDER = ["--size", "64x48", "--fps", "30", "--jobs", "2", "--quiet"]
+RENDER = ["--size", "64x48", "--video-fps", "30", "--jobs", "2", "--quiet"]
 
 
 def test_ctrl_c_stops_render_at_once_and_a_rerun_makes_only_the_rest(tmp_path, monkeypatch):
