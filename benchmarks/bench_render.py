@@ -4,7 +4,7 @@ Prints, in one run:
 
 * frames per second at 640x480 and 1280x720 for
   - **reused**: one plotter, one merged body mesh whose points are rewritten in
-    place each frame (``render.figures.iter_frames``);
+    place each frame (``render.video.iter_frames``);
   - **naive, new actors**: one plotter, but every frame clears it and adds a
     new mesh per body piece and a new ground (what a first script does);
   - **naive, new plotter**: a new plotter (OpenGL context) per frame;
@@ -39,10 +39,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from flipstudy.render._pv import pv  # noqa: E402  (EGL offscreen before anything else)
-from flipstudy.render.figures import iter_frames, prepare  # noqa: E402
 from flipstudy.render.geometry import piece_frames, resample  # noqa: E402
 from flipstudy.render.scene import Scene  # noqa: E402
+from flipstudy.render.staging import stage  # noqa: E402
 from flipstudy.render.style import Style  # noqa: E402
+from flipstudy.render.video import iter_frames  # noqa: E402
 
 
 def load_clip():
@@ -219,7 +220,7 @@ def main(argv=None):
     for size in ((640, 480), (1280, 720)):
         for aa in ("ssaa", "none"):
             st = Style(anti_aliasing=aa)
-            prep = prepare([clip], size=size, style=st)
+            prep = stage([clip], size=size, style=st)
             ground = _ground(prep, st)
             fr, setup = bench_reused(prep, size, n, st)
             fa = bench_naive_actors(prep, size, max(5, n // 4), st, ground)

@@ -1,8 +1,23 @@
-"""The one H.264 encoder (imageio-ffmpeg) of every video flipstudy writes: the
-rendered stimuli and the demo study's placeholders."""
+"""Stimulus videos: the clip resampled to a display rate (rotations slerped,
+root linear) and drawn frame by frame in one reused scene (:func:`iter_frames`),
+encoded by the one H.264 writer of every video flipstudy writes
+(:func:`h264_writer`: the rendered stimuli and the demo study's placeholders).
+
+PyVista is imported only when a video is rendered (the demo's placeholders need
+the encoder alone).
+"""
 from __future__ import annotations
 
+import contextlib
+from pathlib import Path
+
+import numpy as np
+
+from flipstudy.stimuli.body import Body
 from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.stimuli.motion.clip import Clip
+
+from .geometry import resample
 
 
 def h264_writer(path, size, fps: float, *, crf: int = 18, preset: str = "medium"):
@@ -20,3 +35,100 @@ def h264_writer(path, size, fps: float, *, crf: int = 18, preset: str = "medium"
                        "-movflags", "+faststart"])
     writer.send(None)
     return writer
+
+
+def iter_frames(clip: Clip, scene, fps: float = 60.0, *, other: Clip | None = None,
+                body: Body | None = None, other_body: Body | None = None, gizmos=None,
+                colors=None):
+    """Yield the frames (H,W,3 uint8) of ``clip`` sampled at ``fps`` in a
+    scene set up for it (camera and ground set, e.g. by
+    :func:`~flipstudy.render.scene.scene_for`).  The same buffer is reused: copy a
+    frame to keep it.  ``other`` draws a second clip (overlay) in
+    ``colors[1]``, over ``clip`` in ``colors[0]``."""
+    st = scene.style
+    v = resample(clip, fps)
+    R, P = v.joint_rotations(), v.joint_positions()
+    n = v.num_frames
+    ch = scene.character("main", body)
+    if other is not None:
+        colors = colors or st.overlay_colors
+        ch.look(colors[0], 1.0)
+        w = resample(other, fps)
+        R2, P2 = w.joint_rotations(), w.joint_positions()
+        n = max(n, w.num_frames)
+        ch2 = scene.character("other", other_body or body, inflate=0.004)
+        ch2.look(colors[1], st.overlay_opacity)
+    else:
+        ch.look(st.body_color, 1.0)
+        scene.hide("other")
+    buf = np.empty((scene.size[1], scene.size[0], 3), np.uint8)
+    for k in range(n):
+        i = min(k, v.num_frames - 1)
+        ch.pose(R[i], P[i])
+        if other is not None:
+            j = min(k, w.num_frames - 1)
+            ch2.pose(R2[j], P2[j])
+        if gizmos is not None:
+            gizmos.draw(scene, i / fps, (0.0, i / fps), st.ground_height)
+        yield scene.grab(out=buf)
+
+
+def render_video(what, path, *, fps: float = 60.0, scene=None, debug=(), frames_dir=None,
+                 crf: int = 18) -> Path:
+    """Render a stimulus video of a :class:`~flipstudy.render.staging.Stage` (or a
+    clip, staged with the defaults): its clip sampled at ``fps`` display
+    frames per second (rotations slerped, root linear), at the stage's size,
+    H.264 in MP4, yuv420p (plays in browsers); ``frames_dir`` also writes every
+    frame as PNG.  A stage of two clips overlays the second (e.g. the edited
+    one) in the second overlay colour.  ``scene``: a
+    :class:`~flipstudy.render.scene.Scene` to reuse (e.g. one per worker);
+    ``debug``: gizmos (see :mod:`flipstudy.render.gizmos`).
+
+    Example
+    -------
+    >>> import tempfile, pathlib
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render.staging import stage
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     mp4 = render_video(stage([builtin("backflip")], size=(160, 120)),
+    ...                        pathlib.Path(tmp) / "backflip.mp4", fps=15)
+    ...     mp4.name, mp4.stat().st_size > 1000
+    ('backflip.mp4', True)
+    """
+    from .compose import write_png
+    from .gizmos import debug_gizmos
+    from .scene import scene_for
+    from .staging import staged
+    st = staged(what)
+    W, H = st.size
+    if W % 2 or H % 2:
+        raise FlipstudyValueError(f"video size {W}x{H}: width and height must be even for H.264 yuv420p")
+    if len(st.clips) > 2:
+        raise FlipstudyValueError(f"render_video draws one clip, or two overlaid; this stage holds "
+                                  f"{len(st.clips)} (pass stage.only(k))")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if frames_dir is not None:
+        Path(frames_dir).mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.stem}.tmp{path.suffix}")
+    writer = h264_writer(tmp, (W, H), fps, crf=crf)
+    try:
+        with scene_for(st, scene) as sc:
+            gz = debug_gizmos(debug, st.clips[0], st.bodies[0])
+            for k, frame in enumerate(iter_frames(
+                    st.clips[0], sc, fps, other=st.clips[1] if len(st.clips) > 1 else None,
+                    body=st.bodies[0], other_body=st.bodies[-1], gizmos=gz)):
+                writer.send(frame)
+                if frames_dir is not None:
+                    write_png(Path(frames_dir) / f"{path.stem}_{k:05d}.png", frame)
+        writer.close()
+    except BaseException:
+        with contextlib.suppress(Exception):
+            writer.close()
+        tmp.unlink(missing_ok=True)
+        raise
+    tmp.replace(path)
+    return path
+
+
+__all__ = ["h264_writer", "iter_frames", "render_video"]

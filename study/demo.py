@@ -101,7 +101,7 @@ def write_demo_record(out, rows, *, size=(64, 48), fps: float = 30.0) -> None:
     so ``flipstudy run`` serves them."""
     import json
 
-    from flipstudy.render.study import file_sha256
+    from flipstudy.render.record import file_sha256
     render = Path(out) / "render"
     settings = {"size": list(size), "fps": float(fps), "placeholder": "flipstudy.study.demo moving square"}
     outputs = {}

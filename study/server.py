@@ -17,7 +17,7 @@ to 127.0.0.1 unless told otherwise, accepts only loopback ``Host`` headers then
 (on another address: the machine's names and addresses and ``--allowed-host``
 names, never any name, against DNS rebinding), refuses cross-origin posts and
 anything but ``application/json`` bodies of at most 8 KiB.  One server per
-participant: :mod:`flipstudy.study.lock`.  It serves only videos that ``flipstudy.render.json``
+participant: :mod:`flipstudy.study.lock`.  It serves only videos that ``render.json``
 says were made from the current stimuli with one set of settings.
 
 Example
@@ -284,7 +284,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
                   allowed_hosts, out) -> int:
     import uvicorn
 
-    from flipstudy.render.study import StaleRenderError, check_rendered
+    from flipstudy.render.record import StaleRenderError, check_rendered
     open_session(study, participant, new_session=new_session, dry_run=True)   # refusals first
     missing = study.missing_videos()
     if missing:

@@ -475,11 +475,12 @@ def test_boxes_are_drawn(jumps):
     composite) and nothing of them without."""
     pytest.importorskip("pyvista")
     from flipstudy.render.figures import composite_image
+    from flipstudy.render.staging import stage
     res, _ = jumps[("box", 0.5)]
     clip = res.clip
-    kw = dict(size=(160, 120), interval=0.25, takeoff=res.takeoff, landing=res.landing)
-    with_boxes = composite_image(clip, boxes=clip.meta["boxes"], **kw)
-    without = composite_image(clip, **kw)
+    kw = dict(size=(160, 120), takeoffs=[res.takeoff], landings=[res.landing])
+    with_boxes = composite_image(stage([clip], boxes=clip.meta["boxes"], **kw), interval=0.25)
+    without = composite_image(stage([clip], **kw), interval=0.25)
 
     def warm(img):          # the light-wood boxes: red well above blue (ground grey, body blue)
         img = img.astype(int)

@@ -14,10 +14,12 @@ from scipy.spatial.transform import Rotation
 from flipstudy.stimuli.body import Body
 from flipstudy.stimuli.motion import Clip, Skeleton, save_bvh
 
-from flipstudy.render.camera import Camera, fit_camera, stage
+from flipstudy.render.camera import Camera, fit_camera
 from flipstudy.render.compose import over, read_image
-from flipstudy.render.figures import (composite_image, ghost_image, iter_frames, overlay_image, prepare,
-                            render_video, strip_image, support_polygon, trail_image)
+from flipstudy.render.figures import composite_image, ghost_image, overlay_image, strip_image, trail_image
+from flipstudy.render.gizmos import support_polygon
+from flipstudy.render.staging import stage
+from flipstudy.render.video import iter_frames, render_video
 from flipstudy.render.geometry import piece_frames, BodyMesh, body_points, resample, unit_sphere
 from flipstudy.render.scene import Scene
 from flipstudy.render.style import Style, rgb8
@@ -209,7 +211,7 @@ def test_stage_orients_other_base_clips_but_not_edits():
 # ---------------------------------------------------------- pixels: camera
 def test_character_pixels_are_where_the_camera_projects_the_com():
     clip, t0, t1 = jumper(flip=1.0)
-    prep = prepare([clip], takeoffs=[t0], landings=[t1], size=(160, 120))
+    prep = stage([clip], [t0], [t1], size=(160, 120))
     from flipstudy.stimuli.physics import center_of_mass
     com = center_of_mass(prep.clips[0], prep.bodies[0])
     frames = []
@@ -232,8 +234,8 @@ def test_character_pixels_are_where_the_camera_projects_the_com():
 # ------------------------------------------------------------- ghosts, trails
 def test_ghosts_are_separate_silhouettes():
     clip = walker(seconds=1.0, speed=5.0)                     # 1 m between ghosts 0.2 s apart
-    img = ghost_image(clip, None, interval=0.2, span="clip", takeoff=0, landing=clip.num_frames - 1,
-                      size=(320, 120), style=PLAIN)
+    img = ghost_image(stage([clip], [0], [clip.num_frames - 1], size=(320, 120), style=PLAIN), None,
+                      interval=0.2, span="clip")
     mask = ndimage.binary_dilation(nonwhite(img), iterations=2)   # close 1-pixel joints
     _, n = ndimage.label(mask, structure=np.ones((3, 3)))
     assert n == 6                                              # t = 0, 0.2, ..., 1.0
@@ -249,7 +251,7 @@ def test_ghosts_are_separate_silhouettes():
 def test_trail_colours_of_the_legend_are_in_the_image():
     clip, t0, t1 = jumper(flip=3.0)
     st = Style(anti_aliasing="none")
-    img = trail_image(clip, None, takeoff=t0, landing=t1, size=(320, 240), style=st)
+    img = trail_image(stage([clip], [t0], [t1], size=(320, 240), style=st), None)
     cols = [rgb8(c) for c in st.trail_palette[:8]] + [rgb8(st.trail_com_color)]
     H, W = img.shape[:2]
     rest = img.reshape(-1, 3).astype(int)
@@ -268,8 +270,8 @@ def test_trail_colours_of_the_legend_are_in_the_image():
 def test_video_decodes_with_expected_frames_and_rate(tmp_path):
     import imageio_ffmpeg
     clip, t0, t1 = jumper(fps=120.0)
-    path = render_video(clip, tmp_path / "j.mp4", fps=30.0, size=(160, 120), style=PLAIN,
-                        takeoff=t0 * 2, landing=t1 * 2, frames_dir=tmp_path / "frames")
+    path = render_video(stage([clip], [t0 * 2], [t1 * 2], size=(160, 120), style=PLAIN), tmp_path / "j.mp4",
+                        fps=30.0, frames_dir=tmp_path / "frames")
     gen = imageio_ffmpeg.read_frames(str(path))
     meta = next(gen)
     frames = [np.frombuffer(f, np.uint8).reshape(120, 160, 3) for f in gen]
@@ -286,7 +288,7 @@ def test_video_decodes_with_expected_frames_and_rate(tmp_path):
 def test_video_rejects_odd_size(tmp_path):
     clip, t0, t1 = jumper()
     with pytest.raises(ValueError, match="even"):
-        render_video(clip, tmp_path / "x.mp4", size=(161, 120), takeoff=t0, landing=t1)
+        render_video(stage([clip], [t0], [t1], size=(161, 120)), tmp_path / "x.mp4")
 
 
 # ------------------------------------------------- same take-off, same frames
@@ -385,8 +387,8 @@ def test_render_study_in_parallel_workers(tmp_path):
 # ------------------------------------------------------------ strip, composite
 def test_strip_has_one_labelled_panel_per_time():
     clip, t0, t1 = jumper(flip=3.0)
-    img = strip_image(clip, None, dt=0.25, span="clip", panel_size=(80, 120), style=PLAIN,
-                      takeoff=t0, landing=t1)
+    img = strip_image(stage([clip], [t0], [t1], style=PLAIN), None, dt=0.25, span="clip",
+                      panel_size=(80, 120))
     assert img.shape == (120, 5 * 80 + 4 * 4, 3)              # t = 0, .25, .5, .75, 1.0
     for k in range(5):
         panel = img[:, k * 84:k * 84 + 80]
@@ -396,12 +398,12 @@ def test_strip_has_one_labelled_panel_per_time():
 
 def test_composite_layers_use_the_alpha_matte():
     clip = walker(seconds=0.4, speed=5.0)
-    kw = dict(takeoff=0, landing=clip.num_frames - 1, size=(200, 100), style=PLAIN, span="clip")
-    one = composite_image(clip, None, times=[0.4], **kw)
-    ghost = ghost_image(clip, None, times=[0.4], **kw)
+    st = stage([clip], [0], [clip.num_frames - 1], size=(200, 100), style=PLAIN)
+    one = composite_image(st, None, times=[0.4], span="clip")
+    ghost = ghost_image(st, None, times=[0.4], span="clip")
     # a single opaque layer matted onto the plate is the plain render
     assert np.abs(one.astype(int) - ghost.astype(int)).max() <= 2
-    two = composite_image(clip, None, times=[0.0, 0.4], **kw)
+    two = composite_image(st, None, times=[0.0, 0.4], span="clip")
     mask = nonwhite(two)
     lab, n = ndimage.label(ndimage.binary_dilation(mask, iterations=2), structure=np.ones((3, 3)))
     assert n == 2
@@ -423,7 +425,7 @@ def test_overlay_two_colours():
     a, t0, t1 = jumper(flip=0.0)
     b, _, _ = jumper(flip=2.5)
     st = Style(anti_aliasing="none", ground=False, background="#ffffff")
-    img = overlay_image(a, b, None, takeoff=t0, landing=t1, size=(200, 150), style=st, interval=0.25)
+    img = overlay_image(stage([a, b], [t0, t0], [t1, t1], size=(200, 150), style=st), None, interval=0.25)
     px = img.reshape(-1, 3).astype(int)
     for c in st.overlay_colors:
         assert (np.abs(px - rgb8(c)).max(1) <= 2).sum() >= 10       # legend swatch
@@ -440,9 +442,9 @@ def test_support_polygon_is_the_hull():
 def test_debug_gizmos_drawn_on_top():
     clip, t0, t1 = jumper(flip=2.0)
     st = Style(anti_aliasing="none", ground=False, background="#ffffff")
-    kw = dict(takeoff=t0, landing=t1, size=(160, 120), style=st, times=[0.5])
-    plain = ghost_image(clip, None, **kw)
-    dbg = ghost_image(clip, None, debug=("com", "L", "v"), **kw)
+    one = stage([clip], [t0], [t1], size=(160, 120), style=st)
+    plain = ghost_image(one, None, times=[0.5])
+    dbg = ghost_image(one, None, debug=("com", "L", "v"), times=[0.5])
     com_c = np.array(rgb8(st.com_color))
     assert (np.abs(dbg.reshape(-1, 3).astype(int) - com_c).max(1) < 50).sum() > 5
     assert (np.abs(plain.reshape(-1, 3).astype(int) - com_c).max(1) < 50).sum() == 0
@@ -470,23 +472,63 @@ MEMORY_GROWTH_MB = 15.0
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="needs /proc for VmRSS")
 def test_memory_stays_flat_over_a_long_batch():
     clip = walker(seconds=5.0, speed=0.2)                           # 301 frames
-    prep = prepare([clip], takeoffs=[0], landings=[clip.num_frames - 1], size=(160, 120))
+    prep = stage([clip], [0], [clip.num_frames - 1], size=(160, 120))
     with Scene(prep.bodies[0], Style(), (160, 120), prep.camera, prep.ground_bounds) as sc:
         for _ in iter_frames(prep.clips[0].slice(0, 40), sc, 60.0):      # warm-up
             pass
-        ghost_image(prep.clips[0], None, scene=sc, camera=prep.camera, times=[0, 1, 2], takeoff=0,
-                    landing=300, size=(160, 120))
+        def again():                                   # the clip drawn under the same camera
+            return stage([prep.clips[0]], [0], [300], camera=prep.camera, size=(160, 120))
+        ghost_image(again(), None, scene=sc, times=[0, 1, 2])
         base = _rss_mb()
         n = 0
         for _ in iter_frames(prep.clips[0], sc, 60.0):
             n += 1
         for k in range(8):
-            ghost_image(prep.clips[0], None, scene=sc, camera=prep.camera, times=[0, 1, 2 + k / 8],
-                        takeoff=0, landing=300, size=(160, 120))
+            ghost_image(again(), None, scene=sc, times=[0, 1, 2 + k / 8])
         grown = _rss_mb() - base
     assert n == 301
     print(f"RSS growth {grown:.2f} MB over {n} frames and 8 figures")
     assert grown < MEMORY_GROWTH_MB, f"RSS grew {grown:.1f} MB over {n} frames"
+
+
+# ---------------------------------------------------------- the staging object
+def test_stage_once_for_every_picture_of_its_clips():
+    """One Stage: a clip of it drawn alone keeps the camera and the ground of
+    all; another image size refits the camera to the same points; a camera that
+    follows the action keeps a given ground and refits a fitted one."""
+    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    a, t0, t1 = jumper(flip=0.0)
+    b = a.replace(root_pos=a.root_pos + [1.5, 0.0, 0.5])
+    st = stage([a, b], [t0, t0], [t1, t1], size=(160, 120), style=PLAIN)
+    one = st.only(1)
+    assert one.clips[0] is st.clips[1] and one.camera == st.camera and one.style is st.style
+    assert one.ground_bounds == st.ground_bounds and one.size == st.size
+    with pytest.raises(FlipstudyValueError, match="only"):
+        ghost_image(st, None)
+    with pytest.raises(FlipstudyValueError, match="two clips"):
+        overlay_image(one, None)
+    tall = st.resized((40, 160))                      # the travel no longer fits: farther away
+    assert tall.camera.distance > st.camera.distance and tall.size == (40, 160)
+    for c in tall.clips:                              # every frame still in the (new) picture
+        px = tall.camera.project(body_points(c, tall.bodies[0], (20, 12)).reshape(-1, 3), (40, 160))
+        assert px.min() > 0 and px[:, 0].max() < 40 and px[:, 1].max() < 160
+    moved = st.camera.translated((0.5, 0.0, 0.0))
+    assert st.with_camera(moved).ground_bounds != st.ground_bounds           # fitted: refitted
+    assert one.with_camera(moved).ground_bounds == st.ground_bounds          # given: kept
+    img = ghost_image(one, None, times=[0.5])
+    assert img.shape == (120, 160, 3) and nonwhite(img).any()
+
+
+def test_a_reused_scene_must_have_the_stage_style():
+    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    clip, t0, t1 = jumper()
+    st = stage([clip], [t0], [t1], size=(96, 64), style=PLAIN)
+    with Scene(st.bodies[0], Style(), (96, 64), st.camera) as sc:
+        with pytest.raises(FlipstudyValueError, match="style"):
+            ghost_image(st, None, scene=sc)
+    with Scene(st.bodies[0], PLAIN, (96, 64), st.camera) as sc:
+        reused = ghost_image(st, None, scene=sc, times=[0.5])
+    assert np.array_equal(reused, ghost_image(st, None, times=[0.5]))
 
 
 # ------------------------------------------------------------- style, CLI
@@ -529,6 +571,32 @@ def test_cli_render_and_figure(tmp_path, capsys):
     assert set(RENDER_KINDS) >= {"video", "ghost", "trail", "strip", "composite"}
 
 
+def test_cli_fps_is_the_clips_frame_rate_and_video_fps_the_videos(tmp_path, capsys):
+    """``--fps`` means one thing in every command (a clip's frame rate);
+    ``render``'s video rate is ``--video-fps``, its old ``--fps`` still works
+    with a warning and says so in --help."""
+    import argparse
+
+    from flipstudy.study.cli.render import add_commands
+    ap = argparse.ArgumentParser(prog="flipstudy")
+    sub = ap.add_subparsers(dest="command")
+    add_commands(sub)
+    assert ap.parse_args(["render", "S"]).video_fps == 60.0
+    assert ap.parse_args(["render", "S", "--video-fps", "24"]).video_fps == 24.0
+    assert "deprecated" not in capsys.readouterr().err
+    assert ap.parse_args(["render", "S", "--fps", "25"]).video_fps == 25.0
+    err = capsys.readouterr().err
+    assert "--fps is deprecated" in err and "--video-fps" in err
+    sub.choices["render"].print_help()
+    helptext = " ".join(capsys.readouterr().out.split())
+    assert "--video-fps FPS frame rate of the videos" in helptext
+    assert "--fps FPS deprecated spelling of --video-fps" in helptext
+    args = ap.parse_args(["figure", "backflip", "--fps", "30", "--out", str(tmp_path / "f.png")])
+    assert args.fps == 30.0 and not hasattr(args, "video_fps")
+    from flipstudy.study.cli.common import load_clip
+    assert load_clip(args.clip, args.scale, args.fps).fps == 30.0
+
+
 # ----------------------------------------------------- real and built-in clips
 @pytest.mark.skipif(not (SHARED / "mocap" / "88_01.bvh").exists(),
                     reason=f"needs ../shared/mocap/88_01.bvh (not found under {SHARED})")
@@ -540,8 +608,8 @@ def test_real_flip_in_frame_and_rendered():
     assert (st.takeoffs[0], st.landings[0]) == (46, 79)
     px = st.camera.project(body_points(st.clips[0], st.bodies[0], (20, 12)).reshape(-1, 3), (160, 120))
     assert px.min() >= 0 and px[:, 0].max() <= 160 and px[:, 1].max() <= 120
-    img = ghost_image(st.clips[0], None, camera=st.camera, takeoff=46, landing=79, size=(160, 120),
-                      style=PLAIN)
+    img = ghost_image(stage([st.clips[0]], [46], [79], camera=st.camera, size=(160, 120), style=PLAIN),
+                      None)
     assert nonwhite(img).mean() > 0.05
 
 
@@ -549,7 +617,7 @@ def test_real_flip_in_frame_and_rendered():
 def test_builtin_backflip_renders():
     from flipstudy.stimuli import builtin
     clip = builtin("backflip")
-    img = ghost_image(clip, None, size=(160, 120), style=PLAIN)
+    img = ghost_image(stage([clip], size=(160, 120), style=PLAIN), None)
     assert nonwhite(img).mean() > 0.03
     m = nonwhite(img)
     assert not m[0].any() and not m[-1].any()
@@ -560,14 +628,14 @@ def test_labels_and_legend_without_a_font_file(monkeypatch):
     monkeypatch.setattr(fg, "find_font", lambda: None)       # VTK's built-in font instead
     clip, t0, t1 = jumper(flip=3.0)
     st = Style(anti_aliasing="none", ground=False, background="#ffffff")
-    img = fg.trail_image(clip, None, takeoff=t0, landing=t1, size=(320, 240), style=st,
+    img = fg.trail_image(stage([clip], [t0], [t1], size=(320, 240), style=st), None,
                          joints=("pelvis", "com"))
     for c in (rgb8(st.trail_palette[0]), rgb8(st.trail_com_color)):
         assert (np.abs(img.reshape(-1, 3).astype(int) - c).max(1) <= 2).sum() >= 10
     dark = img[:40, 10:120].astype(int).max(-1) < 170               # label text, top left
     assert dark.sum() > 20
-    strip = fg.strip_image(clip, None, dt=0.5, span="clip", panel_size=(80, 120), style=PLAIN,
-                           takeoff=t0, landing=t1)
+    strip = fg.strip_image(stage([clip], [t0], [t1], style=PLAIN), None, dt=0.5, span="clip",
+                           panel_size=(80, 120))
     assert all(nonwhite(strip[:16, k * 84:k * 84 + 80]).sum() > 10 for k in range(3))
 
 

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from flipstudy.render.study import StaleRenderError, check_rendered, render_study
+from flipstudy.render.record import StaleRenderError, check_rendered
+from flipstudy.render.study import render_study
 from test_render import _write_study, jumper
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -109,7 +110,7 @@ def tiny_study(folder: Path, n: int) -> Path:
     return folder
 
 
-RENDER = ["--size", "64x48", "--fps", "30", "--jobs", "2", "--quiet"]
+RENDER = ["--size", "64x48", "--video-fps", "30", "--jobs", "2", "--quiet"]
 
 
 def test_ctrl_c_stops_render_at_once_and_a_rerun_makes_only_the_rest(tmp_path, monkeypatch):
@@ -150,7 +151,7 @@ def test_ctrl_c_stops_render_at_once_and_a_rerun_makes_only_the_rest(tmp_path, m
     assert {k for k, v in snapshot(study).items() if v != after[k]} == {"s03.mp4"}
 
     # a re-render at another size, interrupted after two stimuli: mixed sizes, refused
-    import flipstudy.render.study as rs
+    import flipstudy.render.workers as rs
     real, calls = rs._render_task, []
 
     def interrupted(task):
@@ -182,7 +183,7 @@ def test_sigkill_of_render_leaves_no_worker(tmp_path):
     assert wait_gone(seen, 10.0) == []
     # what the killed run was writing never appears under an output's name, and
     # the next run clears it and finishes the job
-    from flipstudy.render.study import file_sha256
+    from flipstudy.render.record import file_sha256
     outputs = json.loads((study / "render" / "render.json").read_text())["outputs"]
     made = set(outputs)
     assert made and all(file_sha256(study / "render" / f) == o["sha256"] for f, o in outputs.items())

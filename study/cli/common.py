@@ -19,7 +19,7 @@ def add_clip(p: argparse.ArgumentParser) -> None:
 
 def add_units(p: argparse.ArgumentParser, *,
               scale_help: str = "metres per file unit (default: guessed from the skeleton's size)",
-              fps_help: str = "frames per second, overriding the file's Frame Time") -> None:
+              fps_help: str = "the clip's frames per second, overriding the file's Frame Time") -> None:
     """``--scale`` and ``--fps`` of the clips a command loads (see :func:`load_clip`)."""
     p.add_argument("--scale", type=float, default=None, help=scale_help)
     p.add_argument("--fps", type=float, default=None, help=fps_help)

@@ -66,6 +66,7 @@ def cmd_concat(args) -> int:
         out["plot"] = str(args.plot)
     if args.ghost:
         from flipstudy.render.figures import ghost_image
+        from flipstudy.render.staging import stage
         w0, w1 = r.blend_out
         fps = res.clip.fps
         t0 = max(0.0, w0 / fps - args.ghost_margin)
@@ -75,7 +76,8 @@ def cmd_concat(args) -> int:
         f0, f1 = int(t0 * fps), int(np.ceil(t1 * fps)) + 1
         cam = transition_camera(res.clip, a, body, args.ghost_view, main=r.phases_a["main"],
                                 at=r.blend_out[0], frames=(f0, f1))
-        ghost_image(res.clip, args.ghost, span=(t0, t1), interval=args.ghost_interval, body=body, camera=cam)
+        ghost_image(stage([res.clip], bodies=[body], camera=cam), args.ghost, span=(t0, t1),
+                    interval=args.ghost_interval)
         out["ghost"] = str(args.ghost)
     if args.json:
         print(json.dumps(out, indent=2, default=float))

@@ -41,17 +41,18 @@ def jump_figures(res, strip=None, composite=None, *, strip_dt: float = STRIP_DT,
     (:class:`flipstudy.stimuli.control.JumpResult`), with the boxes of its
     course.  Returns the paths written."""
     from flipstudy.render import figures as fg
+    from flipstudy.render.staging import stage
     clip = res.clip
-    kw = dict(takeoff=res.takeoff, landing=max(res.landing, res.takeoff),
-              boxes=[tuple(b) for b in clip.meta.get("boxes", [])])
+    st = stage([clip], [res.takeoff], [max(res.landing, res.takeoff)],
+               size=size, boxes=[tuple(b) for b in clip.meta.get("boxes", [])])
     out = {}
     if strip:
         h = size[1]
-        fg.strip_image(clip, strip, dt=strip_dt, span="clip", panel_size=(2 * int(round(0.35 * h)), h),
-                       label="t = {t:.1f} s", **kw)
+        fg.strip_image(st, strip, dt=strip_dt, span="clip", panel_size=(2 * int(round(0.35 * h)), h),
+                       label="t = {t:.1f} s")
         out["strip"] = str(strip)
     if composite:
-        fg.composite_image(clip, composite, interval=interval, span="flight", margin=0.25, size=size, **kw)
+        fg.composite_image(st, composite, interval=interval, span="flight", margin=0.25)
         out["composite"] = str(composite)
     return out
 

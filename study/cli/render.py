@@ -4,12 +4,17 @@
     add_commands(subparsers)          # adds `render` and `figure`
 
 ``flipstudy render STUDY_DIR [--what video,ghost,trail,strip,composite,overlay]
-[--size WxH] [--jobs N] [--fps 60] [--style STYLE.toml] [--frames] [--force] [--quiet]``
+[--size WxH] [--jobs N] [--video-fps 60] [--style STYLE.toml] [--frames] [--force] [--quiet]``
 (resumable: only what is missing or stale is made; Ctrl-C stops the workers at once)
 
 ``flipstudy figure CLIP [--ghost|--trail|--strip|--composite|--overlay OTHER]
 --out FILE.png [--fps F] [--scale S] [--size WxH] [--interval S] [--debug]
 [--style STYLE.toml]``
+
+``--fps`` means one thing in every command: the frame rate of the clip a
+command loads (``figure``'s CLIP, overriding a BVH's Frame Time).  The frame
+rate of the videos ``render`` writes is ``--video-fps``; ``render --fps`` is
+its old spelling, still accepted with a warning.
 """
 from __future__ import annotations
 
@@ -36,12 +41,23 @@ def _style(path):
     return Style.from_toml(path)
 
 
+class _DeprecatedFps(argparse.Action):
+    """``render --fps``, the old spelling of ``--video-fps``: stores the value
+    there and says so on stderr."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        print(f"{parser.prog}: warning: {option_string} is deprecated here (elsewhere --fps is "
+              f"a clip's frame rate); use --video-fps", file=sys.stderr)
+        setattr(namespace, self.dest, values)
+
+
 def cmd_render(args) -> int:
     """``flipstudy render``: all stimuli of a study, one camera, in parallel."""
     from flipstudy.render.study import parse_what, render_study
     try:
         what = parse_what(args.what)
-        rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs, fps=args.fps,
+        rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs,
+                           fps=args.video_fps,
                            style=_style(args.style), frames=args.frames, progress=not args.quiet,
                            orient=not args.no_orient, force=args.force)
     except FlipstudyError as e:
@@ -60,31 +76,32 @@ def cmd_figure(args) -> int:
     from .common import load_clip
 
     from flipstudy.render import figures as fg
+    from flipstudy.render.staging import stage
     try:
-        clip = load_clip(args.clip, args.scale, args.fps)
-        style = _style(args.style)
-        kw = dict(size=args.size, style=style)
+        clips = [load_clip(args.clip, args.scale, args.fps)]
+        if args.overlay:
+            clips.append(load_clip(args.overlay, args.scale, args.fps))
+        st = stage(clips, size=args.size, style=_style(args.style))
         debug = ("com", "path", "L", "v", "support") if args.debug else ()
         interval = args.interval
         if args.overlay:
-            other = load_clip(args.overlay, args.scale, args.fps)
             from pathlib import Path
             labels = (Path(args.clip).stem, Path(args.overlay).stem)
-            fg.overlay_image(clip, other, args.out, interval=interval or 0.2, labels=labels, **kw)
+            fg.overlay_image(st, args.out, interval=interval or 0.2, labels=labels)
             kind = "overlay"
         elif args.trail:
-            fg.trail_image(clip, args.out, debug=debug, **kw)
+            fg.trail_image(st, args.out, debug=debug)
             kind = "trail"
         elif args.strip:
             h = args.size[1]
-            fg.strip_image(clip, args.out, dt=interval or 0.1, panel_size=(2 * int(round(0.35 * h)), h),
-                           style=style, debug=debug)
+            fg.strip_image(st, args.out, dt=interval or 0.1, panel_size=(2 * int(round(0.35 * h)), h),
+                           debug=debug)
             kind = "strip"
         elif args.composite:
-            fg.composite_image(clip, args.out, interval=interval or 0.2, debug=debug, **kw)
+            fg.composite_image(st, args.out, interval=interval or 0.2, debug=debug)
             kind = "composite"
         else:
-            fg.ghost_image(clip, args.out, interval=interval or 0.2, debug=debug, **kw)
+            fg.ghost_image(st, args.out, interval=interval or 0.2, debug=debug)
             kind = "ghost"
     except FlipstudyError as e:
         print(f"flipstudy figure: error: {e}", file=sys.stderr)
@@ -108,8 +125,13 @@ def add_commands(subparsers) -> None:
                    help="image/video size in pixels (default 640x480; even for video)")
     p.add_argument("--jobs", type=int, default=None, metavar="N",
                    help="worker processes (default: number of CPUs); each builds its plotter once")
-    p.add_argument("--fps", type=float, default=60.0,
-                   help="display frame rate of the videos (default 60)")
+    p.add_argument("--video-fps", type=float, default=60.0, metavar="FPS",
+                   help="frame rate of the videos, in display frames per second; the stimuli are "
+                        "resampled to it (default 60)")
+    p.add_argument("--fps", dest="video_fps", type=float, action=_DeprecatedFps,
+                   default=argparse.SUPPRESS, metavar="FPS",
+                   help="deprecated spelling of --video-fps (in the other commands --fps is the "
+                        "frame rate of a clip)")
     p.add_argument("--style", metavar="STYLE.toml", help="style overrides (colours, sizes, ground)")
     p.add_argument("--frames", action="store_true", help="also write every video frame as PNG")
     p.add_argument("--no-orient", action="store_true",

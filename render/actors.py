@@ -1,0 +1,149 @@
+"""The things a :class:`~flipstudy.render.scene.Scene` draws, each one VTK actor
+created once and updated in place: a posable :class:`Character` (a
+:class:`~flipstudy.render.geometry.BodyMesh`), :class:`Markers` (spheres),
+a :class:`Polyline` and an :class:`Arrow`."""
+from __future__ import annotations
+
+import numpy as np
+
+from flipstudy.stimuli.body import Body
+
+from ._pv import pv
+from .geometry import BodyMesh
+from .style import Style
+
+
+class Character:
+    """A posable body drawn by one actor (created once per scene slot)."""
+
+    def __init__(self, plotter, body: Body, style: Style, name: str, inflate: float = 0.0):
+        self.body_mesh = BodyMesh(body, style.ellipsoid_resolution, inflate)
+        self.actor = plotter.add_mesh(self.body_mesh.mesh, color=style.body_color,
+                                      smooth_shading=False, name=name, reset_camera=False,
+                                      ambient=style.ambient, diffuse=style.diffuse,
+                                      specular=style.specular, specular_power=style.specular_power)
+        self.actor.prop.interpolation = "gouraud"
+        self.actor.mapper.scalar_visibility = False
+        self.name = name
+        self._look = None
+
+    def set_body(self, body: Body) -> None:
+        if body is not self.body_mesh.body:
+            self.body_mesh.set_body(body)
+
+    def look(self, color, opacity: float = 1.0) -> None:
+        """Colour and opacity; translucent bodies cull back faces so a ghost
+        reads as one layer."""
+        key = (str(color), float(opacity))
+        if key == self._look:
+            return
+        self._look = key
+        p = self.actor.prop
+        p.color = color
+        p.opacity = float(opacity)
+        p.culling = "back" if opacity < 1.0 else "none"
+
+    def pose(self, R: np.ndarray, P: np.ndarray) -> None:
+        self.body_mesh.pose(R, P)
+
+    @property
+    def visible(self) -> bool:
+        return bool(self.actor.GetVisibility())
+
+    @visible.setter
+    def visible(self, v: bool) -> None:
+        self.actor.SetVisibility(bool(v))
+
+
+class Markers:
+    """Up to ``capacity`` spheres of one colour, in one actor (glyphs rebuilt
+    from a fixed-size point set; unused points are parked on the first one)."""
+
+    def __init__(self, plotter, name: str, capacity: int, radius: float, color, style: Style):
+        self.capacity = int(capacity)
+        self.points = pv.PolyData(np.zeros((self.capacity, 3)))
+        sphere = pv.Sphere(radius=radius, theta_resolution=12, phi_resolution=8)
+        self._glyph = self.points.glyph(geom=sphere, orient=False, scale=False)
+        self.actor = plotter.add_mesh(self._glyph, color=color, name=name, reset_camera=False,
+                                      smooth_shading=True, ambient=0.35, diffuse=0.7, specular=0.1)
+        self.actor.mapper.scalar_visibility = False
+        self._sphere_pts = np.asarray(sphere.points).copy()
+        self._n = self._sphere_pts.shape[0]
+        self._gpts = np.asarray(self._glyph.points)
+
+    def set(self, pts: np.ndarray) -> None:
+        pts = np.asarray(pts, float).reshape(-1, 3)
+        if pts.shape[0] > self.capacity:
+            raise ValueError(f"Markers: {pts.shape[0]} markers, capacity {self.capacity}")
+        full = np.empty((self.capacity, 3))
+        if pts.shape[0]:
+            full[: pts.shape[0]] = pts
+            full[pts.shape[0]:] = pts[0]
+        else:
+            full[:] = 0.0
+        out = self._gpts.reshape(self.capacity, self._n, 3)
+        np.add(full[:, None, :], self._sphere_pts[None], out=out)
+        self._glyph.GetPoints().Modified()
+        self._glyph.Modified()
+        self.actor.SetVisibility(pts.shape[0] > 0)
+
+
+class Polyline:
+    """A polyline of up to ``capacity`` points (unused points repeat the last)."""
+
+    def __init__(self, plotter, name: str, capacity: int, color, width: float, closed=False,
+                 opacity: float = 1.0):
+        self.capacity = int(capacity)
+        n = self.capacity + (1 if closed else 0)
+        idx = np.arange(n) % self.capacity
+        self.mesh = pv.PolyData(np.zeros((self.capacity, 3)), lines=np.hstack([[n], idx]))
+        self.actor = plotter.add_mesh(self.mesh, color=color, line_width=width, name=name,
+                                      reset_camera=False, lighting=False, opacity=opacity)
+        self._pts = np.asarray(self.mesh.points)
+
+    def set(self, pts: np.ndarray) -> None:
+        pts = np.asarray(pts, float).reshape(-1, 3)[: self.capacity]
+        if pts.shape[0] == 0:
+            self.actor.SetVisibility(False)
+            return
+        self._pts[: pts.shape[0]] = pts
+        self._pts[pts.shape[0]:] = pts[-1]
+        self.mesh.GetPoints().Modified()
+        self.mesh.Modified()
+        self.actor.SetVisibility(True)
+
+
+class Arrow:
+    """An arrow from a point along a vector, posed in place (template along +x)."""
+
+    def __init__(self, plotter, name: str, color):
+        tmpl = pv.Arrow(start=(0, 0, 0), direction=(1, 0, 0), tip_length=0.25, tip_radius=0.08,
+                        shaft_radius=0.03, scale=1.0)
+        self._tmpl = np.asarray(tmpl.points).copy()
+        self.mesh = tmpl
+        self.actor = plotter.add_mesh(self.mesh, color=color, name=name, reset_camera=False,
+                                      ambient=0.4, diffuse=0.7)
+        self._pts = np.asarray(self.mesh.points)
+
+    def set(self, start, vec, thickness: float = 1.0) -> None:
+        v = np.asarray(vec, float)
+        L = float(np.linalg.norm(v))
+        if L < 1e-6:
+            self.actor.SetVisibility(False)
+            return
+        x = v / L
+        h = np.array([0.0, 1.0, 0.0]) if abs(x[1]) < 0.9 else np.array([1.0, 0.0, 0.0])
+        y = np.cross(h, x)
+        y /= np.linalg.norm(y)
+        z = np.cross(x, y)
+        # length along x; a fixed girth (tip radius 4 cm, shaft 1.5 cm) except for
+        # short arrows, which are thinned so they still look like arrows
+        s = 0.5 * thickness * min(1.0, L / 0.25)
+        M = np.stack([x * L, y * s, z * s], axis=1)
+        self._pts[:] = self._tmpl @ M.T + np.asarray(start, float)
+        self.mesh.GetPoints().Modified()
+        self.mesh.Modified()
+        self.actor.SetVisibility(True)
+
+
+__all__ = ["Character", "Markers", "Polyline", "Arrow"]
