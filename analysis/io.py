@@ -125,9 +125,9 @@ def combine_responses(sources) -> pd.DataFrame:
             df["source"] = "local"
         df["source"] = df["source"].fillna("local")
         for pid in dict.fromkeys(df["participant"].astype(str)):
-            if pid in owner and owner[pid] != path:
+            if pid in owner:
                 raise ResponsesError(f"{path}: participant {pid} is also in {owner[pid]}; the tables "
-                                     f"must not share participant IDs")
+                                     f"must not share participant IDs (nor be one table twice)")
             owner[pid] = path
         frames.append(df)
     return pd.concat(frames, ignore_index=True)
