@@ -20,12 +20,14 @@ comes from there).
 """
 import csv
 import functools
-import zipfile
 import json
 import os
 import shutil
 import threading
 import time
+import zipfile
+from email import policy
+from email.parser import BytesParser
 from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from urllib.parse import urlparse
@@ -47,6 +49,7 @@ pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
 
 FAST = "backflip_abrupt-decrease_25"       # its video: 240 fps, frames must drop at 60 Hz
 PID = "W01"
+PAVLOVIA_API = "/api/v2/experiments/42/sessions"
 
 #: A stand-in for jatos.js with the calls the site makes, posting to the test server.
 JATOS_STANDIN = """
@@ -69,7 +72,7 @@ class _Host:
     """A static server of the site folder with the JATOS stand-in beside it."""
 
     def __init__(self, site: Path):
-        self.bodies, self.ends, self.paths = [], [], []
+        self.bodies, self.ends, self.paths, self.pavlovia, self.saved = [], [], [], [], {}
         host = self
 
         class Handler(SimpleHTTPRequestHandler):
@@ -78,6 +81,11 @@ class _Host:
 
             def do_GET(self):
                 host.paths.append(self.path)
+                if self.path.split("?")[0] == "/config.json":    # what Pavlovia serves beside the site
+                    self._json({"experiment": {"name": "demo", "fullpath": "lab/demo"},
+                                "pavlovia": {"URL": f"http://127.0.0.1:{host.port}"},
+                                "gitlab": {"projectId": 42}})
+                    return
                 if self.path.split("?")[0] == "/jatos.js":
                     body = JATOS_STANDIN.encode()
                     self.send_response(200)
@@ -88,7 +96,36 @@ class _Host:
                     return
                 super().do_GET()
 
+            def _json(self, obj):
+                body = json.dumps(obj).encode()
+                self.send_response(200)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(body)))
+                self.end_headers()
+                self.wfile.write(body)
+
+            def do_DELETE(self):
+                host.pavlovia.append(("DELETE", self.path, self._form()))
+                self._json({})
+
+            def _form(self):
+                n = int(self.headers.get("Content-Length") or 0)
+                raw = self.rfile.read(n)
+                msg = BytesParser(policy=policy.default).parsebytes(
+                    b"Content-Type: " + self.headers["Content-Type"].encode() + b"\r\n\r\n" + raw)
+                return {part.get_param("name", header="content-disposition"): part.get_content()
+                        for part in msg.iter_parts()} if msg.is_multipart() else {}
+
             def do_POST(self):
+                if self.path.startswith(PAVLOVIA_API):           # Pavlovia's experiment API
+                    form = self._form()
+                    host.pavlovia.append(("POST", self.path, form))
+                    if self.path.endswith("/sessions"):
+                        self._json({"token": "T1", "experiment": {"status2": "RUNNING", "saveFormat": "CSV"}})
+                    else:
+                        host.saved[form["key"]] = form["value"]
+                        self._json({})
+                    return
                 n = int(self.headers.get("Content-Length") or 0)
                 body = self.rfile.read(n).decode()
                 if self.path.startswith("/__jatos/resultData"):
@@ -181,6 +218,65 @@ HOW = ["key", "click", "click", "key", "click", "key", "key", "click"]
 def _csv(path):
     with open(path, newline="") as f:
         return list(csv.DictReader(f))
+
+
+def _gate(page, origin, blocked):
+    def gate(route):
+        if urlparse(route.request.url).netloc == origin:
+            route.continue_()
+        else:
+            blocked.append(route.request.url)
+            route.abort()
+    page.route("**/*", gate)
+
+
+def _intro(page):
+    _wait_screen(page, "instructions")
+    page.click("#jspsych-instructions-next")
+    _wait_screen(page, "demographics")
+    page.fill("#fs-age", "41")
+    page.check('input[name=gender][value="man"]')
+    page.check('input[name=animation_experience][value="significant"]')
+    page.check('input[name=gymnastics_experience][value="none"]')
+    page.click("#jspsych-survey-html-form-next")
+    page.wait_for_selector("button.fs-next:enabled")
+    page.click("button.fs-next")
+
+
+def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  # noqa: F811
+    """Pavlovia's protocol: a session opened, the records saved after each answer, closed at the end."""
+    study = make_demo_study(tmp_path / "study", levels=(0, 25), repetitions=1, video_frames=12,
+                            size=(96, 72))
+    site = tmp_path / "site"
+    export_site(study, site, host="pavlovia", iti_ms=20, jspsych_dir=jspsych_dir)
+    assert "https://pavlovia.org" in (site / "index.html").read_text()     # connect-src: its API only
+    blocked = []
+    with _Host(site) as host:
+        origin = f"127.0.0.1:{host.port}"
+        _gate(page, origin, blocked)
+        page.goto(f"http://{origin}/index.html?participant=V07")
+        _intro(page)
+        for i in (1, 2):
+            _answer(page, i, RESP[i - 1], HOW[i - 1])
+        page.wait_for_function("window.flipstudyState.checkpoint.s.sent >= "
+                               "window.flipstudyState.checkpoint.records.length")
+        (key, text), = host.saved.items()                  # one file per run, replaced each time
+        assert key.startswith("demo_V07_r") and key.endswith(".csv")
+        assert text.count(",answer,") == 2
+        for i in (3, 4):
+            _answer(page, i, RESP[i - 1], HOW[i - 1])
+        page.wait_for_selector('#jspsych-target[data-saved="1"]')
+    assert blocked == []
+    assert [m for m, *_ in host.pavlovia][0] == "POST" and host.pavlovia[-1][0] == "DELETE"
+    assert host.pavlovia[-1][2] == {"isCompleted": "true"}
+    (key, text), = host.saved.items()
+    f = tmp_path / key
+    f.write_text(text)
+    out = import_web(study, [f])
+    assert out["answers"] == 4 and out["incomplete"] == []
+    got = _csv(study / "web" / "responses.csv")
+    assert [r["response"] for r in got] == RESP[:4] and {r["source"] for r in got} == {"web-pavlovia"}
+    assert _csv(study / "web" / "participants.csv")[0]["age"] == "41"
 
 
 def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_path):  # noqa: F811

@@ -17,7 +17,8 @@ participant's trial order recomputed with :func:`flipstudy.study.web.order.web_t
 A bad record refuses the whole import, naming the file and the line or row.
 
 Nothing is overwritten and nothing is counted twice.  Each imported file is kept
-as it was, under ``STUDY/web/imports/`` named by its SHA-256, and
+as it was, under ``STUDY/web/imports/`` named by its SHA-256 (``web/imports.json``
+lists them in the order they were imported, with when and what they added), and
 ``STUDY/web/responses.csv`` (with ``participants.csv`` and a Psych-DS
 ``dataset_description.json``) is rebuilt from all kept files: the same record
 read twice (a file imported again, a JATOS export and the participant's
@@ -398,6 +399,22 @@ def _local_participants(study_dir: Path) -> set:
         conn.close()
 
 
+LEDGER = "imports.json"
+
+
+def _kept(d: Path) -> list[Path]:
+    """The kept files in the order they were imported (``web/imports.json``; a file the
+    ledger misses, after a crash between the two writes, comes last)."""
+    imports = d / IMPORTS
+    if not imports.is_dir():
+        return []
+    files = {p.name: p for p in imports.iterdir() if p.is_file() and not p.name.startswith(".")}
+    order = []
+    if (d / LEDGER).is_file():
+        order = [e["stored"] for e in json.loads((d / LEDGER).read_text()) if e["stored"] in files]
+    return [files[n] for n in order] + [files[n] for n in sorted(files) if n not in order]
+
+
 def import_web(study_dir, files) -> dict:
     """Import results files into ``STUDY_DIR/web/`` (see the module docstring).
 
@@ -409,8 +426,7 @@ def import_web(study_dir, files) -> dict:
     imports = d / IMPORTS
     checker = _Checker(study)
     n_trials = len(checker.order("x")) if checker.groups else 0
-    kept = sorted(imports.glob("*")) if imports.is_dir() else []
-    kept_sha = {p.name.split("-", 1)[0]: p for p in kept if p.is_file()}
+    kept_sha = {p.name.split("-", 1)[0]: p for p in _kept(d)}
     items = []
     for p in kept_sha.values():
         for where, rec in read_records(p):
@@ -450,6 +466,14 @@ def import_web(study_dir, files) -> dict:
         tmp = target.with_name(f".{target.name}.tmp")
         tmp.write_bytes(data)
         tmp.replace(target)
+    from ..store import utc_now
+    ledger = json.loads((d / LEDGER).read_text()) if (d / LEDGER).is_file() else []
+    names = {e["stored"] for e in ledger}
+    ledger += [{"stored": p.name, "imported": None} for p in _kept(d) if p.name not in names
+               and p.name not in {s for s, _ in new_files}]
+    ledger += [{"stored": r["stored"], "file": r["file"], "imported": utc_now(), "records": r["records"],
+                "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
+    atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
     out = d / "responses.csv"
     atomic_write_text(out, _table_text(COLUMNS, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
