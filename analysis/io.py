@@ -107,6 +107,32 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
     return expand_shared_originals(df, where)
 
 
+def combine_responses(sources) -> pd.DataFrame:
+    """Several response tables (paths or study folders) as one table to analyse.
+
+    Each is read and checked on its own first, so an error names its file and
+    line; a ``source`` column says where each row came from (its own ``source``
+    column where it has one, e.g. ``web-jatos``, else ``local``).  A participant
+    ID found in two tables is refused: two tables never mix one person's answers.
+    """
+    frames, owner = [], {}
+    for s in sources:
+        path = resolve_responses_path(s)
+        load_responses(path)
+        df = pd.read_csv(path, dtype={"participant": str, "group": str, "response": str,
+                                      "stimulus": str, "session": str})
+        if "source" not in df.columns:
+            df["source"] = "local"
+        df["source"] = df["source"].fillna("local")
+        for pid in dict.fromkeys(df["participant"].astype(str)):
+            if pid in owner:
+                raise ResponsesError(f"{path}: participant {pid} is also in {owner[pid]}; the tables "
+                                     f"must not share participant IDs (nor be one table twice)")
+            owner[pid] = path
+        frames.append(df)
+    return pd.concat(frames, ignore_index=True)
+
+
 def expand_shared_originals(df: pd.DataFrame, where: str = "responses table") -> pd.DataFrame:
     """The answers to the shared originals as level 0 of each group that shares them.
 

@@ -13,7 +13,9 @@
 trial).  ``participants.csv`` (next to it) has one row per session:
 participant, session, source (browser/simulated), age (empty: not given),
 gender, animation_experience, gymnastics_experience, started, finished,
-answered, n_trials, simulated, complete.
+answered, n_trials, simulated, complete.  ``dataset_description.json`` (Psych-DS,
+:mod:`flipstudy.study.psychds`) beside them names the columns, the design, the
+stimuli's hashes and the software versions.
 
 Simulated participants are left out of both files unless
 ``include_simulated=True`` (``flipstudy export --include-simulated``); when
@@ -87,6 +89,8 @@ def export_responses(study_dir, out=None, *, participants_out=None,
         p["simulated"], p["complete"] = _flag(p["simulated"]), _flag(p["complete"])
     atomic_write_text(out, _csv(RESPONSE_COLUMNS, rows))
     atomic_write_text(pout, _csv(PARTICIPANT_COLUMNS, written))
+    from .psychds import write_dataset_description      # Psych-DS metadata beside them
+    write_dataset_description(out.parent, study_dir, RESPONSE_COLUMNS, source="local sessions")
     return {"responses": out, "participants": pout, "rows": len(rows), "sessions": len(written),
             "real": sorted({p["participant"] for p in written if p["simulated"] == "false"}),
             "simulated": sims if include_simulated else [],

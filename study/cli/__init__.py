@@ -9,6 +9,7 @@ options, calls one library function and prints what it did:
 * :mod:`.analyze` — ``analyze``
 * :mod:`.reproduce` — ``reproduce``
 * :mod:`.concat` — ``concat``;  :mod:`.jump` — ``jump``
+* :mod:`.web` — ``export-web``, ``import-web``
 
 Heavy libraries (pandas, pyvista, …) are imported by the command that needs them.
 """
@@ -20,7 +21,7 @@ import sys
 
 from .common import load_clip
 
-FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump")
+FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -29,11 +29,14 @@ def add_commands(subparsers) -> None:
         epilog=("examples:\n"
                 "  flipstudy analyze responses.csv --out results/\n"
                 "  flipstudy analyze STUDY_DIR            # reads STUDY_DIR/responses.csv\n"
+                "  flipstudy analyze STUDY_DIR/responses.csv STUDY_DIR/web/responses.csv --out both/\n"
                 "  flipstudy analyze responses.csv --out results/ --correction 1/2N --json\n"
                 "  flipstudy analyze responses.csv --out results/ --image ghost_orig.png "
                 "--image 'ghost strongest error=ghost_50.png'"))
-    p.add_argument("responses", metavar="RESPONSES",
-                   help="responses CSV, or a study folder holding responses.csv")
+    p.add_argument("responses", metavar="RESPONSES", nargs="+",
+                   help="responses CSV, or a study folder holding responses.csv; several are "
+                        "analysed together (e.g. STUDY/responses.csv STUDY/web/responses.csv), "
+                        "refused if one participant ID is in two of them")
     p.add_argument("--out", metavar="DIR", default=None,
                    help="output folder (default: RESPONSES' folder/analysis)")
     p.add_argument("--correction", default="loglinear",
@@ -71,11 +74,13 @@ def _images(specs):
 
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
-    from flipstudy.analysis.io import NeedsExport, resolve_responses_path
+    from flipstudy.analysis.io import NeedsExport, combine_responses, resolve_responses_path
     from flipstudy.analysis.pipeline import analyze
     try:
-        src = resolve_responses_path(args.responses)
+        src = resolve_responses_path(args.responses[0])
         out = Path(args.out) if args.out else src.parent / "analysis"
+        if len(args.responses) > 1:
+            src = combine_responses(args.responses)
         res = analyze(src, out, correction=args.correction, images=_images(args.image) or None,
                       seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
                       gee=not args.no_gee, figures=not args.no_figures,

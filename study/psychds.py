@@ -1,0 +1,141 @@
+"""A Psych-DS ``dataset_description.json`` beside the response tables.
+
+Psych-DS (psych-ds.github.io) describes a dataset with a schema.org ``Dataset``
+in JSON-LD: ``name``, ``description``, ``schemaVersion`` and ``variableMeasured``
+(here one ``PropertyValue`` per column, with what it means) are required.  The
+file also names what the answers were given to: the design and the manifest
+with their SHA-256 (``isBasedOn``, schema.org ``MediaObject``), every stimulus
+with the hash of its motion (BVH) and of its video where ``render.json`` records
+one, and the software with its versions.
+
+>>> import tempfile, pathlib, json
+>>> from flipstudy.study.demo import make_demo_study
+>>> tmp = pathlib.Path(tempfile.mkdtemp())
+>>> study = make_demo_study(tmp / "study")
+>>> p = write_dataset_description(study, study, ["participant", "response"], source="local sessions")
+>>> d = json.loads(p.read_text())
+>>> d["@type"], d["schemaVersion"], [v["name"] for v in d["variableMeasured"]]
+('Dataset', 'Psych-DS 0.1.0', ['participant', 'response'])
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import platform
+from pathlib import Path
+
+from flipstudy.stimuli._io import atomic_write_text
+
+FILE = "dataset_description.json"
+SCHEMA_VERSION = "Psych-DS 0.1.0"
+
+#: what each column of the response tables means
+COLUMNS = {
+    "participant": "participant ID",
+    "session": "session number of the participant (1-based)",
+    "trial": "trial number within the session (1-based)",
+    "stimulus": "stimulus name (manifest.csv)",
+    "group": "error group of the stimulus",
+    "level": "nominal error in percent (0 = the original motion)",
+    "repetition": "which showing of the stimulus (1-based)",
+    "response": "the answer: correct or incorrect (physically plausible or not)",
+    "rt_ms": "reaction time in milliseconds, from the end of the motion to the answer",
+    "shown_ms": "how long the motion was shown, milliseconds ('playing' to 'ended')",
+    "timestamp": "when the answer was stored (ISO 8601, UTC)",
+    "clip": "base clip of the stimulus",
+    "kind": "kind of error (angular-momentum, takeoff-angle)",
+    "late_frames": "frames shown late or dropped during the motion",
+    "replays": "times the participant replayed the motion",
+    "input": "how the answer was given: key, click or simulated",
+    "simulated": "true for a simulated participant",
+    "complete": "false when the session did not answer every trial",
+    "source": "where the answer came from (web-jatos, web-pavlovia, web-static)",
+    "run_id": "the browser run the answer came from (web sessions)",
+    "frames_expected": "frames of the video",
+    "frames_presented": "video frames presented (requestVideoFrameCallback presentedFrames)",
+    "frames_dropped": "video frames never presented (frames_expected - frames_presented)",
+    "dropped_pct": "frames_dropped in percent of frames_expected",
+    "playback_ms": "milliseconds from the first presented frame to the end of playback",
+    "video_ms": "duration of the video in milliseconds",
+    "refresh_hz": "display refresh rate measured at the start of the run",
+    "timing": "how frames were counted: rvfc (requestVideoFrameCallback) or raf (fallback)",
+    "playback_flagged": "true when dropped_pct exceeds max_dropped_pct",
+    "max_dropped_pct": "the site's dropped-frame threshold, percent",
+    "source_file": "the imported file the answer was first read from",
+    "age": "age in years (empty: prefer not to say)",
+    "gender": "gender (option code)",
+    "animation_experience": "experience with computer animation",
+    "gymnastics_experience": "experience with gymnastics or acrobatics",
+    "started": "when the session started (ISO 8601, UTC)",
+    "finished": "when the session's last answer was stored",
+    "answered": "answers given in the session",
+    "n_trials": "trials of the session",
+}
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _software() -> list[dict]:
+    from importlib.metadata import PackageNotFoundError, version
+    out = [{"@type": "SoftwareApplication", "name": "python", "softwareVersion": platform.python_version()}]
+    for name in ("flipstudy", "numpy", "scipy", "pandas", "pyvista", "vtk"):
+        try:
+            out.append({"@type": "SoftwareApplication", "name": name, "softwareVersion": version(name)})
+        except PackageNotFoundError:
+            pass
+    return out
+
+
+def write_dataset_description(folder, study_dir, columns, *, source: str, extra_software=()) -> Path:
+    """Write ``folder/dataset_description.json`` for the response tables of
+    ``study_dir`` with these ``columns`` (``source``: "local sessions", "web
+    sessions", …); returns its path."""
+    folder, study_dir = Path(folder), Path(study_dir)
+    name = study_dir.name
+    based = []
+    design = study_dir / "design.toml"
+    if design.is_file():
+        try:
+            from flipstudy.stimuli.design import load_design
+            name = load_design(design).name
+        except Exception:                      # a description never blocks an export
+            pass
+        based.append({"@type": "MediaObject", "name": "design.toml", "sha256": _sha256(design)})
+    manifest = study_dir / "manifest.csv"
+    stimuli = []
+    if manifest.is_file():
+        based.append({"@type": "MediaObject", "name": "manifest.csv", "sha256": _sha256(manifest)})
+        from flipstudy.stimuli.stimset import read_manifest
+        videos = {}
+        rec = study_dir / "render" / "render.json"
+        if rec.is_file():
+            try:
+                outputs = json.loads(rec.read_text()).get("outputs", {})
+                videos = {v.get("stimulus"): v.get("sha256") for k, v in outputs.items()
+                          if isinstance(v, dict) and v.get("kind") == "video"}
+            except ValueError:
+                videos = {}
+        for r in read_manifest(study_dir):
+            s = {"@type": "MediaObject", "name": r["stimulus"], "sha256": r.get("sha256", "")}
+            if videos.get(r["stimulus"]):
+                s["video_sha256"] = videos[r["stimulus"]]
+            stimuli.append(s)
+    desc = {
+        "@context": "https://schema.org/",
+        "@type": "Dataset",
+        "name": f"{name}: responses ({source})",
+        "description": (f"Answers of the perception study '{name}' ({source}): one row per trial "
+                        f"in responses.csv (long format), one row per session in participants.csv. "
+                        f"Written by flipstudy."),
+        "schemaVersion": SCHEMA_VERSION,
+        "keywords": ["perception", "character animation", "physical plausibility", "flipstudy"],
+        "variableMeasured": [{"@type": "PropertyValue", "name": c, "description": COLUMNS.get(c, c)}
+                             for c in columns],
+        "isBasedOn": based + [{"@type": "CreativeWork", "name": "stimuli", "hasPart": stimuli}]
+                     + _software() + list(extra_software),
+    }
+    path = folder / FILE
+    atomic_write_text(path, json.dumps(desc, indent=2, ensure_ascii=False) + "\n")
+    return path

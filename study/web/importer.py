@@ -1,0 +1,487 @@
+"""``flipstudy import-web``: the site's records back into the study.
+
+The files a researcher gets back, each read by its content:
+
+* JATOS: the result data (``Export results → data``: the component's appended
+  lines, one JSON record per line) or the results archive (``.zip``, each
+  ``data.txt`` inside read the same way);
+* Pavlovia: the CSV the site saved in the project's ``data/`` folder (one record
+  per row);
+* the participant's download (``flipstudy-STUDY-ID-RUN.jsonl``, one JSON record per
+  line), also a JSON array of records.
+
+Every record is checked before anything is written: its format, the study's
+manifest hash (a site of other stimuli is refused), each field's type and range,
+and each answer's stimulus, group, level and repetition against the
+participant's trial order recomputed with :func:`flipstudy.study.web.order.web_trial_order`.
+A bad record refuses the whole import, naming the file and the line or row.
+
+Nothing is overwritten and nothing is counted twice.  Each imported file is kept
+as it was, under ``STUDY/web/imports/`` named by its SHA-256 (``web/imports.json``
+lists them in the order they were imported, with when and what they added), and
+``STUDY/web/responses.csv`` (with ``participants.csv`` and a Psych-DS
+``dataset_description.json``) is rebuilt from all kept files: the same record
+read twice (a file imported again, a JATOS export and the participant's
+download of the same run, a record resent after a reload) is one row; a file
+already imported is skipped and reported; two different answers to one trial
+of one run refuse the import.  Web participants are kept apart from local ones:
+an ID that also has sessions in ``sessions.sqlite`` is refused.  Each browser
+run of a participant is a session, numbered by the run's start time.
+
+The rows are the local export's columns (``source`` = ``web-jatos``,
+``web-pavlovia`` or ``web-static``) plus the playback record: ``frames_expected,
+frames_presented, frames_dropped, dropped_pct, playback_ms, video_ms,
+refresh_hz, timing, playback_flagged, max_dropped_pct`` and ``run_id``,
+``source_file``.
+"""
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import math
+import re
+import zipfile
+from pathlib import Path
+
+from flipstudy.stimuli._io import atomic_write_text
+from flipstudy.stimuli.exceptions import FlipstudyError
+
+from .. import store
+from ..export import PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
+from ..psychds import write_dataset_description
+from ..session import load_study
+from ..validate import (DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE,
+                        RESPONSES)
+from .order import order_groups, web_trial_order
+from .site import FORMAT, HOSTS
+
+WEB_DIR = "web"
+IMPORTS = "imports"
+WEB_COLUMNS = ["source", "run_id", "frames_expected", "frames_presented", "frames_dropped",
+               "dropped_pct", "playback_ms", "video_ms", "refresh_hz", "timing", "playback_flagged",
+               "max_dropped_pct", "source_file"]
+COLUMNS = RESPONSE_COLUMNS + WEB_COLUMNS
+WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
+                                                 "user_agent"]
+KINDS = ("start", "demographics", "answer", "end")
+MAX_FILE = 256 * 1024 * 1024
+
+
+class WebImportError(FlipstudyError, ValueError):
+    """A results file that cannot be imported; the message names file and line or row."""
+
+
+# --- reading ---------------------------------------------------------------------------------
+
+def _ndjson(text: str, where: str):
+    for i, line in enumerate(text.splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line, parse_constant=lambda c: math.nan)
+        except ValueError as e:
+            raise WebImportError(f"{where}: line {i}: not a JSON record ({e})") from None
+        if not isinstance(obj, dict):
+            raise WebImportError(f"{where}: line {i}: expected a JSON object, got {type(obj).__name__}")
+        yield f"{where}: line {i}", obj
+
+
+def _json_array(text: str, where: str):
+    try:
+        arr = json.loads(text)
+    except ValueError as e:
+        raise WebImportError(f"{where}: not valid JSON ({e})") from None
+    if not isinstance(arr, list):
+        raise WebImportError(f"{where}: expected a JSON array of records")
+    for i, obj in enumerate(arr, start=1):
+        if not isinstance(obj, dict):
+            raise WebImportError(f"{where}: record {i}: expected a JSON object")
+        yield f"{where}: record {i}", obj
+
+
+def _csv(text: str, where: str):
+    reader = csv.DictReader(io.StringIO(text))
+    if not reader.fieldnames or "record" not in reader.fieldnames or "format" not in reader.fieldnames:
+        raise WebImportError(f"{where}: line 1: not a flipstudy results file (a CSV needs the columns "
+                             f"'format' and 'record'; JSON lines start with '{{')")
+    for i, row in enumerate(reader, start=2):
+        if None in row:
+            raise WebImportError(f"{where}: line {i}: more cells than the header has columns")
+        yield f"{where}: line {i}", {k: (None if v == "" else v) for k, v in row.items()}
+
+
+def _text_records(data: bytes, where: str):
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as e:
+        raise WebImportError(f"{where}: not UTF-8 text ({e})") from None
+    head = text.lstrip()[:1]
+    if not head:
+        return iter(())
+    if head == "{":
+        return _ndjson(text, where)
+    if head == "[":
+        return _json_array(text, where)
+    return _csv(text, where)
+
+
+def read_records(path) -> list[tuple[str, dict]]:
+    """``[(where, record), ...]`` of one results file (JATOS data or archive,
+    Pavlovia CSV, download), unchecked; ``where`` names file and line."""
+    path = Path(path)
+    if not path.is_file():
+        raise WebImportError(f"{path}: no such file")
+    if path.stat().st_size > MAX_FILE:
+        raise WebImportError(f"{path}: larger than {MAX_FILE >> 20} MiB; not a results file")
+    data = path.read_bytes()
+    if data[:4] == b"PK\x03\x04":
+        out = []
+        try:
+            with zipfile.ZipFile(io.BytesIO(data)) as z:
+                for info in sorted(z.infolist(), key=lambda i: i.filename):
+                    if info.is_dir() or info.file_size > MAX_FILE:
+                        continue
+                    name = info.filename.rsplit("/", 1)[-1]
+                    if not (name.endswith((".txt", ".jsonl", ".json", ".csv"))):
+                        continue
+                    out += list(_text_records(z.read(info), f"{path}:{info.filename}"))
+        except zipfile.BadZipFile as e:
+            raise WebImportError(f"{path}: a broken zip archive ({e})") from None
+        return out
+    return list(_text_records(data, str(path)))
+
+
+# --- checking --------------------------------------------------------------------------------
+
+def _num(v, where, key, lo=0.0, hi=math.inf, *, integer=False, optional=False):
+    if v is None and optional:
+        return None
+    if isinstance(v, bool) or v is None:
+        raise WebImportError(f"{where}: {key}: expected a number, got {v!r}")
+    if isinstance(v, str):
+        try:
+            v = float(v)
+        except ValueError:
+            raise WebImportError(f"{where}: {key}: expected a number, got {v!r}") from None
+    v = float(v)
+    if not math.isfinite(v) or not lo <= v <= hi:
+        raise WebImportError(f"{where}: {key}: {v:g} is outside {lo:g}..{hi:g}")
+    if integer:
+        if v != int(v):
+            raise WebImportError(f"{where}: {key}: expected a whole number, got {v:g}")
+        return int(v)
+    return v
+
+
+def _bool(v, where, key):
+    if isinstance(v, bool):
+        return v
+    if isinstance(v, str) and v.lower() in ("true", "false"):
+        return v.lower() == "true"
+    raise WebImportError(f"{where}: {key}: expected true or false, got {v!r}")
+
+
+def _str(v, where, key, options=None):
+    if not isinstance(v, str) or not v:
+        raise WebImportError(f"{where}: {key}: expected text, got {v!r}")
+    if options is not None and v not in options:
+        raise WebImportError(f"{where}: {key}: must be one of {', '.join(options)}, got {v!r}")
+    return v
+
+
+def _need(rec, where, keys):
+    missing = [k for k in keys if k not in rec]
+    if missing:
+        raise WebImportError(f"{where}: missing field(s) {', '.join(missing)}")
+
+
+COMMON = ("format", "record", "site_id", "study", "manifest_sha256", "host", "participant", "run_id",
+          "run_started", "timestamp")
+ANSWER = ("trial", "stimulus", "group", "level", "repetition", "response", "rt_ms", "shown_ms",
+          "input", "replays", "frames_expected", "frames_presented", "frames_dropped", "dropped_pct",
+          "playback_ms", "video_ms", "timing", "playback_flagged", "max_dropped_pct")
+
+
+class _Checker:
+    def __init__(self, study):
+        self.study = study
+        self.groups = order_groups(study.design, study.manifest)
+        self.orders = {}
+
+    def order(self, pid):
+        if pid not in self.orders:
+            self.orders[pid] = web_trial_order(self.groups, self.study.design.repetitions,
+                                               self.study.design.seed, pid)
+        return self.orders[pid]
+
+    def check(self, where: str, rec: dict) -> dict:
+        _need(rec, where, COMMON)
+        if rec["format"] != FORMAT:
+            raise WebImportError(f"{where}: format {rec['format']!r}: this flipstudy reads {FORMAT}")
+        kind = _str(rec["record"], where, "record", KINDS)
+        if rec["manifest_sha256"] != self.study.manifest_sha256:
+            raise WebImportError(
+                f"{where}: the site was exported from other stimuli (manifest sha256 "
+                f"{str(rec['manifest_sha256'])[:12]}…, this study's is {self.study.manifest_sha256[:12]}…); "
+                f"import it into the study it was exported from")
+        pid = rec["participant"]
+        if not isinstance(pid, str) or not PARTICIPANT_RE.fullmatch(pid):
+            raise WebImportError(f"{where}: participant {pid!r} is not a valid participant ID")
+        out = {"record": kind, "participant": pid, "host": _str(rec["host"], where, "host", HOSTS),
+               "run_id": _str(rec["run_id"], where, "run_id"),
+               "run_started": _str(rec["run_started"], where, "run_started"),
+               "timestamp": _str(rec["timestamp"], where, "timestamp"),
+               "site_id": _str(rec["site_id"], where, "site_id")}
+        if kind == "answer":
+            _need(rec, where, ANSWER)
+            trials = self.order(pid)
+            t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
+            want = trials[t - 1]
+            got = {"stimulus": rec["stimulus"], "group": rec["group"],
+                   "level": _num(rec["level"], where, "level", -1e6, 1e6),
+                   "repetition": _num(rec["repetition"], where, "repetition", 1, 1000, integer=True)}
+            for k in got:
+                if got[k] != getattr(want, k):
+                    raise WebImportError(f"{where}: trial {t}: {k} {got[k]!r}, but trial {t} of "
+                                         f"participant {pid} is {getattr(want, k)!r} ({want.stimulus})")
+            out.update(got, trial=t, clip=want.clip, kind=want.kind,
+                       response=_str(rec["response"], where, "response", RESPONSES),
+                       rt_ms=_num(rec["rt_ms"], where, "rt_ms", 0, MAX_RT_MS),
+                       shown_ms=_num(rec["shown_ms"], where, "shown_ms", 0, MAX_SHOWN_MS),
+                       input=_str(rec["input"], where, "input", ("key", "click")),
+                       replays=_num(rec["replays"], where, "replays", 0, MAX_REPLAYS, integer=True),
+                       timing=_str(rec["timing"], where, "timing", ("rvfc", "raf")),
+                       playback_flagged=_bool(rec["playback_flagged"], where, "playback_flagged"),
+                       refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True))
+            for k in ("frames_expected", "frames_presented", "frames_dropped"):
+                out[k] = _num(rec[k], where, k, 0, 10_000_000, integer=True)
+            for k in ("dropped_pct", "max_dropped_pct"):
+                out[k] = _num(rec[k], where, k, 0, 100)
+            for k in ("playback_ms", "video_ms"):
+                out[k] = _num(rec[k], where, k, 0, MAX_SHOWN_MS)
+            if out["frames_dropped"] != max(0, out["frames_expected"] - out["frames_presented"]):
+                raise WebImportError(f"{where}: frames_dropped {out['frames_dropped']} is not "
+                                     f"frames_expected - frames_presented")
+        elif kind == "demographics":
+            for f in DEMOGRAPHIC_FIELDS:
+                _need(rec, where, (f["name"],))
+                v = rec[f["name"]]
+                if f["kind"] == "number":
+                    out[f["name"]] = _num(v, where, f["name"], f["min"], f["max"], integer=True,
+                                          optional=True)
+                else:
+                    out[f["name"]] = _str(v, where, f["name"], [o[0] for o in f["options"]])
+        elif kind == "start":
+            _need(rec, where, ("n_trials", "order"))
+            n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
+            order = " ".join(t.stimulus for t in self.order(pid))
+            if n != len(self.order(pid)) or rec["order"] != order:
+                raise WebImportError(f"{where}: the run's trial order is not this study's order for "
+                                     f"{pid} (another design or trial-order rule)")
+            out.update(n_trials=n, refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000,
+                                                   optional=True),
+                       participant_from=rec.get("participant_from"), user_agent=rec.get("user_agent"))
+        return out
+
+
+# --- merging and writing ---------------------------------------------------------------------
+
+def _key(r: dict):
+    if r["record"] == "answer":
+        return (r["run_id"], "answer", r["trial"])
+    return (r["run_id"], r["record"])
+
+
+def _merge(items, local_ids) -> tuple[dict, int]:
+    """``{key: (record, where, file)}`` from ``[(where, file, record)]``: identical
+    records once; two different ones for one key refuse."""
+    merged, dup = {}, 0
+    runs = {}
+    for where, fname, r in items:
+        k = _key(r)
+        if r["run_id"] in runs and runs[r["run_id"]] != r["participant"]:
+            raise WebImportError(f"{where}: run {r['run_id']} belongs to participant "
+                                 f"{runs[r['run_id']]}, not {r['participant']}")
+        runs[r["run_id"]] = r["participant"]
+        if r["participant"] in local_ids:
+            raise WebImportError(f"{where}: participant {r['participant']} also has local sessions in "
+                                 f"sessions.sqlite; web and local answers are never mixed under one ID "
+                                 f"(give web participants their own IDs)")
+        if k in merged:
+            old = merged[k][0]
+            if r != old and not (r["record"] in ("start", "end") and _same_but_time(r, old)):
+                what = f"trial {r['trial']}" if r["record"] == "answer" else r["record"]
+                raise WebImportError(
+                    f"{where}: {what} of participant {r['participant']} (run {r['run_id']}) differs "
+                    f"from the one in {merged[k][1]}; answers are never overwritten, so nothing was "
+                    f"imported")
+            dup += 1
+            continue
+        merged[k] = (r, where, fname)
+    return merged, dup
+
+
+def _same_but_time(a, b):
+    return {k: v for k, v in a.items() if k != "timestamp"} == {k: v for k, v in b.items() if k != "timestamp"}
+
+
+def _fmt(v):
+    if v is None:
+        return ""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return f"{v:.0f}" if v == int(v) else repr(v)
+    return str(v)
+
+
+def _tables(merged: dict, n_trials: int):
+    runs = {}
+    for (run, *_), (r, _w, _f) in merged.items():
+        runs.setdefault(run, {"participant": r["participant"], "run_started": r["run_started"],
+                              "host": r["host"]})
+    sessions = {}
+    by_pid = {}
+    for run, info in runs.items():
+        by_pid.setdefault(info["participant"], []).append((info["run_started"], run))
+    for pid, lst in by_pid.items():
+        for i, (_, run) in enumerate(sorted(lst), start=1):
+            sessions[run] = i
+    answers = [(r, f) for (r, _w, f) in merged.values() if r["record"] == "answer"]
+    count = {}
+    for r, _ in answers:
+        if r["trial"] <= n_trials:
+            count[r["run_id"]] = count.get(r["run_id"], 0) + 1
+    rows = []
+    for r, f in sorted(answers, key=lambda x: (x[0]["participant"], sessions[x[0]["run_id"]], x[0]["trial"])):
+        row = {c: r.get(c) for c in COLUMNS}
+        row.update(session=sessions[r["run_id"]], late_frames=r["frames_dropped"], simulated=False,
+                   complete=count.get(r["run_id"], 0) >= n_trials, source=f"web-{r['host']}",
+                   source_file=f, rt_ms=f"{r['rt_ms']:.1f}", shown_ms=f"{r['shown_ms']:.1f}",
+                   level=f"{r['level']:g}")
+        rows.append({c: _fmt(row.get(c)) for c in COLUMNS})
+    parts = []
+    for run, info in sorted(runs.items(), key=lambda x: (x[1]["participant"], sessions[x[0]])):
+        demo = merged.get((run, "demographics"), ({},))[0]
+        start = merged.get((run, "start"), ({},))[0]
+        run_answers = [r for r, _ in answers if r["run_id"] == run]
+        last = max((r["timestamp"] for r in run_answers), default=None)
+        done = count.get(run, 0) >= n_trials
+        p = {"participant": info["participant"], "session": sessions[run], "source": f"web-{info['host']}",
+             "started": info["run_started"], "finished": last if done else None,
+             "answered": len(run_answers), "n_trials": n_trials, "simulated": False, "complete": done,
+             "run_id": run, "host": info["host"], "participant_from": start.get("participant_from"),
+             "refresh_hz": start.get("refresh_hz"), "user_agent": start.get("user_agent")}
+        for f in DEMOGRAPHIC_FIELDS:
+            p[f["name"]] = demo.get(f["name"])
+        parts.append({c: _fmt(p.get(c)) for c in WEB_PARTICIPANT_COLUMNS})
+    return rows, parts
+
+
+def _table_text(columns, rows) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for r in rows:
+        w.writerow([r.get(c, "") for c in columns])
+    return buf.getvalue()
+
+
+def _local_participants(study_dir: Path) -> set:
+    if not store.db_path(study_dir).exists():
+        return set()
+    conn = store.connect(study_dir, create=False)
+    try:
+        return {r[0] for r in conn.execute("SELECT DISTINCT participant FROM sessions")}
+    finally:
+        conn.close()
+
+
+LEDGER = "imports.json"
+
+
+def _kept(d: Path) -> list[Path]:
+    """The kept files in the order they were imported (``web/imports.json``; a file the
+    ledger misses, after a crash between the two writes, comes last)."""
+    imports = d / IMPORTS
+    if not imports.is_dir():
+        return []
+    files = {p.name: p for p in imports.iterdir() if p.is_file() and not p.name.startswith(".")}
+    order = []
+    if (d / LEDGER).is_file():
+        order = [e["stored"] for e in json.loads((d / LEDGER).read_text()) if e["stored"] in files]
+    return [files[n] for n in order] + [files[n] for n in sorted(files) if n not in order]
+
+
+def import_web(study_dir, files) -> dict:
+    """Import results files into ``STUDY_DIR/web/`` (see the module docstring).
+
+    Returns ``{"files": [{"file", "status" ("imported" | "already imported"),
+    "records", "new_answers"}], "answers", "participants", "sessions",
+    "incomplete", "flagged", "responses", "participants_csv", "description"}``."""
+    study = load_study(study_dir)
+    d = study.dir / WEB_DIR
+    imports = d / IMPORTS
+    checker = _Checker(study)
+    n_trials = len(checker.order("x")) if checker.groups else 0
+    kept_sha = {p.name.split("-", 1)[0]: p for p in _kept(d)}
+    items = []
+    for p in kept_sha.values():
+        for where, rec in read_records(p):
+            where = where.replace(str(p), f"{IMPORTS}/{p.name}")
+            items.append((where, p.name, checker.check(where, rec)))
+    before, _ = _merge(items, _local_participants(study.dir))
+    report, new_files = [], []
+    seen = set()
+    for f in files:
+        f = Path(f)
+        data = f.read_bytes() if f.is_file() else None
+        if data is None:
+            raise WebImportError(f"{f}: no such file")
+        sha = hashlib.sha256(data).hexdigest()[:16]
+        if sha in kept_sha or sha in seen:
+            report.append({"file": str(f), "status": "already imported", "records": 0, "new_answers": 0})
+            continue
+        seen.add(sha)
+        stored = f"{sha}-" + re.sub(r"[^A-Za-z0-9._-]", "_", f.name)[:120]
+        recs = [(where, stored, checker.check(where, rec)) for where, rec in read_records(f)]
+        if not recs:
+            raise WebImportError(f"{f}: no flipstudy records in this file")
+        items += recs
+        new_files.append((stored, data))
+        report.append({"file": str(f), "status": "imported", "records": len(recs), "new_answers": 0,
+                       "stored": stored})
+    merged, dup = _merge(items, _local_participants(study.dir))
+    for r in report:
+        if r["status"] == "imported":
+            r["new_answers"] = sum(1 for k, (_rec, _w, fn) in merged.items()
+                                   if k[1] == "answer" and fn == r["stored"] and k not in before)
+    rows, parts = _tables(merged, n_trials)
+    # write: the files as they were first, then the tables built from all of them
+    imports.mkdir(parents=True, exist_ok=True)
+    for stored, data in new_files:
+        target = imports / stored
+        tmp = target.with_name(f".{target.name}.tmp")
+        tmp.write_bytes(data)
+        tmp.replace(target)
+    from ..store import utc_now
+    ledger = json.loads((d / LEDGER).read_text()) if (d / LEDGER).is_file() else []
+    names = {e["stored"] for e in ledger}
+    ledger += [{"stored": p.name, "imported": None} for p in _kept(d) if p.name not in names
+               and p.name not in {s for s, _ in new_files}]
+    ledger += [{"stored": r["stored"], "file": r["file"], "imported": utc_now(), "records": r["records"],
+                "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
+    atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
+    out = d / "responses.csv"
+    atomic_write_text(out, _table_text(COLUMNS, rows))
+    atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
+    desc = write_dataset_description(d, study.dir, COLUMNS, source="web sessions")
+    return {"files": report, "answers": len(rows), "participants": len({p["participant"] for p in parts}),
+            "sessions": len(parts), "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/"
+                                                   f"{p['n_trials']})" for p in parts if p["complete"] != "true"],
+            "flagged": [f"{r['participant']}/{r['session']} trial {r['trial']} ({r['dropped_pct']} % dropped)"
+                        for r in rows if r["playback_flagged"] == "true"],
+            "duplicates": dup, "responses": out, "participants_csv": d / "participants.csv",
+            "description": desc}

@@ -1,0 +1,241 @@
+"""``flipstudy export-web``: the study as a static jsPsych site.
+
+:func:`export_site` writes a folder that any static host serves as it is::
+
+    index.html            the page (a Content-Security-Policy allows only its own folder,
+                          and for Pavlovia its API)
+    config.js             the study as data: groups and levels, repetitions, keys, texts,
+                          each video's frames and frame rate, the dropped-frame threshold
+    flipstudy-order.js    the trial-order rule (twin: flipstudy.study.web.order)
+    flipstudy-web.js      the timeline on jsPsych, the checkpoint, the host adapter
+    flipstudy-web.css
+    lib/                  jsPsych and its plugins (npm, pinned: flipstudy.study.web.jspsych)
+    stimuli/<name>.mp4    the rendered videos (checked against render.json first)
+    flipstudy-site.json   what the site is: study, manifest hash, host, jsPsych's packages
+                          with versions and integrity hashes, every file's sha256
+
+``host`` is ``static`` (answers kept in the browser and offered as a download),
+``jatos`` (the page loads ``jatos.js``, which JATOS serves beside it, and appends every
+record to the component's result data) or ``pavlovia`` (Pavlovia's experiment API:
+a session is opened, the records saved after every answer, the session closed at the
+end).  The dropped-frame threshold (``max_dropped_pct``) is an option of the export
+and recorded in the site and in every answer.
+
+Example
+-------
+>>> import tempfile, pathlib
+>>> from flipstudy.study.demo import make_demo_study
+>>> tmp = pathlib.Path(tempfile.mkdtemp())
+>>> cfg = site_config(load_study(make_demo_study(tmp / "study")), host="static")
+>>> cfg["n_trials"], cfg["host"], sorted(cfg["keys"].items())
+(8, 'static', [('correct', 'f'), ('incorrect', 'j')])
+>>> export_site(tmp / "study", tmp / "site", jspsych_dir=...)    # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from types import SimpleNamespace
+
+from flipstudy.stimuli.exceptions import FlipstudyError
+
+from .. import timeline as local_timeline
+from ..session import STIMULUS_RE, load_study
+from ..validate import DEMOGRAPHIC_FIELDS
+from . import jspsych as jsp
+from .order import RULE, order_groups
+
+FORMAT = "flipstudy-web/1"
+HOSTS = ("static", "jatos", "pavlovia")
+STATIC = Path(__file__).resolve().parent / "static"
+OWN_FILES = ("flipstudy-order.js", "flipstudy-web.js", "flipstudy-web.css")
+#: URL query parameters read as the participant ID, first found wins (Prolific's first)
+PARTICIPANT_PARAMS = ("PROLIFIC_PID", "participant", "PARTICIPANT_ID", "workerId", "id")
+SITE_RECORD = "flipstudy-site.json"
+PAVLOVIA_API = "https://pavlovia.org"
+
+
+class SiteError(FlipstudyError, ValueError):
+    """A site that cannot be written; the message says what to do."""
+
+
+def _sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def probe_video(path: Path) -> dict:
+    """``{"frames", "fps", "duration_s"}`` of an MP4, decoded by ffmpeg (imageio-ffmpeg)."""
+    import imageio_ffmpeg
+    gen = imageio_ffmpeg.read_frames(str(path))
+    try:
+        meta = next(gen)
+    finally:
+        gen.close()
+    frames, secs = imageio_ffmpeg.count_frames_and_secs(str(path))
+    fps = float(meta.get("fps") or 0.0)
+    if frames < 1 or fps <= 0:
+        raise SiteError(f"{path}: ffmpeg finds {frames} frames at {fps} fps; render it again")
+    return {"frames": int(frames), "fps": fps, "duration_s": round(frames / fps, 6)}
+
+
+def _texts(study, n_trials: int) -> dict:
+    """The local page's wording (flipstudy.study.timeline), so both say the same."""
+    shim = SimpleNamespace(study=study, n_trials=n_trials, trials=[], participant="", session=1)
+    screens = {s["type"]: s for s in local_timeline.build_timeline(
+        shim, {"answered": 0, "demographics": False})["timeline"]}
+    ex = screens.get("examples", {})
+    keys = dict(local_timeline.KEYS)
+    return {"instructions_title": screens["instructions"]["title"],
+            "instructions": screens["instructions"]["paragraphs"],
+            "demographics_title": screens["demographics"]["title"],
+            "demographics_text": screens["demographics"]["text"],
+            "examples_title": ex.get("title", ""), "examples_text": ex.get("text", ""),
+            "examples_button": ex.get("button", "Start the test"),
+            "keys_sentence": local_timeline._keys_sentence(keys),
+            "prompt": "Was this motion physically correct?",
+            "end_title": screens["end"]["title"],
+            "end_saved": "All your answers are saved. The study is complete.",
+            "end_static": "The study is complete. Please download your answers and send the file "
+                          "to the experimenter as they asked you to.",
+            "end_download": "A copy of your answers stays in this browser; you may also download it."}
+
+
+def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_pct: float = 10.0,
+                video_width: int = 640, videos: dict | None = None) -> dict:
+    """The ``window.FLIPSTUDY`` object of ``config.js`` (``videos``: stimulus →
+    :func:`probe_video`; without it the manifest's frames and fps stand in)."""
+    if host not in HOSTS:
+        raise SiteError(f"host {host!r}: choose one of {', '.join(HOSTS)}")
+    design = study.design
+    groups = order_groups(design, study.manifest)
+    n = sum(len(rows) for _, rows in groups) * int(design.repetitions)
+    vids = {}
+    for r in study.manifest:
+        name = r["stimulus"]
+        v = (videos or {}).get(name) or {"frames": int(float(r.get("frames") or 0)),
+                                         "fps": float(r.get("fps") or 0),
+                                         "duration_s": 0.0}
+        vids[name] = dict(v, video=f"stimuli/{name}.mp4")
+    cfg = {
+        "format": FORMAT, "host": host, "study": design.name, "manifest_sha256": study.manifest_sha256,
+        "design_seed": int(design.seed), "repetitions": int(design.repetitions), "n_trials": n,
+        "order_rule": RULE, "groups": groups, "keys": dict(local_timeline.KEYS),
+        "replay": bool(design.session.replay), "break_every": int(design.session.break_every), "iti_ms": int(iti_ms),
+        "max_dropped_pct": float(max_dropped_pct), "video_width": int(video_width),
+        "participant_params": list(PARTICIPANT_PARAMS),
+        "references": [{"stimulus": r["stimulus"], "video": f"stimuli/{r['stimulus']}.mp4"}
+                       for r in study.references],
+        "videos": vids, "demographic_fields": DEMOGRAPHIC_FIELDS, "texts": _texts(study, n),
+        "jspsych_version": jsp.PACKAGES["jspsych"],
+    }
+    cfg["site_id"] = hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()[:16]
+    return cfg
+
+
+def _index_html(host: str, scripts: list[str]) -> str:
+    connect = "'self'" + (f" {PAVLOVIA_API}" if host == "pavlovia" else "")
+    csp = (f"default-src 'none'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
+           f"connect-src {connect}; media-src 'self' blob:; img-src 'self' data: blob:; font-src data:; "
+           f"base-uri 'none'; form-action 'none'")
+    tags = ([f'<script src="jatos.js"></script>'] if host == "jatos" else [])
+    tags += [f'<script src="lib/{s}"></script>' for s in scripts]
+    tags += ['<script src="config.js"></script>', '<script src="flipstudy-order.js"></script>',
+             '<script src="flipstudy-web.js"></script>']
+    return "\n".join([
+        "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
+        f'<meta http-equiv="Content-Security-Policy" content="{csp}">',
+        '<meta name="viewport" content="width=device-width, initial-scale=1">',
+        '<meta name="referrer" content="no-referrer">',
+        '<link rel="icon" href="data:,">',
+        "<title>Motion study</title>",
+        '<link rel="stylesheet" href="lib/jspsych.css">',
+        '<link rel="stylesheet" href="flipstudy-web.css">',
+        *tags, "</head>", "<body>", '<div id="jspsych-target"></div>',
+        "<noscript><p>This study needs JavaScript.</p></noscript>", "</body>", "</html>", ""])
+
+
+def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
+                max_dropped_pct: float = 10.0, video_width: int = 640, jspsych_dir=None,
+                force: bool = False) -> dict:
+    """Write the site of ``study_dir`` to ``out`` (see the module docstring).
+    Returns ``{"out", "host", "site_id", "n_trials", "videos", "jspsych", "bytes"}``.
+
+    ``out`` must not exist, or be an earlier site (``flipstudy-site.json``) with
+    ``force``; the site is built in a hidden folder beside it and renamed into place."""
+    from flipstudy.render.study import StaleRenderError, check_rendered
+    study = load_study(study_dir)
+    out = Path(out)
+    if host not in HOSTS:
+        raise SiteError(f"--host {host!r}: choose one of {', '.join(HOSTS)}")
+    if not 0 <= max_dropped_pct <= 100:
+        raise SiteError(f"--max-dropped-pct {max_dropped_pct:g}: a percentage, 0 to 100")
+    if out.exists():
+        if not out.is_dir() or (any(out.iterdir()) and not (force and (out / SITE_RECORD).is_file())):
+            raise SiteError(f"{out} exists" + (" and is not an exported site" if not (out / SITE_RECORD).is_file()
+                                               else "; pass --force to replace the earlier site"))
+    if out.resolve() == study.dir.resolve() or study.dir.resolve() in out.resolve().parents:
+        raise SiteError(f"{out}: write the site outside the study folder {study.dir}")
+    missing = study.missing_videos()
+    if missing:
+        raise SiteError(f"{study.render_dir}: no video of {len(missing)} stimuli (e.g. {missing[0]}.mp4); "
+                        f"render them first: flipstudy render {study.dir}")
+    try:
+        check_rendered(study.dir, "video", rows=study.manifest)
+    except StaleRenderError as e:
+        raise SiteError(str(e)) from None
+    for r in study.manifest:
+        if not STIMULUS_RE.fullmatch(r["stimulus"]):
+            raise SiteError(f"stimulus name {r['stimulus']!r} is not a plain file name")
+    videos = {r["stimulus"]: probe_video(study.video_path(r["stimulus"])) for r in study.manifest}
+    cfg = site_config(study, host=host, iti_ms=iti_ms, max_dropped_pct=max_dropped_pct,
+                      video_width=video_width, videos=videos)
+    folder, packages = jsp.fetch(jspsych_dir)
+
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    try:
+        scripts = jsp.copy_bundles(folder, tmp / "lib")
+        (tmp / "stimuli").mkdir()
+        for r in study.manifest:
+            shutil.copyfile(study.video_path(r["stimulus"]), tmp / "stimuli" / f"{r['stimulus']}.mp4")
+        for f in OWN_FILES:
+            shutil.copyfile(STATIC / f, tmp / f)
+        (tmp / "config.js").write_text("// written by flipstudy export-web; the study as data\n"
+                                       "window.FLIPSTUDY = " + json.dumps(cfg, indent=1) + ";\n")
+        (tmp / "index.html").write_text(_index_html(host, scripts))
+        from flipstudy import __version__ as fs_version
+        files = {p.relative_to(tmp).as_posix(): _sha256(p) for p in sorted(tmp.rglob("*")) if p.is_file()}
+        design_path = study.dir / "design.toml"
+        record = {"format": FORMAT, "site_id": cfg["site_id"], "host": host, "study": cfg["study"],
+                  "study_dir": str(study.dir.resolve()), "design_sha256": _sha256(design_path),
+                  "manifest_sha256": study.manifest_sha256, "n_trials": cfg["n_trials"],
+                  "order_rule": RULE, "max_dropped_pct": cfg["max_dropped_pct"],
+                  "software": {"flipstudy": fs_version},
+                  "jspsych": {"version": jsp.PACKAGES["jspsych"], "packages": packages,
+                              "fetched_with": "npm", "loaded_from": "lib/ (this folder)"},
+                  "files": files}
+        (tmp / SITE_RECORD).write_text(json.dumps(record, indent=2) + "\n")
+        os.chmod(tmp, 0o755)
+        if out.exists():
+            old = out.with_name(f".{out.name}.old")
+            if old.exists():
+                shutil.rmtree(old)
+            out.rename(old)
+            tmp.rename(out)
+            shutil.rmtree(old)
+        else:
+            tmp.rename(out)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+    size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
+    return {"out": out, "host": host, "site_id": cfg["site_id"], "n_trials": cfg["n_trials"],
+            "videos": len(videos), "jspsych": jsp.PACKAGES["jspsych"], "bytes": size}

@@ -1,0 +1,111 @@
+// flipstudy web: the trial-order rule of flipstudy.study.order over sfc32, seeded by
+// the participant ID.  Its Python twin is flipstudy/study/web/order.py (same names,
+// line for line); the tests run this file under node and in Chromium and compare.
+//
+//   seed   key "flipstudy-web:<design seed>:<participant>", UTF-8; FNV-1a (32 bit) of
+//          "0:"+key .. "3:"+key is sfc32's state a, b, c, d; 12 outputs discarded
+//   below  floor(u * n / 2^32) for the next 32-bit output u
+//   shuffle Fisher-Yates from the last element down, j = below(i + 1)
+//   sample  k of 0..n-1: the first k places of a partial Fisher-Yates, j = i + below(n - i)
+'use strict';
+(function (root) {
+  const RULE = 'flipstudy-web-order/1 (sfc32 seeded by FNV-1a; the rule of flipstudy.study.order)';
+
+  function fnv1a32(bytes) {
+    let h = 0x811c9dc5;
+    for (const b of bytes) h = Math.imul(h ^ b, 0x01000193) >>> 0;
+    return h >>> 0;
+  }
+
+  function utf8(s) { return new TextEncoder().encode(s); }
+
+  function orderKey(designSeed, participant) { return `flipstudy-web:${designSeed}:${participant}`; }
+
+  class Sfc32 {
+    constructor(a, b, c, d) { this.a = a >>> 0; this.b = b >>> 0; this.c = c >>> 0; this.d = d >>> 0; }
+    static fromKey(key) {
+      const data = utf8(key);
+      const s = [0, 1, 2, 3].map((i) => {
+        const p = utf8(`${i}:`);
+        const all = new Uint8Array(p.length + data.length);
+        all.set(p); all.set(data, p.length);
+        return fnv1a32(all);
+      });
+      const g = new Sfc32(s[0], s[1], s[2], s[3]);
+      for (let i = 0; i < 12; i++) g.next();
+      return g;
+    }
+    next() {
+      let {a, b, c, d} = this;
+      let t = (a + b) >>> 0;
+      a = (b ^ (b >>> 9)) >>> 0;
+      b = (c + (c << 3)) >>> 0;
+      c = ((c << 21) | (c >>> 11)) >>> 0;
+      d = (d + 1) >>> 0;
+      t = (t + d) >>> 0;
+      c = (c + t) >>> 0;
+      this.a = a; this.b = b; this.c = c; this.d = d;
+      return t;
+    }
+    below(n) { return Math.floor(this.next() * n / 4294967296); }
+    shuffle(x) {
+      for (let i = x.length - 1; i > 0; i--) {
+        const j = this.below(i + 1);
+        const t = x[i]; x[i] = x[j]; x[j] = t;
+      }
+    }
+    sample(n, k) {
+      const pool = Array.from({length: n}, (_, i) => i);
+      for (let i = 0; i < k; i++) {
+        const j = i + this.below(n - i);
+        const t = pool[i]; pool[i] = pool[j]; pool[j] = t;
+      }
+      return pool.slice(0, k);
+    }
+  }
+
+  // groups: [[group, [{stimulus, clip, kind, level}, ...]], ...] (the site's config)
+  function webTrialOrder(groups, repetitions, designSeed, participant) {
+    const rng = Sfc32.fromKey(orderKey(designSeed, participant));
+    const nStimuli = groups.reduce((n, [, rows]) => n + rows.length, 0);
+    const trials = [];
+    for (let rep = 1; rep <= repetitions; rep++) {
+      let block;
+      for (let k = 0; k < 100; k++) {
+        block = makeBlock(groups, rng);
+        if (!trials.length || nStimuli === 1 || block[0][0].stimulus !== trials[trials.length - 1].stimulus) break;
+      }
+      for (const [row, g] of block) {
+        trials.push({trial: trials.length + 1, stimulus: row.stimulus, clip: row.clip, group: g,
+                     kind: row.kind, level: row.level, repetition: rep});
+      }
+    }
+    return trials;
+  }
+
+  function makeBlock(groups, rng) {
+    const queues = [];
+    for (const [g, rows0] of groups) {
+      const rows = rows0.slice();
+      rng.shuffle(rows);
+      queues.push([g, rows]);
+    }
+    const R = Math.max(...queues.map(([, q]) => q.length));
+    const rounds = new Map();
+    for (const [g, q] of queues) {
+      rounds.set(g, new Set(q.length === R ? Array.from({length: R}, (_, i) => i) : rng.sample(R, q.length)));
+    }
+    const byName = new Map(queues);
+    const block = [];
+    for (let r = 0; r < R; r++) {
+      const names = queues.map(([g]) => g).filter((g) => rounds.get(g).has(r));
+      rng.shuffle(names);
+      for (const g of names) block.push([byName.get(g).pop(), g]);
+    }
+    return block;
+  }
+
+  const api = {RULE, fnv1a32, orderKey, Sfc32, webTrialOrder};
+  if (typeof module !== 'undefined' && module.exports) module.exports = api;
+  else root.FlipstudyOrder = api;
+})(typeof window !== 'undefined' ? window : globalThis);

@@ -1,0 +1,493 @@
+// flipstudy web: the study's timeline on jsPsych (config in config.js, written by
+// `flipstudy export-web`).  The screens are the local page's (instructions,
+// demographics, examples of correct motions, trials with breaks, the end), built from
+// jsPsych's own plugins: instructions, survey-html-form, preload, html-keyboard-response,
+// video-button-response, html-button-response.
+//
+// Data.  Every record (start, demographics, answer, end) is one flat JSON object.  It is
+// checkpointed in localStorage at once, then sent to the host the site was exported for:
+//   jatos     jatos.appendResultData(record as one JSON line), in order, retried
+//   pavlovia  the whole record list so far as CSV, under one file name per run
+//             (Pavlovia's experiment API: open a session, POST results, DELETE at the end)
+//   static    nothing is sent; the end screen offers the records as a download
+// The end screen always offers the download (a .jsonl file), on every host.  A reload
+// resumes at the first unanswered trial: the order is recomputed from the participant ID
+// (flipstudy-order.js) and the answers so far are read back from localStorage.
+//
+// Playback.  Each video is loaded completely (preload plugin: a Blob) before its trial.
+// While it plays, requestVideoFrameCallback counts the frames presented (metadata
+// presentedFrames; without the API, a requestAnimationFrame loop counts the distinct
+// frames of currentTime); frames_dropped = the video's frames - frames presented;
+// playback_ms (first frame to 'ended') is recorded beside video_ms, and the display's
+// refresh rate is measured once at the start (median requestAnimationFrame interval).
+// A trial whose dropped frames exceed max_dropped_pct % of the video's is flagged.
+'use strict';
+(function () {
+  const C = window.FLIPSTUDY;
+  const ORDER = window.FlipstudyOrder;
+  const FORMAT = 'flipstudy-web/1';
+  const app = () => document.getElementById('jspsych-target');
+  const esc = (s) => String(s).replace(/[&<>"']/g, (c) => ({'&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;'}[c]));
+  const round1 = (x) => Math.round(x * 10) / 10;
+  const nowIso = () => new Date().toISOString();
+  const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+  const PID_RE = /^[A-Za-z0-9_-]{1,32}$/;
+
+  function setScreen(id, type) {
+    const el = app();
+    el.dataset.screenId = id;
+    el.dataset.screen = type;
+  }
+
+  // ---- participant and checkpoint ----------------------------------------------------------
+  function storage() {
+    try {
+      const k = '__flipstudy_probe__';
+      window.localStorage.setItem(k, '1');
+      window.localStorage.removeItem(k);
+      return window.localStorage;
+    } catch (e) { return null; }
+  }
+  const store = storage();
+
+  function randomId(prefix, n) {
+    const abc = 'abcdefghijkmnpqrstuvwxyz23456789';
+    const b = new Uint8Array(n);
+    crypto.getRandomValues(b);
+    return prefix + Array.from(b, (x) => abc[x % abc.length]).join('');
+  }
+
+  function participantFrom(params) {
+    for (const name of C.participant_params) {
+      const v = params.get(name);
+      if (v !== null && v !== '') {
+        if (!PID_RE.test(v)) throw new Error(`the participant ID in the link (${name}=${v}) is not valid: use 1-32 letters, digits, '_' or '-'`);
+        return {id: v, from: name};
+      }
+    }
+    const key = `flipstudy:${C.site_id}:generated-id`;
+    let id = store && store.getItem(key);
+    if (!id) {
+      id = randomId('W', 12);
+      if (store) store.setItem(key, id);
+    }
+    return {id, from: 'generated'};
+  }
+
+  class Checkpoint {
+    constructor(participant) {
+      this.key = `flipstudy:${C.site_id}:${participant}`;
+      let s = null;
+      try { s = store && JSON.parse(store.getItem(this.key) || 'null'); } catch (e) { s = null; }
+      this.s = s || {records: [], sent: 0};
+    }
+    save() {
+      if (!store) return;
+      try { store.setItem(this.key, JSON.stringify(this.s)); } catch (e) { console.error('flipstudy: checkpoint not saved', e); }
+    }
+    get records() { return this.s.records; }
+    answers() { return this.s.records.filter((r) => r.record === 'answer'); }
+    has(kind) { return this.s.records.some((r) => r.record === kind); }
+  }
+
+  // ---- hosts: where records go besides the browser ------------------------------------------
+  function csvOf(records) {
+    const cols = [];
+    for (const r of records) for (const k of Object.keys(r)) if (!cols.includes(k)) cols.push(k);
+    const cell = (v) => {
+      if (v === null || v === undefined) return '';
+      const s = typeof v === 'string' ? v : JSON.stringify(v);
+      return /[",\n\r]/.test(s) ? '"' + s.replace(/"/g, '""') + '"' : s;
+    };
+    return [cols.join(',')].concat(records.map((r) => cols.map((c) => cell(r[c])).join(','))).join('\n') + '\n';
+  }
+
+  const hosts = {};
+  hosts.static = {
+    async init() {}, async send() {}, async finish() {},
+  };
+  hosts.jatos = {
+    async init() {
+      if (typeof jatos === 'undefined') throw new Error('jatos.js is not loaded: run this site as a JATOS study component');
+      await new Promise((resolve) => jatos.onLoad(resolve));
+    },
+    params() { return new URLSearchParams(jatos.urlQueryParameters || {}); },
+    async send(cp) {
+      // one JSON line per record, in order; `sent` counts what JATOS has acknowledged
+      while (cp.s.sent < cp.records.length) {
+        await jatos.appendResultData(JSON.stringify(cp.records[cp.s.sent]) + '\n');
+        cp.s.sent += 1;
+        cp.save();
+      }
+    },
+    async finish(cp, answered) {
+      if (typeof jatos.endStudyAjax === 'function') await jatos.endStudyAjax(true, `flipstudy: ${answered} answers`);
+    },
+  };
+  hosts.pavlovia = {
+    async init(cp, participant) {
+      const cfg = await (await fetch('config.json', {cache: 'no-cache'})).json();
+      this.cfg = cfg;
+      this.base = `${cfg.pavlovia.URL}/api/v2/experiments/${cfg.gitlab.projectId}/sessions`;
+      const pilot = new URLSearchParams(location.search).get('__pilotToken');
+      const form = new FormData();
+      if (pilot) form.append('pilotToken', pilot);
+      const r = await (await fetch(this.base, {method: 'POST', body: form, credentials: 'same-origin'})).json();
+      if (!r.token) throw new Error('Pavlovia did not open a session (no token)');
+      this.token = r.token;
+      this.running = r.experiment && r.experiment.status2 === 'RUNNING' && !pilot;
+      this.key = `${cfg.experiment.name}_${participant}_${cp.s.run_id}.csv`;
+    },
+    async send(cp) {
+      if (!this.running) return;                          // piloting: the download only
+      const n = cp.records.length;
+      if (cp.s.sent >= n) return;
+      const form = new FormData();
+      form.append('key', this.key);
+      form.append('value', csvOf(cp.records));
+      const r = await fetch(`${this.base}/${this.token}/results`, {method: 'POST', body: form, credentials: 'same-origin'});
+      if (!r.ok) throw new Error(`Pavlovia answered ${r.status}`);
+      cp.s.sent = n;
+      cp.save();
+    },
+    async finish(cp) {
+      const form = new FormData();
+      form.append('isCompleted', 'true');
+      await fetch(`${this.base}/${this.token}`, {method: 'DELETE', body: form, credentials: 'same-origin'});
+    },
+  };
+
+  // a single sender: records go out in order, one request at a time, retried with backoff
+  function makeSender(host, cp) {
+    let running = null;
+    let wait = 500;
+    const loop = async () => {
+      for (;;) {
+        try {
+          await host.send(cp);
+          wait = 500;
+          if (cp.s.sent >= cp.records.length || C.host === 'static') return;
+        } catch (e) {
+          console.warn('flipstudy: sending failed, retrying', e);
+          await sleep(wait);
+          wait = Math.min(wait * 2, 8000);
+        }
+      }
+    };
+    return {
+      kick() { if (!running) running = loop().finally(() => { running = null; }); return running; },
+      async flush() { while (C.host !== 'static' && cp.s.sent < cp.records.length) { await this.kick(); } },
+    };
+  }
+
+  // ---- playback measurement ---------------------------------------------------------------
+  function measureRefresh(ms) {
+    return new Promise((resolve) => {
+      const t = [];
+      const t0 = performance.now();
+      const tick = (ts) => {
+        t.push(ts);
+        if (ts - t0 < ms || t.length < 10) requestAnimationFrame(tick);
+        else {
+          const d = t.slice(1).map((x, i) => x - t[i]).sort((a, b) => a - b);
+          const med = d[Math.floor(d.length / 2)];
+          resolve(med > 0 ? round1(1000 / med) : null);
+        }
+      };
+      requestAnimationFrame(tick);
+      setTimeout(() => resolve(null), ms + 3000);       // a hidden tab runs no frames
+    });
+  }
+
+  function watchPlayback(video, info) {
+    const m = {timing: null, first: null, last: null, seen: new Set(), tFirst: null, tPlaying: null, tEnded: null, done: false};
+    const fps = info.fps;
+    if (typeof video.requestVideoFrameCallback === 'function') {
+      m.timing = 'rvfc';
+      const cb = (now, md) => {
+        if (m.done) return;
+        if (m.first === null) { m.first = md.presentedFrames; m.tFirst = md.expectedDisplayTime || now; }
+        m.last = md.presentedFrames;
+        m.seen.add(Math.round(md.mediaTime * fps));
+        video.requestVideoFrameCallback(cb);
+      };
+      video.requestVideoFrameCallback(cb);
+    } else {
+      m.timing = 'raf';
+      const tick = (ts) => {
+        if (m.done) return;
+        if (!video.paused && video.currentTime > 0) {
+          if (m.tFirst === null) m.tFirst = ts;
+          m.seen.add(Math.floor(video.currentTime * fps + 1e-6));
+        }
+        requestAnimationFrame(tick);
+      };
+      requestAnimationFrame(tick);
+    }
+    video.addEventListener('playing', () => { if (m.tPlaying === null) m.tPlaying = performance.now(); });
+    video.addEventListener('ended', () => {
+      if (m.tEnded === null) m.tEnded = performance.now();
+      m.done = true;
+    }, {once: true});
+    m.result = () => {
+      if (m.tEnded === null) m.tEnded = performance.now();
+      const expected = info.frames;
+      const presented = m.timing === 'rvfc' && m.first !== null ? Math.min(expected, m.last - m.first + 1)
+        : Math.min(expected, m.seen.size);
+      const dropped = Math.max(0, expected - presented);
+      const pct = expected > 0 ? 100 * dropped / expected : 0;
+      return {
+        shown_ms: m.tPlaying === null ? 0 : round1(m.tEnded - m.tPlaying),
+        frames_expected: expected, frames_presented: presented, frames_dropped: dropped,
+        frames_seen: m.seen.size, dropped_pct: round1(pct),
+        playback_ms: m.tFirst === null ? 0 : round1(m.tEnded - m.tFirst),
+        video_ms: round1((isFinite(video.duration) ? video.duration : info.duration_s) * 1000),
+        timing: m.timing, playback_flagged: pct > C.max_dropped_pct,
+      };
+    };
+    return m;
+  }
+
+  // ---- screens -----------------------------------------------------------------------------
+  function card(title, paragraphs) {
+    return `<div class="fs-card"><h1>${esc(title)}</h1>${paragraphs.map((p) => `<p>${esc(p)}</p>`).join('')}</div>`;
+  }
+
+  function demographicsHtml(fields) {
+    const parts = [];
+    for (const f of fields) {
+      if (f.kind === 'number') {
+        parts.push(`<div class="fs-field"><label for="fs-${f.name}">${esc(f.label)}</label>
+          <div class="fs-choices"><input type="number" id="fs-${f.name}" name="${f.name}" min="${f.min}" max="${f.max}" step="1" required>
+          <label><input type="checkbox" id="fs-${f.name}-none" name="${f.name}_none" value="1"> Prefer not to say</label></div></div>`);
+      } else {
+        const opts = f.options.map(([v, label], i) =>
+          `<label><input type="radio" name="${f.name}" value="${esc(v)}"${i === 0 ? ' required' : ''}> ${esc(label)}</label>`).join(' ');
+        parts.push(`<fieldset class="fs-field"><legend>${esc(f.label)}</legend><div class="fs-choices">${opts}</div></fieldset>`);
+      }
+    }
+    return parts.join('');
+  }
+
+  function buttonHtml(cls, key) {
+    return (choice) => `<button class="jspsych-btn fs-${cls(choice)}">${esc(choice)}${key(choice) ? ` <kbd>${esc(key(choice).toUpperCase())}</kbd>` : ''}</button>`;
+  }
+
+  async function main() {
+    const jsPsych = initJsPsych({display_element: 'jspsych-target'});
+    const host = hosts[C.host];
+    if (!host) throw new Error(`unknown host ${C.host}`);
+    if (C.host === 'jatos') await host.init();
+    const params = C.host === 'jatos' ? host.params() : new URLSearchParams(location.search);
+    const who = participantFrom(params);
+    const pid = who.id;
+    const cp = new Checkpoint(pid);
+    if (!cp.s.run_id) {
+      cp.s.run_id = randomId('r', 10);
+      cp.s.run_started = nowIso();
+      cp.save();
+    }
+    if (C.host === 'pavlovia') await host.init(cp, pid);
+    const sender = makeSender(host, cp);
+    const trials = ORDER.webTrialOrder(C.groups, C.repetitions, C.design_seed, pid);
+    const n = trials.length;
+    const refresh = await measureRefresh(500);
+    const base = () => ({format: FORMAT, site_id: C.site_id, study: C.study, manifest_sha256: C.manifest_sha256,
+      host: C.host, participant: pid, run_id: cp.s.run_id, run_started: cp.s.run_started, timestamp: nowIso()});
+    const emit = (rec) => {
+      cp.records.push(Object.assign(base(), rec));
+      cp.save();
+      sender.kick();
+    };
+    if (!cp.has('start')) {
+      emit({record: 'start', n_trials: n, participant_from: who.from, order_rule: ORDER.RULE,
+            order: trials.map((t) => t.stimulus).join(' '), jspsych_version: jsPsych.version(),
+            refresh_hz: refresh, user_agent: navigator.userAgent,
+            screen: `${screen.width}x${screen.height}@${window.devicePixelRatio}`});
+    } else {
+      sender.kick();                                   // whatever the last page did not send
+    }
+    window.flipstudyState = {participant: pid, trials, checkpoint: cp};   // for tests and debugging
+
+    const answered = cp.answers().length;
+    const tl = [];
+    const keys = C.keys;
+    if (answered === 0) {
+      tl.push({type: jsPsychInstructions, pages: [card(C.texts.instructions_title, C.texts.instructions)],
+               show_clickable_nav: true, allow_keys: false, button_label_next: 'Continue',
+               on_load: () => setScreen('instructions', 'instructions')});
+      if (!cp.has('demographics')) {
+        tl.push({type: jsPsychSurveyHtmlForm,
+          preamble: `<div class="fs-card"><h1>${esc(C.texts.demographics_title)}</h1><p class="fs-muted">${esc(C.texts.demographics_text)}</p></div>`,
+          html: demographicsHtml(C.demographic_fields), button_label: 'Continue',
+          on_load: () => {
+            setScreen('demographics', 'demographics');
+            for (const f of C.demographic_fields.filter((x) => x.kind === 'number')) {
+              const input = document.getElementById(`fs-${f.name}`);
+              const none = document.getElementById(`fs-${f.name}-none`);
+              none.addEventListener('change', () => { input.disabled = none.checked; input.required = !none.checked; if (none.checked) input.value = ''; });
+            }
+          },
+          on_finish: (data) => {
+            const r = data.response || {};
+            const rec = {record: 'demographics'};
+            for (const f of C.demographic_fields) {
+              if (f.kind === 'number') rec[f.name] = r[`${f.name}_none`] ? null : Number(r[f.name]);
+              else rec[f.name] = r[f.name];
+            }
+            emit(rec);
+          }});
+      }
+      C.references.forEach((ex, i) => {
+        const last = i === C.references.length - 1;
+        tl.push({type: jsPsychPreload, video: [ex.video], auto_preload: false, show_progress_bar: false,
+                 message: '<p class="fs-muted">Loading…</p>', continue_after_error: false});
+        tl.push({timeline: [{type: jsPsychVideoButtonResponse, stimulus: [ex.video],
+          choices: ['Watch again', last ? C.texts.examples_button : 'Next example'],
+          button_html: buttonHtml((c) => (c === 'Watch again' ? 'again' : 'next'), () => null),
+          prompt: `<p class="fs-progress">${esc(C.texts.examples_title)} · Correct motion ${i + 1} of ${C.references.length}</p>
+                   <p class="fs-prompt">This is a physically correct motion.</p><p class="fs-muted">${esc(C.texts.examples_text)}</p>`,
+          response_allowed_while_playing: false, trial_ends_after_video: false, autoplay: true, controls: false,
+          width: C.video_width, on_load: () => {
+            setScreen(`example-${i + 1}`, 'examples');
+            const v = document.getElementById('jspsych-video-button-response-stimulus');
+            v.muted = true;
+          }}],
+          loop_function: (data) => data.values()[0].response === 0});
+      });
+    } else {
+      tl.push({type: jsPsychHtmlButtonResponse, choices: ['Continue'],
+               stimulus: card('Welcome back', [`Your first ${answered} answers are saved. The study continues with motion ${answered + 1} of ${n}.`,
+                                                'Remember: some motions are physically correct and some are not.', C.texts.keys_sentence]),
+               on_load: () => setScreen('resume', 'instructions')});
+    }
+    const every = Math.max(1, C.break_every);
+    for (const t of trials.slice(answered)) {
+      if (t.trial > 1 && (t.trial - 1) % every === 0 && t.trial - 1 > answered) {
+        tl.push({type: jsPsychHtmlButtonResponse, choices: ['Continue'],
+                 stimulus: card('Break', [`Take a short rest. ${t.trial - 1} of ${n} motions done. Continue when you are ready.`]),
+                 on_load: () => setScreen(`break-${t.trial - 1}`, 'break')});
+      }
+      tl.push(...trialNodes(t));
+    }
+    tl.push(endNode());
+
+    function trialNodes(t) {
+      const info = C.videos[t.stimulus];
+      let watch = null, input = 'click', tEnabled = null, onKey = null, replays = 0;
+      const fix = `<div class="fs-stage"><div class="fs-fixation">+</div></div>`;
+      return [
+        {type: jsPsychPreload, video: [info.video], auto_preload: false, show_progress_bar: false,
+         message: fix, continue_after_error: false, on_start: () => setScreen(`load-${t.trial}`, 'loading')},
+        {type: jsPsychHtmlKeyboardResponse, stimulus: fix, choices: 'NO_KEYS', trial_duration: C.iti_ms,
+         on_load: () => setScreen(`iti-${t.trial}`, 'iti')},
+        {type: jsPsychVideoButtonResponse, stimulus: [info.video], choices: ['Correct', 'Incorrect'],
+         button_html: buttonHtml((c) => c.toLowerCase(), (c) => keys[c.toLowerCase()]),
+         prompt: `<p class="fs-progress"><span>Motion ${t.trial} of ${n}</span><span>${esc(keys.correct.toUpperCase())} = correct · ${esc(keys.incorrect.toUpperCase())} = incorrect</span></p>
+                  <p class="fs-prompt">${esc(C.texts.prompt)}</p>`,
+         response_allowed_while_playing: false, trial_ends_after_video: false, autoplay: true, controls: false,
+         width: C.video_width,
+         on_load: () => {
+           setScreen(`trial-${t.trial}`, 'trial');
+           const el = app();
+           el.dataset.trial = String(t.trial);
+           el.dataset.playing = '1';
+           const v = document.getElementById('jspsych-video-button-response-stimulus');
+           v.muted = true;
+           v.setAttribute('playsinline', '');
+           v.disablePictureInPicture = true;
+           watch = watchPlayback(v, info);
+           const group = document.getElementById('jspsych-video-button-response-btngroup');
+           const buttons = group.querySelectorAll('button');
+           let bR = null;
+           if (C.replay) {
+             bR = document.createElement('button');
+             bR.className = 'jspsych-btn fs-replay';
+             bR.textContent = 'Replay';
+             bR.disabled = true;
+             group.appendChild(bR);
+             bR.addEventListener('click', () => {
+               replays += 1;
+               buttons.forEach((b) => b.setAttribute('disabled', 'disabled'));
+               bR.disabled = true;
+               v.style.visibility = 'visible';
+               v.currentTime = 0;
+               v.play();
+             });
+           }
+           v.addEventListener('ended', () => {
+             el.dataset.playing = '0';
+             v.style.visibility = 'hidden';                 // a blank stage while answering
+             if (tEnabled === null) tEnabled = performance.now();
+             if (bR) { bR.disabled = false; buttons.forEach((b) => b.removeAttribute('disabled')); }
+           });
+           onKey = (e) => {
+             if (e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
+             const k = (e.key || '').toLowerCase();
+             const i = k === keys.correct ? 0 : k === keys.incorrect ? 1 : -1;
+             if (i < 0 || buttons[i].disabled) return;
+             input = 'key';
+             buttons[i].click();
+           };
+           document.addEventListener('keydown', onKey);
+         },
+         on_finish: (data) => {
+           document.removeEventListener('keydown', onKey);
+           const tAnswer = performance.now();
+           const pb = watch.result();
+           const vb = jsPsych.pluginAPI.video_buffers;
+           if (vb && vb[info.video]) { URL.revokeObjectURL(vb[info.video]); delete vb[info.video]; }
+           emit(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
+             repetition: t.repetition, clip: t.clip, kind: t.kind, response: data.response === 0 ? 'correct' : 'incorrect',
+             rt_ms: round1(tAnswer - (tEnabled === null ? tAnswer : tEnabled)), input, replays,
+             refresh_hz: refresh, max_dropped_pct: C.max_dropped_pct}, pb));
+         }},
+      ];
+    }
+
+    function endNode() {
+      return {type: jsPsychHtmlButtonResponse, choices: [],
+        stimulus: `<div class="fs-card"><h1>${esc(C.texts.end_title)}</h1><p id="fs-end-status">Saving your answers…</p>
+                   <p>${esc(C.texts.end_download)}</p>
+                   <div class="fs-actions"><button id="fs-download" class="jspsych-btn fs-next">Download your answers</button>
+                   ${C.host === 'jatos' ? '<button id="fs-finish" class="jspsych-btn fs-next" disabled>Finish</button>' : ''}</div></div>`,
+        on_load: async () => {
+          setScreen('end', 'end');
+          document.getElementById('fs-download').addEventListener('click', () => download(cp, pid));
+          if (!cp.has('end')) emit({record: 'end', answered: cp.answers().length, n_trials: n});
+          await sender.flush();
+          let msg = C.texts.end_saved;
+          if (!cp.s.finished) {
+            try { await host.finish(cp, cp.answers().length); cp.s.finished = nowIso(); cp.save(); } catch (e) { console.warn(e); }
+          }
+          if (C.host === 'static') msg = C.texts.end_static;
+          const st = document.getElementById('fs-end-status');
+          st.textContent = msg;
+          app().dataset.saved = '1';
+          const fin = document.getElementById('fs-finish');
+          if (fin) { fin.disabled = false; fin.addEventListener('click', () => jatos.endStudy(true)); }
+        }};
+    }
+
+    await jsPsych.run(tl);
+  }
+
+  function download(cp, pid) {
+    const text = cp.records.map((r) => JSON.stringify(r)).join('\n') + '\n';
+    const a = document.createElement('a');
+    a.href = URL.createObjectURL(new Blob([text], {type: 'application/x-ndjson'}));
+    a.download = `flipstudy-${C.study}-${pid}-${cp.s.run_id}.jsonl`;
+    document.body.appendChild(a);
+    a.click();
+    a.remove();
+  }
+
+  function fatal(e) {
+    console.error(e);
+    const el = app();
+    el.dataset.screen = 'error';
+    el.innerHTML = card('Please contact the experimenter', ['The study cannot continue on this page. Your saved answers are kept in this browser.', String(e && e.message || e)]);
+  }
+
+  window.addEventListener('load', () => { main().catch(fatal); });
+})();
