@@ -170,7 +170,7 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
 
     ``out`` must not exist, or be an earlier site (``flipstudy-site.json``) with
     ``force``; the site is built in a hidden folder beside it and renamed into place."""
-    from flipstudy.render.study import StaleRenderError, check_rendered
+    from flipstudy.render.record import StaleRenderError, check_rendered
     study = load_study(study_dir)
     out = Path(out)
     if host not in HOSTS:
