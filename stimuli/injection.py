@@ -37,7 +37,7 @@ from .edit.reposition import ballistic_path
 from .edit.timing import sample
 from .exceptions import FlipstudyError, FlipstudyValueError
 from .flight import path_values
-from .motion.clip import Clip
+from .motion.clip import Clip, derived_meta
 from .physics import center_of_mass
 
 KINDS = ("angular-momentum", "takeoff-angle")
@@ -161,7 +161,7 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
     end_new = ballistic_path(c0, v_new, g, np.array([Tn]))[0]
     shift[ld_new + 1:] = end_new - c_end
     out = new.replace(root_pos=new.root_pos + shift,
-                      meta={**clip.meta, "edit": f"angular-momentum {profile} {error:+.3f}"})
+                      meta=derived_meta(clip.meta, f"angular-momentum {profile} {error:+.3f}"))
     return Injected(out, "angular-momentum", profile, float(error), to, ld_new, src, Tn,
                     float(t_to), float(t_ld_new))
 
@@ -184,7 +184,7 @@ def inject_takeoff_angle(a: Analysis, error: float) -> Injected:
     T = t_ld - t_to
     shift = error * vh[None] * np.clip(t, 0.0, T)[:, None]
     out = clip.replace(root_pos=clip.root_pos + shift,
-                       meta={**clip.meta, "edit": f"takeoff-angle {error:+.3f}"})
+                       meta=derived_meta(clip.meta, f"takeoff-angle {error:+.3f}"))
     return Injected(out, "takeoff-angle", None, float(error), a.takeoff, a.landing, None, T,
                     float(t_to), float(t_ld))
 

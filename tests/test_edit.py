@@ -135,8 +135,8 @@ def test_sample_keeps_meta_as_provenance_only():
 
 def test_editing_methods_return_results_with_provenance_only_meta():
     """Every editing method returns a Result (clip, flight, typed report); the
-    clip's meta is the source's provenance plus the edit's description, with
-    nothing the method measured (flight frames, flips, asymmetry) in it."""
+    clip's meta is the source's provenance plus the edit's description (the
+    built-in's exact facts moved under ``source_facts``), with nothing the method measured (flight frames, flips, asymmetry) in it."""
     from flipstudy.stimuli import analyse, builtin
     from flipstudy.stimuli.edit.animator import repair_momentum, straighten
     from flipstudy.stimuli.edit.concat import concatenate, mirror, motion_graph_join
@@ -144,6 +144,7 @@ def test_editing_methods_return_results_with_provenance_only_meta():
     from flipstudy.stimuli.edit.multiflip import multiflip
     from flipstudy.stimuli.edit.pipeline import edit
     from flipstudy.stimuli.edit.report import Report
+    from flipstudy.stimuli.motion.clip import SOURCE_FACTS
     from flipstudy.stimuli.result import Result
     clip = builtin("backflip")
     a = analyse(clip)
@@ -153,7 +154,10 @@ def test_editing_methods_return_results_with_provenance_only_meta():
                "motion graph": motion_graph_join(clip, clip, body=a.body), "edit": edit(a, flips=2)}
     for name, r in results.items():
         assert isinstance(r, Result) and isinstance(r.report, Report), name
-        assert set(r.clip.meta) - source <= {"edit"}, (name, set(r.clip.meta) - source)
+        assert set(r.clip.meta) - source <= {"edit", "source_facts"}, (name, set(r.clip.meta) - source)
+        # the built-in's exact facts are its own, not the edit's: kept apart, never as the clip's
+        assert not set(r.clip.meta) & set(SOURCE_FACTS), (name, set(r.clip.meta) & set(SOURCE_FACTS))
+        assert r.clip.meta["source_facts"]["takeoff"] == clip.meta["takeoff"], name
         if name not in ("concat", "motion graph"):
             # the clip's flight, where the analyser finds it
             b = analyse(r.clip, body=a.body, estimate=False)
@@ -164,7 +168,7 @@ def test_editing_methods_return_results_with_provenance_only_meta():
     assert (c.takeoff, c.landing) == (None, None) and len(c.report.flights) == 2
     assert (results["edit"].takeoff, results["edit"].landing) == (results["edit"].steps.multiflip.takeoff,
                                                                   results["edit"].steps.multiflip.landing)
-    assert set(mirror(clip).meta) - source <= {"edit"}
+    assert set(mirror(clip).meta) - source <= {"edit", "source_facts"}
 
 
 def test_rest_asymmetry_names_the_joint_mirroring_cannot_match():

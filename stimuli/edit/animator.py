@@ -21,7 +21,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..analyse import Analysis
-from ..motion.clip import Clip
+from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass, momentum
 from ..result import Result
 from .report import Report
@@ -56,7 +56,7 @@ def override_joints(clip: Clip, joints, target: np.ndarray, t0: float, t1: float
     rel = (cur.inv() * tgt).as_rotvec() * np.repeat(w, joints.size)[:, None]
     rot = clip.rotations.copy()
     rot[:, joints] = (cur * Rotation.from_rotvec(rel)).as_quat().reshape(clip.num_frames, joints.size, 4)
-    return clip.replace(rotations=rot, meta={**clip.meta, "edit": "override joints"})
+    return clip.replace(rotations=rot, meta=derived_meta(clip.meta, "override joints"))
 
 
 def straighten(a: Analysis, group: str = "legs", t0: float | None = None, t1: float | None = None,
@@ -156,7 +156,7 @@ def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bo
 
     out, src, ld_n, Tn, vy = retime_flight(edited, body, to, ld, g1, ratio, original.path,
                                            midpoint=midpoint)
-    out = out.replace(meta={**out.meta, "edit": "animator edit, momentum repaired"})
+    out = out.replace(meta=derived_meta(out.meta, "animator edit, momentum repaired"))
     path, G, T0 = original.path, -2.0 * original.path[1, 0], (ld - to) / fps
     # errors, per frame, against the original at the same source frame
     L_new = np.linalg.norm(momentum(out, body).L, axis=1)

@@ -44,7 +44,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..analyse import Analysis, analyse
-from ..motion.clip import Clip
+from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass, momentum
 from ..result import Result
 from .flight_measures import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle, unwrapped_turn
@@ -130,7 +130,7 @@ def _assemble(a: Analysis, bc: Clip, b: Analysis, u: np.ndarray, fi: int, gj: in
     step = head.root_pos[-1] - part_b.root_pos[0]
     step[1] = 0.0
     root = np.concatenate([head.root_pos, part_b.root_pos + step])
-    joined = Clip(a.clip.skeleton, fps, root, rot, None, {**a.clip.meta, "edit": "joined in flight"})
+    joined = Clip(a.clip.skeleton, fps, root, rot, None, derived_meta(a.clip.meta, "joined in flight"))
     return joined, fi + 1 + (b.landing - (gj + 1))
 
 

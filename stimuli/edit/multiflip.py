@@ -39,7 +39,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..analyse import Analysis, analyse
-from ..motion.clip import Clip
+from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass
 from ..result import Result
 from .flight_measures import FlipEditError, _jumps, flight_axis, standing_span, unwrapped_turn
@@ -423,7 +423,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
     shift[ld_n + 1:] = target[-1] - com_new[ld_n]
     out = Clip(clip.skeleton, fps, root_n + raise_before + shift, rot_n, None,
-               {**clip.meta, "edit": f"multiflip {flips}"})
+               derived_meta(clip.meta, f"multiflip {flips}"))
 
     report = MultiFlipReport(
         self_loop=SelfLoopReport(m, n, float(np.degrees(ph)), loop.distance),

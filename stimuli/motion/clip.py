@@ -242,6 +242,34 @@ class Clip:
         return self._cache["omega"]
 
 
+#: What a built-in knows exactly of its own motion (:mod:`flipstudy.stimuli.synth`):
+#: true of that clip only.  A clip made from it by an edit or an injected error
+#: keeps them under ``meta["source_facts"]`` (see :func:`derived_meta`), never
+#: as its own: its flight is in the method's result and its analysis.
+SOURCE_FACTS = ("takeoff", "landing", "touchdown", "flight_s", "L_flight", "v0",
+                "rotation_deg", "flight_rotation_deg", "takeoff_pitch_rate",
+                "landing_pitch_rate", "max_pitch_rate", "com_rise_m", "push_rise_m", "heel_off")
+
+
+def derived_meta(meta: dict, edit: str) -> dict:
+    """The provenance of a clip made from one with ``meta`` by ``edit``: the
+    source's provenance, the edit, and the source's own exact facts
+    (:data:`SOURCE_FACTS`) moved under ``"source_facts"``.
+
+    >>> m = derived_meta({"name": "backflip", "takeoff": 157, "g": 9.81}, "multiflip 2")
+    >>> m == {"name": "backflip", "g": 9.81, "edit": "multiflip 2", "source_facts": {"takeoff": 157}}
+    True
+    >>> derived_meta(m, "mirrored")["source_facts"]        # an edit of an edit: the first source's
+    {'takeoff': 157}
+    """
+    own = {k: v for k, v in meta.items() if k not in SOURCE_FACTS}
+    facts = {k: meta[k] for k in SOURCE_FACTS if k in meta}
+    if facts:
+        own["source_facts"] = facts
+    own["edit"] = edit
+    return own
+
+
 def finite_difference(x: np.ndarray, fps: float) -> np.ndarray:
     """d/dt along axis 0: central differences inside, one-sided second-order at the
     ends (exact for quadratics), so a ballistic parabola differentiates exactly."""

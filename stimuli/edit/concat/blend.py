@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...body import Body
-from ...motion.clip import Clip
+from ...motion.clip import Clip, derived_meta
 from ...physics import momentum
 from ..timing import ratio_retime_frames, sample, slerp, smoothstep
 from .phases import ConcatError
@@ -36,7 +36,7 @@ def blend(c1: Clip, c2: Clip, T: int, f0: int, f1: int, ease: bool = True) -> Cl
     pos = np.concatenate([c1.root_pos[:f0], root, c2.root_pos[f1 - T + 1:F2]])
     if rot.shape[0] != f1 + 1 + (F2 - (f1 - T + 1)):
         raise AssertionError("blend: frame bookkeeping")
-    return Clip(c1.skeleton, c1.fps, pos, rot, None, {**c1.meta, "edit": "concatenated"})
+    return Clip(c1.skeleton, c1.fps, pos, rot, None, derived_meta(c1.meta, "concatenated"))
 
 
 def smoothing_factor(Ln: np.ndarray, f0: int, f1: int, ends: tuple[float, float] | None = None) -> float:

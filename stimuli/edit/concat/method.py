@@ -8,7 +8,7 @@ import numpy as np
 from ...analyse import analyse
 from ...body import Body
 from ...flight import _runs, detect_flights
-from ...motion.clip import Clip
+from ...motion.clip import Clip, derived_meta
 from ...physics import momentum
 from ..timing import sample
 from .blend import blend, smooth, smoothing_factor
@@ -179,8 +179,8 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
         frames=out.num_frames, duration_s=out.duration,
         frames_a=a.num_frames, frames_b=b.num_frames,
         feet=feet, flights=flights)
-    out = out.replace(meta={**out.meta, "name": f"{a.meta.get('name', 'a')}+{b.meta.get('name', 'b')}",
-                            "edit": "concatenated"})
+    out = out.replace(meta={**derived_meta(out.meta, "concatenated"),
+                            "name": f"{a.meta.get('name', 'a')}+{b.meta.get('name', 'b')}"})
     # the clip's flight where it has one; two flips have two (the report's flights)
     one = flights[0] if len(flights) == 1 else {"takeoff": None, "landing": None}
     return Concatenation(out, one["takeoff"], one["landing"], report)

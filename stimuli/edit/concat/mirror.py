@@ -6,7 +6,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ...body import Body, _split_name
-from ...motion.clip import Clip
+from ...motion.clip import Clip, derived_meta
 from .motion import torso_facing
 from .phases import UP, ConcatError
 
@@ -68,8 +68,8 @@ def mirror(clip: Clip, plane: str = "sagittal", body: Body | None = None) -> Cli
     q[:, 0] = (Q * Rotation.from_quat(q[:, 0])).as_quat()                # root: M_n R₀ M
     p0 = clip.root_pos[0]
     root = (np.array(clip.root_pos) - p0) @ Mn.T + p0
-    meta = {**clip.meta, "name": f"{clip.meta.get('name', 'clip')}-mirrored",
-            "edit": f"mirrored ({plane})"}
+    meta = {**derived_meta(clip.meta, f"mirrored ({plane})"),
+            "name": f"{clip.meta.get('name', 'clip')}-mirrored"}
     jp = None if clip.joint_pos is None else clip.joint_pos[:, pair] * np.diag(Mx)
     return clip.replace(root_pos=root, rotations=q, joint_pos=jp, meta=meta)
 

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...analyse import analyse
 from ...body import Body
-from ...motion.clip import Clip
+from ...motion.clip import Clip, derived_meta
 from ..reposition import rotate
 from ..timing import sample, slerp
 from .motion import Motion, motion_of
@@ -91,7 +91,7 @@ def motion_graph_join(a: Clip, b: Clip, *, body: Body | None = None, window_s: f
     root = alpha[:, None] * a.root_pos[i:i + k] + (1 - alpha)[:, None] * b2.root_pos[j:j + k]
     rot = np.concatenate([a.rotations[:i], q, b2.rotations[j + k:]])
     pos = np.concatenate([a.root_pos[:i], root, b2.root_pos[j + k:]])
-    out = Clip(a.skeleton, a.fps, pos, rot, None, {**a.meta, "edit": "motion-graph join"})
+    out = Clip(a.skeleton, a.fps, pos, rot, None, derived_meta(a.meta, "motion-graph join"))
     return Concatenation(out, None, None, MotionGraphReport(transition_a=i, transition_b=j, window=k,
                                                 distance=float(D[ii, jj]), theta_deg=float(np.degrees(theta)),
                                                 frames=out.num_frames, duration_s=out.duration))
