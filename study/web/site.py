@@ -181,7 +181,7 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     ``force``; the site is built in a hidden folder beside it and renamed into place.
     ``max_dropped_pct`` None takes the design's ``[session] max_dropped_pct``; a number
     overrides it (the site record says which)."""
-    from flipstudy.render.study import StaleRenderError, check_rendered
+    from flipstudy.render.record import StaleRenderError, check_rendered
     study = load_study(study_dir)
     out = Path(out)
     if host not in HOSTS:
