@@ -261,7 +261,8 @@ class _Checker:
                        timing=_str(rec["timing"], where, "timing", ("rvfc", "raf")),
                        playback_flagged=_bool(rec["playback_flagged"], where, "playback_flagged"),
                        refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True),
-                       repeat=_num(rec.get("repeat", 0), where, "repeat", 0, 1, integer=True))
+                       repeat=_num(0 if rec.get("repeat") is None else rec["repeat"], where, "repeat", 0, 1,
+                                  integer=True))
             for k in ("frames_expected", "frames_presented", "frames_dropped"):
                 out[k] = _num(rec[k], where, k, 0, 10_000_000, integer=True)
             for k in ("dropped_pct", "max_dropped_pct"):
