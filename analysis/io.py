@@ -52,7 +52,10 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
     and every other column as read.  Rows of the ``reference`` group are
     dropped.  Answers to a shared original (group ``original``, see
     :func:`expand_shared_originals`) become the level 0 of every group that shares
-    it, marked ``shared_copy`` beyond the first.  Raises :class:`ResponsesError` naming the file, the line and what
+    it, marked ``shared_copy`` beyond the first.  A first answer that was shown
+    again at the end (a row of the same participant, session and trial with
+    ``repeat`` = 1, see :func:`use_repeats`) is left out: the repeat stands in its
+    place.  Raises :class:`ResponsesError` naming the file, the line and what
     was expected.
     """
     if isinstance(source, pd.DataFrame):
@@ -104,7 +107,40 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
                    incorrect=(resp == "incorrect").astype(np.int8)).reset_index(drop=True)
     if df.empty:
         raise ResponsesError(f"{where}: no trials to analyse (after dropping 'reference' rows)")
-    return expand_shared_originals(df, where)
+    return expand_shared_originals(use_repeats(df, where), where)
+
+
+def use_repeats(df: pd.DataFrame, where: str = "responses table") -> pd.DataFrame:
+    """The answers with each repeated trial counted once: its repeat.
+
+    A web site exported with ``[session] repeat_dropped = true`` shows a trial whose
+    video dropped too many frames once more at the end; the table keeps both answers,
+    the first (``repeat`` = 0, ``playback_flagged`` = true) and the repeat
+    (``repeat`` = 1, same participant, session and trial).  The first is left out
+    here, so the repeat replaces it in every count and d′; a flagged answer without a
+    repeat stays.  Tables without a ``repeat`` column are returned as they are.
+
+    >>> t = pd.DataFrame({"participant": ["P1"] * 3, "session": ["1"] * 3, "trial": [1, 2, 2],
+    ...                   "repeat": [0, 0, 1], "response": ["correct", "incorrect", "correct"]})
+    >>> use_repeats(t)[["trial", "repeat", "response"]].values.tolist()
+    [[1, 0, 'correct'], [2, 1, 'correct']]
+    """
+    if "repeat" not in df.columns:
+        return df
+    rep = pd.to_numeric(df["repeat"], errors="coerce").fillna(0)
+    bad = ~rep.isin((0, 1))
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        trial = f" trial {df.loc[i, 'trial']}" if "trial" in df.columns else ""
+        raise ResponsesError(f"{where}: participant {df.loc[i, 'participant']}{trial}: repeat "
+                             f"{df.loc[i, 'repeat']!r}: expected 0 (the trial's answer) or 1 (the "
+                             f"trial shown once more at the end)")
+    keys = [c for c in ("participant", "session", "trial") if c in df.columns]
+    if "trial" not in keys or not (rep == 1).any():
+        return df
+    idx = pd.MultiIndex.from_frame(df[keys].astype(str))
+    superseded = (rep == 0).to_numpy() & idx.isin(idx[(rep == 1).to_numpy()])
+    return df[~superseded].reset_index(drop=True)
 
 
 def combine_responses(sources) -> pd.DataFrame:

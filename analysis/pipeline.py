@@ -128,6 +128,13 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                              f"no trials to analyse: " + "; ".join(why or ["no participants"]))
     label = participants_label(who)
     table, participants, notes = summarize(df, correction=correction, n_boot=n_boot, seed=seed, ci=ci)
+    if "repeat" in df.columns:
+        n_rep = int((pd.to_numeric(df["repeat"], errors="coerce").fillna(0) == 1)[~df["shared_copy"]].sum())
+        if n_rep:
+            notes.append(f"Repeats: {n_rep} trial(s) flagged for dropped frames were shown once more at "
+                         f"the end of their web session ([session] repeat_dropped); the repeat's answer "
+                         f"is used in place of the flagged first one (kept in the responses table with "
+                         f"repeat = 0).")
     if df["shared_original"].any():
         shared = set(df.loc[df["shared_original"], "group"])
         notes.append("Shared original: the groups " + ", ".join(group_order(shared)) + " share one "

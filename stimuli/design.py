@@ -4,8 +4,8 @@ A design names the base clips, the error groups (kind, profile, sign, levels),
 how often each motion is shown, the reference (practice) clips, the frame rate
 and the seed (the ``[study]`` table and the ones after it: what the stimuli are),
 and how the sessions present them (the ``[session]`` table, read into
-:class:`SessionSettings`: ``replay``, ``break_every``; these change no
-stimulus).  ``PAPER_DESIGN`` is the study of Majkowska & Faloutsos 2007,
+:class:`SessionSettings`: ``replay``, ``break_every``, ``max_dropped_pct``,
+``repeat_dropped``; these change no stimulus).  ``PAPER_DESIGN`` is the study of Majkowska & Faloutsos 2007,
 Section 7: forward and backward somersaults; smooth and abrupt angular-momentum
 increases and decreases at 0/17/25/37/50 %; take-off angle increases at
 0/10/20/30/40 %; each motion shown twice.  As in the paper (its Table 2 gives the
@@ -25,7 +25,7 @@ Designs written before the ``[session]`` table held ``replay`` and
 
 >>> d = parse_design(PAPER_DESIGN)
 >>> d.session
-SessionSettings(replay=False, break_every=40)
+SessionSettings(replay=False, break_every=40, max_dropped_pct=10.0, repeat_dropped=False)
 >>> d.repetitions, len(d.stimulus_names())
 (2, 46)
 """
@@ -81,6 +81,8 @@ class SessionSettings:
 
     replay: bool = False              # may a participant replay a motion before answering
     break_every: int = 40             # trials between breaks
+    max_dropped_pct: float = 10.0     # web: flag a trial whose video dropped more % of its frames
+    repeat_dropped: bool = False      # web: show the flagged trials once more at the end
 
 
 @dataclass
@@ -148,6 +150,9 @@ original = "shared"       # the angular-momentum groups share one original per c
 [session]
 replay = false            # participants may not replay a motion
 break_every = 40          # a break every 40 trials
+max_dropped_pct = 10      # online (export-web): a trial whose video dropped more than 10 % of
+                          # its frames is flagged in the data (playback_flagged)
+repeat_dropped = false    # online: true shows each flagged trial once more after the last one
 
 # Base clips: a built-in name (backflip, frontflip, jump) or a BVH path relative to
 # this file, with optional scale (metres per file unit) and fps (override the header),
@@ -187,7 +192,8 @@ levels = [0, 10, 20, 30, 40]
 #: the keys each section may hold (anything else is refused with a did-you-mean)
 STUDY_KEYS = ("name", "seed", "fps", "repetitions", "total_mass", "com_policy", "tolerance_pct",
               "original")
-SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
+SESSION_KEYS = ("replay", "break_every", "max_dropped_pct", "repeat_dropped")
+OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
 CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
 GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original")
 REFERENCE_KEYS = ("clips",)
@@ -298,7 +304,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
     if not isinstance(st, dict):
         raise DesignError(f"{src}: missing [study] section")
     w = f"{src}: [study]"
-    _check_keys({k: v for k, v in st.items() if k not in SESSION_KEYS}, STUDY_KEYS, w)
+    _check_keys({k: v for k, v in st.items() if k not in OLD_SESSION_KEYS}, STUDY_KEYS, w)
     design = Design(
         name=_get(st, "name", str, w, check=lambda v: None if 0 < len(v) <= 200 else
                   "expected 1 to 200 characters"),
@@ -435,7 +441,7 @@ def _parse_session(d: dict, st: dict, src: str) -> SessionSettings:
     if not isinstance(se, dict):
         raise DesignError(f"{src}: [session]: expected a table ({', '.join(SESSION_KEYS)})")
     _check_keys(se, SESSION_KEYS, f"{src}: [session]")
-    old = [k for k in SESSION_KEYS if k in st]
+    old = [k for k in OLD_SESSION_KEYS if k in st]
     for k in old:
         if k in se:
             raise DesignError(f"{src}: [study].{k} and [session].{k} are both given; {k} is a "
@@ -447,7 +453,10 @@ def _parse_session(d: dict, st: dict, src: str) -> SessionSettings:
 
     settings = SessionSettings(replay=get("replay", bool, False),
                                break_every=get("break_every", int, 40,
-                                               _between(1, BREAK_EVERY_MAX, " trials")))
+                                               _between(1, BREAK_EVERY_MAX, " trials")),
+                               max_dropped_pct=get("max_dropped_pct", float, 10.0,
+                                                   _between(0, 100, " percent of a video's frames")),
+                               repeat_dropped=get("repeat_dropped", bool, False))
     if old:
         warnings.warn(f"{src}: [study] {', '.join(old)}: session settings go in a [session] table "
                       f"now; read as [session] {', '.join(old)} (move them there)",

@@ -44,13 +44,16 @@ def write_test_video(path, *, size=(64, 48), frames: int = 30, fps: float = 30.0
 
 def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_every=40,
                      clips=("backflip",), levels=(0, 25), groups=DEMO_GROUPS,
-                     reference=True, original: str | None = "per-group") -> str:
+                     reference=True, original: str | None = "per-group",
+                     max_dropped_pct: float | None = None, repeat_dropped: bool = False) -> str:
     """A demo design.  ``original``: written as ``[study] original`` — the demo keeps
     every group's own level 0 ("per-group") so its trial counts stay simple;
     "shared" (or None: the default) gives the paper's shared original."""
     lines = ["[study]", f'name = "{name}"', f"seed = {seed}", f"repetitions = {repetitions}"]
     lines += ([f'original = "{original}"'] if original else []) + [""]
-    lines += ["[session]", f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}", ""]
+    lines += ["[session]", f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}"]
+    lines += ([f"max_dropped_pct = {max_dropped_pct:g}"] if max_dropped_pct is not None else [])
+    lines += (["repeat_dropped = true"] if repeat_dropped else []) + [""]
     for c in clips:
         lines += ["[[clips]]", f'name = "{c}"', f'source = "{c}"', ""]
     if reference:

@@ -61,6 +61,8 @@ COLUMNS = {
     "timing": "how frames were counted: rvfc (requestVideoFrameCallback) or raf (fallback)",
     "playback_flagged": "true when dropped_pct exceeds max_dropped_pct",
     "max_dropped_pct": "the site's dropped-frame threshold, percent",
+    "repeat": "1: a trial flagged for dropped frames shown once more at the end (its first "
+              "answer, repeat 0, is the row before); the analysis uses the repeat in its place",
     "source_file": "the imported file the answer was first read from",
     "age": "age in years (empty: prefer not to say)",
     "gender": "gender (option code)",

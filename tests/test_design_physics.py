@@ -101,6 +101,26 @@ def test_session_settings_are_read_from_the_session_table(tmp_path):
     assert "[session]" in msg and "unknown key 'replya'" in msg and "did you mean 'replay'" in msg
 
 
+def test_dropped_frame_threshold_and_repeat_are_session_settings(tmp_path):
+    d = parse_design(PAPER_DESIGN)
+    assert d.session.max_dropped_pct == 10.0 and d.session.repeat_dropped is False
+    assert "max_dropped_pct = 10" in PAPER_DESIGN and "repeat_dropped = false" in PAPER_DESIGN
+    base = ONE_CLIP.format(study="", clip="", source="backflip") + "\n[session]\n"
+    d = load_design(design_file(tmp_path, text=base + "max_dropped_pct = 2.5\nrepeat_dropped = true\n"))
+    assert d.session.max_dropped_pct == 2.5 and d.session.repeat_dropped is True
+    assert load_design(design_file(tmp_path, text=base + "max_dropped_pct = 0\n")).session.max_dropped_pct == 0
+    for line, shown in (("max_dropped_pct = 101", "101"), ("max_dropped_pct = -1", "-1"),
+                        ("max_dropped_pct = nan", "nan"), ('max_dropped_pct = "10"', "'10'")):
+        msg = refused(tmp_path, text=base + line + "\n")
+        assert "design.toml: [session].max_dropped_pct" in msg and f"got {shown}" in msg, msg
+    msg = refused(tmp_path, text=base + "repeat_dropped = 1\n")
+    assert "[session].repeat_dropped: expected true or false, got 1" in msg, msg
+    msg = refused(tmp_path, text=base + "repeat_droped = true\n")
+    assert "did you mean 'repeat_dropped'" in msg, msg
+    msg = refused(tmp_path, study="max_dropped_pct = 5")      # new keys live in [session] only
+    assert "[study]" in msg and "unknown key 'max_dropped_pct'" in msg, msg
+
+
 def test_session_settings_in_the_study_table_are_still_read_with_a_note(tmp_path):
     p = design_file(tmp_path, study="replay = true\nbreak_every = 7")
     with pytest.warns(FutureWarning, match=r"\[study\] replay, break_every: .*\[session\]") as w:

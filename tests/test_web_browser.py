@@ -13,7 +13,11 @@ blocked and recorded.  Then ``import-web`` reads the stand-in's data and the
 download, and ``analyze`` makes the table.
 
 One stimulus's video is made at 240 fps: a 60 Hz display cannot present three of its
-every four frames, so its trials must be flagged as dropping frames.
+every four frames, so its trials must be flagged as dropping frames; with the design's
+``[session] repeat_dropped = true`` they come back once more after the last trial
+(a reload in the middle of the repeats resumes them), and ``analyze`` counts the
+repeat in place of the flagged first answer.  With ``[session] replay = true`` a
+motion is replayed before the answer: the replays are counted, the answer kept once.
 
 Set ``FLIPSTUDY_SCREENSHOTS=DIR`` to keep the screenshots (docs/img/web_trial.png
 comes from there).
@@ -192,23 +196,29 @@ def _wait_screen(page, sid):
 
 
 def _answer(page, trial, response, how):
+    _answer_on(page, f"trial-{trial}", response, how, trial)
+
+
+def _answer_on(page, screen, response, how, n_answers):
+    """Answer on the trial screen ``screen`` (clicking through breaks, the resume and
+    the repeats screen on the way) and wait until ``n_answers`` answers are kept."""
     deadline = time.monotonic() + TIMEOUT / 1000
     while True:
         sid = _screen(page)
-        if sid == f"trial-{trial}":
+        if sid == screen:
             break
-        if sid and (sid.startswith("break-") or sid == "resume"):
+        if sid and (sid.startswith("break-") or sid in ("resume", "repeats")):
             page.click("#jspsych-html-button-response-btngroup button")
             page.wait_for_function(f"document.getElementById('jspsych-target').dataset.screenId !== '{sid}'")
             continue
-        assert time.monotonic() < deadline, f"trial {trial} never came (screen {sid})"
+        assert time.monotonic() < deadline, f"{screen} never came (screen {sid})"
         time.sleep(0.02)
     page.wait_for_selector("button.fs-correct:enabled")
     if how == "key":
         page.keyboard.press("f" if response == "correct" else "j")
     else:
         page.click(f"button.fs-{response}")
-    page.wait_for_function(f"window.flipstudyState.checkpoint.answers().length >= {trial}")
+    page.wait_for_function(f"window.flipstudyState.checkpoint.answers().length >= {n_answers}")
 
 
 RESP = ["correct", "incorrect", "incorrect", "correct", "correct", "incorrect", "correct", "incorrect"]
@@ -391,3 +401,130 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
     assert sum(int(t["n"]) for t in table) == 8                # every answer exactly once
     cells = {(t["group"], float(t["level"])): int(t["n"]) for t in table}
     assert set(cells.values()) == {2}
+
+
+def _config(site):
+    return json.loads((site / "config.js").read_text().split("= ", 1)[1].rstrip().rstrip(";"))
+
+
+def _download(page, tmp_path, name="download.jsonl"):
+    _wait_screen(page, "end")
+    page.wait_for_selector('#jspsych-target[data-saved="1"]')
+    with page.expect_download() as dl:
+        page.click("#fs-download")
+    path = tmp_path / name
+    dl.value.save_as(path)
+    return path
+
+
+def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  # noqa: F811
+    """[session] repeat_dropped = true: the 240 fps stimulus's two trials (flagged) come
+    back after trial 8, in the trials' order, once each, with a reload between them;
+    import-web keeps both answers of each; analyze counts the repeats instead."""
+    study = make_demo_study(tmp_path / "study", levels=(0, 25), repetitions=2, break_every=3,
+                            video_frames=12, video_fps=30.0, size=(160, 120), repeat_dropped=True,
+                            max_dropped_pct=20)
+    write_test_video(study / "render" / f"{FAST}.mp4", size=(160, 120), frames=96, fps=240.0)
+    write_demo_record(study, read_manifest(study), size=(160, 120), fps=30.0)
+    site = tmp_path / "site"
+    r = export_site(study, site, host="static", iti_ms=20, jspsych_dir=jspsych_dir)
+    assert (r["max_dropped_pct"], r["repeat_dropped"]) == (20.0, True)      # the design's
+    record = json.loads((site / "flipstudy-site.json").read_text())
+    assert record["max_dropped_pct_from"] == "design" and record["repeat_dropped"] is True
+    cfg = _config(site)
+    assert cfg["max_dropped_pct"] == 20.0 and cfg["repeat_dropped"] is True
+    twin = web_trial_order(cfg["groups"], 2, 7, PID)
+    fast = [t.trial for t in twin if t.stimulus == FAST]
+    assert len(fast) == 2
+    again = {fast[0]: "incorrect", fast[1]: "incorrect"}        # the repeats' answers
+    first = {t.trial: "correct" for t in twin}                  # every first answer: correct
+    blocked = []
+    with _Host(site) as host:
+        origin = f"127.0.0.1:{host.port}"
+        _gate(page, origin, blocked)
+        page.goto(f"http://{origin}/index.html?participant={PID}")
+        _intro(page)
+        for i in range(1, 9):
+            _answer(page, i, first[i], HOW[i - 1])
+        _wait_screen(page, "repeats")
+        assert "2 motions did not play smoothly" in page.inner_text("#jspsych-target")
+        page.click("#jspsych-html-button-response-btngroup button")
+        _wait_screen(page, f"repeat-{fast[0]}")
+        assert f"Once more: motion {fast[0]} of 8" in page.inner_text("#jspsych-target")
+        _answer_on(page, f"repeat-{fast[0]}", again[fast[0]], "key", 9)
+        page.reload()                                          # in the middle of the repeats
+        _wait_screen(page, "resume")
+        assert "Your first 8 answers are saved" in page.inner_text("#jspsych-target")
+        _answer_on(page, f"repeat-{fast[1]}", again[fast[1]], "click", 10)
+        download = _download(page, tmp_path)
+        state = page.evaluate("window.flipstudyState.checkpoint.answers()")
+    assert blocked == []
+    assert [(a["trial"], a["repeat"]) for a in state] == \
+        [(i, 0) for i in range(1, 9)] + [(fast[0], 1), (fast[1], 1)]  # each flagged trial once more
+    lines = [json.loads(x) for x in download.read_text().splitlines()]
+    assert lines[-1]["record"] == "end" and (lines[-1]["answered"], lines[-1]["repeats"]) == (8, 2)
+
+    imp = import_web(study, [download])
+    assert imp["answers"] == 10 and imp["incomplete"] == [] and len(imp["repeats"]) == 2
+    rows = _csv(study / "web" / "responses.csv")
+    assert [(int(r["trial"]), r["repeat"]) for r in rows] == sorted(
+        [(i, "0") for i in range(1, 9)] + [(fast[0], "1"), (fast[1], "1")])
+    for t in fast:                                             # both answers of a flagged trial
+        f0, f1 = [r for r in rows if int(r["trial"]) == t]
+        assert (f0["repeat"], f0["response"], f0["playback_flagged"]) == ("0", "correct", "true")
+        assert (f1["repeat"], f1["response"], f1["stimulus"]) == ("1", "incorrect", FAST)
+        assert f1["max_dropped_pct"] == "20"
+    assert all(r["playback_flagged"] == "false" for r in rows if r["stimulus"] != FAST)
+    assert _csv(study / "web" / "participants.csv")[0]["answered"] == "8"
+
+    out = tmp_path / "analysis"
+    assert cli(["analyze", str(study / "web"), "--out", str(out), "--no-figures", "--no-gee",
+                "--psychometric", "none", "--n-boot", "50"]) == 0
+    table = _csv(out / "table.csv")
+    assert sum(int(t["n"]) for t in table) == 8                # each trial once: the repeat for the flagged
+    m = next(x for x in read_manifest(study) if x["stimulus"] == FAST)
+    cells = {(t["group"], float(t["level"])): int(t["n_incorrect"]) for t in table}
+    assert cells.pop((m["group"], float(m["level"]))) == 2     # the repeats' "incorrect", not "correct"
+    assert set(cells.values()) == {0}
+    assert "Repeats: 2 trial(s)" in (out / "notes.md").read_text()
+
+
+def test_replay_is_counted_and_the_answer_kept_once(page, tmp_path, jspsych_dir):  # noqa: F811
+    """[session] replay = true: a Replay button once the motion has been shown; while the
+    replay plays no answer can be given; the answer's record counts the replays."""
+    study = make_demo_study(tmp_path / "study", levels=(0, 25), repetitions=1, replay=True,
+                            video_frames=12, size=(96, 72))
+    site = tmp_path / "site"
+    export_site(study, site, host="static", iti_ms=20, jspsych_dir=jspsych_dir)
+    assert _config(site)["replay"] is True
+    blocked = []
+    with _Host(site) as host:
+        origin = f"127.0.0.1:{host.port}"
+        _gate(page, origin, blocked)
+        page.goto(f"http://{origin}/index.html?participant={PID}")
+        _intro(page)
+        _wait_screen(page, "trial-1")
+        for k in (1, 2):                                       # replayed twice
+            page.wait_for_selector("button.fs-replay:enabled")
+            assert page.is_enabled("button.fs-correct")
+            locked = page.evaluate("""() => {
+                document.querySelector('button.fs-replay').click();
+                return ['correct', 'incorrect', 'replay'].map(
+                    (c) => document.querySelector('button.fs-' + c).disabled); }""")
+            assert locked == [True, True, True], k           # nothing to press while it plays again
+            page.keyboard.press("f")                           # ignored: the answer waits for the end
+            assert page.evaluate("window.flipstudyState.checkpoint.answers().length") == 0
+        _answer(page, 1, "incorrect", "key")
+        _answer(page, 2, "correct", "click")                   # not replayed
+        for i in range(3, 5):
+            _answer(page, i, RESP[i - 1], HOW[i - 1])
+        download = _download(page, tmp_path)
+        state = page.evaluate("window.flipstudyState.checkpoint.answers()")
+    assert blocked == []
+    assert [(a["trial"], a["replays"], a["response"]) for a in state[:2]] == \
+        [(1, 2, "incorrect"), (2, 0, "correct")]
+    assert [a["trial"] for a in state] == [1, 2, 3, 4]         # every answer stored once
+    import_web(study, [download])
+    rows = _csv(study / "web" / "responses.csv")
+    assert [(r["trial"], r["replays"], r["response"]) for r in rows] == \
+        [("1", "2", "incorrect"), ("2", "0", "correct")] + [(str(i), "0", RESP[i - 1]) for i in (3, 4)]

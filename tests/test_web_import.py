@@ -214,3 +214,29 @@ def test_site_config_carries_the_design_and_threshold(study):
     assert "PROLIFIC_PID" == cfg["participant_params"][0]
     with pytest.raises(FlipstudyError, match="choose one of static, jatos, pavlovia"):
         site_config(load_study(study), host="ftp")
+
+
+def test_repeats_of_flagged_trials_are_kept_beside_the_first_answer(study, tmp_path):
+    recs = run_records(study, "W09", flag={3}, responses={3: "correct"})
+    end = recs.pop()
+    rep = dict(next(r for r in recs if r.get("trial") == 3), repeat=1, response="incorrect",
+               frames_presented=12, frames_dropped=0, dropped_pct=0.0, playback_flagged=False)
+    out = import_web(study, [pavlovia_csv(tmp_path / "run.csv", recs + [rep, end])])
+    assert out["answers"] == 9 and out["incomplete"] == [] and out["repeats"] == ["W09/1 trial 3"]
+    got = rows(study)
+    assert [(r["trial"], r["repeat"]) for r in got][2:4] == [("3", "0"), ("3", "1")]
+    assert [(r["response"], r["playback_flagged"]) for r in got][2:4] == [("correct", "true"),
+                                                                          ("incorrect", "false")]
+    assert {r["repeat"] for r in got if r["trial"] != "3"} == {"0"}     # records without 'repeat'
+    # a repeat of a trial that was not flagged, or a second repeat, is refused
+    bad = dict(next(r for r in recs if r.get("trial") == 4), repeat=1)
+    with pytest.raises(WebImportError, match=r"line \d+: trial 4 .* repeat = 1, but its first answer"):
+        import_web(study, [jsonl(tmp_path / "bad.jsonl", recs + [bad])])
+    twice = dict(rep, response="correct")
+    with pytest.raises(WebImportError, match="trial 3 of participant W09 .* differs"):
+        import_web(study, [jsonl(tmp_path / "twice.jsonl", recs + [rep, twice])])
+    # analyze: the repeat stands in for the flagged first answer
+    from flipstudy.analysis.io import load_responses
+    df = load_responses(study / "web")
+    assert len(df[df["trial"] == 3]) == 1 and df.loc[df["trial"] == 3, "response"].item() == "incorrect"
+    assert len(df) == 8

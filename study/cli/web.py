@@ -29,6 +29,9 @@ def cmd_export_web(args) -> int:
             "pavlovia": "push the folder to a Pavlovia project (index.html at its root) and set it "
                         "running; results arrive in its data/ folder as CSV"}[r["host"]]
     print(hint)
+    print(f"dropped frames: a trial over {r['max_dropped_pct']:g} % is flagged "
+          f"({'--max-dropped-pct' if args.max_dropped_pct is not None else 'the design'})"
+          + ("; flagged trials are shown once more at the end" if r["repeat_dropped"] else ""))
     print(f"next: flipstudy import-web {args.study_dir} RESULTS...")
     return 0
 
@@ -50,6 +53,9 @@ def cmd_import_web(args) -> int:
     if r["flagged"]:
         print(f"{len(r['flagged'])} trial(s) with dropped frames over the threshold, marked "
               f"playback_flagged=true: " + ", ".join(r["flagged"][:8]))
+    if r["repeats"]:
+        print(f"{len(r['repeats'])} flagged trial(s) shown once more at the end, rows with repeat=1 "
+              f"(analyze uses them in place of the flagged first answers): " + ", ".join(r["repeats"][:8]))
     print(f"next: flipstudy analyze {r['responses'].parent}  (or with the local answers: "
           f"flipstudy analyze {args.study_dir}/responses.csv {r['responses']} --out DIR)")
     return 0
@@ -69,8 +75,9 @@ def add_commands(subparsers) -> None:
     p.add_argument("--out", required=True, metavar="SITE", help="folder to write (must not exist)")
     p.add_argument("--host", choices=("static", "jatos", "pavlovia"), default="static",
                    help="where the site runs (default static: answers by download only)")
-    p.add_argument("--max-dropped-pct", type=_pct, default=10.0, metavar="PCT",
-                   help="flag a trial whose video dropped more than PCT %% of its frames (default 10)")
+    p.add_argument("--max-dropped-pct", type=_pct, default=None, metavar="PCT",
+                   help="flag a trial whose video dropped more than PCT %% of its frames; overrides "
+                        "the design's [session] max_dropped_pct (default: the design's, 10 unless set)")
     p.add_argument("--iti-ms", type=int, default=500, metavar="MS",
                    help="blank interval with a fixation cross before each motion (default 500)")
     p.add_argument("--jspsych-dir", metavar="DIR", default=None,

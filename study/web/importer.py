@@ -31,8 +31,14 @@ run of a participant is a session, numbered by the run's start time.
 The rows are the local export's columns (``source`` = ``web-jatos``,
 ``web-pavlovia`` or ``web-static``) plus the playback record: ``frames_expected,
 frames_presented, frames_dropped, dropped_pct, playback_ms, video_ms,
-refresh_hz, timing, playback_flagged, max_dropped_pct`` and ``run_id``,
+refresh_hz, timing, playback_flagged, max_dropped_pct``, ``repeat`` and ``run_id``,
 ``source_file``.
+
+A site exported with ``[session] repeat_dropped = true`` shows each flagged trial
+once more at the end; that answer is a second row of the same trial with
+``repeat = 1`` (the first, ``repeat = 0``, is kept with its flag).  A repeat of a
+trial whose first answer was not flagged, or a second repeat, is refused.
+``complete`` and ``answered`` count first answers only.
 """
 from __future__ import annotations
 
@@ -61,7 +67,7 @@ WEB_DIR = "web"
 IMPORTS = "imports"
 WEB_COLUMNS = ["source", "run_id", "frames_expected", "frames_presented", "frames_dropped",
                "dropped_pct", "playback_ms", "video_ms", "refresh_hz", "timing", "playback_flagged",
-               "max_dropped_pct", "source_file"]
+               "max_dropped_pct", "repeat", "source_file"]
 COLUMNS = RESPONSE_COLUMNS + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
                                                  "user_agent"]
@@ -254,7 +260,9 @@ class _Checker:
                        replays=_num(rec["replays"], where, "replays", 0, MAX_REPLAYS, integer=True),
                        timing=_str(rec["timing"], where, "timing", ("rvfc", "raf")),
                        playback_flagged=_bool(rec["playback_flagged"], where, "playback_flagged"),
-                       refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True))
+                       refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True),
+                       repeat=_num(0 if rec.get("repeat") is None else rec["repeat"], where, "repeat", 0, 1,
+                                  integer=True))
             for k in ("frames_expected", "frames_presented", "frames_dropped"):
                 out[k] = _num(rec[k], where, k, 0, 10_000_000, integer=True)
             for k in ("dropped_pct", "max_dropped_pct"):
@@ -290,7 +298,7 @@ class _Checker:
 
 def _key(r: dict):
     if r["record"] == "answer":
-        return (r["run_id"], "answer", r["trial"])
+        return (r["run_id"], "answer", r["trial"], r["repeat"])
     return (r["run_id"], r["record"])
 
 
@@ -320,6 +328,13 @@ def _merge(items, local_ids) -> tuple[dict, int]:
             dup += 1
             continue
         merged[k] = (r, where, fname)
+    for k, (r, where, _f) in merged.items():
+        if k[1] == "answer" and r["repeat"]:
+            first = merged.get(k[:3] + (0,))
+            if first is not None and not first[0]["playback_flagged"]:
+                raise WebImportError(f"{where}: trial {r['trial']} of participant {r['participant']} "
+                                     f"(run {r['run_id']}) is marked repeat = 1, but its first answer "
+                                     f"({first[1]}) was not flagged; only flagged trials are repeated")
     return merged, dup
 
 
@@ -352,10 +367,11 @@ def _tables(merged: dict, n_trials: int):
     answers = [(r, f) for (r, _w, f) in merged.values() if r["record"] == "answer"]
     count = {}
     for r, _ in answers:
-        if r["trial"] <= n_trials:
+        if r["trial"] <= n_trials and not r["repeat"]:
             count[r["run_id"]] = count.get(r["run_id"], 0) + 1
     rows = []
-    for r, f in sorted(answers, key=lambda x: (x[0]["participant"], sessions[x[0]["run_id"]], x[0]["trial"])):
+    for r, f in sorted(answers, key=lambda x: (x[0]["participant"], sessions[x[0]["run_id"]], x[0]["trial"],
+                                               x[0]["repeat"])):
         row = {c: r.get(c) for c in COLUMNS}
         row.update(session=sessions[r["run_id"]], late_frames=r["frames_dropped"], simulated=False,
                    complete=count.get(r["run_id"], 0) >= n_trials, source=f"web-{r['host']}",
@@ -366,7 +382,7 @@ def _tables(merged: dict, n_trials: int):
     for run, info in sorted(runs.items(), key=lambda x: (x[1]["participant"], sessions[x[0]])):
         demo = merged.get((run, "demographics"), ({},))[0]
         start = merged.get((run, "start"), ({},))[0]
-        run_answers = [r for r, _ in answers if r["run_id"] == run]
+        run_answers = [r for r, _ in answers if r["run_id"] == run and not r["repeat"]]
         last = max((r["timestamp"] for r in run_answers), default=None)
         done = count.get(run, 0) >= n_trials
         p = {"participant": info["participant"], "session": sessions[run], "source": f"web-{info['host']}",
@@ -420,7 +436,7 @@ def import_web(study_dir, files) -> dict:
 
     Returns ``{"files": [{"file", "status" ("imported" | "already imported"),
     "records", "new_answers"}], "answers", "participants", "sessions",
-    "incomplete", "flagged", "responses", "participants_csv", "description"}``."""
+    "incomplete", "flagged", "repeats", "responses", "participants_csv", "description"}``."""
     study = load_study(study_dir)
     d = study.dir / WEB_DIR
     imports = d / IMPORTS
@@ -482,6 +498,7 @@ def import_web(study_dir, files) -> dict:
             "sessions": len(parts), "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/"
                                                    f"{p['n_trials']})" for p in parts if p["complete"] != "true"],
             "flagged": [f"{r['participant']}/{r['session']} trial {r['trial']} ({r['dropped_pct']} % dropped)"
-                        for r in rows if r["playback_flagged"] == "true"],
+                        + (" repeat" if r["repeat"] == "1" else "") for r in rows if r["playback_flagged"] == "true"],
+            "repeats": [f"{r['participant']}/{r['session']} trial {r['trial']}" for r in rows if r["repeat"] == "1"],
             "duplicates": dup, "responses": out, "participants_csv": d / "participants.csv",
             "description": desc}

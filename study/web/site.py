@@ -18,8 +18,10 @@
 ``jatos`` (the page loads ``jatos.js``, which JATOS serves beside it, and appends every
 record to the component's result data) or ``pavlovia`` (Pavlovia's experiment API:
 a session is opened, the records saved after every answer, the session closed at the
-end).  The dropped-frame threshold (``max_dropped_pct``) is an option of the export
-and recorded in the site and in every answer.
+end).  The dropped-frame threshold is the design's ``[session] max_dropped_pct``
+(``max_dropped_pct`` given to the export overrides it), recorded in the site and in
+every answer; with ``[session] repeat_dropped = true`` the trials flagged by it are
+shown once more after the last trial (their records carry ``repeat = 1``).
 
 Example
 -------
@@ -29,6 +31,8 @@ Example
 >>> cfg = site_config(load_study(make_demo_study(tmp / "study")), host="static")
 >>> cfg["n_trials"], cfg["host"], sorted(cfg["keys"].items())
 (8, 'static', [('correct', 'f'), ('incorrect', 'j')])
+>>> cfg["max_dropped_pct"], cfg["repeat_dropped"]          # the design's [session] settings
+(10.0, False)
 >>> export_site(tmp / "study", tmp / "site", jspsych_dir=...)    # doctest: +SKIP
 """
 from __future__ import annotations
@@ -108,13 +112,16 @@ def _texts(study, n_trials: int) -> dict:
             "end_download": "A copy of your answers stays in this browser; you may also download it."}
 
 
-def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_pct: float = 10.0,
+def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_pct: float | None = None,
                 video_width: int = 640, videos: dict | None = None) -> dict:
     """The ``window.FLIPSTUDY`` object of ``config.js`` (``videos``: stimulus →
-    :func:`probe_video`; without it the manifest's frames and fps stand in)."""
+    :func:`probe_video`; without it the manifest's frames and fps stand in;
+    ``max_dropped_pct`` None: the design's ``[session]`` threshold)."""
     if host not in HOSTS:
         raise SiteError(f"host {host!r}: choose one of {', '.join(HOSTS)}")
     design = study.design
+    if max_dropped_pct is None:
+        max_dropped_pct = design.session.max_dropped_pct
     groups = order_groups(design, study.manifest)
     n = sum(len(rows) for _, rows in groups) * int(design.repetitions)
     vids = {}
@@ -129,7 +136,8 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
         "design_seed": int(design.seed), "repetitions": int(design.repetitions), "n_trials": n,
         "order_rule": RULE, "groups": groups, "keys": dict(local_timeline.KEYS),
         "replay": bool(design.session.replay), "break_every": int(design.session.break_every), "iti_ms": int(iti_ms),
-        "max_dropped_pct": float(max_dropped_pct), "video_width": int(video_width),
+        "max_dropped_pct": float(max_dropped_pct), "repeat_dropped": bool(design.session.repeat_dropped),
+        "video_width": int(video_width),
         "participant_params": list(PARTICIPANT_PARAMS),
         "references": [{"stimulus": r["stimulus"], "video": f"stimuli/{r['stimulus']}.mp4"}
                        for r in study.references],
@@ -163,19 +171,22 @@ def _index_html(host: str, scripts: list[str]) -> str:
 
 
 def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
-                max_dropped_pct: float = 10.0, video_width: int = 640, jspsych_dir=None,
+                max_dropped_pct: float | None = None, video_width: int = 640, jspsych_dir=None,
                 force: bool = False) -> dict:
     """Write the site of ``study_dir`` to ``out`` (see the module docstring).
-    Returns ``{"out", "host", "site_id", "n_trials", "videos", "jspsych", "bytes"}``.
+    Returns ``{"out", "host", "site_id", "n_trials", "videos", "jspsych", "bytes",
+    "max_dropped_pct", "repeat_dropped"}``.
 
     ``out`` must not exist, or be an earlier site (``flipstudy-site.json``) with
-    ``force``; the site is built in a hidden folder beside it and renamed into place."""
+    ``force``; the site is built in a hidden folder beside it and renamed into place.
+    ``max_dropped_pct`` None takes the design's ``[session] max_dropped_pct``; a number
+    overrides it (the site record says which)."""
     from flipstudy.render.record import StaleRenderError, check_rendered
     study = load_study(study_dir)
     out = Path(out)
     if host not in HOSTS:
         raise SiteError(f"--host {host!r}: choose one of {', '.join(HOSTS)}")
-    if not 0 <= max_dropped_pct <= 100:
+    if max_dropped_pct is not None and not 0 <= max_dropped_pct <= 100:
         raise SiteError(f"--max-dropped-pct {max_dropped_pct:g}: a percentage, 0 to 100")
     if out.exists():
         if not out.is_dir() or (any(out.iterdir()) and not (force and (out / SITE_RECORD).is_file())):
@@ -218,6 +229,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
                   "study_dir": str(study.dir.resolve()), "design_sha256": _sha256(design_path),
                   "manifest_sha256": study.manifest_sha256, "n_trials": cfg["n_trials"],
                   "order_rule": RULE, "max_dropped_pct": cfg["max_dropped_pct"],
+                  "max_dropped_pct_from": "design" if max_dropped_pct is None else "export-web",
+                  "repeat_dropped": cfg["repeat_dropped"],
                   "software": {"flipstudy": fs_version},
                   "jspsych": {"version": jsp.PACKAGES["jspsych"], "packages": packages,
                               "fetched_with": "npm", "loaded_from": "lib/ (this folder)"},
@@ -238,4 +251,5 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
             shutil.rmtree(tmp, ignore_errors=True)
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     return {"out": out, "host": host, "site_id": cfg["site_id"], "n_trials": cfg["n_trials"],
-            "videos": len(videos), "jspsych": jsp.PACKAGES["jspsych"], "bytes": size}
+            "videos": len(videos), "jspsych": jsp.PACKAGES["jspsych"], "bytes": size,
+            "max_dropped_pct": cfg["max_dropped_pct"], "repeat_dropped": cfg["repeat_dropped"]}

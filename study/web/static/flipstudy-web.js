@@ -21,6 +21,12 @@
 // playback_ms (first frame to 'ended') is recorded beside video_ms, and the display's
 // refresh rate is measured once at the start (median requestAnimationFrame interval).
 // A trial whose dropped frames exceed max_dropped_pct % of the video's is flagged.
+//
+// Repeats.  With repeat_dropped (the design's [session] repeat_dropped), every trial
+// whose answer was flagged is shown once more after the last trial, in the trials'
+// order, at most once each; its record is a second answer with repeat = 1 (the first
+// answer, repeat = 0, is kept as it was).  Which are due is read from the checkpoint, so
+// a reload during the repeats resumes at the first one not yet answered.
 'use strict';
 (function () {
   const C = window.FLIPSTUDY;
@@ -87,6 +93,9 @@
     }
     get records() { return this.s.records; }
     answers() { return this.s.records.filter((r) => r.record === 'answer'); }
+    // the answers of the trial order (repeat 0) and the repeats of flagged ones (repeat 1)
+    firsts() { return this.answers().filter((r) => !r.repeat); }
+    repeats() { return this.answers().filter((r) => r.repeat); }
     has(kind) { return this.s.records.some((r) => r.record === kind); }
   }
 
@@ -309,7 +318,14 @@
     }
     window.flipstudyState = {participant: pid, trials, checkpoint: cp};   // for tests and debugging
 
-    const answered = cp.answers().length;
+    const answered = cp.firsts().length;
+    // trials flagged on their first showing and not repeated yet, in the trials' order
+    const dueRepeats = () => {
+      if (!C.repeat_dropped) return [];
+      const flagged = new Set(cp.firsts().filter((r) => r.playback_flagged).map((r) => r.trial));
+      const done = new Set(cp.repeats().map((r) => r.trial));
+      return trials.filter((t) => flagged.has(t.trial) && !done.has(t.trial));
+    };
     const tl = [];
     const keys = C.keys;
     if (answered === 0) {
@@ -356,8 +372,10 @@
           loop_function: (data) => data.values()[0].response === 0});
       });
     } else {
+      const next = answered < n ? `The study continues with motion ${answered + 1} of ${n}.`
+        : 'The study continues with the motions shown once more.';
       tl.push({type: jsPsychHtmlButtonResponse, choices: ['Continue'],
-               stimulus: card('Welcome back', [`Your first ${answered} answers are saved. The study continues with motion ${answered + 1} of ${n}.`,
+               stimulus: card('Welcome back', [`Your first ${answered} answers are saved. ${next}`,
                                                 'Remember: some motions are physically correct and some are not.', C.texts.keys_sentence]),
                on_load: () => setScreen('resume', 'instructions')});
     }
@@ -368,27 +386,39 @@
                  stimulus: card('Break', [`Take a short rest. ${t.trial - 1} of ${n} motions done. Continue when you are ready.`]),
                  on_load: () => setScreen(`break-${t.trial - 1}`, 'break')});
       }
-      tl.push(...trialNodes(t));
+      tl.push(...trialNodes(t, 0));
+    }
+    if (C.repeat_dropped) {
+      let total = 0;
+      tl.push({timeline: [{type: jsPsychHtmlButtonResponse, choices: ['Continue'],
+                 stimulus: () => card('A few motions once more', [`${total === 1 ? 'One motion' : `${total} motions`} did not play smoothly on this computer, so ${total === 1 ? 'it is' : 'they are'} shown once more. Please answer again.`, C.texts.keys_sentence]),
+                 on_load: () => setScreen('repeats', 'break')}],
+               conditional_function: () => { total = dueRepeats().length; return total > 0 && cp.repeats().length === 0; }});
+      for (const t of trials) {
+        tl.push({timeline: trialNodes(t, 1), conditional_function: () => dueRepeats().some((d) => d.trial === t.trial)});
+      }
     }
     tl.push(endNode());
 
-    function trialNodes(t) {
+    function trialNodes(t, repeat) {
       const info = C.videos[t.stimulus];
+      const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
+      const progress = repeat ? `Once more: motion ${t.trial} of ${n}` : `Motion ${t.trial} of ${n}`;
       let watch = null, input = 'click', tEnabled = null, onKey = null, replays = 0;
       const fix = `<div class="fs-stage"><div class="fs-fixation">+</div></div>`;
       return [
         {type: jsPsychPreload, video: [info.video], auto_preload: false, show_progress_bar: false,
-         message: fix, continue_after_error: false, on_start: () => setScreen(`load-${t.trial}`, 'loading')},
+         message: fix, continue_after_error: false, on_start: () => setScreen(`load-${sid}`, 'loading')},
         {type: jsPsychHtmlKeyboardResponse, stimulus: fix, choices: 'NO_KEYS', trial_duration: C.iti_ms,
-         on_load: () => setScreen(`iti-${t.trial}`, 'iti')},
+         on_load: () => setScreen(`iti-${sid}`, 'iti')},
         {type: jsPsychVideoButtonResponse, stimulus: [info.video], choices: ['Correct', 'Incorrect'],
          button_html: buttonHtml((c) => c.toLowerCase(), (c) => keys[c.toLowerCase()]),
-         prompt: `<p class="fs-progress"><span>Motion ${t.trial} of ${n}</span><span>${esc(keys.correct.toUpperCase())} = correct · ${esc(keys.incorrect.toUpperCase())} = incorrect</span></p>
+         prompt: `<p class="fs-progress"><span>${esc(progress)}</span><span>${esc(keys.correct.toUpperCase())} = correct · ${esc(keys.incorrect.toUpperCase())} = incorrect</span></p>
                   <p class="fs-prompt">${esc(C.texts.prompt)}</p>`,
          response_allowed_while_playing: false, trial_ends_after_video: false, autoplay: true, controls: false,
          width: C.video_width,
          on_load: () => {
-           setScreen(`trial-${t.trial}`, 'trial');
+           setScreen(sid, 'trial');
            const el = app();
            el.dataset.trial = String(t.trial);
            el.dataset.playing = '1';
@@ -439,7 +469,7 @@
            if (vb && vb[info.video]) { URL.revokeObjectURL(vb[info.video]); delete vb[info.video]; }
            emit(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
              repetition: t.repetition, clip: t.clip, kind: t.kind, response: data.response === 0 ? 'correct' : 'incorrect',
-             rt_ms: round1(tAnswer - (tEnabled === null ? tAnswer : tEnabled)), input, replays,
+             rt_ms: round1(tAnswer - (tEnabled === null ? tAnswer : tEnabled)), input, replays, repeat,
              refresh_hz: refresh, max_dropped_pct: C.max_dropped_pct}, pb));
          }},
       ];
@@ -454,11 +484,11 @@
         on_load: async () => {
           setScreen('end', 'end');
           document.getElementById('fs-download').addEventListener('click', () => download(cp, pid));
-          if (!cp.has('end')) emit({record: 'end', answered: cp.answers().length, n_trials: n});
+          if (!cp.has('end')) emit({record: 'end', answered: cp.firsts().length, repeats: cp.repeats().length, n_trials: n});
           await sender.flush();
           let msg = C.texts.end_saved;
           if (!cp.s.finished) {
-            try { await host.finish(cp, cp.answers().length); cp.s.finished = nowIso(); cp.save(); } catch (e) { console.warn(e); }
+            try { await host.finish(cp, cp.firsts().length); cp.s.finished = nowIso(); cp.save(); } catch (e) { console.warn(e); }
           }
           if (C.host === 'static') msg = C.texts.end_static;
           const st = document.getElementById('fs-end-status');
