@@ -46,8 +46,8 @@ from flipstudy.stimuli.body import Body
 
 from .geometry import BodyMesh, _perp_basis, piece_frames, piece_templates, unit_sphere
 
-#: The character styles, in the order the docs show them.
-CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
+#: The character styles, in the order the docs show them (a design chooses among them).
+from flipstudy.stimuli.design import CHARACTER_STYLES  # noqa: E402
 
 TRUNK, LEFT, RIGHT = 0, 1, 2
 

@@ -98,7 +98,7 @@ class Style:
     lighting: str = "key-fill"                       # "key-fill" or "light kit"
 
     def __post_init__(self):
-        from .characters import CHARACTER_STYLES
+        from flipstudy.stimuli.design import CHARACTER_STYLES
         if self.character not in CHARACTER_STYLES:
             import difflib
             near = difflib.get_close_matches(str(self.character), CHARACTER_STYLES, n=1)

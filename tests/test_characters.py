@@ -125,3 +125,73 @@ def test_mannequin_is_meshed_once_and_closed():
     # posed points stay near the joints (skinned, not left in the meshing pose)
     d = np.linalg.norm(pts[:, None] - P[50][None], axis=-1).min(1)
     assert np.percentile(d, 99) < 0.35
+
+
+DESIGN = '''
+[study]
+name = "styled"
+seed = 3
+{study_style}
+[[clips]]
+name = "backflip"
+source = "backflip"
+[[groups]]
+name = "smooth-increase"
+kind = "angular-momentum"
+profile = "smooth"
+levels = [0, 25]
+original = "own"
+{group_style}
+'''
+
+
+def test_design_style_is_validated_and_recorded_in_manifest_and_render_json(tmp_path):
+    import csv
+    import json
+    from flipstudy.render.study import render_study
+    from flipstudy.stimuli.design import DesignError, parse_design
+    from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, build_stimuli
+    with pytest.raises(DesignError, match="did you mean 'mannequin'"):
+        parse_design(DESIGN.format(study_style='style = "manequin"', group_style=""))
+    with pytest.raises(DesignError, match="did you mean 'point-light'"):
+        parse_design(DESIGN.format(study_style="", group_style='style = "pointlight"'))
+    plain = parse_design(DESIGN.format(study_style="", group_style=""))
+    assert plain.style is None and not plain.styled
+    d = parse_design(DESIGN.format(study_style='style = "capsules"', group_style='style = "stick"'))
+    assert d.style == "capsules" and d.groups[0].style == "stick"
+    rows = build_stimuli(plain, tmp_path / "plain", progress=False)
+    header = (tmp_path / "plain" / "manifest.csv").read_text().splitlines()[0].split(",")
+    assert header == MANIFEST_COLUMNS and "style" not in rows[0]       # unchanged without a style
+    build_stimuli(d, tmp_path / "s", progress=False)
+    with open(tmp_path / "s" / "manifest.csv") as f:
+        man = list(csv.DictReader(f))
+    assert [r["style"] for r in man] == ["stick", "stick"]
+    rec = render_study(tmp_path / "s", what="ghost", size=(64, 48), jobs=1, progress=False)
+    assert rec["style"]["character"] == "stick"
+    assert {v["style"] for v in rec["stimuli"].values()} == {"stick"}
+    assert all(o["style"] == "stick" for o in rec["outputs"].values())
+    on_disk = json.loads((tmp_path / "s" / "render" / "render.json").read_text())
+    assert on_disk["stimuli"]["backflip_smooth-increase_25"]["style"] == "stick"
+
+
+def test_cli_style_takes_a_name_or_a_file(tmp_path):
+    from flipstudy.stimuli.exceptions import FlipstudyError
+    from flipstudy.study.cli.render import _style
+    assert _style(["stick"]).character == "stick"
+    f = tmp_path / "s.toml"
+    f.write_text('background = "#ffffff"\n')
+    s = _style([str(f), "mannequin"])
+    assert (s.background, s.character) == ("#ffffff", "mannequin")
+    with pytest.raises(FlipstudyError, match="did you mean 'capsules'"):
+        _style(["capsule"])
+
+
+def test_analysis_splits_tables_by_style_when_there_are_several():
+    import pandas as pd
+    from flipstudy.analysis.pipeline import split_by_style
+    df = pd.DataFrame({"group": ["a", "a", "b"], "style": ["stick", "stick", "mannequin"]})
+    t, note = split_by_style(df, pd.DataFrame({"group": ["a", "b"], "n": [2, 1]}))
+    assert list(t.columns[:2]) == ["group", "style"] and "stick: a" in note
+    same = pd.DataFrame({"group": ["a", "b"], "style": ["stick", "stick"]})
+    t2, note2 = split_by_style(same, pd.DataFrame({"group": ["a", "b"], "n": [2, 1]}))
+    assert "style" not in t2.columns and note2 is None
