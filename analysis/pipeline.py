@@ -67,6 +67,35 @@ class Result:
                 "files": {k: str(v) for k, v in self.files.items()}}
 
 
+def split_by_style(df: pd.DataFrame, table: pd.DataFrame):
+    """With a ``style`` column (the character style, from the manifest) of more
+    than one value: the table gains a ``style`` column, ordered by style, and a
+    note says which groups each style has.  Otherwise the table is unchanged.
+
+    Example
+    -------
+    >>> df = pd.DataFrame({"group": ["a", "b"], "style": ["stick", "mannequin"]})
+    >>> t, note = split_by_style(df, pd.DataFrame({"group": ["a", "b"], "level": [0, 0]}))
+    >>> t["style"].tolist(), note
+    (['mannequin', 'stick'], 'Character styles: mannequin: b; stick: a.')
+    """
+    if "style" not in df.columns:
+        return table, None
+    st = df["style"].fillna("").astype(str).str.strip()
+    if st.nunique() <= 1:
+        return table, None
+    per = st.groupby(df["group"]).agg(lambda v: ", ".join(sorted(set(v))))
+    t = table.copy()
+    t.insert(1, "style", t["group"].map(per).fillna(""))
+    t = t.sort_values("style", kind="stable").reset_index(drop=True)
+    by = {}
+    for g, s_ in per.items():
+        by.setdefault(s_, []).append(g)
+    note = "Character styles: " + "; ".join(f"{k}: {', '.join(group_order(v))}"
+                                            for k, v in sorted(by.items())) + "."
+    return t, note
+
+
 def _normalise_images(images) -> dict:
     if images is None:
         return {}
@@ -135,6 +164,9 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                          f"the end of their web session ([session] repeat_dropped); the repeat's answer "
                          f"is used in place of the flagged first one (kept in the responses table with "
                          f"repeat = 0).")
+    table, style_note = split_by_style(df, table)
+    if style_note:
+        notes.append(style_note)
     if df["shared_original"].any():
         shared = set(df.loc[df["shared_original"], "group"])
         notes.append("Shared original: the groups " + ", ".join(group_order(shared)) + " share one "

@@ -9,37 +9,80 @@ import numpy as np
 from flipstudy.stimuli.body import Body
 
 from ._pv import pv
-from .geometry import BodyMesh
-from .style import Style
+from .characters import character_mesh, joint_sides, side_tones
+from .style import Style, rgb
 
 
 class Character:
-    """A posable body drawn by one actor (created once per scene slot)."""
+    """A posable body drawn by one actor (created once per scene slot), in the
+    style's character style (:mod:`flipstudy.render.characters`), its left and
+    right limbs in two tones of the colour (``Style.sided``)."""
 
     def __init__(self, plotter, body: Body, style: Style, name: str, inflate: float = 0.0):
-        self.body_mesh = BodyMesh(body, style.ellipsoid_resolution, inflate)
-        self.actor = plotter.add_mesh(self.body_mesh.mesh, color=style.body_color,
-                                      smooth_shading=False, name=name, reset_camera=False,
-                                      ambient=style.ambient, diffuse=style.diffuse,
-                                      specular=style.specular, specular_power=style.specular_power)
-        self.actor.prop.interpolation = "gouraud"
-        self.actor.mapper.scalar_visibility = False
+        self.style = style
+        self.inflate = float(inflate)
+        self.plotter = plotter
         self.name = name
+        self.actor = None
+        self._build(body)
+
+    def _build(self, body: Body) -> None:
+        st = self.style
+        self.body_mesh = character_mesh(body, st, self.inflate)
+        mesh = self.body_mesh.mesh
+        mesh.point_data["rgb"] = np.zeros((mesh.n_points, 3), np.uint8)
+        self._rgb = np.asarray(mesh.point_data["rgb"])
+        flat = st.character == "point-light"
+        old = self.actor
+        vis = True if old is None else bool(old.GetVisibility())
+        self.actor = self.plotter.add_mesh(
+            mesh, scalars="rgb", rgb=True, show_scalar_bar=False, smooth_shading=False,
+            name=self.name, reset_camera=False, ambient=1.0 if flat else st.ambient,
+            diffuse=0.0 if flat else st.diffuse, specular=0.0 if flat else st.specular,
+            specular_power=st.specular_power)
+        self.actor.prop.interpolation = "gouraud"
+        self.actor.SetVisibility(vis)
         self._look = None
+        self._look_args = getattr(self, "_look_args", None)
+        if self._look_args is not None:
+            self.look(*self._look_args)
 
     def set_body(self, body: Body) -> None:
-        if body is not self.body_mesh.body:
-            self.body_mesh.set_body(body)
+        if body is self.body_mesh.body:
+            return
+        bm = self.body_mesh
+        if self.style.character == "ellipsoids" and bm.joint.size == \
+                len(set(body.segment.tolist())):
+            bm.set_body(body)                       # same number of pieces: arrays kept
+            bm.side = np.repeat(joint_sides(body.skeleton)[bm.joint], bm.points_per_piece)
+            self._look = None
+            if self._look_args is not None:
+                self.look(*self._look_args)
+        else:
+            self._build(body)
+
+    def tones(self, color) -> np.ndarray:
+        """(3,3) trunk, left and right colours (0..1) the body is drawn in."""
+        st = self.style
+        if not st.sided:
+            return np.array([rgb(color)] * 3)
+        if st.side_colors is not None and str(color) == str(st.body_color):
+            return np.array([rgb(c) for c in st.side_colors])
+        return side_tones(color, st.side_lightness)
 
     def look(self, color, opacity: float = 1.0) -> None:
-        """Colour and opacity; translucent bodies cull back faces so a ghost
-        reads as one layer."""
+        """Colour (in sided tones) and opacity; translucent bodies cull back
+        faces so a ghost reads as one layer."""
         key = (str(color), float(opacity))
+        self._look_args = (color, opacity)
         if key == self._look:
             return
         self._look = key
+        t = np.rint(self.tones(color) * 255).astype(np.uint8)
+        self._rgb[:] = t[self.body_mesh.side]
+        self.body_mesh.mesh.GetPointData().GetArray("rgb").Modified()
+        self.body_mesh.mesh.Modified()
         p = self.actor.prop
-        p.color = color
         p.opacity = float(opacity)
         p.culling = "back" if opacity < 1.0 else "none"
 

@@ -107,6 +107,17 @@ def load_stimuli(study_dir) -> tuple[list[dict], list]:
     return rows, clips
 
 
+def _character(row: dict, style, study_dir) -> str:
+    """The character style of a manifest row: its ``style`` column, else the
+    render style's."""
+    from .characters import CHARACTER_STYLES
+    name = (row.get("style") or "").strip() or style.character
+    if name not in CHARACTER_STYLES:
+        raise StudyRenderError(f"{Path(study_dir) / 'manifest.csv'}: stimulus {row['stimulus']!r}: "
+                               f"unknown style {name!r} (one of {', '.join(CHARACTER_STYLES)})")
+    return name
+
+
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False) -> dict:
@@ -171,6 +182,9 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     out.mkdir(parents=True, exist_ok=True)
     clear_partials(out)
     rows, clips = load_stimuli(study_dir)
+    chosen = {(r.get("style") or "").strip() for r in rows}
+    if len(chosen) == 1 and "" not in chosen:        # the design chose one style for all
+        style = style.with_character(_character(rows[0], style, study_dir))
     shas = stimulus_hashes(study_dir, rows)
     bodies = _Bodies()
     body_list = [bodies(c) for c in clips]
@@ -211,12 +225,13 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
             ref = None
         placement = json.loads(json.dumps({"offset": o.tolist(), "yaw_deg": float(y),
                                            "takeoff": t0, "landing": t1}))
+        character = _character(r, style, study_dir)
         todo = []
         for kind in what:
             if kind == "overlay" and ref is None:
                 continue
             want = {"stimulus": name, "kind": kind, "stimulus_sha256": sha_of[name],
-                    "settings": sid, "placement": placement}
+                    "settings": sid, "placement": placement, "style": character}
             if kind == "video":
                 want["frames"] = bool(frames)
             if kind == "overlay":
@@ -232,12 +247,12 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         if todo:
             tasks.append({"stimulus": name, "bvh": p, "offset": o.tolist(), "yaw": y,
                           "takeoff": t0, "landing": t1, "what": todo, "reference": ref,
-                          "body": body})
+                          "body": body, "style": character})
     settings_records = {k: v for k, v in (old.get("settings_records") or {}).items()
                         if any(o_.get("settings") == k for o_ in outputs.values())}
     settings_records[sid] = pixel
     info = {r["stimulus"]: {"offset": [float(v) for v in o], "yaw_deg": float(y),
-                            "takeoff": t0_, "landing": t1_}
+                            "takeoff": t0_, "landing": t1_, "style": _character(r, style, study_dir)}
             for r, o, y, t0_, t1_ in zip(rows, st.offsets, st.yaws, takeoffs, landings)}
     jobs = max(1, min(int(jobs or os.cpu_count() or 1), max(len(tasks), 1)))
     t_start = time.perf_counter()

@@ -85,12 +85,34 @@ class Style:
     v_color: str = "#0072B2"
     v_scale: float = 0.15                            # metres per m/s
     support_color: str = "#009E73"
+    # character style and sided colours (flipstudy.render.characters)
+    character: str = "ellipsoids"                    # ellipsoids, capsules, stick, point-light, mannequin
+    sided: bool = True                               # left and right limbs in two tones
+    side_lightness: float = 20.0                     # CIE L* of left above / right below the colour
+    side_colors: tuple | None = None                 # (trunk, left, right) for body_color; None: tones
+    point_light_radius: float = 0.03                 # metres
+    point_light_extra: bool = False                  # sternum and pelvis markers (15, not 13)
     # rendering
     anti_aliasing: str = "ssaa"                      # "ssaa" or "none" (no MSAA: breaks depth peeling)
     depth_peels: int = 8
     lighting: str = "key-fill"                       # "key-fill" or "light kit"
 
     def __post_init__(self):
+        from flipstudy.stimuli.design import CHARACTER_STYLES
+        if self.character not in CHARACTER_STYLES:
+            import difflib
+            near = difflib.get_close_matches(str(self.character), CHARACTER_STYLES, n=1)
+            hint = f" (did you mean {near[0]!r}?)" if near else ""
+            raise FlipstudyValueError(f"Style.character: unknown style {self.character!r}{hint}; "
+                                      f"choose from {', '.join(CHARACTER_STYLES)}")
+        if self.side_colors is not None:
+            self.side_colors = tuple(self.side_colors)
+            if len(self.side_colors) != 3:
+                raise FlipstudyValueError("Style.side_colors: three colours (trunk, left, right)")
+        if self.character == "point-light":              # Johansson: white dots on black
+            for name, value in POINT_LIGHT_LOOK.items():
+                if getattr(self, name) == _DEFAULTS[name]:
+                    setattr(self, name, value)
         for name in ("ground_colors", "ellipsoid_resolution", "overlay_colors",
                      "trail_palette", "legend_size"):
             setattr(self, name, tuple(getattr(self, name)))
@@ -138,6 +160,20 @@ class Style:
     def replace(self, **kw) -> "Style":
         return dataclasses.replace(self, **kw)
 
+    def with_character(self, name: str) -> "Style":
+        """This style with character style ``name``; leaving point-light restores
+        the looks it set (background, ground, colour) to the defaults.
+
+        >>> s = Style().with_character("point-light")
+        >>> s.background, s.ground, s.with_character("stick").background == Style().background
+        ('#000000', False, True)
+        """
+        kw = {"character": name}
+        if self.character == "point-light" and name != "point-light":
+            kw.update({k: _DEFAULTS[k] for k, v in POINT_LIGHT_LOOK.items()
+                       if getattr(self, k) == v})
+        return dataclasses.replace(self, **kw)
+
     @property
     def ghost(self) -> str:
         return self.ghost_color or self.body_color
@@ -155,5 +191,9 @@ def rgb8(color) -> tuple:
     return tuple(int(c) for c in pv.Color(color).int_rgb)
 
 
+#: what point-light changes unless the style sets it (Johansson 1973: white dots on black)
+POINT_LIGHT_LOOK = {"background": "#000000", "ground": False, "body_color": "#ffffff",
+                    "sided": False}
+_DEFAULTS = {f.name: f.default for f in dataclasses.fields(Style)}
 DEFAULT_STYLE = Style()
 __all__ = ["Style", "DEFAULT_STYLE", "TOL_MUTED", "OKABE_ITO", "rgb", "rgb8"]

@@ -81,6 +81,8 @@ def _close_worker() -> None:
     sc = _WORKER.pop("scene", None)
     if sc is not None:
         sc.close()
+    for sc, _ in _WORKER.pop("scenes", {}).values():
+        sc.close()
 
 
 def _load_placed(path: str, offset, yaw: float = 0.0):
@@ -88,6 +90,22 @@ def _load_placed(path: str, offset, yaw: float = 0.0):
 
     from .staging import place
     return place(load_bvh(path, scale=1.0), offset, yaw)
+
+
+def _scene_for_style(name):
+    """The worker's scene and style for a stimulus's character style (the
+    study's scene, or one more scene per other style, kept for later stimuli)."""
+    style = _WORKER["style"]
+    if not name or name == style.character:
+        return _WORKER["scene"], style
+    scenes = _WORKER.setdefault("scenes", {})
+    if name not in scenes:
+        from .scene import Scene
+        st = _WORKER["settings"]
+        s2 = style.with_character(name)
+        scenes[name] = (Scene(None, s2, tuple(st["size"]), _WORKER["camera"],
+                              tuple(st["ground_bounds"])), s2)
+    return scenes[name]
 
 
 def _render_task(task: dict) -> dict:
@@ -101,11 +119,11 @@ def _render_task(task: dict) -> dict:
     from .video import render_video
     t_start = time.perf_counter()
     st = _WORKER["settings"]
-    scene = _WORKER["scene"]
+    scene, style = _scene_for_style(task.get("style"))
     clip = _load_placed(task["bvh"], task["offset"], task["yaw"])
     body = task["body"]            # measured once in the parent: the same in every worker
     # the study's camera, ground and style (render_study fitted them to every stimulus)
-    common = dict(camera=_WORKER["camera"], size=tuple(st["size"]), style=_WORKER["style"],
+    common = dict(camera=_WORKER["camera"], size=tuple(st["size"]), style=style,
                   ground=tuple(st["ground_bounds"]))
     t0, t1 = task["takeoff"], task["landing"]
     one = Stage([clip], [body], [t0], [t1], **common)

@@ -71,6 +71,7 @@ class Group:
     sign: int                   # +1 increase, -1 decrease
     levels: list[float]         # nominal error in percent (magnitude; 0 = original)
     original: str = "own"       # "shared": its level 0 is the clip's shared original
+    style: str | None = None    # character style of its stimuli (None: the study's)
 
 
 @dataclass(frozen=True)
@@ -101,6 +102,17 @@ class Design:
     fps_given: bool = True            # [study] fps written: BVH clips are resampled to it
     path: Path | None = None
     session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
+    style: str | None = None          # character style of every stimulus (None: the renderer's)
+
+    def style_of(self, group) -> str | None:
+        """The character style of a group's stimuli (None: nothing chosen)."""
+        return (getattr(group, "style", None) if group is not None else None) or self.style
+
+    @property
+    def styled(self) -> bool:
+        """Does the design choose a character style anywhere (the manifest then
+        has a ``style`` column)?"""
+        return self.style is not None or any(g.style for g in self.groups)
 
     def clip(self, name: str) -> ClipSpec:
         for c in self.clips:
@@ -191,11 +203,13 @@ levels = [0, 10, 20, 30, 40]
 
 #: the keys each section may hold (anything else is refused with a did-you-mean)
 STUDY_KEYS = ("name", "seed", "fps", "repetitions", "total_mass", "com_policy", "tolerance_pct",
-              "original")
+              "original", "style")
 SESSION_KEYS = ("replay", "break_every", "max_dropped_pct", "repeat_dropped")
 OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
 CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
-GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original")
+GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original", "style")
+#: the character styles a design may choose (drawn by flipstudy.render.characters)
+CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
 SECTIONS = ("study", "session", "clips", "groups", "reference")
 ORIGINAL_MODES = ("shared", "per-group")   # [study] original
@@ -270,6 +284,15 @@ def _between(lo, hi, unit: str = ""):
     return lambda v: None if lo <= v <= hi else f"expected {lo:g} to {hi:g}{unit}"
 
 
+def _style_ok(v: str):
+    """None if ``v`` is a character style, else what is wrong (with a did-you-mean)."""
+    if v in CHARACTER_STYLES:
+        return None
+    close = difflib.get_close_matches(v, CHARACTER_STYLES, n=1, cutoff=0.5)
+    hint = f" (did you mean '{close[0]}'?)" if close else ""
+    return f"unknown character style{hint}; expected one of {', '.join(CHARACTER_STYLES)}"
+
+
 def _check_keys(table: dict, allowed, where: str) -> None:
     """Refuse keys a section does not know, suggesting the closest known one."""
     for k in table:
@@ -324,6 +347,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         fps_given="fps" in st,
         path=Path(path) if str(path) != "<design>" else None,
         session=_parse_session(d, st, src),
+        style=_get(st, "style", str, w, None, _style_ok),
     )
     clips = d.get("clips")
     if not isinstance(clips, list) or not clips:
@@ -405,7 +429,11 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         if orig == "shared" and kind != "angular-momentum":
             raise DesignError(f"{wg}.original: only angular-momentum groups share their original "
                               f"(the paper's take-off group had its own); use original = \"own\"")
-        design.groups.append(Group(gname, kind, profile, sign, sorted(lv), orig))
+        gstyle = _get(g, "style", str, wg, None, _style_ok)
+        if orig == "shared" and gstyle is not None and gstyle != (design.style or "ellipsoids"):
+            raise DesignError(f"{wg}.style: a group drawn as {gstyle!r} cannot share the clip's "
+                              f"original (drawn in the study's style); use original = \"own\"")
+        design.groups.append(Group(gname, kind, profile, sign, sorted(lv), orig, gstyle))
     gnames = [g.name for g in design.groups]
     if len(set(gnames)) != len(gnames):
         raise DesignError(f"{src}: groups: duplicate group names "

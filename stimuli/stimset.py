@@ -275,6 +275,7 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 "takeoff_time": inj.takeoff_time, "landing_time": inj.landing_time,
                 **{k: m[k] for k in ("air_acc_dev", "air_acc_dev_original", "dv_takeoff",
                                      "dv_landing", "L_error_touchdown_pct", "below_floor_mm")},
+                **({"style": design.style_of(group) or "ellipsoids"} if design.styled else {}),
             })
             bar.step(name)
         write_manifest(tmp / "manifest.csv", rows)
@@ -300,11 +301,14 @@ def _fmt(v) -> str:
 
 
 def write_manifest(path: Path, rows: list[dict]) -> None:
+    """The manifest; a ``style`` column (the character style) is added last when
+    the rows have one (a design that chooses a style)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow(MANIFEST_COLUMNS)
+    cols = MANIFEST_COLUMNS + (["style"] if rows and "style" in rows[0] else [])
+    w.writerow(cols)
     for r in rows:
-        w.writerow([_fmt(r[c]) for c in MANIFEST_COLUMNS])
+        w.writerow([_fmt(r[c]) for c in cols])
     path.write_text(buf.getvalue())
 
 

@@ -4,12 +4,12 @@
     add_commands(subparsers)          # adds `render` and `figure`
 
 ``flipstudy render STUDY_DIR [--what video,ghost,trail,strip,composite,overlay]
-[--size WxH] [--jobs N] [--video-fps 60] [--style STYLE.toml] [--frames] [--force] [--quiet]``
+[--size WxH] [--jobs N] [--video-fps 60] [--style NAME|STYLE.toml] [--frames] [--force] [--quiet]``
 (resumable: only what is missing or stale is made; Ctrl-C stops the workers at once)
 
 ``flipstudy figure CLIP [--ghost|--trail|--strip|--composite|--overlay OTHER]
 --out FILE.png [--fps F] [--scale S] [--size WxH] [--interval S] [--debug]
-[--style STYLE.toml]``
+[--style NAME|STYLE.toml]``
 
 ``--fps`` means one thing in every command: the frame rate of the clip a
 command loads (``figure``'s CLIP, overriding a BVH's Frame Time).  The frame
@@ -34,11 +34,32 @@ def _size(text: str):
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
-def _style(path):
-    if not path:
+def _style(values):
+    """A Style from ``--style`` values: style files (TOML) and at most one
+    character style name (ellipsoids, capsules, stick, point-light, mannequin)."""
+    if not values:
         return None
+    import difflib
+    from pathlib import Path
+
     from flipstudy.render.style import Style
-    return Style.from_toml(path)
+    from flipstudy.stimuli.design import CHARACTER_STYLES
+    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    values = [values] if isinstance(values, str) else list(values)
+    names = [v for v in values if v in CHARACTER_STYLES]
+    files = [v for v in values if v not in CHARACTER_STYLES]
+    if len(names) > 1 or len(files) > 1:
+        raise FlipstudyValueError(f"--style: at most one character style and one style file, "
+                                  f"got {', '.join(values)}")
+    style = Style()
+    for f in files:
+        if not Path(f).is_file():
+            close = difflib.get_close_matches(f, CHARACTER_STYLES, n=1, cutoff=0.5)
+            hint = f"; did you mean '{close[0]}'?" if close else ""
+            raise FlipstudyValueError(f"--style {f!r}: neither a character style "
+                                      f"({', '.join(CHARACTER_STYLES)}) nor a style file{hint}")
+        style = Style.from_toml(f)
+    return style.with_character(names[0]) if names else style
 
 
 class _DeprecatedFps(argparse.Action):
@@ -132,7 +153,10 @@ def add_commands(subparsers) -> None:
                    default=argparse.SUPPRESS, metavar="FPS",
                    help="deprecated spelling of --video-fps (in the other commands --fps is the "
                         "frame rate of a clip)")
-    p.add_argument("--style", metavar="STYLE.toml", help="style overrides (colours, sizes, ground)")
+    p.add_argument("--style", metavar="NAME|STYLE.toml", action="append",
+                   help="a character style (ellipsoids, capsules, stick, point-light, mannequin; "
+                        "a manifest's style column, from the design, comes first) and/or a style "
+                        "file of overrides (colours, sizes, ground); may be given twice")
     p.add_argument("--frames", action="store_true", help="also write every video frame as PNG")
     p.add_argument("--no-orient", action="store_true",
                    help="do not turn base clips that travel in other directions to travel like "
@@ -161,6 +185,8 @@ def add_commands(subparsers) -> None:
                    help="seconds between copies/panels (default 0.2; strip 0.1)")
     f.add_argument("--debug", action="store_true",
                    help="draw COM and its path, L and velocity arrows, support polygon")
-    f.add_argument("--style", metavar="STYLE.toml", help="style overrides")
+    f.add_argument("--style", metavar="NAME|STYLE.toml", action="append",
+                   help="a character style (ellipsoids, capsules, stick, point-light, mannequin) "
+                        "and/or a style file of overrides; may be given twice")
     add_units(f)
     f.set_defaults(func=cmd_figure)
