@@ -300,9 +300,11 @@ def _load_image(path: Path, max_px: int = 900):
 
 def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict | None) -> tuple[Figure, list[str]]:
     """A sheet: the images (ghost and marker-trail composites of an original and
-    its strongest error) on the left, the psychometric curves of all groups on
-    the right.  Missing image files leave their slot out; the returned notes say
-    which.  Returns (figure, notes)."""
+    its strongest error) on the left, each titled with its label (name the
+    stimulus and its error there: kind, profile, sign, level), the psychometric
+    curves of all groups on the right.  Missing image files leave their slot
+    out — nothing is printed into the figure in their place; the returned notes
+    say which.  Returns (figure, notes)."""
     notes = []
     present = []
     for label, p in (images or {}).items():
@@ -345,13 +347,5 @@ def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict 
         if fits:
             _level_axis(ax_c, np.r_[0.0, np.concatenate([f.x for f in fits])])
             ax_c.legend(loc="upper left", frameon=False, fontsize=7.5)
-        absent = [f"{label} ({Path(p).name})" for label, p in (images or {}).items()
-                  if label not in {lab for lab, _ in present}]
-        if not present:
-            fig.suptitle("images not provided (" + (f"not found: {'; '.join(absent)}" if absent
-                                                    else "no paths given") + "): curves only",
-                         fontsize=7.5, color="0.4", x=0.01, ha="left")
-        elif absent:
-            fig.suptitle("image(s) not found, left out: " + "; ".join(absent),
-                         fontsize=7.5, color="0.4", x=0.01, ha="left")
+        # what is missing is said in the notes (notes.md), never printed into the figure
     return fig, notes

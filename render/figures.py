@@ -40,8 +40,10 @@ from .scene import scene_for
 from .staging import Stage, one_clip, staged
 from .style import rgb8
 
-#: Default trail joints (Ooi used the pelvis and the leg joints; a legend is a must).
-TRAIL_JOINTS = ("pelvis", "head", "hand_l", "hand_r", "knee_l", "knee_r", "foot_l", "foot_r", "com")
+#: Default trail joints (Ooi used the pelvis and the leg joints; a legend is a must): the
+#: extremities and the COM, five colours of the style's palette and black — few enough to
+#: tell apart (the pelvis follows the COM, the knees the feet)
+TRAIL_JOINTS = ("head", "hand_l", "hand_r", "foot_l", "foot_r", "com")
 _LANDMARK_OF = {"hand_l": "wrist_l", "hand_r": "wrist_r", "foot_l": "ankle_l", "foot_r": "ankle_r"}
 _LABEL = {"pelvis": "pelvis", "head": "head", "hand_l": "left hand", "hand_r": "right hand",
           "knee_l": "left knee", "knee_r": "right knee", "foot_l": "left foot",
@@ -114,20 +116,120 @@ def _legend_after(img, sc, entries, fs: int, legend: bool) -> None:
 
 
 # -------------------------------------------------------------------- ghosts
+def key_times(clip: Clip, body: Body, takeoff, landing, *, between: int = 1,
+              margin: float = 0.25) -> tuple[np.ndarray, list[str]]:
+    """The instants a ghost picture shows, in seconds, and their names: the
+    crouch ``margin`` s before take-off, take-off, ``between`` evenly spaced
+    instants, the apex (highest COM), ``between`` more, landing, and ``margin``
+    s after it (dropped when ``margin`` is 0).  Without a flight: ``2·between + 3``
+    instants evenly over the clip, unnamed.
+
+    Example
+    -------
+    >>> from flipstudy import Body, builtin
+    >>> clip = builtin("backflip")
+    >>> ts, names = key_times(clip, Body.from_clip(clip), 157, 237)
+    >>> names
+    ['before', 'take-off', '', 'apex', '', 'landing', 'after']
+    >>> bool(abs(ts[1] - 157 / clip.fps) < 1e-9 and abs(ts[5] - 237 / clip.fps) < 1e-9)
+    True
+    """
+    between = max(0, int(between))
+    if takeoff is None or landing is None or landing <= takeoff:
+        return np.linspace(0.0, clip.duration, 2 * between + 3), [""] * (2 * between + 3)
+    com = center_of_mass(clip.slice(int(takeoff), int(landing) + 1), body)
+    t_to, t_la = takeoff / clip.fps, landing / clip.fps
+    t_ap = (int(takeoff) + int(np.argmax(com[:, 1]))) / clip.fps
+    up = np.linspace(t_to, t_ap, between + 2)
+    down = np.linspace(t_ap, t_la, between + 2)
+    ts = list(up) + list(down[1:])
+    names = ["take-off"] + [""] * between + ["apex"] + [""] * between + ["landing"]
+    if margin > 0:
+        ts = [max(0.0, t_to - margin)] + ts + [min(clip.duration, t_la + margin)]
+        names = ["before"] + names + ["after"]
+    return np.asarray(ts, float), names
+
+
+def _ramp(colors, n: int) -> list:
+    """``n`` colours evenly along the ramp ``colors`` (interpolated in RGB)."""
+    c = np.asarray([rgb8(x) for x in colors], float)
+    if n <= 1:
+        return [tuple(c[0] / 255.0)] * max(n, 0)
+    u = np.linspace(0.0, len(c) - 1, n)
+    i = np.minimum(u.astype(int), len(c) - 2)
+    f = (u - i)[:, None]
+    return [tuple(v) for v in ((c[i] * (1 - f) + c[i + 1] * f) / 255.0)]
+
+
 def _ghost_looks(style, n: int) -> list[tuple]:
-    """(colour, opacity) of each of ``n`` ghosts, earliest first: translucent
-    ghosts, the last pose opaque in the body colour."""
+    """(colour, opacity) of each of ``n`` ghosts, earliest first: a time cue,
+    the colour running along ``style.ghost_ramp`` (light to dark, so it reads
+    in grey too; one ``ghost_color`` when set) and the opacity from
+    ``ghost_opacity`` to ``ghost_late_opacity``; the last pose opaque in the
+    body colour."""
     if n <= 0:
         return []
-    return [(style.ghost, style.ghost_opacity)] * (n - 1) + [(style.body_color, style.ghost_last_opacity)]
+    m = n - 1
+    cols = [style.ghost_color] * m if style.ghost_color else _ramp(style.ghost_ramp, m)
+    ops = np.linspace(style.ghost_opacity, style.ghost_late_opacity, m) if m > 1 else \
+        [style.ghost_opacity] * m
+    return list(zip(cols, (float(o) for o in ops))) + [(style.body_color, style.ghost_last_opacity)]
 
 
-def ghost_image(what, path=None, *, interval: float = 0.2, span="flight", margin: float = 0.25,
-                times=None, scene=None, debug=()) -> np.ndarray:
-    """Ghosts: semi-transparent copies every ``interval`` seconds over the
-    ``span`` (``"flight"`` ± ``margin`` s, ``"clip"``, or ``(t0, t1)``), the last
-    pose opaque (Ooi, Fig. 4.2); transparency sorted by depth peeling.
-    ``what``: a :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
+def _travel(st: Stage) -> np.ndarray:
+    """Horizontal unit vector of the travel: the camera's right, on the ground."""
+    r = np.asarray(st.camera.basis()[0], float)
+    r = np.array([r[0], 0.0, r[2]])
+    return r / np.linalg.norm(r)
+
+
+def _scale_bar(img: np.ndarray, st: Stage, length: float = 1.0) -> None:
+    """Draw a ``length`` m bar (in place) on the ground plane, at the depth of
+    the take-off spot, where it covers the fewest pixels of the picture's
+    action; labelled with its length."""
+    cam, (W, H) = st.camera, st.size
+    right = _travel(st)
+    y = st.style.ground_height
+    anchor = np.array([0.0, y, 0.0])               # the take-off spot, under the camera's focus
+    bg = np.asarray(rgb8(st.style.background), int)
+    busy = np.abs(img.astype(int) - bg).max(-1) > 60
+    best = None
+    for s in np.arange(-4.0, 4.01, 0.25):
+        a, b = cam.project([anchor + s * right, anchor + (s + length) * right], (W, H))
+        x0, x1, yy = int(round(a[0])), int(round(b[0])), int(round(0.5 * (a[1] + b[1])))
+        if x0 < 6 or x1 > W - 6 or not 20 < yy < H - 4:
+            continue
+        cost = busy[max(0, yy - 18):yy + 4, x0:x1].mean()
+        if best is None or cost < best[0] - 1e-9:
+            best = (cost, x0, x1, yy)
+    if best is None:
+        return
+    _, x0, x1, yy = best
+    t = max(2, H // 160)
+    col = np.asarray(rgb8(st.style.label_color), np.uint8)
+    img[yy - t // 2:yy - t // 2 + t, x0:x1] = col
+    img[yy - 3 * t:yy + t, x0:x0 + t] = col
+    img[yy - 3 * t:yy + t, x1 - t:x1] = col
+    fs = max(9, int(round(st.style.font_size * 0.45 * H)))
+    draw_text(img, f"{length:g} m", (x0 + x1) // 2, yy - 3 * t - 3, fs, tuple(col), align="center")
+
+
+def ghost_image(what, path=None, *, interval: float | None = None, span="flight",
+                margin: float = 0.25, times=None, between: int = 1, spread: float | None = None,
+                legend: bool | None = None, scene=None, debug=()) -> np.ndarray:
+    """Ghosts that tell time: copies at the flight's key instants
+    (:func:`key_times`: before take-off, take-off, apex, landing, after, and
+    ``between`` evenly between; or every ``interval`` seconds over the
+    ``span`` — ``"flight"`` ± ``margin`` s, ``"clip"``, ``(t0, t1)`` — or at
+    ``times``), coloured and faded from early to late along the style's ramp,
+    the last pose opaque in the body colour (Ooi, Fig. 4.2); transparency
+    sorted by depth peeling.  ``spread`` (default ``style.ghost_spread``)
+    metres moves each ghost that much further along the travel than the one
+    before (the camera fitted again to keep them all).  A legend (default
+    ``style.legend``) gives each colour's time and instant; a 1 m scale bar lies
+    on the ground (``style.scale_bar``; the ground's checker tiles are
+    ``style.ground_tile`` = 0.5 m).  ``what``: a
+    :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
 
     Example
     -------
@@ -138,16 +240,49 @@ def ghost_image(what, path=None, *, interval: float = 0.2, span="flight", margin
     (120, 160, 3)
     """
     st = one_clip(staged(what), "ghost_image")
-    c, b, ts, R, P = _posed(st, span, margin, times, interval)
+    c, b = st.clips[0], st.bodies[0]
+    if times is None and interval is None:
+        ts, names = key_times(c, b, st.takeoffs[0], st.landings[0], between=between, margin=margin)
+        if span != "flight":
+            t0, t1 = _span(c, span, margin, st.takeoffs[0], st.landings[0])
+            ts, names = np.linspace(t0, t1, len(ts)), [""] * len(ts)
+    else:
+        ts = np.asarray(times, float) if times is not None else \
+            _regular_times(*_span(c, span, margin, st.takeoffs[0], st.landings[0]), interval)
+        names = [""] * len(ts)
+    R, P, pc = _fk(c, ts)
+    spread = st.style.ghost_spread if spread is None else float(spread)
+    shift = np.zeros((len(ts), 3))
+    if spread:
+        shift = np.outer(np.arange(len(ts)) * spread, _travel(st))
+        P = P + shift[:, None, :]
+        fr = st.framing
+        pts = (body_points(pc, b) + shift[:, None, :]).reshape(-1, 3)
+        st = st.with_camera(fit_camera(pts, _travel(st), st.size,
+                                       view_angle=fr.view_angle if fr else st.camera.view_angle,
+                                       elevation=fr.elevation if fr else 8.0,
+                                       margin=st.style.frame_margin))
+    looks = []
     with scene_for(st, scene) as sc:
-        for i, (color, opacity) in enumerate(_ghost_looks(sc.style, len(ts))):
+        looks = _ghost_looks(sc.style, len(ts))
+        for i, (color, opacity) in enumerate(looks):
             ch = sc.character(("ghost", i), b)
             ch.look(color, opacity)
             ch.pose(R[i], P[i])
         gz = debug_gizmos(debug, c, b)
         if gz is not None:
             gz.draw(sc, ts[-1], (ts[0], ts[-1]), sc.style.ground_height)
+        show = sc.style.legend if legend is None else legend
+        t_ref = (st.takeoffs[0] or 0) / c.fps if st.takeoffs[0] is not None else 0.0
+        entries = [(f"{t - t_ref:+.2f} s" + (f"  {n}" if n else ""), col)
+                   for t, n, (col, _) in zip(ts, names, looks)] if len(ts) > 1 else []
+        fs, paint = _legend(sc, st.size, entries, show and bool(entries))
         img = sc.grab()
+        if paint is not None:
+            paint(img)
+    if sc.style.scale_bar and sc.style.ground:
+        _scale_bar(img, st)
+    _legend_after(img, sc, entries, fs, show and bool(entries))
     return _save(img, path)
 
 
@@ -218,6 +353,9 @@ def trail_image(what, path=None, *, joints=TRAIL_JOINTS, rate: float | None = No
                 sc.polyline(("trail", i), len(tl), col, sty.trail_line_width).set(
                     _trail_points(c, b, name, tl))
             entries.append((labels[i], col))
+        if len([j for j in joints if j != "com"]) > len(pal):
+            raise FlipstudyValueError(f"trail_image: {len(joints)} trails but {len(pal)} colours in "
+                                      f"the style's trail_palette (colours would repeat)")
         R, P, _ = _fk(c, [t_at])
         ch = sc.character("main", b)
         ch.look(sty.trail_body_color, sty.trail_body_opacity)
@@ -230,6 +368,8 @@ def trail_image(what, path=None, *, joints=TRAIL_JOINTS, rate: float | None = No
         img = sc.grab()
         if paint is not None:
             paint(img)
+    if sty.scale_bar and sty.ground:
+        _scale_bar(img, st)
     _legend_after(img, sc, entries, fs, show)
     return _save(img, path)
 

@@ -157,6 +157,29 @@ class Stage:
                        takeoffs=pick(self.takeoffs), landings=pick(self.landings),
                        offsets=self.offsets[ks], yaws=pick(self.yaws), ground=self.ground_bounds)
 
+    def refit(self, *which: int) -> "Stage":
+        """The stage with only the clips ``which`` (indices), under a camera
+        fitted to their bodies alone (the same view direction, angle, elevation
+        and margin), on the same ground: one camera per base clip, fitted to
+        the union of that clip's stimuli (see :func:`base_clip_groups`), so
+        each base clip's action is centred and fills the frame.
+
+        Example
+        -------
+        >>> from flipstudy import builtin
+        >>> st = stage([builtin("backflip"), builtin("frontflip")], size=(320, 240))
+        >>> st.refit(0).camera == st.camera, st.refit(0).clips[0] is st.clips[0]
+        (False, True)
+        """
+        if self.framing is None:
+            raise FlipstudyValueError("Stage.refit: the stage's camera was given, not fitted")
+        one = self.only(*which)
+        basis = view_basis(self.framing.direction, self.framing.elevation)
+        pts = np.concatenate([_extremes(body_points(c, b), basis).reshape(-1, 3)
+                              for c, b in zip(one.clips, one.bodies)])
+        framing = replace(self.framing, points=pts)
+        return replace(one, camera=framing.camera(self.size), framing=framing)
+
     def resized(self, size) -> "Stage":
         """The stage for an image of another ``size`` (w, h): a fitted camera is
         fitted again to the same points (and a fitted ground with it), a given
@@ -290,6 +313,28 @@ def _extremes(points: np.ndarray, basis: np.ndarray) -> np.ndarray:
     return np.take_along_axis(points, idx[..., None], axis=1)
 
 
+def base_clip_groups(clips, takeoffs, names=None) -> dict:
+    """Indices of ``clips`` grouped by base clip: by ``names`` (one per clip,
+    e.g. the manifest's ``clip`` column) where given and not empty, else by the
+    motion before take-off (stimuli made from one base clip by editing the
+    flight share it).  Returns ``{key: [indices]}`` in first-seen order.
+
+    Example
+    -------
+    >>> from flipstudy import builtin
+    >>> a, b = builtin("backflip"), builtin("frontflip")
+    >>> list(base_clip_groups([a, b, a], [157, 157, 157]).values())
+    [[0, 2], [1]]
+    >>> base_clip_groups([a, b], [157, 157], names=["x", "x"])
+    {'x': [0, 1]}
+    """
+    out: dict = {}
+    for k, (c, t) in enumerate(zip(clips, takeoffs)):
+        name = names[k] if names is not None else None
+        out.setdefault(name or _prefix_key(c, t), []).append(k)
+    return out
+
+
 def _bodies_for(clips, bodies):
     if bodies is not None:
         return list(bodies)
@@ -313,7 +358,7 @@ def _placed_boxes(boxes, clip: Clip, placed: Clip) -> list:
 
 def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | None = None,
           size=(640, 480), style: Style | None = None, ground_bounds=None, boxes=(),
-          direction=None, view_angle: float = 25.0, elevation: float = 8.0, margin: float = 0.06,
+          direction=None, view_angle: float = 25.0, elevation: float = 8.0, margin: float | None = None,
           align: bool = True, orient: bool = True) -> Stage:
     """Place clips for one study or one picture: same take-off spot, one camera.
 
@@ -351,6 +396,7 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
     if not clips:
         raise ValueError("stage: no clips")
     style = style or DEFAULT_STYLE
+    margin = style.frame_margin if margin is None else float(margin)
     bodies = _bodies_for(clips, bodies)
     if takeoffs is None or landings is None:
         from flipstudy.stimuli import analyse
@@ -408,4 +454,5 @@ def one_clip(st: Stage, what: str) -> Stage:
 
 
 __all__ = ["Stage", "Framing", "stage", "staged", "ground_around", "translate", "place",
-           "takeoff_com", "align_takeoff", "travel_direction", "jump_direction", "orient_yaws"]
+           "takeoff_com", "align_takeoff", "travel_direction", "jump_direction", "orient_yaws",
+           "base_clip_groups"]

@@ -3,11 +3,13 @@
 :func:`render_study` reads ``STUDY_DIR/manifest.csv``, loads every stimulus
 (:func:`load_stimuli`: ``STUDY_DIR/<stimulus>.bvh``, metres, the header's frame
 rate), places all of them with :func:`flipstudy.render.staging.stage` (take-off COM
-at the origin, one camera fitted to every frame of every stimulus, one ground),
+at the origin, one ground, one view direction), fits one camera per base clip to
+every frame of all its stimuli (the paper's rule: every stimulus of a base clip
+under one camera; each base clip's action centred and filling the frame),
 and renders the chosen outputs in parallel worker processes
 (:mod:`flipstudy.render.workers`: each builds its offscreen plotter once and
 reuses it for all its stimuli).  Outputs go to ``STUDY_DIR/render/`` and the
-settings (camera, style, size, fps, versions, per-stimulus offsets and files) to
+settings (cameras, style, size, fps, versions, per-stimulus offsets, camera and files) to
 ``STUDY_DIR/render/render.json`` (:mod:`flipstudy.render.record`).
 
 Interruptible and resumable: Ctrl-C stops the workers at once, outputs appear
@@ -121,8 +123,9 @@ def _character(row: dict, style, study_dir) -> str:
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False) -> dict:
-    """Render the stimuli of a study with one style, one camera and one take-off
-    spot; returns (and writes to ``render/render.json``) the settings.  With
+    """Render the stimuli of a study with one style, one take-off spot and one
+    camera per base clip (fitted to all its stimuli; ``cameras`` in the record,
+    and each stimulus's ``camera``); returns (and writes to ``render/render.json``) the settings.  With
     ``orient`` base clips that travel in other directions are turned about the
     vertical to travel like the first one (see :func:`flipstudy.render.staging.stage`).
 
@@ -167,7 +170,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     0
     >>> tmp.cleanup()
     """
-    from .staging import stage
+    from .staging import base_clip_groups, stage
     from .style import Style
     study_dir = Path(study_dir)
     what = parse_what(what)
@@ -191,14 +194,22 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     takeoffs = [_int_or_none(r.get("takeoff")) for r in rows]
     landings = [_int_or_none(r.get("landing")) for r in rows]
     st = stage(clips, takeoffs, landings, bodies=body_list, size=size, style=style, orient=orient)
+    # one camera per base clip, fitted to the union of its stimuli over every frame
+    groups = base_clip_groups(st.clips, takeoffs, [r.get("clip") or "" for r in rows])
+    cameras, camera_of = {}, [None] * len(rows)
+    for key, ks in groups.items():
+        cam = st.refit(*ks).camera.to_dict()
+        cameras[rows[ks[0]].get("clip") or rows[ks[0]]["stimulus"]] = cam
+        for k in ks:
+            camera_of[k] = cam
     vers = versions()
-    # what changes pixels, once for the whole study (the camera is fitted to all stimuli)
+    # what changes pixels, once for the whole study (one camera per base clip)
     pixel = {"size": list(size), "fps": float(fps), "style": style.to_dict(),
-             "camera": st.camera.to_dict(), "ground_bounds": [float(v) for v in st.ground_bounds],
+             "cameras": cameras, "ground_bounds": [float(v) for v in st.ground_bounds],
              "versions": vers}
     pixel = json.loads(json.dumps(pixel))             # the form it has when read back
     sid = canonical_id(pixel)
-    settings = {"style": style.to_dict(), "camera": st.camera.to_dict(), "size": list(size),
+    settings = {"style": style.to_dict(), "camera": camera_of[0], "size": list(size),
                 "fps": float(fps), "ground_bounds": pixel["ground_bounds"],
                 "out": str(out), "partial": str(out / f"{PARTIAL_PREFIX}{os.getpid()}"),
                 "frames": bool(frames)}
@@ -217,8 +228,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     outputs = {k: v for k, v in (old.get("outputs") or {}).items()
                if isinstance(v, dict) and (out / k).is_file()}
     tasks, n_kept, expected = [], 0, {}
-    for r, o, p, y, t0, t1, body in zip(rows, st.offsets, bvh, st.yaws, takeoffs, landings,
-                                        body_list):
+    for r, o, p, y, t0, t1, body, cam in zip(rows, st.offsets, bvh, st.yaws, takeoffs, landings,
+                                             body_list, camera_of):
         name = r["stimulus"]
         ref = refs.get(r.get("clip", ""))
         if ref is not None and ref["stimulus"] == name:
@@ -247,13 +258,15 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         if todo:
             tasks.append({"stimulus": name, "bvh": p, "offset": o.tolist(), "yaw": y,
                           "takeoff": t0, "landing": t1, "what": todo, "reference": ref,
-                          "body": body, "style": character})
+                          "body": body, "style": character, "camera": cam})
     settings_records = {k: v for k, v in (old.get("settings_records") or {}).items()
                         if any(o_.get("settings") == k for o_ in outputs.values())}
     settings_records[sid] = pixel
     info = {r["stimulus"]: {"offset": [float(v) for v in o], "yaw_deg": float(y),
-                            "takeoff": t0_, "landing": t1_, "style": _character(r, style, study_dir)}
-            for r, o, y, t0_, t1_ in zip(rows, st.offsets, st.yaws, takeoffs, landings)}
+                            "takeoff": t0_, "landing": t1_, "style": _character(r, style, study_dir),
+                            "camera": cam}
+            for r, o, y, t0_, t1_, cam in zip(rows, st.offsets, st.yaws, takeoffs, landings,
+                                              camera_of)}
     jobs = max(1, min(int(jobs or os.cpu_count() or 1), max(len(tasks), 1)))
     t_start = time.perf_counter()
     made = [0]
@@ -268,7 +281,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         return {
             "study": str(study_dir.resolve()),
             "what": what, "size": list(size), "fps": float(fps), "jobs": jobs,
-            "orient": bool(orient), "camera": st.camera.to_dict(), "style": style.to_dict(),
+            "orient": bool(orient), "camera": camera_of[0], "cameras": cameras,
+            "style": style.to_dict(),
             "takeoff_spot": {"x": 0.0, "z": 0.0, "anchor": "COM in the last frame on the ground "
                                                               "(takeoff - 1); heights unchanged"},
             "direction": [float(v) for v in st.direction],

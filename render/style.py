@@ -64,7 +64,9 @@ class Style:
     overlay_colors: tuple = ("#e8b500", "#19b2a8")   # yellow, turquoise
     overlay_opacity: float = 0.45
     # marker trails (Ooi, Figure 4.1)
-    trail_palette: tuple = TOL_MUTED
+    # Okabe–Ito without yellow and black, in the order of TRAIL_JOINTS: head purple, the left
+    # hand and foot light and dark blue, the right ones light and dark orange
+    trail_palette: tuple = ("#CC79A7", "#56B4E9", "#E69F00", "#0072B2", "#D55E00", "#009E73")
     trail_rate: float = 10.0                         # markers per second
     marker_size: float = 0.035                       # sphere radius, metres
     trail_line: bool = True                          # a thin line through each joint's path
@@ -92,6 +94,12 @@ class Style:
     side_colors: tuple | None = None                 # (trunk, left, right) for body_color; None: tones
     point_light_radius: float = 0.03                 # metres
     point_light_extra: bool = False                  # sternum and pelvis markers (15, not 13)
+    # framing and the time cues of composites
+    frame_margin: float = 0.06                       # fraction of width/height left on each side
+    ghost_ramp: tuple = ("#fde725", "#7ad151", "#22a884", "#2a788e")  # viridis, early → late ghosts
+    ghost_late_opacity: float = 0.60                 # the ghost before the last; earlier ones down to ghost_opacity
+    ghost_spread: float = 0.0                        # metres between successive ghosts along the travel
+    scale_bar: bool = True                           # a 1 m bar on the ground of ghosts and trails
     # rendering
     anti_aliasing: str = "ssaa"                      # "ssaa" or "none" (no MSAA: breaks depth peeling)
     depth_peels: int = 8
@@ -114,17 +122,21 @@ class Style:
                 if getattr(self, name) == _DEFAULTS[name]:
                     setattr(self, name, value)
         for name in ("ground_colors", "ellipsoid_resolution", "overlay_colors",
-                     "trail_palette", "legend_size"):
+                     "trail_palette", "legend_size", "ghost_ramp"):
             setattr(self, name, tuple(getattr(self, name)))
         if self.anti_aliasing not in ("ssaa", "none"):
             raise FlipstudyValueError(f"Style.anti_aliasing must be 'ssaa' or 'none', got {self.anti_aliasing!r}")
         if self.lighting not in ("key-fill", "light kit"):
             raise FlipstudyValueError(f"Style.lighting must be 'key-fill' or 'light kit', got {self.lighting!r}")
         for name in ("ghost_opacity", "ghost_last_opacity", "layer_opacity", "overlay_opacity",
-                     "trail_body_opacity"):
+                     "trail_body_opacity", "ghost_late_opacity"):
             v = getattr(self, name)
             if not 0.0 <= v <= 1.0:
                 raise FlipstudyValueError(f"Style.{name} must be in [0, 1], got {v!r}")
+        if not 0.0 <= self.frame_margin < 0.5:
+            raise FlipstudyValueError(f"Style.frame_margin must be in [0, 0.5), got {self.frame_margin!r}")
+        if len(self.ghost_ramp) < 2:
+            raise FlipstudyValueError("Style.ghost_ramp needs at least two colours (early, late)")
         if len(self.trail_palette) == 0:
             raise FlipstudyValueError("Style.trail_palette is empty")
 

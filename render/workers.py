@@ -115,6 +115,7 @@ def _render_task(task: dict) -> dict:
     it into place when the task is done, so an interrupted render never leaves a
     half-written file under an output's name."""
     from . import figures as fg
+    from .camera import Camera
     from .staging import Stage
     from .video import render_video
     t_start = time.perf_counter()
@@ -123,7 +124,8 @@ def _render_task(task: dict) -> dict:
     clip = _load_placed(task["bvh"], task["offset"], task["yaw"])
     body = task["body"]            # measured once in the parent: the same in every worker
     # the study's camera, ground and style (render_study fitted them to every stimulus)
-    common = dict(camera=_WORKER["camera"], size=tuple(st["size"]), style=style,
+    camera = Camera.from_dict(task["camera"]) if task.get("camera") else _WORKER["camera"]
+    common = dict(camera=camera, size=tuple(st["size"]), style=style,
                   ground=tuple(st["ground_bounds"]))
     t0, t1 = task["takeoff"], task["landing"]
     one = Stage([clip], [body], [t0], [t1], **common)

@@ -49,6 +49,24 @@ class ReproduceError(FlipstudyError, RuntimeError):
     """The reproduce run cannot start or a stage failed (message names which)."""
 
 
+def sheet_label(row: dict) -> str:
+    r"""A sheet panel's title: the stimulus and its error (kind, profile, signed
+    nominal level) from its manifest row.
+
+    >>> sheet_label({"stimulus": "backflip_abrupt-decrease_50", "kind": "angular-momentum",
+    ...              "profile": "abrupt", "nominal_error_pct": "-50.000000"})
+    'backflip_abrupt-decrease_50\nangular momentum, abrupt, −50 %'
+    >>> sheet_label({"stimulus": "backflip_reference", "kind": "reference", "profile": ""})
+    'backflip_reference\noriginal (no error)'
+    """
+    name, kind = row["stimulus"], row.get("kind", "")
+    if kind == "reference" or not float(row.get("nominal_error_pct") or 0.0):
+        return f"{name}\noriginal (no error)"
+    level = float(row["nominal_error_pct"])
+    parts = [kind.replace("-", " ")] + ([row["profile"]] if row.get("profile") else [])
+    return f"{name}\n" + ", ".join(parts) + f", {'+' if level > 0 else '−'}{abs(level):g} %"
+
+
 def _say(quiet: bool, text: str) -> None:
     if not quiet:
         print(text, file=sys.stderr, flush=True)
@@ -131,10 +149,9 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
         t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
         render_dir = study / "render"
-        images = {"ghost original": render_dir / f"{SHEET_ORIGINAL}_ghost.png",
-                  "ghost strongest error": render_dir / f"{SHEET_ERROR}_ghost.png",
-                  "trail original": render_dir / f"{SHEET_ORIGINAL}_trail.png",
-                  "trail strongest error": render_dir / f"{SHEET_ERROR}_trail.png"}
+        by_name = {r["stimulus"]: r for r in rows}
+        images = {f"{what}s: {sheet_label(by_name[name])}": render_dir / f"{name}_{what}.png"
+                  for what in ("ghost", "trail") for name in (SHEET_ORIGINAL, SHEET_ERROR)}
         result = analyze(exp["responses"], work / "analysis", images=images, seed=seed,
                          include_simulated=True)
         seconds["analysis"] = time.perf_counter() - t

@@ -16,7 +16,7 @@ from flipstudy.stimuli.motion import Clip, Skeleton, save_bvh
 
 from flipstudy.render.camera import Camera, fit_camera
 from flipstudy.render.compose import over, read_image
-from flipstudy.render.figures import composite_image, ghost_image, overlay_image, strip_image, trail_image
+from flipstudy.render.figures import TRAIL_JOINTS, composite_image, ghost_image, overlay_image, strip_image, trail_image
 from flipstudy.render.gizmos import support_polygon
 from flipstudy.render.staging import stage
 from flipstudy.render.video import iter_frames, render_video
@@ -252,7 +252,7 @@ def test_trail_colours_of_the_legend_are_in_the_image():
     clip, t0, t1 = jumper(flip=3.0)
     st = Style(anti_aliasing="none")
     img = trail_image(stage([clip], [t0], [t1], size=(320, 240), style=st), None)
-    cols = [rgb8(c) for c in st.trail_palette[:8]] + [rgb8(st.trail_com_color)]
+    cols = [rgb8(c) for c in st.trail_palette[:len(TRAIL_JOINTS) - 1]] + [rgb8(st.trail_com_color)]
     H, W = img.shape[:2]
     rest = img.reshape(-1, 3).astype(int)
     for c in cols:
