@@ -214,8 +214,7 @@ class Scene:
             self.set_camera(camera)
         if ground_bounds is not None and self.style.ground:
             self.set_ground(ground_bounds)
-        self._w2i = None
-        self._w2i_alpha = None
+        self._readback: dict = {}
         self._closed = False
 
     # ---------------------------------------------------------------- setup
@@ -238,7 +237,6 @@ class Scene:
         if size != self.size:
             self.size = size
             self.plotter.window_size = list(size)
-            self._w2i = self._w2i_alpha = None
 
     def set_ground(self, bounds) -> None:
         """A checkerboard plane at ``style.ground_height`` covering ``bounds``
@@ -463,20 +461,6 @@ class Scene:
             self.boxes_actor.SetVisibility(bool(visible))
 
     # --------------------------------------------------------------- output
-    def _filter(self, alpha: bool):
-        from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
-        attr = "_w2i_alpha" if alpha else "_w2i"
-        f = getattr(self, attr)
-        if f is None:
-            f = vtkWindowToImageFilter()
-            f.SetInput(self.plotter.render_window)
-            f.SetInputBufferTypeToRGBA() if alpha else f.SetInputBufferTypeToRGB()
-            f.ReadFrontBufferOn()
-            f.ShouldRerenderOff()
-            f.FixBoundaryOn()
-            setattr(self, attr, f)
-        return f
-
     def grab(self, alpha: bool = False, out: np.ndarray | None = None) -> np.ndarray:
         """Render and read the frame: (H, W, 3) uint8, or (H, W, 4) with
         ``alpha=True`` (transparent background: the alpha channel is the matte,
@@ -494,13 +478,20 @@ class Scene:
         self._clip_range()
         if self._overlay is not None:
             self._overlay.SetActiveCamera(ren.GetActiveCamera())
-        pl.render_window.Render()
-        f = self._filter(alpha)
-        f.Modified()
-        f.Update()
-        img = f.GetOutput()
-        w, h, _ = img.GetDimensions()
-        arr = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)
+        rw = pl.render_window
+        rw.Render()
+        # read the front buffer straight into a reused array (what
+        # vtkWindowToImageFilter does, without its image copy and pipeline)
+        buf = self._readback.get(alpha)
+        if buf is None:
+            from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
+            buf = self._readback[alpha] = vtkUnsignedCharArray()
+        w, h = rw.GetSize()
+        if alpha:
+            rw.GetRGBACharPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
+        else:
+            rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
+        arr = vtk_to_numpy(buf).reshape(h, w, -1)
         if alpha:
             ren.SetBackground(*bg)
             ren.SetBackgroundAlpha(1.0)
@@ -514,7 +505,7 @@ class Scene:
         if self._closed:
             return
         self._closed = True
-        self._w2i = self._w2i_alpha = None
+        self._readback.clear()
         self._overlay = None
         self._chars.clear()
         self._markers.clear()
