@@ -8,8 +8,10 @@ markers and gizmos have fixed topology.  Frames are read back into a reused
 buffer.  Close the scene (or use it as a context manager) when done.
 
 Rendering notes (VTK 9.7, Mesa llvmpipe through EGL): depth peeling is on for
-correct transparency; MSAA breaks depth peeling there (blank images), so the
-anti-aliasing is SSAA (``Style.anti_aliasing``).
+correct transparency; MSAA breaks depth peeling there (translucent surfaces
+vanish), so the anti-aliasing (``Style.anti_aliasing``) is VTK's FXAA filter
+(the renderer's ``UseFXAA``, which PyVista refuses on EGL and replaces by SSAA)
+or its SSAA pass.
 """
 from __future__ import annotations
 
@@ -192,7 +194,9 @@ class Scene:
             pl.add_light(key)
             pl.add_light(fill)
         pl.enable_depth_peeling(number_of_peels=self.style.depth_peels, occlusion_ratio=0.0)
-        if self.style.anti_aliasing == "ssaa":
+        if self.style.anti_aliasing == "fxaa":
+            pl.renderer.SetUseFXAA(True)          # works offscreen on EGL/llvmpipe, with depth peeling
+        elif self.style.anti_aliasing == "ssaa":
             import warnings
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
