@@ -10,8 +10,10 @@ Close the scene (or use it as a context manager) when done; :func:`scene_for`
 sets one up for a :class:`~flipstudy.render.staging.Stage`.
 
 Rendering notes (VTK 9.7, Mesa llvmpipe through EGL): depth peeling is on for
-correct transparency; MSAA breaks depth peeling there (blank images), so the
-anti-aliasing is SSAA (``Style.anti_aliasing``).
+correct transparency; MSAA breaks depth peeling there (translucent surfaces
+vanish), so the anti-aliasing (``Style.anti_aliasing``) is VTK's FXAA filter
+(the renderer's ``UseFXAA``, which PyVista refuses on EGL and replaces by SSAA)
+or its SSAA pass.
 """
 from __future__ import annotations
 
@@ -64,7 +66,9 @@ class Scene:
             pl.add_light(key)
             pl.add_light(fill)
         pl.enable_depth_peeling(number_of_peels=self.style.depth_peels, occlusion_ratio=0.0)
-        if self.style.anti_aliasing == "ssaa":
+        if self.style.anti_aliasing == "fxaa":
+            pl.renderer.SetUseFXAA(True)          # works offscreen on EGL/llvmpipe, with depth peeling
+        elif self.style.anti_aliasing == "ssaa":
             import warnings
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -86,8 +90,7 @@ class Scene:
             self.set_camera(camera)
         if ground_bounds is not None and self.style.ground:
             self.set_ground(ground_bounds)
-        self._w2i = None
-        self._w2i_alpha = None
+        self._readback: dict = {}
         self._closed = False
 
     # ---------------------------------------------------------------- setup
@@ -110,7 +113,6 @@ class Scene:
         if size != self.size:
             self.size = size
             self.plotter.window_size = list(size)
-            self._w2i = self._w2i_alpha = None
 
     def set_ground(self, bounds) -> None:
         """A checkerboard plane at ``style.ground_height`` covering ``bounds``
@@ -335,20 +337,6 @@ class Scene:
             self.boxes_actor.SetVisibility(bool(visible))
 
     # --------------------------------------------------------------- output
-    def _filter(self, alpha: bool):
-        from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
-        attr = "_w2i_alpha" if alpha else "_w2i"
-        f = getattr(self, attr)
-        if f is None:
-            f = vtkWindowToImageFilter()
-            f.SetInput(self.plotter.render_window)
-            f.SetInputBufferTypeToRGBA() if alpha else f.SetInputBufferTypeToRGB()
-            f.ReadFrontBufferOn()
-            f.ShouldRerenderOff()
-            f.FixBoundaryOn()
-            setattr(self, attr, f)
-        return f
-
     def grab(self, alpha: bool = False, out: np.ndarray | None = None) -> np.ndarray:
         """Render and read the frame: (H, W, 3) uint8, or (H, W, 4) with
         ``alpha=True`` (transparent background: the alpha channel is the matte,
@@ -366,13 +354,20 @@ class Scene:
         self._clip_range()
         if self._overlay is not None:
             self._overlay.SetActiveCamera(ren.GetActiveCamera())
-        pl.render_window.Render()
-        f = self._filter(alpha)
-        f.Modified()
-        f.Update()
-        img = f.GetOutput()
-        w, h, _ = img.GetDimensions()
-        arr = vtk_to_numpy(img.GetPointData().GetScalars()).reshape(h, w, -1)
+        rw = pl.render_window
+        rw.Render()
+        # read the front buffer straight into a reused array (what
+        # vtkWindowToImageFilter does, without its image copy and pipeline)
+        buf = self._readback.get(alpha)
+        if buf is None:
+            from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
+            buf = self._readback[alpha] = vtkUnsignedCharArray()
+        w, h = rw.GetSize()
+        if alpha:
+            rw.GetRGBACharPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
+        else:
+            rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
+        arr = vtk_to_numpy(buf).reshape(h, w, -1)
         if alpha:
             ren.SetBackground(*bg)
             ren.SetBackgroundAlpha(1.0)
@@ -386,7 +381,7 @@ class Scene:
         if self._closed:
             return
         self._closed = True
-        self._w2i = self._w2i_alpha = None
+        self._readback.clear()
         self._overlay = None
         self._chars.clear()
         self._markers.clear()

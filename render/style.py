@@ -30,6 +30,16 @@ OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2",
              "#D55E00", "#CC79A7", "#000000")
 
 
+#: The anti-aliasing a :class:`Style` can ask for (offscreen EGL, Mesa llvmpipe;
+#: measured by ``benchmarks/bench_render_ceiling.py`` at 640x480): ``"fxaa"``
+#: (VTK's FXAA filter, the default: a frame costs about 3x what it costs with
+#: ``"none"``; the error on the character's edges, against a supersampled
+#: reference, halves), ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos
+#: filter: about 8x, edges a little finer than FXAA's) and ``"none"``.  MSAA is
+#: not offered: under depth peeling it drops every translucent surface (ghosts).
+ANTI_ALIASING = ("fxaa", "ssaa", "none")
+
+
 @dataclass
 class Style:
     """Colours, sizes, ground and lighting of the renders.
@@ -101,7 +111,7 @@ class Style:
     ghost_spread: float = 0.0                        # metres between successive ghosts along the travel
     scale_bar: bool = True                           # a 1 m bar on the ground of ghosts and trails
     # rendering
-    anti_aliasing: str = "ssaa"                      # "ssaa" or "none" (no MSAA: breaks depth peeling)
+    anti_aliasing: str = "fxaa"                      # "fxaa", "ssaa" (slow, finest) or "none"
     depth_peels: int = 8
     lighting: str = "key-fill"                       # "key-fill" or "light kit"
 
@@ -124,8 +134,9 @@ class Style:
         for name in ("ground_colors", "ellipsoid_resolution", "overlay_colors",
                      "trail_palette", "legend_size", "ghost_ramp"):
             setattr(self, name, tuple(getattr(self, name)))
-        if self.anti_aliasing not in ("ssaa", "none"):
-            raise FlipstudyValueError(f"Style.anti_aliasing must be 'ssaa' or 'none', got {self.anti_aliasing!r}")
+        if self.anti_aliasing not in ANTI_ALIASING:
+            raise FlipstudyValueError(f"Style.anti_aliasing must be one of {', '.join(map(repr, ANTI_ALIASING))}, "
+                                      f"got {self.anti_aliasing!r}")
         if self.lighting not in ("key-fill", "light kit"):
             raise FlipstudyValueError(f"Style.lighting must be 'key-fill' or 'light kit', got {self.lighting!r}")
         for name in ("ghost_opacity", "ghost_last_opacity", "layer_opacity", "overlay_opacity",
@@ -208,4 +219,4 @@ POINT_LIGHT_LOOK = {"background": "#000000", "ground": False, "body_color": "#ff
                     "sided": False}
 _DEFAULTS = {f.name: f.default for f in dataclasses.fields(Style)}
 DEFAULT_STYLE = Style()
-__all__ = ["Style", "DEFAULT_STYLE", "TOL_MUTED", "OKABE_ITO", "rgb", "rgb8"]
+__all__ = ["Style", "DEFAULT_STYLE", "ANTI_ALIASING", "TOL_MUTED", "OKABE_ITO", "rgb", "rgb8"]

@@ -38,7 +38,7 @@ def test_every_stage_leaves_its_outputs(run):
     md = (out / "analysis" / "table_paper.md").read_text()
     assert "abrupt-decrease" in md and "(.00)" in md
     settings = json.loads((out / "study" / "render" / "render.json").read_text())
-    assert settings["size"] == [160, 120] and settings["style"]["anti_aliasing"] == "none"
+    assert settings["size"] == [160, 120] and settings["style"]["anti_aliasing"] == "fxaa"
     assert not list(out.parent.glob(".paper.partial-*"))
 
 
