@@ -560,8 +560,8 @@ def test_fxaa_keeps_translucent_ghosts():
     """FXAA goes with depth peeling (MSAA does not here: translucent surfaces
     vanish): the ghosts of the default style are drawn."""
     clip = walker(seconds=1.0, speed=5.0)
-    img = ghost_image(clip, None, interval=0.2, span="clip", takeoff=0, landing=clip.num_frames - 1,
-                      size=(320, 120), style=PLAIN.replace(anti_aliasing="fxaa"))
+    st = stage([clip], [0], [clip.num_frames - 1], size=(320, 120), style=PLAIN.replace(anti_aliasing="fxaa"))
+    img = ghost_image(st, None, interval=0.2, span="clip")
     mask = ndimage.binary_dilation(nonwhite(img), iterations=2)
     assert ndimage.label(mask, structure=np.ones((3, 3)))[1] == 6
 
