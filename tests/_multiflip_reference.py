@@ -42,7 +42,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from flipstudy.stimuli.analyse import Analysis, analyse
-from flipstudy.stimuli.motion.clip import Clip
+from flipstudy.stimuli.motion.clip import Clip, derived_meta
 from flipstudy.stimuli.physics import center_of_mass
 from flipstudy.stimuli.edit.reposition import ballistic_path
 from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features
@@ -202,7 +202,7 @@ def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, 
             .reshape(x.size, -1, 4)
         root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
     seq = Clip(clip.skeleton, fps, root_pos, rot, None,
-               {**clip.meta, "edit": f"multiflip {flips}"})
+               derived_meta(clip.meta, f"multiflip {flips}"))
     seq.meta.pop("source_frames", None)
     end0 = int(np.flatnonzero(copy == -2)[0])
     # a landing on the join frame g itself: the frame before the end segment
