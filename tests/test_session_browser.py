@@ -35,6 +35,7 @@ from flipstudy.study.export import export_responses  # noqa: E402
 from flipstudy.study.order import trial_order  # noqa: E402
 from flipstudy.study.server import ServerThread, create_app  # noqa: E402
 from flipstudy.study.session import load_study, open_session  # noqa: E402
+from _screenshots import screenshot  # noqa: E402
 
 BREAK_EVERY = 3
 TIMEOUT = 15_000          # ms, for any one screen
@@ -81,14 +82,6 @@ def tiny_replay(tiny):
     return tiny
 
 
-def screenshot(page, name, tmp_path):
-    path = tmp_path / name
-    page.screenshot(path=str(path))
-    keep = os.environ.get("FLIPSTUDY_SCREENSHOTS")
-    if keep:
-        Path(keep).mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(path, Path(keep) / name)
-    return path
 
 
 def screen(page, sid):

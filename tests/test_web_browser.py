@@ -47,6 +47,7 @@ from flipstudy.study.web import jspsych as jsp
 from flipstudy.study.web.importer import import_web
 from flipstudy.study.web.order import web_trial_order
 from flipstudy.study.web.site import export_site
+from _screenshots import screenshot as _shot  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
                                 reason=f"needs Debian's chromium at {CHROMIUM} (apt-get install -y chromium)")
@@ -177,14 +178,6 @@ def study(tmp_path):
     return d
 
 
-def _shot(page, name, tmp_path):
-    path = tmp_path / name
-    page.screenshot(path=str(path))
-    keep = os.environ.get("FLIPSTUDY_SCREENSHOTS")
-    if keep:
-        Path(keep).mkdir(parents=True, exist_ok=True)
-        shutil.copyfile(path, Path(keep) / name)
-    return path
 
 
 def _screen(page):
