@@ -25,6 +25,7 @@ comes from there).
 import csv
 import functools
 import json
+import contextlib
 import os
 import shutil
 import threading
@@ -246,6 +247,19 @@ def _intro(page):
     page.click("button.fs-next")
 
 
+@contextlib.contextmanager
+def _opened(page, site, participant, blocked):
+    """The site served on 127.0.0.1, every other request blocked (and noted in
+    ``blocked``), opened for ``participant`` and past the instructions and
+    demographics; yields the host."""
+    with _Host(site) as host:
+        origin = f"127.0.0.1:{host.port}"
+        _gate(page, origin, blocked)
+        page.goto(f"http://{origin}/index.html?participant={participant}")
+        _intro(page)
+        yield host
+
+
 def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  # noqa: F811
     """Pavlovia's protocol: a session opened, the records saved after each answer, closed at the end."""
     study = make_demo_study(tmp_path / "study", levels=(0, 25), repetitions=1, video_frames=12,
@@ -254,11 +268,7 @@ def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  #
     export_site(study, site, host="pavlovia", iti_ms=20, jspsych_dir=jspsych_dir)
     assert "https://pavlovia.org" in (site / "index.html").read_text()     # connect-src: its API only
     blocked = []
-    with _Host(site) as host:
-        origin = f"127.0.0.1:{host.port}"
-        _gate(page, origin, blocked)
-        page.goto(f"http://{origin}/index.html?participant=V07")
-        _intro(page)
+    with _opened(page, site, "V07", blocked) as host:
         for i in (1, 2):
             _answer(page, i, RESP[i - 1], HOW[i - 1])
         page.wait_for_function("window.flipstudyState.checkpoint.s.sent >= "
@@ -432,11 +442,7 @@ def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  #
     again = {fast[0]: "incorrect", fast[1]: "incorrect"}        # the repeats' answers
     first = {t.trial: "correct" for t in twin}                  # every first answer: correct
     blocked = []
-    with _Host(site) as host:
-        origin = f"127.0.0.1:{host.port}"
-        _gate(page, origin, blocked)
-        page.goto(f"http://{origin}/index.html?participant={PID}")
-        _intro(page)
+    with _opened(page, site, PID, blocked) as host:
         for i in range(1, 9):
             _answer(page, i, first[i], HOW[i - 1])
         _wait_screen(page, "repeats")
@@ -491,11 +497,7 @@ def test_replay_is_counted_and_the_answer_kept_once(page, tmp_path, jspsych_dir)
     export_site(study, site, host="static", iti_ms=20, jspsych_dir=jspsych_dir)
     assert _config(site)["replay"] is True
     blocked = []
-    with _Host(site) as host:
-        origin = f"127.0.0.1:{host.port}"
-        _gate(page, origin, blocked)
-        page.goto(f"http://{origin}/index.html?participant={PID}")
-        _intro(page)
+    with _opened(page, site, PID, blocked) as host:
         _wait_screen(page, "trial-1")
         for k in (1, 2):                                       # replayed twice
             page.wait_for_selector("button.fs-replay:enabled")
