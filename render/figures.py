@@ -211,8 +211,9 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
         if gz is not None:
             gz.draw(sc, ts[-1], (ts[0], ts[-1]), sc.style.ground_height)
         show = sc.style.legend if legend is None else legend
-        t_ref = (st.takeoffs[0] or 0) / c.fps if st.takeoffs[0] is not None else 0.0
-        entries = [(f"{t - t_ref:+.2f} s" + (f"  {n}" if n else ""), col)
+        t_ref = (st.takeoffs[0] or 0) / c.fps
+        entries = [(("take-off" if n == "take-off" else f"{n or 'take-off'} {t - t_ref:+.2f} s")
+                    if any(names) else f"t = {t:.2f} s", col)
                    for t, n, (col, _) in zip(ts, names, looks)] if len(ts) > 1 else []
         fs, paint = _legend(sc, st.size, entries, show and bool(entries))
         img = sc.grab()

@@ -122,7 +122,7 @@ def cmd_figure(args) -> int:
             fg.composite_image(st, args.out, interval=interval or 0.2, debug=debug)
             kind = "composite"
         else:
-            fg.ghost_image(st, args.out, interval=interval or 0.2, debug=debug)
+            fg.ghost_image(st, args.out, interval=interval, debug=debug)
             kind = "ghost"
     except FlipstudyError as e:
         print(f"flipstudy figure: error: {e}", file=sys.stderr)
@@ -173,7 +173,7 @@ def add_commands(subparsers) -> None:
                     "Ooi (2016, Chapter 4).")
     add_clip(f)
     g = f.add_mutually_exclusive_group()
-    g.add_argument("--ghost", action="store_true", help="ghost copies every --interval s (default)")
+    g.add_argument("--ghost", action="store_true", help="ghost copies at the flight's key instants (take-off, apex, landing and between), or every --interval s (default)")
     g.add_argument("--trail", action="store_true", help="marker trails with a legend")
     g.add_argument("--strip", action="store_true", help="animation strip, panels every --interval s")
     g.add_argument("--composite", action="store_true", help="layered frames (first opaque, rest 75 %%)")
@@ -182,7 +182,7 @@ def add_commands(subparsers) -> None:
     f.add_argument("--size", type=_size, default=(640, 480), metavar="WxH",
                    help="image size (strip: panel height) in pixels (default 640x480)")
     f.add_argument("--interval", type=float, default=None, metavar="S",
-                   help="seconds between copies/panels (default 0.2; strip 0.1)")
+                   help="seconds between copies/panels (default: ghosts at the key instants, others 0.2; strip 0.1)")
     f.add_argument("--debug", action="store_true",
                    help="draw COM and its path, L and velocity arrows, support polygon")
     f.add_argument("--style", metavar="NAME|STYLE.toml", action="append",
