@@ -294,8 +294,10 @@ def orient_yaws(clips, bodies, takeoffs, landings, direction) -> list[float]:
             if d is None:
                 yaw_of[key] = 0.0
             else:
-                ang = np.arctan2(np.cross(d, target) @ UP, d @ target)
-                yaw_of[key] = float(np.degrees(ang))
+                ang = float(np.degrees(np.arctan2(np.cross(d, target) @ UP, d @ target)))
+                # a half turn is +180 whatever the sign of a zero cross product (arctan2
+                # gives -180 for -0.0): the same rotation, one spelling in render.json
+                yaw_of[key] = ang + 360.0 if ang <= -180.0 + 1e-9 else ang
         out.append(yaw_of[key])
     return out
 
