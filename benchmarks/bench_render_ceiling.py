@@ -208,6 +208,7 @@ def ours_video(st, n_frames: int, fps=FPS) -> Rate:
 
 
 def _gl_renderer() -> str:
+    """The OpenGL renderer string (e.g. llvmpipe)."""
     st = stage([builtin("jump")], size=(16, 16))
     with scene_for(st) as sc:
         sc.grab()
@@ -219,10 +220,12 @@ def _gl_renderer() -> str:
 
 
 def best(rates):
+    """The best wall and the best per-CPU rate of several runs."""
     return max(r.fps for r in rates), max(r.fps_cpu for r in rates)
 
 
 def main(argv=None):
+    """Print the table (and the anti-aliasing one with ``--aa``); return its rows."""
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--size", default="640x480", help="frame size WxH (default 640x480)")
     ap.add_argument("--repeat", type=int, default=3, help="runs of each measurement (best kept)")
