@@ -41,6 +41,12 @@ class Character:
             diffuse=0.0 if flat else st.diffuse, specular=0.0 if flat else st.specular,
             specular_power=st.specular_power)
         self.actor.prop.interpolation = "gouraud"
+        # PyVista puts a Python VTK filter (its ActiveScalarsAlgorithm: a shallow
+        # copy with "rgb" made active) between the mesh and the mapper, which runs
+        # again on every frame the points move (~1 ms of Python per frame): make
+        # "rgb" the mesh's own active scalars and feed the mapper the mesh itself
+        mesh.GetPointData().SetActiveScalars("rgb")
+        self.actor.mapper.SetInputData(mesh)
         self.actor.SetVisibility(vis)
         self._look = None
         self._look_args = getattr(self, "_look_args", None)

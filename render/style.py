@@ -31,12 +31,13 @@ OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2",
 
 
 #: The anti-aliasing a :class:`Style` can ask for (offscreen EGL, Mesa llvmpipe;
-#: measured by ``benchmarks/bench_render_ceiling.py`` at 640x480): ``"fxaa"``
-#: (VTK's FXAA filter, the default: a frame costs about 3x what it costs with
-#: ``"none"``; the error on the character's edges, against a supersampled
-#: reference, halves), ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos
-#: filter: about 8x, edges a little finer than FXAA's) and ``"none"``.  MSAA is
-#: not offered: under depth peeling it drops every translucent surface (ghosts).
+#: costs measured by ``benchmarks/bench_render_ceiling.py --aa`` at 640x480, per
+#: CPU-second): ``"fxaa"`` (VTK's FXAA filter, the default: a frame costs about
+#: 2.5x what it costs with ``"none"``; the error on the character's edges,
+#: against a supersampled reference, halves — ``tests/test_render.py``),
+#: ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos filter: about 7x,
+#: edges a little finer than FXAA's) and ``"none"``.  MSAA is not offered: under
+#: depth peeling it drops every translucent surface (ghosts).
 ANTI_ALIASING = ("fxaa", "ssaa", "none")
 
 

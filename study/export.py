@@ -10,7 +10,10 @@
 ``timestamp`` ISO 8601 UTC of the moment the answer was stored, ``simulated``
 ``true`` for an answer of a simulated participant (``flipstudy simulate``),
 ``complete`` ``false`` for an answer of a session that did not answer every
-trial).  ``participants.csv`` (next to it) has one row per session:
+trial).  When the study's ``manifest.csv`` has a ``style`` column (a design that
+sets a character style), a ``style`` column follows ``kind``: the style of each
+trial's stimulus, from its manifest row, so the analysis splits by style
+without a join; without one the table is as above.  ``participants.csv`` (next to it) has one row per session:
 participant, session, source (browser/simulated), age (empty: not given),
 gender, animation_experience, gymnastics_experience, started, finished,
 answered, n_trials, simulated, complete.  ``dataset_description.json`` (Psych-DS,
@@ -66,6 +69,34 @@ def _fmt_response(r: dict) -> dict:
     return out
 
 
+def _manifest_styles(study_dir: Path) -> dict | None:
+    """Stimulus → character style from ``manifest.csv``, or None when the
+    manifest (or its ``style`` column) is absent."""
+    p = study_dir / "manifest.csv"
+    if not p.is_file():
+        return None
+    with p.open(newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        if "style" not in (reader.fieldnames or ()):
+            return None
+        return {r["stimulus"]: (r.get("style") or "").strip() for r in reader}
+
+
+def response_columns(styled: bool) -> list[str]:
+    """The columns of ``responses.csv``: :data:`RESPONSE_COLUMNS`, with ``style``
+    after ``kind`` for a study whose manifest has a style.
+
+    >>> response_columns(True)[11:14]
+    ['clip', 'kind', 'style']
+    >>> response_columns(False) == RESPONSE_COLUMNS
+    True
+    """
+    if not styled:
+        return list(RESPONSE_COLUMNS)
+    k = RESPONSE_COLUMNS.index("kind") + 1
+    return RESPONSE_COLUMNS[:k] + ["style"] + RESPONSE_COLUMNS[k:]
+
+
 def export_responses(study_dir, out=None, *, participants_out=None,
                      include_simulated: bool = False) -> dict:
     """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``) and
@@ -83,14 +114,19 @@ def export_responses(study_dir, out=None, *, participants_out=None,
         parts = store.participant_rows(conn, include_simulated=True)
     finally:
         conn.close()
+    styles = _manifest_styles(study_dir)
+    columns = response_columns(styles is not None)
+    if styles is not None:
+        for r in rows:
+            r["style"] = styles.get(r["stimulus"], "")
     sims = sorted({p["participant"] for p in parts if p["simulated"]})
     written = [p for p in parts if include_simulated or not p["simulated"]]
     for p in written:
         p["simulated"], p["complete"] = _flag(p["simulated"]), _flag(p["complete"])
-    atomic_write_text(out, _csv(RESPONSE_COLUMNS, rows))
+    atomic_write_text(out, _csv(columns, rows))
     atomic_write_text(pout, _csv(PARTICIPANT_COLUMNS, written))
     from .psychds import write_dataset_description      # Psych-DS metadata beside them
-    write_dataset_description(out.parent, study_dir, RESPONSE_COLUMNS, source="local sessions")
+    write_dataset_description(out.parent, study_dir, columns, source="local sessions")
     return {"responses": out, "participants": pout, "rows": len(rows), "sessions": len(written),
             "real": sorted({p["participant"] for p in written if p["simulated"] == "false"}),
             "simulated": sims if include_simulated else [],

@@ -44,6 +44,8 @@ COLUMNS = {
     "timestamp": "when the answer was stored (ISO 8601, UTC)",
     "clip": "base clip of the stimulus",
     "kind": "kind of error (angular-momentum, takeoff-angle)",
+    "style": "character style the stimulus was drawn in (ellipsoids, capsules, stick, "
+             "point-light, mannequin; from manifest.csv)",
     "late_frames": "frames shown late or dropped during the motion",
     "replays": "times the participant replayed the motion",
     "input": "how the answer was given: key, click or simulated",

@@ -1,0 +1,304 @@
+"""Stimulus videos against the limits of this machine, for every character style.
+
+For each style (ellipsoids, capsules, stick, point-light, mannequin) the script
+measures, in one run, on the built-in backflip at 640x480 / 60 fps in the
+default look (FXAA, depth peeling, the style's ground and lights):
+
+* **ours, frames**: ``render.video.iter_frames`` — what ``render_video`` and
+  ``render_study``'s workers run per frame (pose the character, render, read
+  back into the reused frame, flipped upright), without encoding;
+* **ceiling**: bare VTK calls on the very scene our renderer builds (the same
+  merged character mesh, ground, lights and FXAA): only ``Render()`` and the
+  read-back of the pixels (``GetPixelData`` into a reused array, viewed as
+  numpy) — no geometry update, as little Python as there can be;
+* **ceiling + upload**: the same, but a pose computed in advance is first
+  copied into the point and normal arrays and marked modified (VTK then
+  uploads the mesh again, as any animation must): the limit of a renderer that
+  poses the character;
+* **encoder**: the H.264 writer of ``render.video.h264_writer`` (libx264, the
+  same settings) fed the frames of that video, rendered beforehand;
+* **ours, video**: ``render.video.render_video`` — frames encoded as they are
+  rendered (ffmpeg runs in its own process beside the renderer).
+
+The first three run in turn frame by frame in one scene (one ours, one
+ceiling, one ceiling + upload, then the next display frame), so a load change
+on a shared machine hits them alike.  Figures are frames per wall-clock second
+(best of ``--repeat`` runs) and frames per CPU-second (``/cpu``: the process's
+CPU time with llvmpipe's raster threads, plus its ffmpeg child's for the
+encoded ones) — the rate one core would give, and the steadier figure when
+other jobs share the machine.  Ratios: ours/ceiling for the frames (wall and per CPU-second); for
+the videos, wall: video/min(ceiling, encoder) (renderer and encoder run side
+by side), per CPU-second: video against 1/(1/ceiling + 1/encoder) (one core
+does both).
+
+With ``--aa`` it also measures the ceiling and ours (ellipsoids, the first
+``--aa-frames`` frames) for each anti-aliasing a style offers (``none``,
+``fxaa``, ``ssaa``), as a frame's cost relative to ``none``.
+
+With ``--hashes`` it prints, per style, the SHA-256 of all frames of
+``iter_frames`` (a speed-up must keep them).
+
+Usage: ``python benchmarks/bench_render_ceiling.py [--size 640x480] [--repeat 3] [--styles ...] [--hashes] [--no-video] [--aa]``.
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import resource
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from flipstudy.render._pv import pv  # noqa: E402  (EGL offscreen before anything else)
+from flipstudy.render.geometry import resample  # noqa: E402
+from flipstudy.render.scene import scene_for  # noqa: E402
+from flipstudy.render.staging import stage  # noqa: E402
+from flipstudy.render.style import Style  # noqa: E402
+from flipstudy.render.video import h264_writer, iter_frames, render_video  # noqa: E402
+from flipstudy.stimuli import builtin  # noqa: E402
+from flipstudy.stimuli.design import CHARACTER_STYLES  # noqa: E402
+
+FPS = 60.0
+
+
+def _cpu(children: bool = False) -> float:
+    """CPU seconds (user + system) of this process (all threads), or of its
+    waited-for children."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN if children else resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+class Rate:
+    """Frames per wall second and per CPU second of a timed block."""
+
+    def __init__(self, children: bool = False):
+        self.children = children
+
+    def __enter__(self):
+        self.t, self.c, self.cc = time.perf_counter(), _cpu(), _cpu(True)
+        return self
+
+    def stop(self, n: int) -> "Rate":
+        wall = time.perf_counter() - self.t
+        cpu = _cpu() - self.c + ((_cpu(True) - self.cc) if self.children else 0.0)
+        self.fps, self.fps_cpu = n / wall, n / max(cpu, 1e-9)
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+class Clock:
+    """Wall and CPU seconds summed over many short timed spans."""
+
+    def __init__(self):
+        self.wall = self.cpu = 0.0
+        self.n = 0
+
+    def __enter__(self):
+        self._t, self._c = time.perf_counter(), time.process_time()
+        return self
+
+    def __exit__(self, *exc):
+        self.wall += time.perf_counter() - self._t
+        self.cpu += time.process_time() - self._c
+        self.n += 1
+        return False
+
+    @property
+    def fps(self) -> float:
+        return self.n / self.wall
+
+    @property
+    def fps_cpu(self) -> float:
+        return self.n / self.cpu
+
+
+def interleaved(st, fps=FPS, frames: int | None = None):
+    """Ours, the ceiling and the ceiling with upload, frame by frame in turn in
+    one scene (so the three see the same machine load): per display frame one
+    ``next()`` of ``iter_frames`` (ours: pose, render, read back, flip), then
+    a bare ``Render()`` + ``GetPixelData`` of the geometry as it stands
+    (ceiling: nothing to upload), then a precomputed pose copied in and marked
+    modified before the same bare render (ceiling + upload).  Returns the
+    three :class:`Clock` objects (``frames``: only the first ones)."""
+    from vtkmodules.util.numpy_support import vtk_to_numpy
+    from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
+    ours, ceil, upl = Clock(), Clock(), Clock()
+    with scene_for(st) as sc:
+        it = iter_frames(st.clips[0], sc, fps, body=st.bodies[0])
+        next(it)                                    # shaders compiled, the character built
+        ch = sc.character("main", st.bodies[0])     # the slot iter_frames draws in
+        bm, mesh = ch.body_mesh, ch.body_mesh.mesh
+        pts, nrm = bm.world_points(), np.asarray(mesh.point_data["Normals"])
+        v = resample(st.clips[0], fps)
+        R, P = v.joint_rotations(), v.joint_positions()
+        poses = []                                  # 16 poses over the clip, computed untimed
+        for k in np.linspace(0, len(R) - 1, 16).astype(int):
+            bm.pose(R[k], P[k])
+            poses.append((pts.copy(), nrm.copy()))
+        rw = sc.plotter.render_window
+        w, h = rw.GetSize()
+        buf = vtkUnsignedCharArray()
+        vpts, vnrm = mesh.GetPoints(), mesh.GetPointData().GetNormals()
+        for k in range(min(len(R) - 1, frames or len(R))):
+            with ours:
+                next(it)
+            with ceil:
+                rw.Render()
+                rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
+                vtk_to_numpy(buf)
+            with upl:
+                a, b = poses[k % len(poses)]
+                np.copyto(pts, a)
+                np.copyto(nrm, b)
+                vpts.Modified()
+                vnrm.Modified()
+                mesh.Modified()
+                rw.Render()
+                rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
+                vtk_to_numpy(buf)
+    return ours, ceil, upl
+
+
+def ours_frames(st, fps=FPS, hashes: bool = False):
+    """``iter_frames`` over the whole clip (the first frame, which compiles the
+    shaders, untimed); with ``hashes`` also the SHA-256 of every frame."""
+    with scene_for(st) as sc:
+        it = iter_frames(st.clips[0], sc, fps, body=st.bodies[0])
+        first = next(it)
+        h = hashlib.sha256(first.tobytes()) if hashes else None
+        n = 0
+        with Rate() as r:
+            for f in it:
+                n += 1
+                if h is not None:
+                    h.update(f.tobytes())
+            r.stop(n)
+    return r, (h.hexdigest() if h is not None else None)
+
+
+def encoder(frames, size, fps=FPS) -> Rate:
+    """The H.264 writer alone, fed pre-rendered frames."""
+    with tempfile.TemporaryDirectory() as d:
+        with Rate(children=True) as r:
+            w = h264_writer(Path(d) / "enc.mp4", size, fps)
+            for f in frames:
+                w.send(f)
+            w.close()
+            r.stop(len(frames))
+    return r
+
+
+def ours_video(st, n_frames: int, fps=FPS) -> Rate:
+    """``render_video`` (render and encode) of the clip, scene set up untimed."""
+    with tempfile.TemporaryDirectory() as d, scene_for(st) as sc:
+        next(iter_frames(st.clips[0], sc, fps, body=st.bodies[0]))     # shaders compiled
+        with Rate(children=True) as r:
+            render_video(st, Path(d) / "v.mp4", fps=fps, scene=sc)
+            r.stop(n_frames)
+    return r
+
+
+def _gl_renderer() -> str:
+    """The OpenGL renderer string (e.g. llvmpipe)."""
+    st = stage([builtin("jump")], size=(16, 16))
+    with scene_for(st) as sc:
+        sc.grab()
+        info = sc.plotter.render_window.ReportCapabilities()
+    for line in info.splitlines():
+        if "renderer string" in line:
+            return line.split(":", 1)[1].strip()
+    return "unknown GL renderer"
+
+
+def best(rates):
+    """The best wall and the best per-CPU rate of several runs."""
+    return max(r.fps for r in rates), max(r.fps_cpu for r in rates)
+
+
+def main(argv=None):
+    """Print the table (and the anti-aliasing one with ``--aa``); return its rows."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--size", default="640x480", help="frame size WxH (default 640x480)")
+    ap.add_argument("--repeat", type=int, default=3, help="runs of each measurement (best kept)")
+    ap.add_argument("--styles", nargs="*", default=list(CHARACTER_STYLES), choices=CHARACTER_STYLES)
+    ap.add_argument("--hashes", action="store_true", help="print the SHA-256 of every style's frames")
+    ap.add_argument("--no-video", action="store_true", help="frames only (no encoder, no video)")
+    ap.add_argument("--aa", action="store_true", help="also time each anti-aliasing (ellipsoids)")
+    ap.add_argument("--aa-frames", type=int, default=60, help="frames per anti-aliasing (default 60)")
+    args = ap.parse_args(argv)
+    size = tuple(int(v) for v in args.size.lower().split("x"))
+    clip = builtin("backflip")
+    v = resample(clip, FPS)
+    n = v.num_frames
+    print(f"clip: built-in backflip, {n} frames at {FPS:g} fps, {size[0]}x{size[1]}, FXAA; VTK "
+          f"{'.'.join(map(str, pv.vtk_version_info))}, {_gl_renderer()}, {os.cpu_count()} CPU(s), "
+          f"LP_NUM_THREADS={os.environ.get('LP_NUM_THREADS', 'unset')}, "
+          f"load average {os.getloadavg()[0]:.1f}; best of {args.repeat}")
+    print("frames/s (wall) and frames per CPU-second (/cpu):")
+    head = (f"{'style':>12} {'points':>7} {'ceiling':>8} {'/cpu':>6} {'+upload':>8} {'/cpu':>6} "
+            f"{'ours':>6} {'/cpu':>6} {'ours/ceiling':>12} {'/cpu':>5}")
+    if not args.no_video:
+        head += (f" {'encoder':>8} {'/cpu':>6} {'video':>6} {'/cpu':>6} {'video/min':>9} "
+                 f"{'/cpu':>5}")
+    print(head)
+    rows = {}
+    for name in args.styles:
+        st = stage([clip], size=size, style=Style().with_character(name))
+        c, cu, o, e, vi, hashes = [], [], [], [], [], set()
+        frames = None
+        for _ in range(args.repeat):
+            oc_, c_, u_ = interleaved(st)
+            o.append(oc_)
+            c.append(c_)
+            cu.append(u_)
+            if args.hashes:
+                hashes.add(ours_frames(st, hashes=True)[1])
+            if not args.no_video:
+                if frames is None:
+                    with scene_for(st) as sc:
+                        frames = [f.copy() for f in iter_frames(st.clips[0], sc, FPS, body=st.bodies[0])]
+                e.append(encoder(frames, size))
+                vi.append(ours_video(st, n))
+        with scene_for(st) as sc:
+            npts = sc.character("main", st.bodies[0]).body_mesh.mesh.n_points
+        (cf, cc), (uf, uc), (of, oc) = best(c), best(cu), best(o)
+        line = (f"{name:>12} {npts:>7} {cf:8.1f} {cc:6.1f} {uf:8.1f} {uc:6.1f} {of:6.1f} {oc:6.1f} "
+                f"{of / cf:12.0%} {oc / cc:5.0%}")
+        rows[name] = {"ceiling": (cf, cc), "upload": (uf, uc), "ours": (of, oc)}
+        if not args.no_video:
+            (ef, ec), (vf, vc) = best(e), best(vi)
+            line += (f" {ef:8.1f} {ec:6.1f} {vf:6.1f} {vc:6.1f} {vf / min(cf, ef):9.0%} "
+                     f"{vc * (1 / cc + 1 / ec):5.0%}")
+            rows[name].update(encoder=(ef, ec), video=(vf, vc))
+        print(line, flush=True)
+        if args.hashes:
+            if len(hashes) != 1:
+                print(f"  {name}: frames differ between runs!")
+            print(f"  sha256 of {name}'s {n} frames: {hashes.pop()}")
+    if args.aa:
+        from flipstudy.render.style import ANTI_ALIASING
+        print(f"anti-aliasing (ellipsoids, {args.aa_frames} frames; cost of a frame relative to none, "
+              f"per CPU-second):")
+        print(f"{'AA':>6} {'ceiling':>8} {'/cpu':>6} {'ours':>6} {'/cpu':>6} {'cost':>5}")
+        base = None
+        for aa in ("none",) + tuple(a for a in ANTI_ALIASING if a != "none"):
+            st = stage([clip], size=size, style=Style(anti_aliasing=aa))
+            runs = [interleaved(st, frames=args.aa_frames) for _ in range(args.repeat)]
+            (cf, cc), (of, oc) = best([r[1] for r in runs]), best([r[0] for r in runs])
+            base = base or oc
+            print(f"{aa:>6} {cf:8.1f} {cc:6.1f} {of:6.1f} {oc:6.1f} {base / oc:4.1f}×", flush=True)
+            rows[f"aa-{aa}"] = {"ceiling": (cf, cc), "ours": (of, oc)}
+    return rows
+
+
+if __name__ == "__main__":
+    main()
