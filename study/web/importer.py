@@ -58,8 +58,7 @@ from .. import store
 from ..export import PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
 from ..psychds import write_dataset_description
 from ..session import load_study
-from ..validate import (DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE,
-                        RESPONSES)
+from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
 from .order import order_groups, web_trial_order
 from .site import FORMAT, HOSTS
 
@@ -72,6 +71,9 @@ COLUMNS = RESPONSE_COLUMNS + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
                                                  "user_agent"]
 KINDS = ("start", "demographics", "answer", "end")
+#: the answers each task takes: yes/no judges one motion, 2AFC names the interval judged
+#: physically correct
+RESPONSES_BY_TASK = {"yes-no": ("correct", "incorrect"), "2afc": ("first", "second")}
 MAX_FILE = 256 * 1024 * 1024
 
 
@@ -248,12 +250,20 @@ class _Checker:
             got = {"stimulus": rec["stimulus"], "group": rec["group"],
                    "level": _num(rec["level"], where, "level", -1e6, 1e6),
                    "repetition": _num(rec["repetition"], where, "repetition", 1, 1000, integer=True)}
+            task = getattr(want, "task", "") or "yes-no"
+            if task == "2afc":          # which motion came first, and the comparison, as the order says
+                got.update(task=rec.get("task"), first=rec.get("first"), original=rec.get("original"))
+            elif rec.get("task", "yes-no") != "yes-no":
+                got["task"] = rec.get("task")
             for k in got:
                 if got[k] != getattr(want, k):
                     raise WebImportError(f"{where}: trial {t}: {k} {got[k]!r}, but trial {t} of "
                                          f"participant {pid} is {getattr(want, k)!r} ({want.stimulus})")
-            out.update(got, trial=t, clip=want.clip, kind=want.kind,
-                       response=_str(rec["response"], where, "response", RESPONSES),
+            got.pop("original", None)
+            out.update(got, trial=t, clip=want.clip, kind=want.kind, method="constant", task=task,
+                       first=getattr(want, "first", "") or "",
+                       original_stimulus=getattr(want, "original", "") or "",
+                       response=_str(rec["response"], where, "response", RESPONSES_BY_TASK[task]),
                        rt_ms=_num(rec["rt_ms"], where, "rt_ms", 0, MAX_RT_MS),
                        shown_ms=_num(rec["shown_ms"], where, "shown_ms", 0, MAX_SHOWN_MS),
                        input=_str(rec["input"], where, "input", ("key", "click")),
