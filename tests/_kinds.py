@@ -39,9 +39,10 @@ def design_text(groups: list[dict], *, name="kinds", seed=11, repetitions=2, rep
     return "\n".join(lines)
 
 
-def make_study(out, text: str, *, frames: int = 12, fps: float = 30.0, size=(96, 72)) -> Path:
-    """``design.toml`` (``text``), ``manifest.csv`` and one placeholder video per stimulus
-    (colour ``PALETTE[i]`` for manifest row i) with its ``render.json``."""
+def make_study(out, text: str, *, frames: int = 12, fps: float = 30.0, size=(96, 72),
+               videos: bool = True) -> Path:
+    """``design.toml`` (``text``), ``manifest.csv`` and (``videos``) one placeholder video
+    per stimulus (colour ``PALETTE[i]`` for manifest row i) with its ``render.json``."""
     from flipstudy.stimuli.design import parse_design
     from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
     out = Path(out)
@@ -60,6 +61,8 @@ def make_study(out, text: str, *, frames: int = 12, fps: float = 30.0, size=(96,
                  original=original_of(d, spec.name, group), accept_unphysical="false")
         rows.append(r)
     write_manifest(out / "manifest.csv", rows)
+    if not videos:
+        return out
     for i, r in enumerate(rows):
         write_test_video(out / "render" / f"{r['stimulus']}.mp4", size=size, frames=frames, fps=fps,
                          color=PALETTE[i % len(PALETTE)])
