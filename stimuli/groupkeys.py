@@ -29,7 +29,7 @@ GRID_KEYS = ("from", "to", "step")
 LEVELS_MAX = 20          # levels of a group written as a list
 GRID_MAX = 401           # levels of a grid
 QUEST_TRIALS_MAX = 1000  # trials of one quest+ group per participant
-LAPSE_MAX = 0.2
+LAPSE_MAX = 0.2          # exclusive
 WIDTH_PRIOR_RANGE = (0.1, 1000.0)   # percent (psignifit width w = s * 3.29)
 
 
@@ -155,5 +155,5 @@ def parse_quest(g: dict, where: str, method: str, task: str, levels: list[float]
     wprior = _pair(g, "width_prior", where, *WIDTH_PRIOR_RANGE, "percent") \
         if "width_prior" in g else QuestSpec.width_prior
     lapse = _get(g, "lapse", float, where, QuestSpec.lapse,
-                 lambda v: None if 0 <= v <= LAPSE_MAX else f"expected 0 to {LAPSE_MAX:g}")
+                 lambda v: None if 0 <= v < LAPSE_MAX else f"expected 0 or more and below {LAPSE_MAX:g}")
     return QuestSpec(trials, stop, tprior, wprior, lapse)
