@@ -223,14 +223,16 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
                                    "You may close this window."]})
 
     answered, start = state["answered"], 0
-    if answered >= n:
+    # the next open trial: quest+ slots skipped once their group stopped early are passed over
+    nxt = state.get("next_trial", answered + 1)
+    if state.get("finished", answered >= n):
         start = len(screens) - 1
     elif answered > 0:
-        idx = next(i for i, s in enumerate(screens) if s.get("trial") == answered + 1)
+        idx = next(i for i, s in enumerate(screens) if s.get("trial") == nxt)
         screens.insert(idx, {
             "type": "instructions", "id": "resume", "title": "Welcome back",
             "paragraphs": [f"Your first {answered} answers are saved. The study continues "
-                           f"with {words['noun']} {answered + 1} of {n}.",
+                           f"with {words['noun']} {nxt} of {n}.",
                            words["remember"], words["keys_sentence"]],
             "button": "Continue"})
         start = idx

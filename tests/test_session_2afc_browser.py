@@ -87,7 +87,7 @@ def _reach(page, trial):
             return page.get_attribute("#app", "data-screen")
         if sid and (sid.startswith("break-") or sid == "resume"):
             page.click("#app button.primary")
-            page.wait_for_function(f"document.getElementById('app').dataset.screenId !== '{sid}'")
+            page.wait_for_function(f"() => document.getElementById('app').dataset.screenId !== '{sid}'")
             continue
         assert time.monotonic() < deadline, f"trial {trial} never came (screen {sid})"
         time.sleep(0.02)
@@ -101,8 +101,7 @@ def _answer(page, trial, response, how):
         page.keyboard.press(keys[response])
     else:
         page.click(f"#app button.{response}")
-    page.wait_for_function(f"document.getElementById('app').dataset.trial !== '{trial}' || "
-                           f"document.getElementById('app').dataset.screen === 'end'")
+    page.wait_for_function(f"() => document.getElementById('app').dataset.screenId !== 'trial-{trial}'")
     return kind
 
 

@@ -312,11 +312,11 @@
         await playMeasured(video);
         video.classList.add('hidden');
       });
-    await postJSON(s.submit, {
+    ctx.next = (await postJSON(s.submit, {
       participant: ctx.data.participant, session: ctx.data.session, trial: s.trial,
       stimulus: s.stimulus, response: answer.response, rt_ms: round1(answer.rt_ms),
       shown_ms: round1(m.shown_ms), late_frames: m.late_frames, replays: answer.replays, input: answer.input,
-    });
+    })).next_trial;
     await dropVideo(s.video);
   };
 
@@ -367,12 +367,12 @@
     prefetch(ctx);
 
     const answer = await awaitAnswer([['first', bF, keys.first], ['second', bS, keys.second]], bR, playPair);
-    await postJSON(s.submit, {
+    ctx.next = (await postJSON(s.submit, {
       participant: ctx.data.participant, session: ctx.data.session, trial: s.trial,
       stimulus: s.stimulus, response: answer.response, rt_ms: round1(answer.rt_ms),
       shown_ms: round1(shown[0].shown_ms + shown[1].shown_ms),
       late_frames: shown[0].late_frames + shown[1].late_frames, replays: answer.replays, input: answer.input,
-    });
+    })).next_trial;
     await Promise.all(s.videos.map((u) => dropVideo(u)));
   };
 
@@ -390,9 +390,13 @@
   async function main() {
     const data = await getJSON('/api/session');
     KEYS = data.keys;
-    const ctx = {data, index: 0};
+    const ctx = {data, index: 0, next: null};
     for (let i = data.start; i < data.timeline.length; i++) {
       let s = data.timeline[i];
+      // the server's next open trial: quest+ slots of a group that stopped early
+      // (stop_width) are passed over, and so are breaks once nothing is left
+      const isTrial = s.type === 'trial' || s.type === 'trial-2afc';
+      if (ctx.next && ((isTrial && s.trial < ctx.next) || (s.type === 'break' && ctx.next > data.n_trials))) continue;
       // an adaptive trial: its level is chosen when it is served
       if (s.adaptive && !s.stimulus) s = await getJSON(`/api/trial/${s.trial}`);
       const plugin = plugins[s.type];
