@@ -86,6 +86,9 @@ INSTRUCTIONS_MIXED = [
 ]
 
 
+ONE_REPLAY = " You may replay a motion before answering."
+
+
 def _keys_sentence(keys: dict) -> str:
     return (f"Answer with the keyboard — {keys['correct'].upper()} = correct, "
             f"{keys['incorrect'].upper()} = incorrect — or with the buttons on the screen. "
@@ -122,8 +125,9 @@ def is_default(design) -> bool:
 
 def texts(design) -> dict:
     """The task-dependent wording: ``instructions`` (paragraphs), ``keys_sentence``,
-    ``remember`` (the welcome-back reminder) and ``noun`` (what a trial is called in
-    the breaks' and the resume's counts: "motion", or "trial" when two are shown).
+    ``remember`` (the welcome-back reminder), ``noun`` (what a trial is called in
+    the breaks' and the resume's counts: "motion", or "trial" when two are shown),
+    ``replay`` and ``once`` (how often a motion plays, with and without replay).
 
     >>> from types import SimpleNamespace as NS
     >>> texts(NS(groups=[NS(task="2afc", method="constant")]))["keys_sentence"][:48]
@@ -134,14 +138,17 @@ def texts(design) -> dict:
     tasks = study_tasks(design)
     if tasks == ["2afc"]:
         return {"instructions": list(INSTRUCTIONS_2AFC), "keys_sentence": _keys_sentence_2afc(KEYS_2AFC),
-                "noun": "trial",
+                "noun": "trial", "replay": " You may replay the two motions before answering.",
+                "once": " The two motions play once, then you answer.",
                 "remember": "Remember: in each trial one of the two motions is physically correct."}
     if tasks == ["yes-no", "2afc"]:
-        return {"instructions": list(INSTRUCTIONS_MIXED), "noun": "trial",
+        return {"instructions": list(INSTRUCTIONS_MIXED), "noun": "trial", "replay": ONE_REPLAY,
+                "once": " Each motion plays once, then you answer.",
                 "keys_sentence": _keys_sentence_mixed(KEYS, KEYS_2AFC),
                 "remember": "Remember: some motions are physically correct and some are not; "
                             "when you see two, one of them is."}
     return {"instructions": list(INSTRUCTIONS), "keys_sentence": _keys_sentence(KEYS), "noun": "motion",
+            "replay": ONE_REPLAY, "once": " Each motion plays once, then you answer.",
             "remember": "Remember: some motions are physically correct and some are not."}
 
 
@@ -187,8 +194,7 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
     tagged = not is_default(session.study.design)
     paragraphs = words["instructions"] + [
         words["keys_sentence"]
-        + (" You may replay a motion before answering." if replay else
-           " Each motion plays once, then you answer."),
+        + (words["replay"] if replay else words["once"]),
     ] + (["There will be short breaks along the way."] if session.n_trials > settings.break_every else [])
     screens = [{"type": "instructions", "id": "instructions", "title": "Judging motions",
                 "paragraphs": paragraphs, "button": "Continue"}]
