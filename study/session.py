@@ -228,9 +228,8 @@ class Session:
         if conn is None:
             with self.db() as c:
                 return self.quest(group, c)
-        rows = store.group_answers(conn, self.participant, self.session, group)
-        states = [r["quest_state"] for r in rows if r["quest_state"]]
-        return Quest.from_json(model, states[-1]) if states else Quest.new(model)
+        state = store.last_quest_state(conn, self.participant, self.session, group)
+        return Quest.from_json(model, state) if state else Quest.new(model)
 
     def _pick(self, quest, t: Trial) -> Trial:
         level = quest.next_level()

@@ -302,16 +302,14 @@ def skipped_trials(conn, participant: str, session: int) -> list[int]:
         (participant, session))]
 
 
-def group_answers(conn, participant: str, session: int, group: str) -> list[sqlite3.Row]:
-    """The answers of one group in this session, in trial order, with the trial's
-    method, task, first, clip and the shown stimulus and level (quest+)."""
-    return conn.execute("""
-        SELECT r.trial, r.response, r.shown_stimulus, r.shown_level, r.quest_state,
-               t.method, t.task, t.first, t.clip, t.stimulus, t.level
-        FROM responses r JOIN trials t
+def last_quest_state(conn, participant: str, session: int, group: str) -> str | None:
+    """The QUEST+ state stored with the group's latest answer (None: no answer yet)."""
+    row = conn.execute("""
+        SELECT r.quest_state FROM responses r JOIN trials t
              ON t.participant = r.participant AND t.session = r.session AND t.trial = r.trial
-        WHERE r.participant=? AND r.session=? AND t.group_name=? ORDER BY r.trial""",
-                        (participant, session, group)).fetchall()
+        WHERE r.participant=? AND r.session=? AND t.group_name=? AND r.quest_state IS NOT NULL
+        ORDER BY r.trial DESC LIMIT 1""", (participant, session, group)).fetchone()
+    return None if row is None else row[0]
 
 
 def set_simulated_truth(conn, participant: str, session: int, truth_json: str) -> None:
