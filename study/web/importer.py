@@ -55,7 +55,7 @@ from flipstudy.stimuli._io import atomic_write_text
 from flipstudy.stimuli.exceptions import FlipstudyError
 
 from .. import store
-from ..export import PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
+from ..export import ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
 from ..psychds import write_dataset_description
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
@@ -68,6 +68,8 @@ WEB_COLUMNS = ["source", "run_id", "frames_expected", "frames_presented", "frame
                "dropped_pct", "playback_ms", "video_ms", "refresh_hz", "timing", "playback_flagged",
                "max_dropped_pct", "repeat", "source_file"]
 COLUMNS = RESPONSE_COLUMNS + WEB_COLUMNS
+#: a study with 2AFC groups: the local export's task columns too (no quest+ online)
+COLUMNS_2AFC = RESPONSE_COLUMNS + [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
                                                  "user_agent"]
 KINDS = ("start", "demographics", "answer", "end")
@@ -362,7 +364,7 @@ def _fmt(v):
     return str(v)
 
 
-def _tables(merged: dict, n_trials: int):
+def _tables(merged: dict, n_trials: int, columns=COLUMNS):
     runs = {}
     for (run, *_), (r, _w, _f) in merged.items():
         runs.setdefault(run, {"participant": r["participant"], "run_started": r["run_started"],
@@ -382,12 +384,12 @@ def _tables(merged: dict, n_trials: int):
     rows = []
     for r, f in sorted(answers, key=lambda x: (x[0]["participant"], sessions[x[0]["run_id"]], x[0]["trial"],
                                                x[0]["repeat"])):
-        row = {c: r.get(c) for c in COLUMNS}
+        row = {c: r.get(c) for c in columns}
         row.update(session=sessions[r["run_id"]], late_frames=r["frames_dropped"], simulated=False,
                    complete=count.get(r["run_id"], 0) >= n_trials, source=f"web-{r['host']}",
                    source_file=f, rt_ms=f"{r['rt_ms']:.1f}", shown_ms=f"{r['shown_ms']:.1f}",
                    level=f"{r['level']:g}")
-        rows.append({c: _fmt(row.get(c)) for c in COLUMNS})
+        rows.append({c: _fmt(row.get(c)) for c in columns})
     parts = []
     for run, info in sorted(runs.items(), key=lambda x: (x[1]["participant"], sessions[x[0]])):
         demo = merged.get((run, "demographics"), ({},))[0]
@@ -484,7 +486,8 @@ def import_web(study_dir, files) -> dict:
         if r["status"] == "imported":
             r["new_answers"] = sum(1 for k, (_rec, _w, fn) in merged.items()
                                    if k[1] == "answer" and fn == r["stored"] and k not in before)
-    rows, parts = _tables(merged, n_trials)
+    columns = COLUMNS_2AFC if any(g.task == "2afc" for g in study.design.groups) else COLUMNS
+    rows, parts = _tables(merged, n_trials, columns)
     # write: the files as they were first, then the tables built from all of them
     imports.mkdir(parents=True, exist_ok=True)
     for stored, data in new_files:
@@ -501,9 +504,9 @@ def import_web(study_dir, files) -> dict:
                 "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
     atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
     out = d / "responses.csv"
-    atomic_write_text(out, _table_text(COLUMNS, rows))
+    atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
-    desc = write_dataset_description(d, study.dir, COLUMNS, source="web sessions")
+    desc = write_dataset_description(d, study.dir, columns, source="web sessions")
     return {"files": report, "answers": len(rows), "participants": len({p["participant"] for p in parts}),
             "sessions": len(parts), "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/"
                                                    f"{p['n_trials']})" for p in parts if p["complete"] != "true"],
