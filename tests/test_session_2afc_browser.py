@@ -134,7 +134,9 @@ def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
     assert {t.level for t in trials} == {25.0, 50.0}                # level 0 is the comparison
     firsts = [t.first for t in trials]
     assert sorted(set(firsts)) == ["modified", "original"]
-    resp = ["first", "second", "second", "first", "first", "second", "first", "second"]
+    # the original chosen at 50 %, the modified motion at 25 %: d′ > 0 and d′ < 0
+    resp = ["first" if (t.first == "original") == (t.level == 50) else "second" for t in trials]
+    assert set(resp) == {"first", "second"}
     how = ["key", "click", "key", "click", "click", "key", "key", "click"]
     with ServerThread(create_app(session, iti_ms=50)) as srv:
         page.goto(srv.url)
@@ -185,8 +187,11 @@ def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
         assert len(cell) == int(t["n"]) == 2
         # correct = the original chosen as the physically correct one
         k = sum((r["response"] == "first") == (r["first"] == "original") for r in cell)
-        pc = (k + 0.5) / (len(cell) + 1)                            # log-linear correction
+        assert t["task"] == "2afc" and int(t["n_correct"]) == k
+        n = len(cell)           # the log-linear correction (the default) only for 0 or 1
+        pc = (k + 0.5) / (n + 1) if k in (0, n) else k / n
         assert float(t["dprime"]) == pytest.approx(math.sqrt(2) * norm.ppf(pc), abs=1e-6), t
+        assert (float(t["dprime"]) > 0) == (float(t["level"]) == 50)
 
 
 MIXED = [{"name": "smooth-increase", "sign": 1, "levels": [0, 25]},

@@ -102,8 +102,9 @@ def test_2afc_site_session_import_analyze(page, tmp_path, jspsych_dir):  # noqa:
     assert sorted(t.first for t in two) == ["modified", "modified", "original", "original"]
     assert "two motions" in " ".join(cfg["texts"]["instructions"])
     yes = {"correct": "correct", "incorrect": "incorrect"}
-    resp = {t.trial: (["first", "second"][t.trial % 2] if t.task == "2afc" else list(yes)[t.trial % 2])
-            for t in twin}
+    # 2AFC: the original chosen at 50 %, the modified motion at 25 % (d′ > 0 and d′ < 0)
+    resp = {t.trial: (("first" if (t.first == "original") == (t.level == 50) else "second")
+                      if t.task == "2afc" else list(yes)[t.trial % 2]) for t in twin}
     how = {t.trial: "key" if t.trial % 3 else "click" for t in twin}
     blocked, colours = [], {}
     with _Host(site) as host:
@@ -146,12 +147,16 @@ def test_2afc_site_session_import_analyze(page, tmp_path, jspsych_dir):  # noqa:
                 "--psychometric", "none", "--n-boot", "50"]) == 0
     from scipy.stats import norm
     table = [t for t in _csv(out / "table.csv") if t["group"] == "smooth-increase"]
+    assert {t["task"] for t in _csv(out / "table.csv") if t["group"] == "smooth-decrease"} == {"yes-no"}
     assert sorted(float(t["level"]) for t in table) == [25.0, 50.0]
     for t in table:
         cell = [r for r in rows if r["group"] == t["group"] and float(r["level"]) == float(t["level"])]
         k = sum((r["response"] == "first") == (r["first"] == "original") for r in cell)
-        pc = (k + 0.5) / (len(cell) + 1)
+        assert t["task"] == "2afc" and int(t["n_correct"]) == k
+        n = len(cell)           # the log-linear correction (the default) only for 0 or 1
+        pc = (k + 0.5) / (n + 1) if k in (0, n) else k / n
         assert float(t["dprime"]) == pytest.approx(math.sqrt(2) * norm.ppf(pc), abs=1e-6), t
+        assert (float(t["dprime"]) > 0) == (float(t["level"]) == 50)
 
 
 def test_export_web_refuses_quest_groups_by_name(tmp_path):
