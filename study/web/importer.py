@@ -52,13 +52,13 @@ import zipfile
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
-from flipstudy.stimuli.exceptions import FlipstudyError
 
 from .. import store
 from ..export import ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
 from ..psychds import write_dataset_description
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
+from ._fields import WebImportError, _bool, _need, _num, _str
 from .order import order_groups, web_trial_order
 from .site import FORMAT, HOSTS
 
@@ -77,10 +77,6 @@ KINDS = ("start", "demographics", "answer", "end")
 #: physically correct
 RESPONSES_BY_TASK = {"yes-no": ("correct", "incorrect"), "2afc": ("first", "second")}
 MAX_FILE = 256 * 1024 * 1024
-
-
-class WebImportError(FlipstudyError, ValueError):
-    """A results file that cannot be imported; the message names file and line or row."""
 
 
 # --- reading ---------------------------------------------------------------------------------
@@ -164,48 +160,6 @@ def read_records(path) -> list[tuple[str, dict]]:
 
 
 # --- checking --------------------------------------------------------------------------------
-
-def _num(v, where, key, lo=0.0, hi=math.inf, *, integer=False, optional=False):
-    if v is None and optional:
-        return None
-    if isinstance(v, bool) or v is None:
-        raise WebImportError(f"{where}: {key}: expected a number, got {v!r}")
-    if isinstance(v, str):
-        try:
-            v = float(v)
-        except ValueError:
-            raise WebImportError(f"{where}: {key}: expected a number, got {v!r}") from None
-    v = float(v)
-    if not math.isfinite(v) or not lo <= v <= hi:
-        raise WebImportError(f"{where}: {key}: {v:g} is outside {lo:g}..{hi:g}")
-    if integer:
-        if v != int(v):
-            raise WebImportError(f"{where}: {key}: expected a whole number, got {v:g}")
-        return int(v)
-    return v
-
-
-def _bool(v, where, key):
-    if isinstance(v, bool):
-        return v
-    if isinstance(v, str) and v.lower() in ("true", "false"):
-        return v.lower() == "true"
-    raise WebImportError(f"{where}: {key}: expected true or false, got {v!r}")
-
-
-def _str(v, where, key, options=None):
-    if not isinstance(v, str) or not v:
-        raise WebImportError(f"{where}: {key}: expected text, got {v!r}")
-    if options is not None and v not in options:
-        raise WebImportError(f"{where}: {key}: must be one of {', '.join(options)}, got {v!r}")
-    return v
-
-
-def _need(rec, where, keys):
-    missing = [k for k in keys if k not in rec]
-    if missing:
-        raise WebImportError(f"{where}: missing field(s) {', '.join(missing)}")
-
 
 COMMON = ("format", "record", "site_id", "study", "manifest_sha256", "host", "participant", "run_id",
           "run_started", "timestamp")
