@@ -172,3 +172,33 @@ def test_export_web_refuses_quest_groups_by_name(tmp_path):
     assert cli(["export-web", str(study), "--out", str(tmp_path / "site")]) != 0
     assert not (tmp_path / "site").exists()
     json.dumps(site_config(load_study(make_study(tmp_path / "ok", design_text(GROUPS), videos=False))))
+
+
+def test_2afc_replay_on_the_site_plays_both_again(page, tmp_path, jspsych_dir):  # noqa: F811
+    """[session] replay = true: "Replay both" runs the pair again (nothing to answer while
+    it plays); the answer is kept once with replays = 1."""
+    study = make_study(tmp_path / "study", design_text(GROUPS[:1], repetitions=1, replay=True))
+    site = tmp_path / "site"
+    export_site(study, site, host="static", iti_ms=20, jspsych_dir=jspsych_dir)
+    blocked = []
+    with _Host(site) as host:
+        origin = f"127.0.0.1:{host.port}"
+        _gate(page, origin, blocked)
+        page.goto(f"http://{origin}/index.html?participant={PID}")
+        _intro(page)
+        page.wait_for_selector("button.fs-replay:enabled")
+        page.click("button.fs-replay")
+        page.wait_for_selector('#jspsych-target[data-interval="1"][data-playing="1"]')
+        assert page.query_selector("button.fs-first") is None          # no answer while it plays
+        page.keyboard.press("f")
+        page.wait_for_selector('#jspsych-target[data-interval="2"]')
+        page.wait_for_selector("button.fs-second:enabled")
+        assert page.evaluate("window.flipstudyState.checkpoint.answers().length") == 0
+        page.click("button.fs-second")
+        page.wait_for_function("() => window.flipstudyState.checkpoint.answers().length === 1")
+        _answer(page, web_trial_order(_config(site)["groups"], 1, _config(site)["design_seed"], PID)[1],
+                "first", "key", 2)
+        answers = page.evaluate("window.flipstudyState.checkpoint.answers()")
+    assert blocked == []
+    assert [(a["trial"], a["replays"], a["response"], a["input"]) for a in answers] == [
+        (1, 1, "second", "click"), (2, 0, "first", "key")]
