@@ -77,23 +77,35 @@ def colour_of(study_dir, stimulus: str) -> tuple[int, int, int]:
     return PALETTE[names.index(stimulus) % len(PALETTE)]
 
 
-#: JavaScript: the colour of the brightest saturated pixel of the visible video of
-#: the local page's stage (null when no video shows a frame)
-VISIBLE_COLOUR_JS = """() => {
-  const v = [...document.querySelectorAll('#app .stage video')].find((x) => !x.classList.contains('hidden'));
-  if (!v || !v.videoWidth) return null;
-  const c = document.createElement('canvas');
-  c.width = v.videoWidth; c.height = v.videoHeight;
-  const g = c.getContext('2d');
-  g.drawImage(v, 0, 0);
-  const d = g.getImageData(0, 0, c.width, c.height).data;
-  let best = null, bs = -1;
-  for (let i = 0; i < d.length; i += 4) {
-    const s = Math.max(d[i], d[i + 1], d[i + 2]) - Math.min(d[i], d[i + 1], d[i + 2]);
-    if (s > bs) { bs = s; best = [d[i], d[i + 1], d[i + 2]]; }
-  }
-  return bs > 60 ? best : null;
-}"""
+#: JavaScript (one argument: the interval, 1 or 2): resolves, polling in the page on every
+#: animation frame, to the colour of the brightest saturated pixel of the video on the
+#: stage while that motion plays (the local page's stage, or the site's video element)
+INTERVAL_COLOUR_JS = """(interval) => new Promise((resolve) => {
+  const colour = (v) => {
+    const c = document.createElement('canvas');
+    c.width = v.videoWidth; c.height = v.videoHeight;
+    const g = c.getContext('2d');
+    g.drawImage(v, 0, 0);
+    const d = g.getImageData(0, 0, c.width, c.height).data;
+    let best = null, bs = -1;
+    for (let i = 0; i < d.length; i += 4) {
+      const s = Math.max(d[i], d[i + 1], d[i + 2]) - Math.min(d[i], d[i + 1], d[i + 2]);
+      if (s > bs) { bs = s; best = [d[i], d[i + 1], d[i + 2]]; }
+    }
+    return bs > 60 ? best : null;
+  };
+  const root = document.getElementById('app') || document.getElementById('jspsych-target');
+  const tick = () => {
+    if (root.dataset.interval === String(interval)) {
+      const v = [...root.querySelectorAll('video')].find((x) => !x.classList.contains('hidden')
+                                                             && x.style.visibility !== 'hidden');
+      const c = v && v.videoWidth && v.currentTime > 0 ? colour(v) : null;
+      if (c) { resolve(c); return; }
+    }
+    requestAnimationFrame(tick);
+  };
+  tick();
+})"""
 
 
 def nearest(colour, palette=PALETTE) -> tuple[int, int, int]:

@@ -19,7 +19,7 @@ import pytest
 
 from test_session_browser import CHROMIUM, TIMEOUT, page, pw  # noqa: F401 (fixtures)
 from test_web_browser import _config, _csv, _Host, _gate, _intro, _screen, _wait_screen, jspsych_dir  # noqa: F401
-from _kinds import colour_of, design_text, make_study, nearest
+from _kinds import INTERVAL_COLOUR_JS, colour_of, design_text, make_study, nearest
 from _screenshots import screenshot
 
 from flipstudy.study.cli import main as cli
@@ -35,33 +35,9 @@ GROUPS = [{"name": "smooth-increase", "sign": 1, "levels": [0, 25, 50], "task": 
           {"name": "smooth-decrease", "sign": -1, "levels": [0, 40]}]
 PID = "T01"
 
-#: the colour of the brightest saturated pixel of the site's video (null: no frame yet)
-SITE_COLOUR_JS = """() => {
-  const v = document.getElementById('jspsych-video-button-response-stimulus');
-  if (!v || !v.videoWidth || v.currentTime <= 0) return null;
-  const c = document.createElement('canvas');
-  c.width = v.videoWidth; c.height = v.videoHeight;
-  const g = c.getContext('2d');
-  g.drawImage(v, 0, 0);
-  const d = g.getImageData(0, 0, c.width, c.height).data;
-  let best = null, bs = -1;
-  for (let i = 0; i < d.length; i += 4) {
-    const s = Math.max(d[i], d[i + 1], d[i + 2]) - Math.min(d[i], d[i + 1], d[i + 2]);
-    if (s > bs) { bs = s; best = [d[i], d[i + 1], d[i + 2]]; }
-  }
-  return bs > 60 ? best : null;
-}"""
-
-
 def _colour_while(page, interval):
-    deadline = time.monotonic() + TIMEOUT / 1000
-    while time.monotonic() < deadline:
-        if page.get_attribute("#jspsych-target", "data-interval") == str(interval):
-            c = page.evaluate(SITE_COLOUR_JS)
-            if c is not None:
-                return nearest(c)
-        time.sleep(0.01)
-    raise AssertionError(f"no frame of motion {interval} seen")
+    """The colour of the site's video while motion ``interval`` (1 or 2) plays."""
+    return nearest(page.evaluate(INTERVAL_COLOUR_JS, interval))
 
 
 def _answer(page, t, response, how, n_answers, check_colours=None, shot=None):
