@@ -79,7 +79,8 @@ def colour_of(study_dir, stimulus: str) -> tuple[int, int, int]:
 
 #: JavaScript (one argument: the interval, 1 or 2): resolves, polling in the page on every
 #: animation frame, to the colour of the brightest saturated pixel of the video on the
-#: stage while that motion plays (the local page's stage, or the site's video element)
+#: stage while that motion plays (the local page's stage, or the site's video element);
+#: null when none is seen within 10 s
 INTERVAL_COLOUR_JS = """(interval) => new Promise((resolve) => {
   const colour = (v) => {
     const c = document.createElement('canvas');
@@ -95,7 +96,10 @@ INTERVAL_COLOUR_JS = """(interval) => new Promise((resolve) => {
     return bs > 60 ? best : null;
   };
   const root = document.getElementById('app') || document.getElementById('jspsych-target');
+  let done = false;
+  setTimeout(() => { done = true; resolve(null); }, 10000);      // never hang a test
   const tick = () => {
+    if (done) return;
     if (root.dataset.interval === String(interval)) {
       const v = [...root.querySelectorAll('video')].find((x) => !x.classList.contains('hidden')
                                                              && x.style.visibility !== 'hidden');

@@ -112,7 +112,9 @@ def _rows(path):
 
 def _seen_colour(page, interval):
     """The colour of the video on the stage while motion ``interval`` (1 or 2) plays."""
-    return nearest(page.evaluate(INTERVAL_COLOUR_JS, interval))
+    c = page.evaluate(INTERVAL_COLOUR_JS, interval)
+    assert c is not None, f"no frame of motion {interval} seen"
+    return nearest(c)
 
 
 TWO_AFC = [{"name": "smooth-increase", "sign": 1, "levels": [0, 25, 50], "task": "2afc"},

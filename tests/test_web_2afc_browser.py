@@ -37,7 +37,9 @@ PID = "T01"
 
 def _colour_while(page, interval):
     """The colour of the site's video while motion ``interval`` (1 or 2) plays."""
-    return nearest(page.evaluate(INTERVAL_COLOUR_JS, interval))
+    c = page.evaluate(INTERVAL_COLOUR_JS, interval)
+    assert c is not None, f"no frame of motion {interval} seen"
+    return nearest(c)
 
 
 def _answer(page, t, response, how, n_answers, check_colours=None, shot=None):
@@ -46,7 +48,8 @@ def _answer(page, t, response, how, n_answers, check_colours=None, shot=None):
     sid = f"trial-{t.trial}"
     while True:
         cur = _screen(page)
-        if cur == sid:
+        # colours: from the loading of the pair on, so the first motion is not missed
+        if cur == sid or (check_colours is not None and cur in (f"load-{sid}", f"iti-{sid}")):
             break
         if cur and (cur.startswith("break-") or cur == "resume"):
             page.click("#jspsych-html-button-response-btngroup button")
