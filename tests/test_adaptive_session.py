@@ -51,6 +51,7 @@ def test_yes_no_and_quest_groups_interleave_and_quest_picks_the_levels(tmp_path)
     s = open_session(study, "P01")
     kinds = [t.method for t in s.trials]
     assert kinds.count("quest+") == 12 and kinds.count("constant") == 4
+    assert s.n_trials == study.design.trials_per_participant()
     q_at = [i for i, k in enumerate(kinds) if k == "quest+"]
     assert any(k == "constant" for k in kinds[q_at[0]:q_at[-1]])      # interleaved, not a block
     assert all(not t.stimulus and np.isnan(t.level) for t in s.trials if t.adaptive)
@@ -211,3 +212,18 @@ def test_a_sigkilled_session_resumes_with_the_same_posterior_and_next_level(tmp_
         s2 = [r["quest_state"] for r in c2.execute("SELECT quest_state FROM responses ORDER BY trial")]
     assert s1 == s2 and sum(x is not None for x in s1) == 12
     assert json.loads(s1[-1])["levels"] == [resumed.resolve(i).level for i in slots]
+
+
+def test_level_0_of_a_quest_group_sharing_the_original_shows_the_shared_original(tmp_path):
+    text = design_text(("quest",), trials=20).replace('original = "per-group"\n', "")
+    study = load_study(make_study(tmp_path / "s", text))
+    assert study.group("quest").original == "shared" and not study.design.shows_shared_original
+    assert study.stimulus_at("quest", "backflip", 0) == "backflip_original"
+    s = open_session(study, "P01")
+    assert all(t.adaptive for t in s.trials)           # the shared original is no trial of its own
+    shown = []
+    while not s.state()["finished"]:                   # "incorrect" mostly: QUEST+ goes down to 0
+        t = s.resolve(s.state()["next_trial"])
+        shown.append(t.stimulus)
+        submit_answer(s, answer(s, t, "incorrect" if t.trial % 3 else "correct"))
+    assert "backflip_original" in shown and all(x in study.by_name for x in shown)
