@@ -227,3 +227,14 @@ def test_level_0_of_a_quest_group_sharing_the_original_shows_the_shared_original
         shown.append(t.stimulus)
         submit_answer(s, answer(s, t, "incorrect" if t.trial % 3 else "correct"))
     assert "backflip_original" in shown and all(x in study.by_name for x in shown)
+
+
+def test_a_session_resumed_after_its_quest_settings_changed_is_refused(tmp_path):
+    from flipstudy.study.session import SessionError
+    study = load_study(make_study(tmp_path / "s", groups=("yn", "quest"), trials=12))
+    s = open_session(study, "P01")
+    run(s, upto=next(t.trial for t in s.trials if t.adaptive))
+    design = tmp_path / "s" / "design.toml"
+    design.write_text(design.read_text().replace("method", "lapse = 0.05\nmethod"))
+    with pytest.raises(SessionError, match="QUEST\\+ state of group 'quest' does not fit"):
+        open_session(load_study(tmp_path / "s"), "P01")
