@@ -169,42 +169,51 @@ CHILD = textwrap.dedent("""
         t = s.resolve(s.state()["next_trial"])
         submit_answer(s, answer(s, t, respond(t)))
         print("stored", t.trial, flush=True)
-        sys.stdin.readline()                      # wait: the parent kills us here
+        if {wait}:
+            sys.stdin.readline()                  # wait: the parent kills us here
 """)
 
 
-def test_a_sigkilled_session_resumes_with_the_same_posterior_and_next_level(tmp_path):
+@pytest.mark.parametrize("wait", [True, False], ids=["between-answers", "while-answering"])
+def test_a_sigkilled_session_resumes_with_the_same_posterior_and_next_level(tmp_path, wait):
+    """``wait``: the child stops after each stored answer and is killed there; else it
+    runs on and is killed wherever it is (computing or writing the next answer)."""
     killed = make_study(tmp_path / "killed", groups=("yn", "quest"), trials=12)
     calm = make_study(tmp_path / "calm", groups=("yn", "quest"), trials=12)
     tests = str(Path(__file__).parent)
-    proc = subprocess.Popen([sys.executable, "-c", CHILD.format(tests=tests, study=str(killed))],
+    proc = subprocess.Popen([sys.executable, "-c", CHILD.format(tests=tests, study=str(killed),
+                                                                 wait=wait)],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": tests})
     study_k = load_study(killed)
     slots = [t.trial for t in open_session(study_k, "P01").trials if t.adaptive]
-    stop_after = slots[4]                          # killed after the 5th adaptive answer
+    kill_at = slots[4]                             # killed after the 5th adaptive answer
     try:
         while True:
             line = proc.stdout.readline()
             assert line.startswith("stored"), line
-            if int(line.split()[1]) == stop_after:
+            if int(line.split()[1]) == kill_at:
                 break
-            proc.stdin.write("\n")
-            proc.stdin.flush()
+            if wait:
+                proc.stdin.write("\n")
+                proc.stdin.flush()
         os.kill(proc.pid, signal.SIGKILL)
         assert proc.wait(timeout=60) == -signal.SIGKILL
     finally:
         if proc.poll() is None:
             proc.kill()
     resumed = open_session(load_study(killed), "P01")
-    assert resumed.resumed and resumed.state()["answered"] == stop_after
+    stop_after = resumed.state()["answered"]          # the kill may have let one more through
+    assert resumed.resumed and (stop_after == kill_at if wait else stop_after >= kill_at)
     uninterrupted = open_session(load_study(calm), "P01")
     run(uninterrupted, upto=stop_after)
     a, b = resumed.quest("quest"), uninterrupted.quest("quest")
     assert np.array_equal(a.posterior, b.posterior) and a.history == b.history
-    nxt = next(t for t in slots if t > stop_after)
-    assert resumed.resolve(nxt) == uninterrupted.resolve(nxt)
-    assert resumed.resolve(nxt).level == b.next_level()
+    nxt = next((t for t in slots if t > stop_after), None)
+    assert nxt is not None or not wait
+    if nxt is not None:                                # the same next level, resolved alike
+        assert resumed.resolve(nxt) == uninterrupted.resolve(nxt)
+        assert resumed.resolve(nxt).level == b.next_level()
     run(resumed)
     run(uninterrupted)
     with resumed.db() as c1, uninterrupted.db() as c2:
