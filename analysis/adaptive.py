@@ -135,11 +135,11 @@ class QuestModel:
         post = np.asarray(post, float)
         plp = xlogy(post, post)
         A0, A1 = self._ent                              # L log L, (1 − L) log(1 − L)
-        p0 = (self.p_detect @ post.T).T                 # P(detected), (..., levels)
+        p0 = post @ self.p_detect.T                     # P(detected), (..., levels)
         p1 = post.sum(-1)[..., None] - p0
-        lp = (self.p_detect @ plp.T).T                  # Σ π log π · L
-        t0 = lp + (A0 @ post.T).T                       # Σ π L log(π L)
-        t1 = (plp.sum(-1)[..., None] - lp) + (A1 @ post.T).T
+        lp = plp @ self.p_detect.T                      # Σ π log π · L
+        t0 = lp + post @ A0.T                           # Σ π L log(π L)
+        t1 = (plp.sum(-1)[..., None] - lp) + post @ A1.T
         return xlogy(p0, p0) + xlogy(p1, p1) - t0 - t1
 
     def summary(self, post: np.ndarray) -> dict:
@@ -179,8 +179,9 @@ def quest_model(levels, task: str = "yes-no", settings: QuestSettings | None = N
     if task == "2afc":
         lv = lv[lv > 0]                                 # level 0 is the comparison
     if len(lv) < 2:
-        raise FlipstudyValueError(f"quest+ levels: at least two levels to choose from "
-                                  f"({'besides 0 ' if task == '2afc' else ''}in 2AFC), got {levels!r}")
+        raise FlipstudyValueError(f"quest+ levels: at least two levels to choose from"
+                                  f"{' besides 0 (the comparison) in 2AFC' if task == '2afc' else ''}, "
+                                  f"got {sorted(set(np.asarray(list(levels), float).tolist()))}")
     key = hashlib.sha256(json.dumps([lv.tolist(), task, asdict(settings), GAMMA_GRID.tolist(),
                                      N_THRESHOLD, N_WIDTH]).encode()).hexdigest()[:16]
     if key in _MODELS:

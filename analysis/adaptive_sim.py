@@ -38,6 +38,25 @@ class QuestBatch:
         self.model = model
         self.post = np.tile(model.prior, (n, 1))
 
+    @classmethod
+    def from_counts(cls, model: QuestModel, k: np.ndarray, n: np.ndarray) -> "QuestBatch":
+        """Posteriors after ``n[j, i]`` trials at ``model.levels[i]`` of which ``k[j, i]``
+        were detected (order does not matter without adaptive choices): one row per
+        row of ``k``, computed in log space as one matrix product."""
+        L = model.p_detect
+        with np.errstate(divide="ignore"):
+            lL, l1 = np.log(L), np.log1p(-L)
+        k, n = np.atleast_2d(np.asarray(k, float)), np.atleast_2d(np.asarray(n, float))
+        # 0 · log 0 = 0: a cell with L = 0 (or 1) is only impossible where it was observed
+        ll = np.where(k > 0, k, 0) @ np.where(np.isfinite(lL), lL, -1e300) \
+            + np.where(n - k > 0, n - k, 0) @ np.where(np.isfinite(l1), l1, -1e300)
+        ll += np.log(model.prior)
+        ll -= ll.max(axis=1, keepdims=True)
+        b = cls(model, len(k))
+        b.post = np.exp(ll)
+        b.post /= b.post.sum(1, keepdims=True)
+        return b
+
     def next_index(self) -> np.ndarray:
         """Per row, the index (into ``model.levels``) of least expected entropy."""
         return np.argmin(self.model.expected_entropy(self.post), axis=-1)

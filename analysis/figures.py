@@ -243,10 +243,10 @@ def _draw_fit(ax, fit: PsychometricFit, colour, marker, table=None, annotate=Tru
 
 
 def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None = None,
-                        method_note: str = "") -> Figure:
-    """One panel per group: P(judged incorrect) against |level| with the fitted
-    function, the base rate γ (dotted), the detection threshold x* (where
-    P = (1 + γ)/2; dashed) and its interval (shaded bar)."""
+                        method_note: str = "", ylabel: str = "P(judged incorrect)") -> Figure:
+    """One panel per group: P(judged incorrect) (2AFC: ``ylabel`` P(original chosen))
+    against |level| with the fitted function, the base rate γ (dotted), the
+    detection threshold x* (where P = (1 + γ)/2; dashed) and its interval (shaded bar)."""
     groups = [f.group for f in fits]
     sty = group_styles(group_order(table["group"].unique()) if table is not None else groups)
     nrows, ncols = _panel_grid(max(len(fits), 1))
@@ -260,7 +260,7 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
             ax.set_title(f.group, color=c, fontweight="bold")
             _level_axis(ax, np.r_[0.0, f.x])
             ax.set_ylim(0, 1)
-        _label_panels(axes, len(fits), "P(judged incorrect)", "error magnitude |level| (%)")
+        _label_panels(axes, len(fits), ylabel, "error magnitude |level| (%)")
         if len(fits) < nrows * ncols:
             ax = axes.flat[len(fits)]
             ax.set_visible(True)
@@ -276,6 +276,38 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
         elif not fits:
             axes.flat[0].text(0.5, 0.5, "no psychometric fits", ha="center", va="center",
                               transform=axes.flat[0].transAxes)
+    return fig
+
+
+def thresholds_figure(per_participant: pd.DataFrame, per_group: pd.DataFrame | None = None) -> Figure:
+    """Per-participant detection thresholds x* with their 95 % posterior intervals, one
+    column of points per group (adaptive and constant alike), the group's median and
+    quartiles as a box beside them."""
+    groups = group_order(per_participant["group"].unique())
+    sty = group_styles(groups)
+    with style():
+        fig = Figure(figsize=(1.2 * len(groups) + 1.6, 3.2), layout="constrained")
+        ax = fig.subplots()
+        for i, g in enumerate(groups):
+            sub = per_participant[per_participant["group"] == g].sort_values("threshold")
+            c, mk = sty[g]
+            x = i + _dodge(len(sub), min(0.5 / max(len(sub), 1), 0.06))
+            y = sub["threshold"].to_numpy(float)
+            ax.errorbar(x, y, yerr=_yerr(y, sub["ci_low"], sub["ci_high"]), color=c, marker=mk, ms=3.5,
+                        ls="none", elinewidth=0.7, mec="white", mew=0.4)
+            fin = y[np.isfinite(y)]
+            if len(fin):
+                q1, med, q3 = np.quantile(fin, [0.25, 0.5, 0.75])
+                ax.add_patch(mpl.patches.Rectangle((i + 0.32, q1), 0.16, q3 - q1, fc=c, alpha=0.25, ec=c))
+                ax.plot([i + 0.32, i + 0.48], [med, med], color=c, lw=1.6)
+        labels = []
+        for g in groups:
+            m = per_participant.loc[per_participant["group"] == g, ["task", "method"]].iloc[0]
+            labels.append(f"{g}\n{m['method']}, {m['task']}")
+        ax.set_xticks(range(len(groups)), labels, fontsize=7)
+        ax.set_xlim(-0.6, len(groups) - 0.3)
+        ax.set_ylabel("threshold x* (%), 95 % posterior interval")
+        ax.set_title("Per-participant detection thresholds (box: median and quartiles)", fontsize=8.5)
     return fig
 
 

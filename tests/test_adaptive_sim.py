@@ -84,3 +84,16 @@ def test_trials_to_width_is_the_first_crossing():
         else:
             assert np.all(sim.width[:, j] >= 15.0)
     assert np.all(sim.trials_to_width(1e-9) == np.inf)
+
+
+def test_posterior_from_counts_equals_trial_by_trial_updates():
+    model = quest_model(GRID, "yes-no")
+    obs = population(6, np.random.default_rng(4), "yes-no")
+    sim = simulate(model, obs, 60, np.random.default_rng(5), method="constant",
+                   constant_levels=[0.0, 17.0, 25.0, 37.0, 50.0], every_trial=False)
+    idx = np.searchsorted(model.levels, sim.levels.T)
+    nl = len(model.levels)
+    k = np.stack([np.bincount(i, d, nl) for i, d in zip(idx, sim.detected.T)])
+    n = np.stack([np.bincount(i, None, nl) for i in idx])
+    b = QuestBatch.from_counts(model, k, n)
+    np.testing.assert_allclose(b.post, sim.posterior, rtol=1e-8, atol=1e-300)
