@@ -18,6 +18,12 @@ did-you-mean, every number is bounded, names, clips, references and levels are
 not repeated; every invalid field raises :class:`DesignError` naming the file,
 section and key and the value as written (levels in percent).
 
+A group's ``levels`` may be a dense grid ``{from, to, step}`` (at most 401 levels);
+``method = "quest+"`` makes it adaptive (the session picks each level with
+QUEST+; its settings are :class:`~flipstudy.stimuli.groupkeys.QuestSpec`), and
+``task = "2afc"`` (default ``[study] task``, itself "yes-no") shows each modified
+motion beside its original (see :mod:`flipstudy.stimuli.groupkeys`).
+
 Designs written before the ``[session]`` table held ``replay`` and
 ``break_every`` in ``[study]``; they are still read, the same way, with a
 ``FutureWarning`` that names the file and asks to move them to ``[session]``

@@ -275,7 +275,9 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
             if missing:
                 raise SessionError(f"session {s} of {participant} names stimuli not in the "
                                    f"manifest: {missing[:3]}")
-            return Session(study, participant, s, source, trials, resumed=True)
+            resumed = Session(study, participant, s, source, trials, resumed=True)
+            _check_quest_states(resumed, conn)
+            return resumed
         s = 1 if last is None else last["session"] + 1
         if any(g.task == "2afc" for g in study.design.groups) and not store.accepts_2afc(conn):
             raise SessionError(f"{store.db_path(study.dir)} was made by an older flipstudy (schema "
@@ -299,6 +301,21 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         return Session(study, participant, s, source, trials, resumed=False)
     finally:
         conn.close()
+
+
+def _check_quest_states(session: Session, conn) -> None:
+    """A resumed session's stored QUEST+ states must belong to its groups' models
+    now (the design's quest+ keys or levels unchanged)."""
+    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    for g in sorted({t.group for t in session.trials if t.adaptive}):
+        try:
+            session.quest(g, conn)
+        except (FlipstudyValueError, SessionError) as e:
+            raise SessionError(
+                f"participant {session.participant}, session {session.session}: the stored QUEST+ "
+                f"state of group {g!r} does not fit {session.study.dir / 'design.toml'} now ({e}); "
+                f"restore the design the session started with, or start a new session with "
+                f"--new-session") from None
 
 
 def submit_answer(session: Session, payload: dict, *, timestamp: str | None = None) -> dict:

@@ -27,24 +27,20 @@ the session, before the first trial is served.  The responses' primary key makes
 a second answer to the same trial impossible.  Timestamps are ISO 8601 UTC with
 milliseconds (``2026-01-05T10:00:00.123Z``).
 
-Version 2 (adaptive and 2AFC groups) added the columns after the line break
-above, all nullable: a trial's ``method`` (constant / quest+), ``task`` (yes-no /
-2afc), ``first`` (original / modified: what a 2AFC trial shows first),
-``original`` (a 2AFC trial's comparison stimulus) and ``skipped`` (1: a quest+
-slot left out because its group stopped early, ``stop_width``); an answer's
-``shown_stimulus`` and ``shown_level`` (what an adaptive slot showed; a slot is
+Version 2 (adaptive and 2AFC groups) added the nullable columns after each line
+break: a trial's ``method`` (constant / quest+), ``task`` (yes-no / 2afc),
+``first`` (what a 2AFC trial shows first), ``original`` (its comparison) and
+``skipped`` (1: a quest+ slot left out, its group stopped early); an answer's
+``shown_stimulus``/``shown_level`` (what an adaptive slot showed; the slot is
 stored with stimulus ``""`` and level :data:`SLOT_LEVEL`), ``quest_state`` (the
-group's QUEST+ state after this answer, JSON) and the threshold's posterior mean
-and 95 % interval then; a simulated session's ``simulated_truth`` (JSON: its
-observers' parameters per group).  A NULL reads as the version-1 meaning
-(constant, yes-no, not skipped).  New databases accept the responses "first" and
-"second" (2AFC) besides "correct" and "incorrect".
-
-A version-1 database is migrated when it is opened: the new columns are added
-(``ALTER TABLE … ADD COLUMN``) in one transaction that also sets the version, so
-its rows stay exactly as they were.  SQLite cannot widen its responses CHECK in
-place, so a migrated database keeps accepting only correct/incorrect: a 2AFC
-study needs a new study folder (:func:`accepts_2afc`).
+group's QUEST+ state after it, JSON) and the threshold's posterior mean and 95 %
+interval then; a simulated session's ``simulated_truth`` (JSON).  NULL reads as
+version 1 did (constant, yes-no, not skipped).  New databases also accept the
+2AFC responses "first" and "second".  A version-1 database is migrated when
+opened: the columns are added (``ALTER TABLE … ADD COLUMN``) in one transaction
+that also sets the version; its rows stay as they were.  SQLite cannot widen its
+responses CHECK in place, so a migrated database takes no 2AFC answers
+(:func:`accepts_2afc`): a 2AFC study needs a new study folder.
 """
 from __future__ import annotations
 

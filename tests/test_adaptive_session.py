@@ -51,6 +51,7 @@ def test_yes_no_and_quest_groups_interleave_and_quest_picks_the_levels(tmp_path)
     s = open_session(study, "P01")
     kinds = [t.method for t in s.trials]
     assert kinds.count("quest+") == 12 and kinds.count("constant") == 4
+    assert s.n_trials == study.design.trials_per_participant()
     q_at = [i for i, k in enumerate(kinds) if k == "quest+"]
     assert any(k == "constant" for k in kinds[q_at[0]:q_at[-1]])      # interleaved, not a block
     assert all(not t.stimulus and np.isnan(t.level) for t in s.trials if t.adaptive)
@@ -168,42 +169,51 @@ CHILD = textwrap.dedent("""
         t = s.resolve(s.state()["next_trial"])
         submit_answer(s, answer(s, t, respond(t)))
         print("stored", t.trial, flush=True)
-        sys.stdin.readline()                      # wait: the parent kills us here
+        if {wait}:
+            sys.stdin.readline()                  # wait: the parent kills us here
 """)
 
 
-def test_a_sigkilled_session_resumes_with_the_same_posterior_and_next_level(tmp_path):
+@pytest.mark.parametrize("wait", [True, False], ids=["between-answers", "while-answering"])
+def test_a_sigkilled_session_resumes_with_the_same_posterior_and_next_level(tmp_path, wait):
+    """``wait``: the child stops after each stored answer and is killed there; else it
+    runs on and is killed wherever it is (computing or writing the next answer)."""
     killed = make_study(tmp_path / "killed", groups=("yn", "quest"), trials=12)
     calm = make_study(tmp_path / "calm", groups=("yn", "quest"), trials=12)
     tests = str(Path(__file__).parent)
-    proc = subprocess.Popen([sys.executable, "-c", CHILD.format(tests=tests, study=str(killed))],
+    proc = subprocess.Popen([sys.executable, "-c", CHILD.format(tests=tests, study=str(killed),
+                                                                 wait=wait)],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": tests})
     study_k = load_study(killed)
     slots = [t.trial for t in open_session(study_k, "P01").trials if t.adaptive]
-    stop_after = slots[4]                          # killed after the 5th adaptive answer
+    kill_at = slots[4]                             # killed after the 5th adaptive answer
     try:
         while True:
             line = proc.stdout.readline()
             assert line.startswith("stored"), line
-            if int(line.split()[1]) == stop_after:
+            if int(line.split()[1]) == kill_at:
                 break
-            proc.stdin.write("\n")
-            proc.stdin.flush()
+            if wait:
+                proc.stdin.write("\n")
+                proc.stdin.flush()
         os.kill(proc.pid, signal.SIGKILL)
         assert proc.wait(timeout=60) == -signal.SIGKILL
     finally:
         if proc.poll() is None:
             proc.kill()
     resumed = open_session(load_study(killed), "P01")
-    assert resumed.resumed and resumed.state()["answered"] == stop_after
+    stop_after = resumed.state()["answered"]          # the kill may have let one more through
+    assert resumed.resumed and (stop_after == kill_at if wait else stop_after >= kill_at)
     uninterrupted = open_session(load_study(calm), "P01")
     run(uninterrupted, upto=stop_after)
     a, b = resumed.quest("quest"), uninterrupted.quest("quest")
     assert np.array_equal(a.posterior, b.posterior) and a.history == b.history
-    nxt = next(t for t in slots if t > stop_after)
-    assert resumed.resolve(nxt) == uninterrupted.resolve(nxt)
-    assert resumed.resolve(nxt).level == b.next_level()
+    nxt = next((t for t in slots if t > stop_after), None)
+    assert nxt is not None or not wait
+    if nxt is not None:                                # the same next level, resolved alike
+        assert resumed.resolve(nxt) == uninterrupted.resolve(nxt)
+        assert resumed.resolve(nxt).level == b.next_level()
     run(resumed)
     run(uninterrupted)
     with resumed.db() as c1, uninterrupted.db() as c2:
@@ -211,3 +221,29 @@ def test_a_sigkilled_session_resumes_with_the_same_posterior_and_next_level(tmp_
         s2 = [r["quest_state"] for r in c2.execute("SELECT quest_state FROM responses ORDER BY trial")]
     assert s1 == s2 and sum(x is not None for x in s1) == 12
     assert json.loads(s1[-1])["levels"] == [resumed.resolve(i).level for i in slots]
+
+
+def test_level_0_of_a_quest_group_sharing_the_original_shows_the_shared_original(tmp_path):
+    text = design_text(("quest",), trials=20).replace('original = "per-group"\n', "")
+    study = load_study(make_study(tmp_path / "s", text))
+    assert study.group("quest").original == "shared" and not study.design.shows_shared_original
+    assert study.stimulus_at("quest", "backflip", 0) == "backflip_original"
+    s = open_session(study, "P01")
+    assert all(t.adaptive for t in s.trials)           # the shared original is no trial of its own
+    shown = []
+    while not s.state()["finished"]:                   # "incorrect" mostly: QUEST+ goes down to 0
+        t = s.resolve(s.state()["next_trial"])
+        shown.append(t.stimulus)
+        submit_answer(s, answer(s, t, "incorrect" if t.trial % 3 else "correct"))
+    assert "backflip_original" in shown and all(x in study.by_name for x in shown)
+
+
+def test_a_session_resumed_after_its_quest_settings_changed_is_refused(tmp_path):
+    from flipstudy.study.session import SessionError
+    study = load_study(make_study(tmp_path / "s", groups=("yn", "quest"), trials=12))
+    s = open_session(study, "P01")
+    run(s, upto=next(t.trial for t in s.trials if t.adaptive))
+    design = tmp_path / "s" / "design.toml"
+    design.write_text(design.read_text().replace("method", "lapse = 0.05\nmethod"))
+    with pytest.raises(SessionError, match="QUEST\\+ state of group 'quest' does not fit"):
+        open_session(load_study(tmp_path / "s"), "P01")
