@@ -72,6 +72,17 @@ def _images(specs):
     return out
 
 
+def _design_specs(sources):
+    """The QUEST+ models of the groups of the study folder's design.toml (beside the first
+    responses table), to replay adaptive answers; None without a design."""
+    from flipstudy.analysis.io import resolve_responses_path
+    from flipstudy.stimuli.design import load_design
+
+    from .plan import quest_specs
+    design = resolve_responses_path(sources[0]).parent / "design.toml"
+    return quest_specs(load_design(design)) if design.is_file() else None
+
+
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
     from flipstudy.analysis.io import NeedsExport, combine_responses, resolve_responses_path
@@ -82,6 +93,7 @@ def handler(args) -> int:
         if len(args.responses) > 1:
             src = combine_responses(args.responses)
         res = analyze(src, out, correction=args.correction, images=_images(args.image) or None,
+                      quest_specs=_design_specs(args.responses),
                       seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
                       gee=not args.no_gee, figures=not args.no_figures,
                       include_simulated=args.include_simulated,
