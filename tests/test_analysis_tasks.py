@@ -150,3 +150,17 @@ def test_2afc_answers_are_checked_with_their_line(tmp_path):
     d = load_responses(p)
     want = [(r == "first") == (f == "original") for r, f in zip(df["response"], df["first"])]
     assert d["detected"].astype(bool).tolist() == want
+
+
+def test_quest_track_figure_draws_the_replayed_track():
+    from flipstudy.analysis.figures import quest_track_figure
+    model = quest_model(GRID, "2afc", QuestSettings(trials=12))
+    o = Observer(20.0, 10.0, 0.5, 0.02, "2afc")
+    _, q = quest_rows("P1", "g", "2afc", o, QuestSettings(trials=12), np.random.default_rng(0))
+    fig = quest_track_figure(q, o)
+    ax = fig.axes[0]
+    step = ax.lines[0]                     # the posterior mean after each trial
+    assert len(step.get_ydata()) == 13 and step.get_ydata()[-1] == pytest.approx(q.threshold()["threshold"])
+    shown = np.concatenate([ln.get_ydata() for ln in ax.lines[1:3]])
+    assert sorted(shown) == sorted(lv for lv, _ in q.history)
+    assert model.key == q.model.key
