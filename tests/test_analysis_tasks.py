@@ -105,12 +105,14 @@ def test_quest_rows_replayed_equal_the_stored_state(task, tmp_path):
         rows, _ = quest_rows(f"P{i}", "adaptive", task, o, settings, rng)
         frames.append(rows)
     df = pd.concat(frames, ignore_index=True).sample(frac=1, random_state=0)   # any row order
+    df[["quest_threshold", "quest_ci_low", "quest_ci_high"]] = \
+        df[["quest_threshold", "quest_ci_low", "quest_ci_high"]].round(4)         # as exported
     specs = {"adaptive": (GRID, task, settings)}
     r = analyze(df, tmp_path / "out", quest_specs=specs, n_boot=50, figures=True)
     per = r.participant_thresholds.set_index("participant")
     assert (per["source"] == "replayed").all() and per["stored_matches"].all()
     assert (per["n_trials"] == 30).all() and (per["method"] == "quest+").all()
-    np.testing.assert_array_equal(per["threshold"], per["stored_threshold"])
+    np.testing.assert_allclose(per["threshold"], per["stored_threshold"], atol=5e-5)
     g = r.group_thresholds.iloc[0]
     assert g["n_participants"] == 4 and g["median"] == pytest.approx(np.median(per["threshold"]))
     assert g["q25"] <= g["median"] <= g["q75"] and np.isnan(g["pooled_threshold"])

@@ -132,7 +132,14 @@ def handler(args) -> int:
                 print(f"  {t['group']:20s} {t['threshold']:5.1f} %  [{t['threshold_ci_low']:.1f}, {hi}]")
             else:
                 print(f"  {t['group']:20s} not reached")
-    notable = [n for n in res.notes if "not found" in n or "no images" in n or "failed" in n]
+    if res.group_thresholds is not None and len(res.group_thresholds):
+        print("per-participant thresholds x* (thresholds_participants.csv), per group:")
+        for _, t in res.group_thresholds.iterrows():
+            print(f"  {t['group']:20s} {t['method']:8s} {t['task']:6s} N = {t['n_participants']:<3d} "
+                  f"median {t['median']:5.1f} %  quartiles [{t['q25']:.1f}, {t['q75']:.1f}]  "
+                  f"mean 95 % interval width {t['mean_ci_width']:.1f} %")
+    notable = [n for n in res.notes if "not found" in n or "no images" in n or "failed" in n
+               or "differ from the ones the session stored" in n or "no design" in n]
     for n in notable:
         print(f"note: {n}")
     print(f"\nwrote {len(res.files)} files to {out}/ (table.csv, table_paper.md/.tex, figures, notes.md)")
