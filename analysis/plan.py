@@ -95,12 +95,13 @@ def format_plan(rows: list[dict], target_width: float, coverage: float = 0.9, ma
     """The plan as a text table."""
     head = (f"Target: 95 % interval of x* narrower than {target_width:g} % — per participant "
             f"(for {coverage:.0%} of simulated observers) and for the group's mean x*.")
-    lines = [head, "", f"{'group':<22} {'task':<7} {'method':<9} {'trials/participant':>19} "
+    gw = max([22] + [len(r["group"]) + 1 for r in rows])
+    lines = [head, "", f"{'group':<{gw}} {'task':<7} {'method':<9} {'trials/participant':>19} "
                        f"{'(median)':>9} {'participants':>13} {'total trials':>13}"]
     for r in rows:
         tr = f"{r['trials']:.0f}" if np.isfinite(r["trials"]) else f"> {max_trials}"
         n = f"{r['participants']}" if np.isfinite(r["participants"]) else "—"
         tot = f"{r['total_trials']:.0f}" if np.isfinite(r["total_trials"]) else "—"
         med = f"{r['trials_median']:.0f}" if np.isfinite(r["trials_median"]) else f"> {max_trials}"
-        lines.append(f"{r['group']:<22} {r['task']:<7} {r['method']:<9} {tr:>19} {med:>9} {n:>13} {tot:>13}")
+        lines.append(f"{r['group']:<{gw}} {r['task']:<7} {r['method']:<9} {tr:>19} {med:>9} {n:>13} {tot:>13}")
     return "\n".join(lines)
