@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .adaptive import Quest, QuestSettings, quest_model
+from .adaptive import LEVEL_ATOL, Quest, QuestSettings, quest_model
 from .adaptive_sim import QuestBatch
 from .io import ResponsesError, group_order
 
@@ -102,8 +102,8 @@ def participant_thresholds(df: pd.DataFrame, specs: dict | None = None) -> tuple
                         q.update(lv, d)
                     est, source = q.threshold(), "replayed"
                 else:
-                    idx = np.searchsorted(model.levels, x)
-                    ok = (idx < len(model.levels)) & (model.levels[np.minimum(idx, len(model.levels) - 1)] == x)
+                    idx = np.abs(x[:, None] - model.levels[None, :]).argmin(1)
+                    ok = np.abs(model.levels[idx] - x) <= LEVEL_ATOL
                     if not ok.all():
                         raise ResponsesError(f"group {g}: participant {pid} answered level "
                                              f"{x[~ok][0]:g}, which is not on the group's grid "
