@@ -166,3 +166,30 @@ def test_quest_track_figure_draws_the_replayed_track():
     shown = np.concatenate([ln.get_ydata() for ln in ax.lines[1:3]])
     assert sorted(shown) == sorted(lv for lv, _ in q.history)
     assert model.key == q.model.key
+
+
+def test_analyze_command_on_adaptive_and_2afc_answers(tmp_path, capsys):
+    """`flipstudy analyze` on a responses CSV without a design beside it: the stored QUEST+
+    thresholds, the 2AFC table, the new files, a summary.json that is valid JSON."""
+    import json
+
+    from flipstudy.study.cli import main
+    rng = np.random.default_rng(11)
+    frames = []
+    for i in range(3):
+        o = Observer(20.0 + 5 * i, 12.0, 0.5, 0.02, "2afc")
+        rows, _ = quest_rows(f"P{i}", "adaptive", "2afc", o, QuestSettings(trials=15), rng)
+        lv = np.repeat([10.0, 20.0, 30.0, 40.0], 6)
+        frames += [rows, afc_rows(f"P{i}", "constant", lv, np.array([o.answer(x, rng) for x in lv]), rng)]
+    csv = tmp_path / "responses.csv"
+    pd.concat(frames, ignore_index=True).to_csv(csv, index=False)
+    assert main(["analyze", str(csv), "--out", str(tmp_path / "a"), "--no-figures", "--n-boot", "50",
+                 "--psychometric", "none"]) == 0
+    out = capsys.readouterr().out
+    assert "per-participant thresholds" in out and "adaptive" in out and "no design" in out
+    per = pd.read_csv(tmp_path / "a" / "thresholds_participants.csv")
+    assert set(per.loc[per["group"] == "adaptive", "source"]) == {"stored"}
+    assert set(per.loc[per["group"] == "constant", "source"]) == {"replayed"}
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert {r["group"] for r in summary["thresholds_groups"]} == {"adaptive", "constant"}
+    assert all(r["task"] == "2afc" for r in summary["table"])
