@@ -58,6 +58,8 @@ GAMMA_GRID = np.round(np.arange(0.0, 0.7001, 0.05), 2)
 N_THRESHOLD, N_WIDTH = 41, 10
 #: the JSON state's format tag
 FORMAT = "flipstudy-quest+/1"
+#: a level given to :meth:`Quest.update` is the grid level within this (percent)
+LEVEL_ATOL = 1e-6
 #: share of the posterior an interval leaves out (95 % intervals)
 ALPHA = 0.05
 
@@ -260,7 +262,7 @@ class Quest:
         """Add one answer: ``detected`` is True for "incorrect" (yes/no) or the
         original chosen as correct (2AFC)."""
         lv = self.model.levels
-        i = np.flatnonzero(lv == float(level))
+        i = np.flatnonzero(np.abs(lv - float(level)) <= LEVEL_ATOL)     # a level read back from text
         if not len(i):
             raise FlipstudyValueError(f"quest+ update: level {level!r} is not one of the group's "
                                       f"levels ({lv[0]:g} … {lv[-1]:g}, {len(lv)} levels)")

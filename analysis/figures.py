@@ -311,6 +311,67 @@ def thresholds_figure(per_participant: pd.DataFrame, per_group: pd.DataFrame | N
     return fig
 
 
+def quest_track_figure(quest, truth=None, title: str = "") -> Figure:
+    """One participant's QUEST+ run: left, the level of every trial (filled:
+    detected) with the posterior mean of x* and its 95 % interval after each trial;
+    right, the final posterior of x* (a histogram of the grid cells' x*, weighted by
+    their posterior) and the psychometric function at the posterior mean.  ``truth``:
+    a simulated observer (:class:`~.adaptive.Observer`) whose x* and curve are drawn."""
+    from .adaptive import Quest
+    from .stats import psychometric_curve
+    model, hist = quest.model, quest.history
+    q = Quest.new(model)
+    steps = [q.threshold()]
+    for lv, d in hist:
+        q.update(lv, d)
+        steps.append(q.threshold())
+    mean = np.array([s["threshold"] for s in steps])
+    lo, hi = np.array([s["ci_low"] for s in steps]), np.array([s["ci_high"] for s in steps])
+    c0, c1 = OKABE_ITO[0], OKABE_ITO[1]
+    with style():
+        fig = Figure(figsize=(7.4, 3.0), layout="constrained")
+        ax, ax2 = fig.subplots(1, 2, width_ratios=[1.6, 1])
+        t = np.arange(len(steps))
+        ax.fill_between(t, lo, hi, step="post", color=c0, alpha=0.18, lw=0, label="95 % interval of x*")
+        ax.step(t, mean, where="post", color=c0, lw=1.4, label="posterior mean of x*")
+        n = np.arange(1, len(hist) + 1)
+        lv = np.array([h[0] for h in hist])
+        det = np.array([h[1] for h in hist], bool)
+        ax.plot(n[det], lv[det], "o", color=c1, ms=4, label="level shown: detected")
+        ax.plot(n[~det], lv[~det], "o", mfc="white", mec=c1, ms=4, label="not detected")
+        if truth is not None:
+            ax.axhline(truth.threshold, color="0.3", ls="--", lw=0.9, label="true x*")
+        ax.set_xlabel("trial")
+        ax.set_ylabel("error level (%)")
+        ax.set_ylim(0, float(model.levels.max()) * 1.05)
+        ax.legend(frameon=False, fontsize=6.5, loc="upper right", ncol=2)
+        post = quest.posterior
+        bins = np.arange(0, float(model.levels.max()) + 2.5, 2.0)
+        ax2.hist(model.xstar, bins=bins, weights=post, color=c0, alpha=0.35, label="posterior of x*")
+        ax2.set_xlabel("error magnitude (%)")
+        ax2.set_ylabel("posterior probability")
+        axp = ax2.twinx()
+        xs = np.linspace(0, float(model.levels.max()), 200)
+        g = model.gamma if model.task == "yes-no" else np.array([0.5])
+        M, W, G = np.meshgrid(model.m, model.width, g, indexing="ij")
+        curves = psychometric_curve(xs[:, None], M.ravel(), W.ravel(), G.ravel(), model.lapse)
+        axp.plot(xs, curves @ post, color=c0, lw=1.4, label="P(detected), posterior mean")
+        if truth is not None:
+            axp.plot(xs, truth.p_detect(xs), color="0.3", ls="--", lw=0.9, label="true function")
+            ax2.axvline(truth.threshold, color="0.3", ls="--", lw=0.9, ymax=0.7)
+        axp.set_ylim(0, 1.45)                            # room for the legend above the curves
+        axp.set_yticks([0, 0.25, 0.5, 0.75, 1.0])
+        ax2.set_ylim(0, ax2.get_ylim()[1] * 1.45)
+        axp.set_ylabel("P(detected)")
+        axp.grid(False)
+        axp.legend(frameon=False, fontsize=6.5, loc="upper left")
+        s = steps[-1]
+        ax2.set_title(f"x* = {s['threshold']:.1f} % [{s['ci_low']:.1f}, {s['ci_high']:.1f}]", fontsize=8.5)
+        if title:
+            fig.suptitle(title, fontsize=9)
+    return fig
+
+
 def _load_image(path: Path, max_px: int = 900):
     """An image file as a uint8 RGBA array (OpenImageIO), shrunk to fit ``max_px``."""
     import OpenImageIO as oiio

@@ -215,6 +215,9 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                      "over all levels of all groups in gee_p_holm.")
         for msg in sorted(set(m for m in g["gee_note"] if m)):
             notes.append("GEE: " + msg)
+        if tasks and len(yes_no) < len(df):
+            notes.append("GEE: yes/no constant-stimuli groups only (a 2AFC group has no level-0 cell; "
+                         "QUEST+ levels are chosen by the procedure).")
     else:
         g = pd.DataFrame(columns=["group", "level", "gee_or", "gee_ci_low", "gee_ci_high", "gee_p",
                                   "gee_p_holm", "gee_note"])
