@@ -14,17 +14,21 @@ Entry points:
   signal detection on counts (vectorised);
 * :func:`load_responses` — read and check a response table;
 * :func:`summarize`, :func:`gee_levels`, :func:`fit_psychometric` — the steps;
-* :mod:`flipstudy.analysis.simulate` — simulated panels (the paper's, SDT observers).
+* :mod:`flipstudy.analysis.simulate` — simulated panels (the paper's, SDT observers);
+* :mod:`flipstudy.analysis.adaptive` — the QUEST+ engine and simulated observers with
+  known thresholds (:mod:`~flipstudy.analysis.adaptive_sim`: many at once);
+  :func:`dprime_2afc` — 2AFC d′; :mod:`flipstudy.analysis.thresholds` — per-participant
+  thresholds; :mod:`flipstudy.analysis.plan` — the power analysis of ``flipstudy plan``.
 """
 from .core import count_cells, participant_dprimes, summarize
 from .io import NeedsExport, ResponsesError, load_responses
 from .pipeline import Result, analyze
-from .sdt import CORRECTIONS, corrected_rate, criterion, dprime, rates, z
+from .sdt import CORRECTIONS, corrected_rate, criterion, dprime, dprime_2afc, rates, z
 from .stats import (PsychometricFit, detection_threshold, fit_psychometric, gee_levels,
                     psychometric_curve)
 from .tables import fmt_cell, fmt_dprime, paper_layout, to_latex, to_markdown
 
-__all__ = ["analyze", "Result", "dprime", "criterion", "rates", "corrected_rate", "z", "CORRECTIONS",
+__all__ = ["analyze", "Result", "dprime", "dprime_2afc", "criterion", "rates", "corrected_rate", "z", "CORRECTIONS",
            "load_responses", "ResponsesError", "NeedsExport", "summarize", "count_cells",
            "participant_dprimes", "gee_levels", "fit_psychometric", "PsychometricFit",
            "detection_threshold", "psychometric_curve", "paper_layout", "to_markdown", "to_latex",

@@ -243,10 +243,10 @@ def _draw_fit(ax, fit: PsychometricFit, colour, marker, table=None, annotate=Tru
 
 
 def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None = None,
-                        method_note: str = "") -> Figure:
-    """One panel per group: P(judged incorrect) against |level| with the fitted
-    function, the base rate γ (dotted), the detection threshold x* (where
-    P = (1 + γ)/2; dashed) and its interval (shaded bar)."""
+                        method_note: str = "", ylabel: str = "P(judged incorrect)") -> Figure:
+    """One panel per group: P(judged incorrect) (2AFC: ``ylabel`` P(original chosen))
+    against |level| with the fitted function, the base rate γ (dotted), the
+    detection threshold x* (where P = (1 + γ)/2; dashed) and its interval (shaded bar)."""
     groups = [f.group for f in fits]
     sty = group_styles(group_order(table["group"].unique()) if table is not None else groups)
     nrows, ncols = _panel_grid(max(len(fits), 1))
@@ -260,7 +260,7 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
             ax.set_title(f.group, color=c, fontweight="bold")
             _level_axis(ax, np.r_[0.0, f.x])
             ax.set_ylim(0, 1)
-        _label_panels(axes, len(fits), "P(judged incorrect)", "error magnitude |level| (%)")
+        _label_panels(axes, len(fits), ylabel, "error magnitude |level| (%)")
         if len(fits) < nrows * ncols:
             ax = axes.flat[len(fits)]
             ax.set_visible(True)
@@ -276,6 +276,99 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
         elif not fits:
             axes.flat[0].text(0.5, 0.5, "no psychometric fits", ha="center", va="center",
                               transform=axes.flat[0].transAxes)
+    return fig
+
+
+def thresholds_figure(per_participant: pd.DataFrame, per_group: pd.DataFrame | None = None) -> Figure:
+    """Per-participant detection thresholds x* with their 95 % posterior intervals, one
+    column of points per group (adaptive and constant alike), the group's median and
+    quartiles as a box beside them."""
+    groups = group_order(per_participant["group"].unique())
+    sty = group_styles(groups)
+    with style():
+        fig = Figure(figsize=(1.2 * len(groups) + 1.6, 3.2), layout="constrained")
+        ax = fig.subplots()
+        for i, g in enumerate(groups):
+            sub = per_participant[per_participant["group"] == g].sort_values("threshold")
+            c, mk = sty[g]
+            x = i + _dodge(len(sub), min(0.5 / max(len(sub), 1), 0.06))
+            y = sub["threshold"].to_numpy(float)
+            ax.errorbar(x, y, yerr=_yerr(y, sub["ci_low"], sub["ci_high"]), color=c, marker=mk, ms=3.5,
+                        ls="none", elinewidth=0.7, mec="white", mew=0.4)
+            fin = y[np.isfinite(y)]
+            if len(fin):
+                q1, med, q3 = np.quantile(fin, [0.25, 0.5, 0.75])
+                ax.add_patch(mpl.patches.Rectangle((i + 0.32, q1), 0.16, q3 - q1, fc=c, alpha=0.25, ec=c))
+                ax.plot([i + 0.32, i + 0.48], [med, med], color=c, lw=1.6)
+        labels = []
+        for g in groups:
+            m = per_participant.loc[per_participant["group"] == g, ["task", "method"]].iloc[0]
+            labels.append(f"{g}\n{m['method']}, {m['task']}")
+        ax.set_xticks(range(len(groups)), labels, fontsize=7)
+        ax.set_xlim(-0.6, len(groups) - 0.3)
+        ax.set_ylabel("threshold x* (%), 95 % posterior interval")
+        ax.set_title("Per-participant detection thresholds (box: median and quartiles)", fontsize=8.5)
+    return fig
+
+
+def quest_track_figure(quest, truth=None, title: str = "") -> Figure:
+    """One participant's QUEST+ run: left, the level of every trial (filled:
+    detected) with the posterior mean of x* and its 95 % interval after each trial;
+    right, the final posterior of x* (a histogram of the grid cells' x*, weighted by
+    their posterior) and the psychometric function at the posterior mean.  ``truth``:
+    a simulated observer (:class:`~.adaptive.Observer`) whose x* and curve are drawn."""
+    from .adaptive import Quest
+    from .stats import psychometric_curve
+    model, hist = quest.model, quest.history
+    q = Quest.new(model)
+    steps = [q.threshold()]
+    for lv, d in hist:
+        q.update(lv, d)
+        steps.append(q.threshold())
+    mean = np.array([s["threshold"] for s in steps])
+    lo, hi = np.array([s["ci_low"] for s in steps]), np.array([s["ci_high"] for s in steps])
+    c0, c1 = OKABE_ITO[0], OKABE_ITO[1]
+    with style():
+        fig = Figure(figsize=(7.4, 3.0), layout="constrained")
+        ax, ax2 = fig.subplots(1, 2, width_ratios=[1.6, 1])
+        t = np.arange(len(steps))
+        ax.fill_between(t, lo, hi, step="post", color=c0, alpha=0.18, lw=0, label="95 % interval of x*")
+        ax.step(t, mean, where="post", color=c0, lw=1.4, label="posterior mean of x*")
+        n = np.arange(1, len(hist) + 1)
+        lv = np.array([h[0] for h in hist])
+        det = np.array([h[1] for h in hist], bool)
+        ax.plot(n[det], lv[det], "o", color=c1, ms=4, label="level shown: detected")
+        ax.plot(n[~det], lv[~det], "o", mfc="white", mec=c1, ms=4, label="not detected")
+        if truth is not None:
+            ax.axhline(truth.threshold, color="0.3", ls="--", lw=0.9, label="true x*")
+        ax.set_xlabel("trial")
+        ax.set_ylabel("error level (%)")
+        ax.set_ylim(0, float(model.levels.max()) * 1.05)
+        ax.legend(frameon=False, fontsize=6.5, loc="upper right", ncol=2)
+        post = quest.posterior
+        bins = np.arange(0, float(model.levels.max()) + 2.5, 2.0)
+        ax2.hist(model.xstar, bins=bins, weights=post, color=c0, alpha=0.35, label="posterior of x*")
+        ax2.set_xlabel("error magnitude (%)")
+        ax2.set_ylabel("posterior probability")
+        axp = ax2.twinx()
+        xs = np.linspace(0, float(model.levels.max()), 200)
+        g = model.gamma if model.task == "yes-no" else np.array([0.5])
+        M, W, G = np.meshgrid(model.m, model.width, g, indexing="ij")
+        curves = psychometric_curve(xs[:, None], M.ravel(), W.ravel(), G.ravel(), model.lapse)
+        axp.plot(xs, curves @ post, color=c0, lw=1.4, label="P(detected), posterior mean")
+        if truth is not None:
+            axp.plot(xs, truth.p_detect(xs), color="0.3", ls="--", lw=0.9, label="true function")
+            ax2.axvline(truth.threshold, color="0.3", ls="--", lw=0.9, ymax=0.7)
+        axp.set_ylim(0, 1.45)                            # room for the legend above the curves
+        axp.set_yticks([0, 0.25, 0.5, 0.75, 1.0])
+        ax2.set_ylim(0, ax2.get_ylim()[1] * 1.45)
+        axp.set_ylabel("P(detected)")
+        axp.grid(False)
+        axp.legend(frameon=False, fontsize=6.5, loc="upper left")
+        s = steps[-1]
+        ax2.set_title(f"x* = {s['threshold']:.1f} % [{s['ci_low']:.1f}, {s['ci_high']:.1f}]", fontsize=8.5)
+        if title:
+            fig.suptitle(title, fontsize=9)
     return fig
 
 

@@ -17,6 +17,9 @@ IGNORED_GROUPS = ("reference",)
 #: the group of the shared originals (stimuli.design.SHARED_ORIGINAL_GROUP)
 SHARED_ORIGINAL = "original"
 EXPORT_HINT = "flipstudy export {d} --out {d}/responses.csv"
+#: the values of the optional columns ``task`` and ``method`` (missing: yes-no, constant)
+TASKS = ("yes-no", "2afc")
+METHODS = ("constant", "quest+")
 
 
 class ResponsesError(FlipstudyError, ValueError):
@@ -48,8 +51,11 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
     ``source`` is a DataFrame, a CSV path, or a study folder (its
     ``responses.csv``).  Returns a new DataFrame with the checked columns:
     ``participant`` (str), ``group`` (str), ``level`` (float, nominal error in
-    percent), ``response`` (``"correct"``/``"incorrect"``), ``incorrect`` (0/1)
-    and every other column as read.  Rows of the ``reference`` group are
+    percent), ``response`` (``"correct"``/``"incorrect"``; 2AFC rows:
+    ``"first"``/``"second"``), ``incorrect`` (0/1; 0 on 2AFC rows), ``detected``
+    (0/1: yes/no answered "incorrect", 2AFC chose the original as the physically
+    correct one, by column ``first``) and every other column as read; ``task`` and
+    ``method``, where present, are normalised (empty: ``yes-no``, ``constant``).  Rows of the ``reference`` group are
     dropped.  Answers to a shared original (group ``original``, see
     :func:`expand_shared_originals`) become the level 0 of every group that shares
     it, marked ``shared_copy`` beyond the first.  A first answer that was shown
@@ -90,7 +96,7 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
             raise ResponsesError(f"{where}: {line(i)}: empty '{col}' ({int(bad.sum())} row(s) in all)")
     df["participant"] = df["participant"].astype(str)
     df["group"] = df["group"].astype(str).str.strip()
-    df = df[~df["group"].str.lower().isin(IGNORED_GROUPS)]
+    df = df[~df["group"].str.lower().isin(IGNORED_GROUPS)].copy()
     lvl = pd.to_numeric(df["level"], errors="coerce")
     bad = lvl.isna() | ~np.isfinite(lvl)
     if bad.any():
@@ -98,16 +104,54 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
         raise ResponsesError(f"{where}: {line(i)}: level {df.loc[i, 'level']!r} is not a number "
                              f"(expected the nominal error in percent, 0 = original)")
     resp = df["response"].astype(str).str.strip().str.lower()
-    bad = ~resp.isin(("correct", "incorrect"))
+    task = _norm_column(df, "task", TASKS, where, line, "yes-no")
+    if "method" in df.columns:
+        _norm_column(df, "method", METHODS, where, line, "constant")
+    afc = (task == "2afc").to_numpy()
+    bad = ~resp.isin(("correct", "incorrect")) & ~afc
     if bad.any():
         i = int(df.index[bad.to_numpy()][0])
         raise ResponsesError(f"{where}: {line(i)}: response {df.loc[i, 'response']!r} is neither "
                              f"'correct' nor 'incorrect' ({int(bad.sum())} such row(s))")
+    detected = (resp == "incorrect").to_numpy()
+    if afc.any():
+        bad = ~resp.isin(("first", "second")) & afc
+        if bad.any():
+            i = int(df.index[bad.to_numpy()][0])
+            raise ResponsesError(f"{where}: {line(i)}: 2AFC response {df.loc[i, 'response']!r} is "
+                                 f"neither 'first' nor 'second' ({int(bad.sum())} such row(s))")
+        first = (df["first"] if "first" in df.columns else pd.Series("", index=df.index))
+        first = first.fillna("").astype(str).str.strip().str.lower()
+        bad = ~first.isin(("original", "modified")) & afc
+        if bad.any():
+            i = int(df.index[bad.to_numpy()][0])
+            raise ResponsesError(f"{where}: {line(i)}: a 2AFC answer needs column 'first' = "
+                                 f"'original' or 'modified' (what was shown first), got "
+                                 f"{df.loc[i, 'first'] if 'first' in df.columns else 'no such column'!r}")
+        chose_original = (resp == "first") == (first == "original")
+        detected = np.where(afc, chose_original.to_numpy(), detected)
     df = df.assign(level=lvl.astype(float), response=resp,
-                   incorrect=(resp == "incorrect").astype(np.int8)).reset_index(drop=True)
+                   incorrect=((resp == "incorrect").to_numpy() & ~afc).astype(np.int8),
+                   detected=detected.astype(np.int8)).reset_index(drop=True)
     if df.empty:
         raise ResponsesError(f"{where}: no trials to analyse (after dropping 'reference' rows)")
     return expand_shared_originals(use_repeats(df, where), where)
+
+
+def _norm_column(df: pd.DataFrame, col: str, allowed, where, line, default) -> pd.Series:
+    """Column ``col`` lower-cased with empty cells as ``default`` (written back to
+    ``df``); a value outside ``allowed`` is refused naming its line.  A table
+    without the column gives ``default`` everywhere (and is left as it is)."""
+    if col not in df.columns:
+        return pd.Series(default, index=df.index)
+    v = df[col].fillna("").astype(str).str.strip().str.lower().replace("", default)
+    bad = ~v.isin(allowed)
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        raise ResponsesError(f"{where}: {line(i)}: {col} {df.loc[i, col]!r}: expected one of "
+                             f"{', '.join(allowed)}")
+    df[col] = v
+    return v
 
 
 def use_repeats(df: pd.DataFrame, where: str = "responses table") -> pd.DataFrame:
@@ -194,6 +238,14 @@ def expand_shared_originals(df: pd.DataFrame, where: str = "responses table") ->
                              f"found level {orig.loc[bad, 'level'].iloc[0]:g}")
     rest = df[~is_orig]
     has0 = set(rest.loc[rest["level"] == 0, "group"])
+    # 2AFC groups compare with the original in every trial, QUEST+ groups show their own
+    # level 0: neither takes the shared originals' answers
+    other = np.zeros(len(rest), bool)
+    if "task" in rest.columns:
+        other |= (rest["task"] == "2afc").to_numpy()
+    if "method" in rest.columns:
+        other |= (rest["method"] == "quest+").to_numpy()
+    has0 |= set(rest.loc[other, "group"])
     kinds = None
     if "kind" in df.columns:
         kinds = set(orig["kind"].dropna().astype(str))

@@ -14,6 +14,8 @@ from .io import ResponsesError, group_order, load_responses, participants_label,
 from .sdt import CORRECTION_TEXT, normalise_correction
 from .stats import fit_psychometric, gee_levels
 from .tables import paper_layout, to_latex, to_markdown
+from .tasks import fit_tasks, has_tasks, split, summarize_tasks, thresholds_frame
+from .thresholds import group_thresholds, participant_thresholds
 
 #: the default figure-sheet image slots, in display order
 IMAGE_SLOTS = ("ghost original", "ghost strongest error", "trail original", "trail strongest error")
@@ -46,6 +48,8 @@ class Result:
     notes: list[str]
     files: dict[str, Path] = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
+    participant_thresholds: pd.DataFrame | None = None
+    group_thresholds: pd.DataFrame | None = None
 
     def to_dict(self) -> dict:
         """JSON-ready summary (what ``flipstudy analyze --json`` prints)."""
@@ -60,11 +64,13 @@ class Result:
 
         def records(df):
             return [{k: clean(v) for k, v in r.items()} for r in df.to_dict("records")]
-        return {"settings": self.settings,
-                "table": records(self.table),
-                "thresholds": records(self.thresholds),
-                "notes": list(self.notes),
-                "files": {k: str(v) for k, v in self.files.items()}}
+        out = {"settings": self.settings,
+               "table": records(self.table),
+               "thresholds": records(self.thresholds)}
+        if self.participant_thresholds is not None:
+            out["thresholds_participants"] = records(self.participant_thresholds)
+            out["thresholds_groups"] = records(self.group_thresholds)
+        return {**out, "notes": list(self.notes), "files": {k: str(v) for k, v in self.files.items()}}
 
 
 def split_by_style(df: pd.DataFrame, table: pd.DataFrame):
@@ -113,7 +119,7 @@ def _normalise_images(images) -> dict:
 def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=None, seed=0,
             n_boot: int = 2000, ci: float = 0.95, psychometric: str = "psignifit",
             gee: bool = True, figures: bool = True, include_simulated: bool = False,
-            include_incomplete: bool = False) -> Result:
+            include_incomplete: bool = False, quest_specs: dict | None = None) -> Result:
     """Run the whole analysis and write its outputs.
 
     ``responses``: a DataFrame, a responses CSV or a study folder (its
@@ -129,6 +135,14 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     left out by default (:func:`flipstudy.analysis.io.select_participants`); which
     participants were used is in ``settings["participants"]``, in every table
     caption, figure, ``notes.md`` and ``summary.json``.
+
+    Answers with a ``task`` of ``2afc`` or a ``method`` of ``quest+``
+    (:mod:`flipstudy.analysis.tasks`): the table gains a ``task`` column (2AFC d′ =
+    √2·z(P correct)), 2AFC fits fix γ = ½, and every group gets per-participant
+    thresholds (``thresholds_participants.csv``) and their distribution
+    (``thresholds_groups.csv``); ``quest_specs``: group → (levels, task,
+    :class:`~flipstudy.analysis.adaptive.QuestSettings`) of the design, to replay
+    QUEST+ groups (without it their stored thresholds are used).
 
     Files (in ``out_dir``): ``table.csv``, ``table_paper.csv``,
     ``table_paper.md``, ``table_paper.tex``, ``participants.csv``,
@@ -156,7 +170,13 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
         raise ResponsesError(f"{responses if not isinstance(responses, pd.DataFrame) else 'responses'}: "
                              f"no trials to analyse: " + "; ".join(why or ["no participants"]))
     label = participants_label(who)
-    table, participants, notes = summarize(df, correction=correction, n_boot=n_boot, seed=seed, ci=ci)
+    tasks = has_tasks(df)
+    if tasks:
+        table, participants, notes = summarize_tasks(df, correction, n_boot, seed, ci)
+        yes_no = split(df)[0]
+    else:
+        table, participants, notes = summarize(df, correction=correction, n_boot=n_boot, seed=seed, ci=ci)
+        yes_no = df
     if "repeat" in df.columns:
         n_rep = int((pd.to_numeric(df["repeat"], errors="coerce").fillna(0) == 1)[~df["shared_copy"]].sum())
         if n_rep:
@@ -185,8 +205,8 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                         f"{MIN_PARTICIPANTS}), the intervals over participants (bootstrap), the GEE "
                         f"tests (participants as clusters) and the thresholds are not meaningful: "
                         f"read them as descriptions of these answers only.")
-    if gee:
-        g = gee_levels(df, ci=ci)
+    if gee and len(yes_no):
+        g = gee_levels(yes_no, ci=ci)
         table = table.merge(g, on=["group", "level"], how="left")
         notes.append("Each level against its group's original: GEE logistic model of P(incorrect) on "
                      "level as a category (reference: level 0), Binomial family, exchangeable "
@@ -195,14 +215,21 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                      "over all levels of all groups in gee_p_holm.")
         for msg in sorted(set(m for m in g["gee_note"] if m)):
             notes.append("GEE: " + msg)
+        if tasks and len(yes_no) < len(df):
+            notes.append("GEE: yes/no constant-stimuli groups only (a 2AFC group has no level-0 cell; "
+                         "QUEST+ levels are chosen by the procedure).")
     else:
         g = pd.DataFrame(columns=["group", "level", "gee_or", "gee_ci_low", "gee_ci_high", "gee_p",
                                   "gee_p_holm", "gee_note"])
 
-    fits, fit_notes = fit_psychometric(df, psychometric, ci=ci, seed=seed)
+    if tasks:
+        fits, fit_notes = fit_tasks(df, psychometric, ci, seed)
+        thresholds = thresholds_frame(fits)
+    else:
+        fits, fit_notes = fit_psychometric(df, psychometric, ci=ci, seed=seed)
+        thresholds = pd.DataFrame([f.row() for f in fits]) if fits else pd.DataFrame(
+            columns=["group", "method", "threshold", "threshold_ci_low", "threshold_ci_high", "reached"])
     notes += fit_notes
-    thresholds = pd.DataFrame([f.row() for f in fits]) if fits else pd.DataFrame(
-        columns=["group", "method", "threshold", "threshold_ci_low", "threshold_ci_high", "reached"])
     if fits:
         notes.append(
             "Psychometric functions: P(incorrect) = γ + (1 − γ − λ)·Φ((|level| − m)/s) per group "
@@ -216,15 +243,28 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                 why = next((p for p in f.note.split("; ") if p.startswith("not reached")), "not reached")
                 notes.append(f"{f.group}: threshold {why}")
 
-    paper = paper_layout(table)
+    per_participant = per_group = None
+    if tasks:
+        per_participant, t_notes = participant_thresholds(df, quest_specs)
+        per_group = group_thresholds(per_participant, fits)
+        notes += t_notes
+        notes.append("Per-participant thresholds (thresholds_participants.csv): each participant's "
+                     "answers to a group replayed through that group's QUEST+ model (the psychometric "
+                     "function above on a grid of m, width and γ; 2AFC: γ = ½; λ fixed), x* = "
+                     "posterior mean with its 95 % equal-tailed posterior interval, the same definition "
+                     "for adaptive and constant groups; thresholds_groups.csv: their distribution "
+                     "per group beside the pooled psignifit x*.")
+    paper = paper_layout(table) if len(table) else pd.DataFrame(columns=["group"])
     result = Result(table=table, participants=participants, gee=g, thresholds=thresholds, fits=fits,
-                    paper=paper, notes=notes,
+                    paper=paper, notes=notes, participant_thresholds=per_participant,
+                    group_thresholds=per_group,
                     settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
                               "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
                               "n_participants": int(df["participant"].nunique()),
                               "participants": who, "participants_label": label,
                               "n_trials": int((~df["shared_copy"]).sum()),
-                              "groups": list(dict.fromkeys(table["group"]))})
+                              "groups": (group_order(df["group"].unique()) if tasks
+                                         else list(dict.fromkeys(table["group"])))})
     if out_dir is None:
         return result
     out = Path(out_dir)
@@ -235,32 +275,52 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     files["table_paper.csv"] = out / "table_paper.csv"
     paper.to_csv(files["table_paper.csv"], index=False)
     caption = PAPER_CAPTION + f" Correction for rates of 0 or 1: {correction}. {label}."
-    files["table_paper.md"] = out / "table_paper.md"
-    files["table_paper.md"].write_text(to_markdown(table, caption), encoding="utf-8")
-    files["table_paper.tex"] = out / "table_paper.tex"
-    files["table_paper.tex"].write_text(to_latex(table, caption), encoding="utf-8")
+    if tasks and (table["task"] == "2afc").any():
+        caption += " 2AFC groups: percent correct choices (d′ = √2·z(P correct))."
+    if len(table):
+        files["table_paper.md"] = out / "table_paper.md"
+        files["table_paper.md"].write_text(to_markdown(table, caption), encoding="utf-8")
+        files["table_paper.tex"] = out / "table_paper.tex"
+        files["table_paper.tex"].write_text(to_latex(table, caption), encoding="utf-8")
     files["participants.csv"] = out / "participants.csv"
     participants.to_csv(files["participants.csv"], index=False)
-    if gee:
+    if gee and len(g):
         files["levels_vs_original.csv"] = out / "levels_vs_original.csv"
         g.to_csv(files["levels_vs_original.csv"], index=False)
     if fits:
         files["thresholds.csv"] = out / "thresholds.csv"
         thresholds.to_csv(files["thresholds.csv"], index=False)
+    if per_participant is not None:
+        for name, frame in (("thresholds_participants.csv", per_participant),
+                            ("thresholds_groups.csv", per_group)):
+            files[name] = out / name
+            frame.to_csv(files[name], index=False)
 
     if figures:
-        from .figures import dprime_figure, psychometric_figure, ratings_figure, save, sheet_figure
+        from .figures import (dprime_figure, psychometric_figure, ratings_figure, save, sheet_figure,
+                              thresholds_figure)
         ci_label = f"{ci:.0%} CI"
-        for name, fig in (("ratings", ratings_figure(table, ci_label)),
-                          ("dprime", dprime_figure(table, ci_label))):
+        yn_table = table[table["task"] == "yes-no"] if tasks else table
+        yn_fits = [f for f in fits if getattr(f, "task", "yes-no") == "yes-no"]
+        afc_fits = [f for f in fits if getattr(f, "task", "yes-no") == "2afc"]
+        figs = []
+        if len(yn_table):
+            figs.append(("ratings", ratings_figure(yn_table, ci_label)))
+        if len(table):
+            figs.append(("dprime", dprime_figure(table, ci_label)))
+        if yn_fits:
+            figs.append(("psychometric", psychometric_figure(yn_fits, yn_table, "psignifit 4 (Bayesian, MAP)")))
+        if afc_fits:
+            figs.append(("psychometric_2afc", psychometric_figure(
+                afc_fits, table[table["task"] == "2afc"], "psignifit 4, 2AFC (γ = ½)",
+                ylabel="P(original chosen)")))
+        if per_participant is not None and len(per_participant):
+            figs.append(("thresholds_participants", thresholds_figure(per_participant, per_group)))
+        for name, fig in figs:
             for p in save(_labelled(fig, label), out / name):
                 files[p.name] = p
-        if fits:
-            for p in save(_labelled(psychometric_figure(fits, table, "psignifit 4 (Bayesian, MAP)"), label),
-                          out / "psychometric"):
-                files[p.name] = p
         imgs = _normalise_images(images)
-        fig, sheet_notes = sheet_figure(fits, table, imgs)
+        fig, sheet_notes = sheet_figure(yn_fits, yn_table if len(yn_table) else table, imgs)
         notes += sheet_notes
         for p in save(_labelled(fig, label), out / "sheet"):
             files[p.name] = p
@@ -299,5 +359,14 @@ def _notes_md(r: Result) -> str:
             lo = "—" if not np.isfinite(t["threshold_ci_low"]) else f"{t['threshold_ci_low']:.1f}"
             lines.append(f"| {t['group']} | {x} | [{lo}, {hi}] | {t['p_reached']:.2f} | "
                          f"{t['gamma']:.2f} | {t['lambda']:.2f} | {t['note']} |")
+        lines.append("")
+    if r.group_thresholds is not None and len(r.group_thresholds):
+        lines += ["## Per-participant thresholds (distribution per group)", "",
+                  "| group | task | method | N | mean x* (%) | SD | quartiles | mean interval width |",
+                  "|:--|:--|:--|--:|--:|--:|:--|--:|"]
+        for _, t in r.group_thresholds.iterrows():
+            lines.append(f"| {t['group']} | {t['task']} | {t['method']} | {t['n_participants']} | "
+                         f"{t['mean']:.1f} | {t['sd']:.1f} | {t['q25']:.1f}, {t['median']:.1f}, "
+                         f"{t['q75']:.1f} | {t['mean_ci_width']:.1f} |")
         lines.append("")
     return "\n".join(lines) + "\n"

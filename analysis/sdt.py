@@ -10,6 +10,10 @@ Conventions (DESIGN.md):
   (``scipy.stats.norm.ppf``);
 * criterion ``c = −(z(H) + z(F)) / 2`` (Macmillan & Creelman 2005): positive
   ``c`` is a bias towards answering "correct";
+* two-alternative forced choice (an original and a modified motion, "which was
+  physically correct?"): ``d′ = √2 · z(P correct)`` (Macmillan & Creelman 2005,
+  ch. 7), :func:`dprime_2afc`; a proportion of 0 or 1 is corrected by the same
+  rules (``"loglinear"``: ``(k + 0.5)/(n + 1)`` when it is 0 or 1);
 * rates of 0 or 1 make ``z`` infinite and are corrected:
 
   ``"loglinear"`` (default)
@@ -161,3 +165,34 @@ def dprime_from_rates(H, F):
     if np.any((H <= 0) | (H >= 1) | (F <= 0) | (F >= 1)):
         raise ValueError("rates of 0 or 1 need a correction: use dprime() with counts")
     return _out(z(H) - z(F))
+
+
+def dprime_2afc(k_correct, n, correction: str = "loglinear"):
+    """2AFC sensitivity ``d′ = √2 · z(P correct)`` from counts, and where the
+    correction applied: returns ``(d′, corrected)``.
+
+    ``"loglinear"`` corrects a proportion of 0 or 1 to ``(k + 0.5)/(n + 1)``,
+    ``"loglinear-all"`` every proportion, ``"1/(2N)"`` moves 0 and 1 by ``1/(2N)``.
+
+    >>> d, corrected = dprime_2afc(76, 100)            # 76 % correct
+    >>> round(float(d), 4), bool(corrected)
+    (0.9989, False)
+    >>> d, corrected = dprime_2afc(20, 20)             # perfect: (20.5 / 21)
+    >>> bool(np.isclose(d, np.sqrt(2) * z(20.5 / 21))), bool(corrected)
+    (True, True)
+    """
+    c = normalise_correction(correction)
+    k, n = _counts(k_correct, n)
+    k, n = np.broadcast_arrays(k, n)
+    ext = (k == 0) | (k == n)
+    if c == "loglinear-all":
+        corrected = np.ones(k.shape, bool)
+        p = (k + 0.5) / (n + 1.0)
+    elif c == "loglinear":
+        corrected = ext
+        p = np.where(ext, (k + 0.5) / (n + 1.0), k / n)
+    else:
+        corrected = ext
+        p = np.where(k == 0, 0.5 / n, np.where(k == n, 1.0 - 0.5 / n, k / n))
+    d = np.sqrt(2.0) * z(p)
+    return _out(d), (bool(corrected) if np.ndim(corrected) == 0 else corrected)

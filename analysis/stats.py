@@ -253,17 +253,26 @@ PSIGNIFIT_GRID = {"threshold": 30, "width": 25, "lambda": 12, "gamma": 15, "eta"
 PSIGNIFIT_MOVING = {"threshold": 10, "width": 10, "lambda": 5, "gamma": 5, "eta": 5}
 
 
-def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000) -> PsychometricFit:
-    """Bayesian fit with psignifit 4 (see module doc)."""
+def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-no") -> PsychometricFit:
+    """Bayesian fit with psignifit 4 (see module doc).  ``task="2afc"``: ``k`` counts
+    correct choices and psignifit's 2AFC experiment type fixes γ = ½ (x*: P = 0.75)."""
     import psignifit
     data = np.column_stack([x, k, n])
+    if task == "2afc":
+        kw = {"experiment_type": "2AFC"}
+        grid = {a: b for a, b in PSIGNIFIT_GRID.items() if a != "gamma"}
+        moving = {a: b for a, b in PSIGNIFIT_MOVING.items() if a != "gamma"}
+    else:
+        kw = {"experiment_type": "yes/no", "bounds": {"gamma": (0.0, 0.9)},
+              "priors": {"gamma": lambda v: np.ones_like(v)}}
+        grid, moving = dict(PSIGNIFIT_GRID), dict(PSIGNIFIT_MOVING)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = psignifit.psignifit(
-            data, experiment_type="yes/no", sigmoid="norm", verbose=False, debug=True,
-            bounds={"gamma": (0.0, 0.9)}, priors={"gamma": lambda v: np.ones_like(v)},
-            grid_steps=dict(PSIGNIFIT_GRID), steps_moving_bounds=dict(PSIGNIFIT_MOVING))
+        res = psignifit.psignifit(data, sigmoid="norm", verbose=False, debug=True, grid_steps=grid,
+                                  steps_moving_bounds=moving, **kw)
     note = "95 % credible interval (psignifit posterior)"
+    if task == "2afc":
+        note += "; 2AFC: γ = ½ fixed (psignifit experiment type 2AFC)"
     est = res.parameter_estimate_MAP
     if not (0 <= est["gamma"] <= 0.9 and 0 <= est["lambda"] <= 0.5 and est["width"] > 0
             and est["gamma"] + est["lambda"] < 1 and 0 <= est["eta"] < 1):
@@ -274,15 +283,17 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000) -> Psychom
     params = {"threshold": float(est["threshold"]), "width": float(est["width"]),
               "gamma": float(est["gamma"]), "lambda": float(est["lambda"]), "eta": float(est["eta"])}
     s = res.posterior_samples(n_samples, random_state=np.random.default_rng(seed))
-    xs = detection_threshold(s["threshold"], s["width"], s["gamma"], s["lambda"])
+    gam = s["gamma"] if "gamma" in s else np.full_like(s["threshold"], params["gamma"])
+    xs = detection_threshold(s["threshold"], s["width"], gam, s["lambda"])
     return _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note)
 
 
 def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
-                     seed=0) -> tuple[list[PsychometricFit], list[str]]:
+                     seed=0, task: str = "yes-no") -> tuple[list[PsychometricFit], list[str]]:
     """One :class:`PsychometricFit` per group (a group with fewer than two
     magnitudes, or one psignifit cannot fit, is skipped with a note), and notes.
-    ``method``: ``"psignifit"`` or ``"none"`` (no fits)."""
+    ``method``: ``"psignifit"`` or ``"none"`` (no fits).  ``task="2afc"``: the
+    answers are 2AFC (correct choices counted from column ``detected``), γ = ½."""
     method = method.lower()
     if method not in METHODS:
         hint = " (the own maximum-likelihood fit was removed: psignifit is the one fit)" \
@@ -292,13 +303,15 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
     fits, notes = [], []
     if method == "none":
         return fits, notes
+    if task == "2afc":
+        df = df.assign(incorrect=df["detected"])
     for g in group_order(df["group"].unique()):
         x, k, n = pooled_magnitudes(df[df["group"] == g])
         if len(x) < 2:
             notes.append(f"{g}: a single error magnitude, no psychometric function fitted")
             continue
         try:
-            fits.append(fit_psignifit(g, x, k, n, ci=ci, seed=seed))
+            fits.append(fit_psignifit(g, x, k, n, ci=ci, seed=seed, task=task))
         except Exception as e:  # noqa: BLE001 — a group psignifit cannot fit is a note, never a crash
             notes.append(f"{g}: psignifit failed ({type(e).__name__}: {e}); no psychometric function fitted")
     return fits, notes

@@ -37,6 +37,15 @@ def fmt_cell(rating: float, d: float, minus: str = "-") -> str:
     return f"{int(math.floor(rating + 0.5))} ({fmt_dprime(d, minus)})"
 
 
+def _cell(sub: pd.DataFrame, lv: float, minus: str) -> str:
+    """A cell of a group's rows (indexed by level): yes/no rating or, for a 2AFC row
+    (``task`` = ``2afc``), percent correct choices, then d′."""
+    r = sub.loc[lv]
+    if "task" in sub.columns and r["task"] == "2afc":
+        return fmt_cell(100.0 * r["p_correct"], r["dprime"], minus)
+    return fmt_cell(r["rating_pct"], r["dprime"], minus)
+
+
 def fmt_level(lv: float) -> str:
     return f"{lv:g} %".replace("-", "−")
 
@@ -60,8 +69,7 @@ def paper_layout(table: pd.DataFrame, minus: str = "-") -> pd.DataFrame:
         sub = table[table["group"] == g].set_index("level")
         row = {"group": g}
         for lv in levels:
-            row[fmt_level(lv)] = (fmt_cell(sub.loc[lv, "rating_pct"], sub.loc[lv, "dprime"], minus)
-                                  if lv in sub.index else "")
+            row[fmt_level(lv)] = _cell(sub, lv, minus) if lv in sub.index else ""
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -70,8 +78,7 @@ def _block_rows(table, levels, groups, minus):
     out = []
     for g in groups:
         sub = table[table["group"] == g].set_index("level")
-        out.append([g] + [fmt_cell(sub.loc[lv, "rating_pct"], sub.loc[lv, "dprime"], minus)
-                          if lv in sub.index else MISSING for lv in levels])
+        out.append([g] + [_cell(sub, lv, minus) if lv in sub.index else MISSING for lv in levels])
     return out
 
 

@@ -18,6 +18,12 @@ did-you-mean, every number is bounded, names, clips, references and levels are
 not repeated; every invalid field raises :class:`DesignError` naming the file,
 section and key and the value as written (levels in percent).
 
+A group's ``levels`` may be a dense grid ``{from, to, step}`` (at most 401 levels);
+``method = "quest+"`` makes it adaptive (the session picks each level with
+QUEST+; its settings are :class:`~flipstudy.stimuli.groupkeys.QuestSpec`), and
+``task = "2afc"`` (default ``[study] task``, itself "yes-no") shows each modified
+motion beside its original (see :mod:`flipstudy.stimuli.groupkeys`).
+
 Designs written before the ``[session]`` table held ``replay`` and
 ``break_every`` in ``[study]``; they are still read, the same way, with a
 ``FutureWarning`` that names the file and asks to move them to ``[session]``
@@ -33,23 +39,21 @@ SessionSettings(replay=False, break_every=40, max_dropped_pct=10.0, repeat_dropp
 from __future__ import annotations
 
 import difflib
-import math
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .exceptions import FlipstudyError
+from .exceptions import FlipstudyError  # noqa: F401  (re-exported)
+from ._designkeys import DesignError, _between, _check_keys, _get, _pct, _show  # noqa: F401
 
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+from .groupkeys import (GRID_MAX, LEVELS_MAX, METHODS, QUEST_KEYS, TASKS, QuestSpec,  # noqa: F401
+                        parse_levels, parse_method_task, parse_quest)
 from .injection import COM_POLICIES, KINDS, PROFILES
-
-
-class DesignError(FlipstudyError, ValueError):
-    """An invalid study design; the message names the file and field."""
 
 
 @dataclass
@@ -72,6 +76,20 @@ class Group:
     levels: list[float]         # nominal error in percent (magnitude; 0 = original)
     original: str = "own"       # "shared": its level 0 is the clip's shared original
     style: str | None = None    # character style of its stimuli (None: the study's)
+    method: str = "constant"    # "constant" stimuli | "quest+" (adaptive over the levels)
+    task: str = "yes-no"        # "yes-no" | "2afc" (original and modified, which was correct?)
+    quest: QuestSpec | None = None   # a quest+ group's settings
+
+    @property
+    def adaptive(self) -> bool:
+        """Does the session choose this group's levels (quest+)?"""
+        return self.method == "quest+"
+
+    def trial_levels(self) -> list[float]:
+        """The levels its trials show: level 0 is a 2AFC group's comparison, not a trial
+        level, and a shared original is shown as the group ``original``."""
+        return [v for v in self.levels
+                if v != 0 or (self.task == "yes-no" and (self.adaptive or self.original != "shared"))]
 
 
 @dataclass(frozen=True)
@@ -103,6 +121,7 @@ class Design:
     path: Path | None = None
     session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
     style: str | None = None          # character style of every stimulus (None: the renderer's)
+    task: str = "yes-no"              # [study] task: the groups' default task
 
     def style_of(self, group) -> str | None:
         """The character style of a group's stimuli (None: nothing chosen)."""
@@ -138,6 +157,21 @@ class Design:
 
     def n_test_stimuli(self) -> int:
         return len(self.stimulus_names()) - len(self.reference)
+
+    @property
+    def shows_shared_original(self) -> bool:
+        """Are the shared originals trials of their own (group ``original``)?  Only a
+        constant yes/no group that shares them asks about them on their own."""
+        return any(g.original == "shared" and 0.0 in g.levels and not g.adaptive
+                   and g.task == "yes-no" for g in self.groups)
+
+    def trials_per_participant(self) -> int:
+        """Test trials of one session: ``repetitions`` × clips × trial levels of each
+        constant group (and the shared originals), plus ``trials`` of each quest+ group."""
+        nc = len(self.clips)
+        n = sum(g.quest.trials if g.adaptive else self.repetitions * nc * len(g.trial_levels())
+                for g in self.groups)
+        return n + (self.repetitions * nc if self.shows_shared_original else 0)
 
 
 PAPER_DESIGN = """\
@@ -203,11 +237,12 @@ levels = [0, 10, 20, 30, 40]
 
 #: the keys each section may hold (anything else is refused with a did-you-mean)
 STUDY_KEYS = ("name", "seed", "fps", "repetitions", "total_mass", "com_policy", "tolerance_pct",
-              "original", "style")
+              "original", "style", "task")
 SESSION_KEYS = ("replay", "break_every", "max_dropped_pct", "repeat_dropped")
 OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
 CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
-GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original", "style")
+GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original", "style", "method", "task",
+              *QUEST_KEYS)
 #: the character styles a design may choose (drawn by flipstudy.render.characters)
 CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
@@ -226,62 +261,13 @@ MASS_RANGE = (20.0, 200.0)            # kg
 TOLERANCE_MAX = 50.0                  # percent; the lower bound 0 is excluded
 BREAK_EVERY_MAX = 10000
 SCALE_RANGE = (1e-4, 100.0)           # metres per file unit (mm is 0.001, m is 1)
-TRIALS_MAX = 3000                     # test trials per participant (repetitions × stimuli)
-LEVELS_MAX = 20                       # levels per group
+TRIALS_MAX = 3000                     # test trials per participant (repetitions × stimuli, quest+ trials)
 #: level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
 LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the original
                 ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
                 ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
                 ("takeoff-angle", -1): (100.0, True)}       # −100 % leaves no horizontal velocity
 MAX_DESIGN_BYTES = 1_000_000
-
-
-def _typename(typ) -> str:
-    names = {"str": "a string", "int": "a whole number", "float": "a number", "bool": "true or false",
-             "list": "an array", "dict": "a table"}
-    return names.get(typ.__name__, typ.__name__)
-
-
-def _get(d: dict, key: str, typ, where: str, default=..., check=None):
-    if key not in d:
-        if default is ...:
-            raise DesignError(f"{where}: missing field '{key}'")
-        return default
-    v = d[key]
-    if typ is float and isinstance(v, int) and not isinstance(v, bool):
-        v = float(v)
-    if not isinstance(v, typ) or isinstance(v, bool) and typ is not bool:
-        raise DesignError(f"{where}.{key}: expected {_typename(typ)}, got {_show(v)}")
-    if typ is float and not math.isfinite(v):
-        raise DesignError(f"{where}.{key}: expected a finite number, got {_show(v)}")
-    if check is not None:
-        msg = check(v)
-        if msg:
-            raise DesignError(f"{where}.{key}: {msg}, got {_show(v)}")
-    return v
-
-
-def _show(v) -> str:
-    """A value as the user wrote it in TOML (short)."""
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, float):
-        return "nan" if v != v else ("inf" if v > 0 else "-inf") if math.isinf(v) else repr(v)
-    if isinstance(v, str):
-        return repr(v if len(v) <= 60 else v[:57] + "...")
-    if isinstance(v, (list, dict)):
-        r = repr(v)
-        return r if len(r) <= 60 else r[:57] + "..."
-    return repr(v)
-
-
-def _pct(v) -> str:
-    """A level as written, in percent: 200, 17.5, inf."""
-    return _show(v) if isinstance(v, float) and not math.isfinite(v) else f"{v:g}"
-
-
-def _between(lo, hi, unit: str = ""):
-    return lambda v: None if lo <= v <= hi else f"expected {lo:g} to {hi:g}{unit}"
 
 
 def _style_ok(v: str):
@@ -291,16 +277,6 @@ def _style_ok(v: str):
     close = difflib.get_close_matches(v, CHARACTER_STYLES, n=1, cutoff=0.5)
     hint = f" (did you mean '{close[0]}'?)" if close else ""
     return f"unknown character style{hint}; expected one of {', '.join(CHARACTER_STYLES)}"
-
-
-def _check_keys(table: dict, allowed, where: str) -> None:
-    """Refuse keys a section does not know, suggesting the closest known one."""
-    for k in table:
-        if k in allowed:
-            continue
-        close = difflib.get_close_matches(str(k), allowed, n=1, cutoff=0.6)
-        hint = f"; did you mean '{close[0]}'?" if close else ""
-        raise DesignError(f"{where}: unknown key '{k}'{hint} (known keys: {', '.join(allowed)})")
 
 
 def parse_design(text: str, path: Path | str = "<design>") -> Design:
@@ -348,6 +324,8 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         path=Path(path) if str(path) != "<design>" else None,
         session=_parse_session(d, st, src),
         style=_get(st, "style", str, w, None, _style_ok),
+        task=_get(st, "task", str, w, "yes-no",
+                  lambda v: None if v in TASKS else f"must be one of {list(TASKS)}"),
     )
     clips = d.get("clips")
     if not isinstance(clips, list) or not clips:
@@ -401,28 +379,14 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         elif "profile" in g:
             raise DesignError(f"{wg}.profile: only angular-momentum groups have a profile")
         sign = _get(g, "sign", int, wg, 1, lambda v: None if v in (1, -1) else "must be 1 or -1")
-        levels = _get(g, "levels", list, wg)
-        if not levels:
-            raise DesignError(f"{wg}.levels: at least one level is needed")
-        if len(levels) > LEVELS_MAX:
-            raise DesignError(f"{wg}.levels: {len(levels)} levels; at most {LEVELS_MAX} per group")
         top, excluded = LEVEL_BOUNDS[(kind, sign)]
-        what = f"{'an increase' if sign > 0 else 'a decrease'} of the {kind.replace('-', ' ')}"
-        lv = []
-        for v in levels:
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                raise DesignError(f"{wg}.levels: each level is a number (percent), got {_show(v)}")
-            if not math.isfinite(v) or v < 0:
-                raise DesignError(f"{wg}.levels: {_pct(v)} %: each level is the size of the error in "
-                                  f"percent, 0 or more (the direction is the group's sign = {sign})")
-            if v > top or (excluded and v >= top):
-                limit = f"below {top:g} %" if excluded else f"at most {top:g} %"
-                why = " (it stops the rotation)" if kind == "angular-momentum" and sign < 0 else ""
-                raise DesignError(f"{wg}.levels: {_pct(v)} % is out of range: {what} must be "
-                                  f"{limit}{why}")
-            lv.append(float(v))
-        if len(set(lv)) != len(lv):
-            raise DesignError(f"{wg}.levels: duplicate levels in {levels}")
+        lv = parse_levels(g, wg, kind, sign, top, excluded)
+        method, task = parse_method_task(g, wg, design.task)
+        quest = parse_quest(g, wg, method, task, lv)
+        if task == "2afc" and (0.0 not in lv or len(lv) < 2):
+            raise DesignError(f"{wg}.levels: a 2afc group shows each level beside the original, so "
+                              f"its levels need 0 (the original) and at least one error level, got "
+                              f"{_show(g['levels'])}")
         default_orig = "shared" if design.original == "shared" and kind == "angular-momentum" else "own"
         orig = _get(g, "original", str, wg, default_orig,
                     lambda v: None if v in GROUP_ORIGINAL else f"must be one of {list(GROUP_ORIGINAL)}")
@@ -433,7 +397,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         if orig == "shared" and gstyle is not None and gstyle != (design.style or "ellipsoids"):
             raise DesignError(f"{wg}.style: a group drawn as {gstyle!r} cannot share the clip's "
                               f"original (drawn in the study's style); use original = \"own\"")
-        design.groups.append(Group(gname, kind, profile, sign, sorted(lv), orig, gstyle))
+        design.groups.append(Group(gname, kind, profile, sign, lv, orig, gstyle, method, task, quest))
     gnames = [g.name for g in design.groups]
     if len(set(gnames)) != len(gnames):
         raise DesignError(f"{src}: groups: duplicate group names "
@@ -454,7 +418,12 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         dup = sorted({s for s in stimuli if stimuli.count(s) > 1})
         raise DesignError(f"{src}: clip and group names give the same stimulus name twice ({dup[:3]}); "
                           f"rename a clip or group")
-    n_trials = design.repetitions * design.n_test_stimuli()
+    n_trials = design.trials_per_participant()
+    if any(g.adaptive or g.task != "yes-no" for g in design.groups) and n_trials > TRIALS_MAX:
+        parts = [f"{g.name}: {g.quest.trials if g.adaptive else design.repetitions * len(design.clips) * len(g.trial_levels())}"
+                 for g in design.groups]
+        raise DesignError(f"{src}: {n_trials} test trials per participant ({', '.join(parts)}); "
+                          f"at most {TRIALS_MAX} (fewer repetitions, clips, levels or quest+ trials)")
     if n_trials > TRIALS_MAX:
         raise DesignError(f"{src}: [study].repetitions = {design.repetitions} × {design.n_test_stimuli()} "
                           f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "

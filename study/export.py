@@ -20,6 +20,21 @@ answered, n_trials, simulated, complete.  ``dataset_description.json`` (Psych-DS
 :mod:`flipstudy.study.psychds`) beside them names the columns, the design, the
 stimuli's hashes and the software versions.
 
+A study with a quest+ or 2AFC group gets seven more columns at the end of
+``responses.csv``: ``method`` (constant / quest+), ``task`` (yes-no / 2afc),
+``first`` (what a 2AFC trial showed first: original / modified), and
+``original_stimulus`` (a 2AFC trial's comparison), and on quest+ rows
+``quest_threshold``, ``quest_ci_low``, ``quest_ci_high`` (the group's QUEST+
+posterior of the threshold x* after that answer: mean and 95 % interval, percent).
+``stimulus`` and ``level`` are what the trial showed (an adaptive trial's level is
+QUEST+'s choice).  Other studies' files keep the columns above, byte for byte.
+
+With simulated participants included, ``simulated_truth.csv`` beside them holds
+each simulated session's known observer parameters per group (participant,
+session, group, task, threshold, width, gamma, lapse: the psychometric function
+the simulated answers were drawn from, :mod:`flipstudy.study.simulate`), so an
+analysis can check that it recovers them.
+
 Simulated participants are left out of both files unless
 ``include_simulated=True`` (``flipstudy export --include-simulated``); when
 included, every one of their rows says ``simulated=true``.  Both files are
@@ -41,6 +56,10 @@ from . import store
 RESPONSE_COLUMNS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
                     "response", "rt_ms", "shown_ms", "timestamp", "clip", "kind", "late_frames",
                     "replays", "input", "simulated", "complete"]
+ADAPTIVE_COLUMNS = ["method", "task", "first", "original_stimulus", "quest_threshold",
+                    "quest_ci_low", "quest_ci_high"]
+TRUTH_FILE = "simulated_truth.csv"
+TRUTH_COLUMNS = ["participant", "session", "group", "task", "threshold", "width", "gamma", "lapse"]
 PARTICIPANT_COLUMNS = ["participant", "session", "source", "age", "gender", "animation_experience",
                        "gymnastics_experience", "started", "finished", "answered", "n_trials",
                        "simulated", "complete"]
@@ -66,6 +85,34 @@ def _fmt_response(r: dict) -> dict:
     out["rt_ms"] = f"{r['rt_ms']:.1f}"
     out["shown_ms"] = f"{r['shown_ms']:.1f}"
     out["simulated"], out["complete"] = _flag(r["simulated"]), _flag(r["complete"])
+    for k in ("quest_threshold", "quest_ci_low", "quest_ci_high"):
+        out[k] = "" if r.get(k) is None else f"{r[k]:.4f}"
+    return out
+
+
+def _adaptive_study(conn, study_dir: Path) -> bool:
+    """Has the study a quest+ or 2AFC group (its design) or trial (its database)?"""
+    design = study_dir / "design.toml"
+    if design.is_file():
+        from flipstudy.stimuli.design import load_design
+        try:
+            if any(g.adaptive or g.task != "yes-no" for g in load_design(design).groups):
+                return True
+        except Exception:                      # an unreadable design: the database says
+            pass
+    return conn.execute("SELECT 1 FROM trials WHERE method = 'quest+' OR task = '2afc' LIMIT 1"
+                        ).fetchone() is not None
+
+
+def truth_table(rows: list[dict]) -> list[dict]:
+    """The rows of ``simulated_truth.csv`` from :func:`flipstudy.study.store.truth_rows`."""
+    import json
+    out = []
+    for r in rows:
+        truth = json.loads(r["simulated_truth"])
+        for g, o in truth.get("groups", {}).items():
+            out.append({"participant": r["participant"], "session": r["session"], "group": g,
+                        **{k: o[k] for k in TRUTH_COLUMNS[3:]}})
     return out
 
 
@@ -100,8 +147,10 @@ def response_columns(styled: bool) -> list[str]:
 def export_responses(study_dir, out=None, *, participants_out=None,
                      include_simulated: bool = False) -> dict:
     """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``) and
-    ``participants.csv`` beside it.  Returns ``{"responses": path, "participants":
-    path, "rows": n, "sessions": m, "real": [IDs], "simulated": [IDs written],
+    ``participants.csv`` beside it (and ``simulated_truth.csv`` when simulated
+    sessions with known observers are included).  Returns ``{"responses": path,
+    "participants": path, "truth": path or None, "rows": n, "sessions": m, "real":
+    [IDs], "simulated": [IDs written],
     "simulated_left_out": [IDs], "incomplete": ["P07/1 (6/18)", ...]}``."""
     study_dir = Path(study_dir)
     out = Path(out) if out is not None else study_dir / "responses.csv"
@@ -112,10 +161,12 @@ def export_responses(study_dir, out=None, *, participants_out=None,
     try:
         rows = [_fmt_response(r) for r in store.response_rows(conn, include_simulated=include_simulated)]
         parts = store.participant_rows(conn, include_simulated=True)
+        adaptive = _adaptive_study(conn, study_dir)
+        truth = truth_table(store.truth_rows(conn)) if include_simulated else []
     finally:
         conn.close()
     styles = _manifest_styles(study_dir)
-    columns = response_columns(styles is not None)
+    columns = response_columns(styles is not None) + (ADAPTIVE_COLUMNS if adaptive else [])
     if styles is not None:
         for r in rows:
             r["style"] = styles.get(r["stimulus"], "")
@@ -125,9 +176,14 @@ def export_responses(study_dir, out=None, *, participants_out=None,
         p["simulated"], p["complete"] = _flag(p["simulated"]), _flag(p["complete"])
     atomic_write_text(out, _csv(columns, rows))
     atomic_write_text(pout, _csv(PARTICIPANT_COLUMNS, written))
+    tout = None
+    if truth:
+        tout = out.parent / TRUTH_FILE
+        atomic_write_text(tout, _csv(TRUTH_COLUMNS, truth))
     from .psychds import write_dataset_description      # Psych-DS metadata beside them
     write_dataset_description(out.parent, study_dir, columns, source="local sessions")
-    return {"responses": out, "participants": pout, "rows": len(rows), "sessions": len(written),
+    return {"responses": out, "participants": pout, "truth": tout, "rows": len(rows),
+            "sessions": len(written),
             "real": sorted({p["participant"] for p in written if p["simulated"] == "false"}),
             "simulated": sims if include_simulated else [],
             "simulated_left_out": [] if include_simulated else sims,

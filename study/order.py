@@ -12,7 +12,26 @@ groups' order shuffled again in every round.  The angular-momentum groups'
 shared originals (group ``original``, one per clip) form a group of their own
 whose few rows are placed in rounds drawn at random, so each original is shown
 ``repetitions`` times, not once per group.  A block never starts with the
-motion the previous one ended with.  The random generator is seeded
+motion the previous one ended with.
+
+Adaptive and two-alternative groups (issue 19):
+
+* A quest+ group has no fixed stimuli: it gets ``trials`` adaptive slots
+  (``method = "quest+"``, ``stimulus = ""``, ``level`` NaN; the session picks
+  the level when the trial is served, :meth:`flipstudy.study.session.Session.resolve`),
+  each with a clip (the group's clips in equal shares, shuffled).  The slots are
+  spread over the session among the constant trials: the constant trials keep
+  their order, and every sequence (the constant trials, each quest+ group's
+  slots) is placed at stratified random positions ``(k + u) / n`` and merged.
+* A 2AFC trial shows the modified motion and its original (``original``, the
+  comparison stimulus; level 0 is not a trial level of a 2AFC group).  Which comes
+  first (``first`` = ``"original"`` or ``"modified"``) is balanced within each
+  group: half of its trials each way (an odd one drawn), shuffled.
+* The shared originals are trials of their own only while a constant yes/no
+  group shares them (:attr:`flipstudy.stimuli.design.Design.shows_shared_original`).
+
+A design with only constant yes/no groups draws exactly the random numbers it
+drew before these were added, so its orders are unchanged.  The random generator is seeded
 from the design seed and the participant ID through SHA-256
 (:func:`participant_seed`), never Python's ``hash()``, so the same participant
 always gets the same order; the order is stored before the first trial anyway.
@@ -39,15 +58,27 @@ from __future__ import annotations
 from flipstudy.stimuli.exceptions import FlipstudyValueError
 
 import hashlib
+import math
 import random
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 REFERENCE_GROUP = "reference"
 
 
+METHODS = ("constant", "quest+")
+TASKS = ("yes-no", "2afc")
+FIRSTS = ("original", "modified")
+
+
 @dataclass(frozen=True)
 class Trial:
-    """One test trial: its 1-based position, the stimulus and its condition."""
+    """One test trial: its 1-based position, the stimulus and its condition.
+
+    ``method``: "constant" or "quest+" (an adaptive slot: ``stimulus`` "" and
+    ``level`` NaN until :meth:`~flipstudy.study.session.Session.resolve` fills
+    them); ``task``: "yes-no" or "2afc"; ``first``: what a 2AFC trial shows first
+    ("original" or "modified"; "" for yes/no); ``original``: a 2AFC trial's
+    comparison stimulus ("" for yes/no)."""
     trial: int
     stimulus: str
     clip: str
@@ -55,9 +86,31 @@ class Trial:
     kind: str
     level: float
     repetition: int
+    method: str = "constant"
+    task: str = "yes-no"
+    first: str = ""
+    original: str = ""
+
+    @property
+    def adaptive(self) -> bool:
+        """Is this a quest+ slot?"""
+        return self.method == "quest+"
+
+    @property
+    def resolved(self) -> bool:
+        """Is its stimulus known (a constant trial, or a slot :meth:`Session.resolve` filled)?"""
+        return bool(self.stimulus)
 
     def to_dict(self) -> dict:
-        return asdict(self)
+        """The trial as JSON-able data (an unresolved slot's NaN level is None).
+
+        >>> Trial(3, "", "backflip", "g", "angular-momentum", math.nan, 1, "quest+").to_dict()["level"] is None
+        True
+        """
+        d = asdict(self)
+        if not math.isfinite(d["level"]):
+            d["level"] = None
+        return d
 
 
 def participant_seed(design_seed: int, participant: str, session: int = 1) -> int:
@@ -83,17 +136,37 @@ def _level(row: dict) -> float:
 
 def group_stimuli(manifest: list[dict], design=None) -> dict[str, list[dict]]:
     """Non-reference manifest rows grouped by error group, groups in the design's
-    order (then any others in manifest order), rows in manifest order."""
+    order (then any others in manifest order), rows in manifest order.
+
+    With a ``design``, only the rows that are constant trials: no quest+ group
+    (the session picks its stimuli), no level 0 of a 2AFC group (its comparison),
+    and the shared originals only while a constant yes/no group shares them."""
     groups: dict[str, list[dict]] = {}
+    keep = None
     if design is not None:
         for g in design.groups:
             groups[g.name] = []
+        keep = _constant_row_rule(design)
     for row in manifest:
         g = row.get("group", "")
-        if g == REFERENCE_GROUP:
+        if g == REFERENCE_GROUP or (keep is not None and not keep(row)):
             continue
         groups.setdefault(g, []).append(row)
     return {g: rows for g, rows in groups.items() if rows}
+
+
+def _constant_row_rule(design):
+    from flipstudy.stimuli.design import SHARED_ORIGINAL_GROUP
+    by = {g.name: g for g in design.groups}
+    shared = getattr(design, "shows_shared_original", True)
+
+    def keep(row: dict) -> bool:
+        g = by.get(row.get("group", ""))
+        if g is None:
+            return shared or row.get("group") != SHARED_ORIGINAL_GROUP
+        return (not getattr(g, "adaptive", False)
+                and (getattr(g, "task", "yes-no") == "yes-no" or _level(row) != 0))
+    return keep
 
 
 def reference_stimuli(manifest: list[dict]) -> list[dict]:
@@ -103,23 +176,89 @@ def reference_stimuli(manifest: list[dict]) -> list[dict]:
 
 def trial_order(design, manifest: list[dict], participant: str, session: int = 1) -> list[Trial]:
     """The participant's trials: ``design.repetitions`` blocks, random within each
-    group, groups interleaved (see the module docstring)."""
+    group, groups interleaved, quest+ slots spread among them, 2AFC order balanced
+    (see the module docstring)."""
     groups = group_stimuli(manifest, design)
-    if not groups:
+    adaptive = [g for g in design.groups if getattr(g, "adaptive", False)]
+    if not groups and not adaptive:
         raise FlipstudyValueError("manifest.csv has no test stimuli (only reference rows)")
+    by = {g.name: g for g in design.groups}
     rng = random.Random(participant_seed(design.seed, participant, session))
     n_stimuli = sum(len(rows) for rows in groups.values())
     trials: list[Trial] = []
-    for rep in range(1, design.repetitions + 1):
+    for rep in range(1, design.repetitions + 1 if groups else 1):
         for _ in range(100):
             block = _block(groups, rng)
             # never the same motion twice in a row across a block boundary
             if not trials or n_stimuli == 1 or block[0][0]["stimulus"] != trials[-1].stimulus:
                 break
         for row, g in block:
+            task = getattr(by.get(g), "task", "yes-no")
             trials.append(Trial(len(trials) + 1, row["stimulus"], row.get("clip", ""), g,
-                                row.get("kind", ""), _level(row), rep))
-    return trials
+                                row.get("kind", ""), _level(row), rep, "constant", task, "",
+                                row.get("original", "") if task == "2afc" else ""))
+    if adaptive:
+        trials = _interleave(trials, [_slots(design, g, manifest, rng) for g in adaptive], rng)
+    if any(t.task == "2afc" for t in trials):
+        trials = balance_first(trials, rng.shuffle, rng.random)
+    return [replace(t, trial=i) for i, t in enumerate(trials, start=1)]
+
+
+def _slots(design, group, manifest: list[dict], rng: random.Random) -> list[Trial]:
+    """A quest+ group's ``trials`` slots: its clips in equal shares (the remainder
+    drawn), shuffled."""
+    clips = [c.name for c in design.clips]
+    T = group.quest.trials
+    order = clips * (T // len(clips)) + rng.sample(clips, T % len(clips))
+    rng.shuffle(order)
+    originals = {}
+    if group.task == "2afc":
+        for r in manifest:
+            if r.get("group") == group.name and r.get("original"):
+                originals.setdefault(r.get("clip", ""), r["original"])
+        missing = sorted(set(clips) - set(originals))
+        if missing:
+            raise FlipstudyValueError(f"manifest.csv: the 2afc group {group.name!r} has no original "
+                                      f"for clip(s) {missing}; rebuild the stimuli")
+    return [Trial(0, "", c, group.name, group.kind, math.nan, 1, "quest+", group.task, "",
+                  originals.get(c, "")) for c in order]
+
+
+def _interleave(constant: list[Trial], slots: list[list[Trial]], rng: random.Random) -> list[Trial]:
+    """Merge the sequences, each keeping its order, at stratified random positions."""
+    keyed = []
+    for s, seq in enumerate([constant] + slots):
+        n = len(seq)
+        keyed += [((k + rng.random()) / n, s, k, t) for k, t in enumerate(seq)]
+    keyed.sort(key=lambda x: x[:3])
+    return [t for *_, t in keyed]
+
+
+def balance_first(trials: list[Trial], shuffle, random01) -> list[Trial]:
+    """``trials`` with ``first`` set on every 2AFC trial: within each group half
+    "original", half "modified" (an odd one drawn with ``random01() < 0.5``), in
+    the order ``shuffle`` leaves them.  ``shuffle``/``random01`` come from the
+    order's generator (the web order passes its own).
+
+    >>> ts = [Trial(i, f"s{i}", "c", "g", "k", 10.0, 1, task="2afc") for i in range(1, 6)]
+    >>> out = balance_first(ts, random.Random(1).shuffle, random.Random(2).random)
+    >>> sorted(t.first for t in out).count("original") in (2, 3)
+    True
+    """
+    out = list(trials)
+    by_group: dict[str, list[int]] = {}
+    for i, t in enumerate(out):
+        if t.task == "2afc":
+            by_group.setdefault(t.group, []).append(i)
+    for idx in by_group.values():
+        n = len(idx)
+        firsts = ["original", "modified"] * (n // 2)
+        if n % 2:
+            firsts.append("original" if random01() < 0.5 else "modified")
+        shuffle(firsts)
+        for i, f in zip(idx, firsts):
+            out[i] = replace(out[i], first=f)
+    return out
 
 
 def _block(groups: dict[str, list[dict]], rng: random.Random) -> list[tuple[dict, str]]:

@@ -74,6 +74,16 @@ COLUMNS = {
     "finished": "when the session's last answer was stored",
     "answered": "answers given in the session",
     "n_trials": "trials of the session",
+    "method": "how the trial's level was chosen: constant (stimuli fixed in advance) or quest+ "
+              "(adaptive: QUEST+ picked the level from the participant's earlier answers)",
+    "task": "yes-no (one motion: correct or incorrect?) or 2afc (an original and a modified "
+            "motion: which was physically correct? response first or second)",
+    "first": "2afc: which motion was shown first (original or modified)",
+    "original_stimulus": "2afc: the original motion the modified one was shown with",
+    "quest_threshold": "quest+: posterior mean of the group's detection threshold x* after this "
+                       "answer (percent; P(x*) = (1 + guess rate)/2)",
+    "quest_ci_low": "quest+: lower end of the 95 % posterior interval of x* after this answer",
+    "quest_ci_high": "quest+: upper end of the 95 % posterior interval of x* after this answer",
 }
 
 

@@ -6,6 +6,9 @@ error is a JSON object ``{"error": "..."}`` with a 4xx status):
 ``GET  /``                  the page (``study/static/index.html``)
 ``GET  /static/<file>``     ``session.js``, ``session.css`` (a fixed list, read at start)
 ``GET  /api/session``       the timeline (:func:`flipstudy.study.timeline.build_timeline`)
+``GET  /api/trial/<n>``     trial ``n``'s filled screen (:func:`flipstudy.study.timeline.trial_screen`
+                            of ``session.resolve(n)``: an adaptive trial's level is chosen
+                            here); only the current trial (the first unanswered) is served
 ``POST /api/answer``        one trial's answer (:func:`flipstudy.study.session.submit_answer`)
 ``POST /api/demographics``  the demographics (:func:`flipstudy.study.session.submit_demographics`)
 ``GET  /stimuli/<name>.mp4`` a stimulus video: ``name`` must be a stimulus of the
@@ -56,7 +59,7 @@ from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
 from .session import Session, SessionError, load_study, open_session, submit_answer, submit_demographics
-from .timeline import build_timeline
+from .timeline import build_timeline, is_default, trial_screen
 from .validate import MAX_BODY, RequestError, parse_json_object
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
@@ -185,6 +188,27 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
 
+    tagged = not is_default(study.design)
+    replay = bool(study.design.session.replay)
+
+    def current_trial(n: int) -> dict:
+        nxt = session.state()["next_trial"]
+        if n != nxt:
+            raise RequestError(409, f"trial {n} is not the current trial (the current one is "
+                                    f"{nxt if nxt <= session.n_trials else 'none: the session is finished'})")
+        return trial_screen(session.resolve(n), session.n_trials, replay=replay, iti_ms=iti_ms,
+                            tagged=tagged)
+
+    async def api_trial(request: Request):
+        raw = request.path_params["n"]
+        if not raw.isdigit() or not 1 <= int(raw) <= session.n_trials:
+            return _error(404, f"no trial {raw[:20]!r} in this session (1 to {session.n_trials})")
+        try:
+            screen = await run_in_threadpool(current_trial, int(raw))
+        except RequestError as e:
+            return _error(e.status, e.message)
+        return JSONResponse(screen, headers={"Cache-Control": "no-store"})
+
     async def _submit(request: Request, submit):
         """(result, None) of ``submit(session, JSON body)``, or (None, the error response)."""
         try:
@@ -225,6 +249,7 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         Route("/", page, methods=["GET"]),
         Route("/static/{name}", static, methods=["GET"]),
         Route("/api/session", api_session, methods=["GET"]),
+        Route("/api/trial/{n}", api_trial, methods=["GET"]),
         Route("/api/answer", api_answer, methods=["POST"]),
         Route("/api/demographics", api_demographics, methods=["POST"]),
         Route("/stimuli/{name:path}", stimulus, methods=["GET"]),

@@ -5,6 +5,16 @@ the server's POST handlers call :func:`submit_answer` and
 :func:`submit_demographics`, and so do the simulated observers
 (:mod:`flipstudy.study.simulate`).
 
+Adaptive (quest+) trials are stored as slots; :meth:`Session.resolve` fills one
+with the level QUEST+ picks from the group's last stored state
+(:class:`flipstudy.analysis.adaptive.Quest`, rebuilt with ``Quest.from_json``, or
+a new one) and the stimulus of that level and the slot's clip.  Its answer must
+name that stimulus; it is stored with the group's QUEST+ state after it, in the
+same transaction, so a session killed at any moment resumes with exactly the
+same posterior and next level.  When a group's ``stop_width`` is reached its
+remaining slots are skipped.  A 2AFC answer is "first" or "second" (the motion
+judged physically correct); yes/no answers are "correct" or "incorrect".
+
 Example
 -------
 On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
@@ -17,7 +27,7 @@ On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
 >>> submit_answer(s, {"participant": "P01", "session": 1, "trial": 1,
 ...                   "stimulus": s.trials[0].stimulus, "response": "correct",
 ...                   "rt_ms": 812.0, "shown_ms": 2400.0, "late_frames": 0})
-{'status': 'stored', 'trial': 1, 'next_trial': 2, 'finished': False}
+{'status': 'stored', 'trial': 1, 'next_trial': 2, 'finished': False, 'next': {'trial': 2, ...}}
 >>> tmp.cleanup()
 """
 from __future__ import annotations
@@ -27,12 +37,12 @@ import hashlib
 import re
 import threading
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from . import store
 from .order import Trial, participant_seed, reference_stimuli, trial_order
-from .validate import RequestError, check_participant, parse_answer, parse_demographics
+from .validate import RequestError, check_participant, check_task_response, parse_answer, parse_demographics
 
 VIDEO_EXT = ".mp4"
 STIMULUS_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,200}")
@@ -65,6 +75,44 @@ class Study:
     def missing_videos(self) -> list[str]:
         return [r["stimulus"] for r in self.manifest if not self.video_path(r["stimulus"]).is_file()]
 
+    def group(self, name: str):
+        """The design's group ``name`` (None for the shared originals' pseudo-group)."""
+        return next((g for g in self.design.groups if g.name == name), None)
+
+    def quest_model(self, group: str):
+        """The QUEST+ model of a quest+ group (its levels, task and settings;
+        :func:`flipstudy.analysis.adaptive.quest_model`, cached there)."""
+        from dataclasses import asdict
+
+        from flipstudy.analysis.adaptive import QuestSettings, quest_model
+        g = self.group(group)
+        if g is None or not g.adaptive:
+            raise SessionError(f"group {group!r} is not a quest+ group of {self.dir / 'design.toml'}")
+        return quest_model(g.levels, g.task, QuestSettings(**asdict(g.quest)))
+
+    def stimulus_at(self, group: str, clip: str, level: float) -> str:
+        """The stimulus of ``group`` × ``clip`` × ``level`` (level 0 of a group that
+        shares the original: the clip's shared original)."""
+        key = (group, clip, round(float(level), 6))
+        if key not in self._levels:
+            raise SessionError(f"{self.dir / 'manifest.csv'}: no stimulus of group {group!r}, clip "
+                               f"{clip!r} at level {level:g} %; rebuild the stimuli")
+        return self._levels[key]
+
+    @property
+    def _levels(self) -> dict:
+        idx = self.__dict__.get("_level_index")
+        if idx is None:
+            idx = {}
+            for r in self.manifest:
+                if r.get("group") in ("reference", None):
+                    continue
+                idx[(r["group"], r.get("clip", ""), round(float(r["level"]), 6))] = r["stimulus"]
+                if r.get("original"):
+                    idx.setdefault((r["group"], r.get("clip", ""), 0.0), r["original"])
+            self.__dict__["_level_index"] = idx
+        return idx
+
 
 def load_study(study_dir) -> Study:
     """Read ``STUDY_DIR/design.toml`` and ``STUDY_DIR/manifest.csv``."""
@@ -91,7 +139,11 @@ def load_study(study_dir) -> Study:
         raise SessionError(f"{d / 'manifest.csv'}: stimulus {dup[0]!r} is listed more than once; "
                            f"rebuild the stimuli with `flipstudy stimuli`")
     n_tests = sum(1 for r in manifest if r.get("group") != "reference")
-    if n_tests * design.repetitions > TRIALS_MAX:
+    if any(g.adaptive or g.task != "yes-no" for g in design.groups):
+        n = design.trials_per_participant()
+        if n > TRIALS_MAX:
+            raise SessionError(f"{d / 'design.toml'}: {n} trials per participant; at most {TRIALS_MAX}")
+    elif n_tests * design.repetitions > TRIALS_MAX:
         raise SessionError(f"{d / 'manifest.csv'}: {n_tests} test stimuli × repetitions = "
                            f"{design.repetitions} is {n_tests * design.repetitions} trials per "
                            f"participant; at most {TRIALS_MAX}")
@@ -130,13 +182,58 @@ class Session:
                 self._conn = None
 
     def state(self) -> dict:
-        """``answered`` (count), ``next_trial`` (1-based; ``n_trials + 1`` when
-        done), ``finished`` and ``demographics`` (stored or not)."""
+        """``answered`` (count), ``next_trial`` (1-based: the first trial neither
+        answered nor skipped, see :meth:`skipped`; ``n_trials + 1`` when done),
+        ``finished`` and ``demographics`` (stored or not)."""
         with self.db() as conn:
             n = store.count_answers(conn, self.participant, self.session)
+            nxt = store.next_open_trial(conn, self.participant, self.session)
             demo = store.has_demographics(conn, self.participant, self.session)
-        return {"answered": n, "next_trial": n + 1, "finished": n >= self.n_trials,
+        return {"answered": n, "next_trial": nxt or self.n_trials + 1, "finished": nxt is None,
                 "demographics": demo}
+
+    def skipped(self) -> list[int]:
+        """The quest+ slots left out because their group stopped early (``stop_width``);
+        ``next_trial`` jumps over them."""
+        with self.db() as conn:
+            return store.skipped_trials(conn, self.participant, self.session)
+
+    def trial(self, trial_no: int) -> Trial:
+        """The stored trial ``trial_no`` (1-based; an adaptive slot unresolved)."""
+        if isinstance(trial_no, bool) or not isinstance(trial_no, int) or not 1 <= trial_no <= self.n_trials:
+            raise SessionError(f"trial {trial_no!r}: this session has trials 1 to {self.n_trials}")
+        return self.trials[trial_no - 1]
+
+    def resolve(self, trial_no: int) -> Trial:
+        """The trial as it is shown: a constant trial as stored; an adaptive slot
+        with the stimulus and level it showed (answered) or that QUEST+ picks now
+        from the group's stored answers (the current trial's; a later slot's
+        level may still change with the answers before it)."""
+        t = self.trial(trial_no)
+        if not t.adaptive:
+            return t
+        with self.db() as conn:
+            row = conn.execute("SELECT shown_stimulus, shown_level FROM responses WHERE "
+                               "participant=? AND session=? AND trial=?",
+                               (self.participant, self.session, t.trial)).fetchone()
+            if row is not None and row["shown_stimulus"]:
+                return replace(t, stimulus=row["shown_stimulus"], level=float(row["shown_level"]))
+            return self._pick(self.quest(t.group, conn), t)
+
+    def quest(self, group: str, conn=None):
+        """The group's QUEST+ run after its stored answers (``Quest.from_json`` of
+        the last stored state, or a new run)."""
+        from flipstudy.analysis.adaptive import Quest
+        model = self.study.quest_model(group)
+        if conn is None:
+            with self.db() as c:
+                return self.quest(group, c)
+        state = store.last_quest_state(conn, self.participant, self.session, group)
+        return Quest.from_json(model, state) if state else Quest.new(model)
+
+    def _pick(self, quest, t: Trial) -> Trial:
+        level = quest.next_level()
+        return replace(t, stimulus=self.study.stimulus_at(t.group, t.clip, level), level=level)
 
 
 def open_session(study: Study, participant: str, *, new_session: bool = False,
@@ -173,12 +270,19 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
                     f"that differ now; restore the stimuli it was started with, or start a new "
                     f"session with --new-session")
             trials = store.load_trials(conn, participant, s)
-            missing = [t.stimulus for t in trials if t.stimulus not in study.by_name]
+            missing = [x for t in trials for x in (t.stimulus, t.original)
+                       if x and x not in study.by_name]
             if missing:
                 raise SessionError(f"session {s} of {participant} names stimuli not in the "
                                    f"manifest: {missing[:3]}")
-            return Session(study, participant, s, source, trials, resumed=True)
+            resumed = Session(study, participant, s, source, trials, resumed=True)
+            _check_quest_states(resumed, conn)
+            return resumed
         s = 1 if last is None else last["session"] + 1
+        if any(g.task == "2afc" for g in study.design.groups) and not store.accepts_2afc(conn):
+            raise SessionError(f"{store.db_path(study.dir)} was made by an older flipstudy (schema "
+                               f"1): it accepts only correct/incorrect answers, not a 2AFC group's "
+                               f"first/second; run this design in a new study folder")
         trials = trial_order(study.design, study.manifest, participant, s)
         seed = participant_seed(study.design.seed, participant, s)
         if not dry_run:
@@ -199,27 +303,75 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         conn.close()
 
 
+def _check_quest_states(session: Session, conn) -> None:
+    """A resumed session's stored QUEST+ states must belong to its groups' models
+    now (the design's quest+ keys or levels unchanged)."""
+    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    for g in sorted({t.group for t in session.trials if t.adaptive}):
+        try:
+            session.quest(g, conn)
+        except (FlipstudyValueError, SessionError) as e:
+            raise SessionError(
+                f"participant {session.participant}, session {session.session}: the stored QUEST+ "
+                f"state of group {g!r} does not fit {session.study.dir / 'design.toml'} now ({e}); "
+                f"restore the design the session started with, or start a new session with "
+                f"--new-session") from None
+
+
 def submit_answer(session: Session, payload: dict, *, timestamp: str | None = None) -> dict:
     """Validate and store one answer: the path of every answer (page and simulation).
 
-    Returns ``{"status": "stored"|"duplicate", "trial", "next_trial", "finished"}``;
-    raises :class:`RequestError` (400 malformed, 403 wrong participant/session,
-    409 not the current trial or a conflicting second answer)."""
+    Returns ``{"status": "stored"|"duplicate", "trial", "next_trial", "finished",
+    "next"}`` (``next``: :meth:`Session.resolve` of ``next_trial`` as a dict, None
+    when finished); raises :class:`RequestError` (400 malformed or a response
+    that does not fit the trial's task, 403 wrong participant/session, 409 not the
+    current trial, a conflicting second answer, or not the stimulus the trial
+    shows: an adaptive trial's is :meth:`Session.resolve`'s)."""
     if not isinstance(payload, dict):
         raise RequestError(400, "an answer must be a JSON object")
     ans = parse_answer(payload, participant=session.participant, session=session.session,
                        n_trials=session.n_trials, replay_allowed=bool(session.study.design.session.replay))
     if (ans["input"] == "simulated") != (session.source == "simulated"):
         raise RequestError(400, f"input: {ans['input']!r} does not fit a {session.source} session")
+    t = session.trials[ans["trial"] - 1]
+    check_task_response(t.task, ans["response"])
+
+    def adaptive(conn, row) -> dict:
+        quest = session.quest(t.group, conn)          # read inside the answer's transaction
+        shown = session._pick(quest, t)
+        if ans["stimulus"] != shown.stimulus:
+            raise store.Conflict(f"trial {t.trial} shows {shown.stimulus!r} (level {shown.level:g} %, "
+                                 f"chosen by QUEST+), not {ans['stimulus']!r}")
+        quest.update(shown.level, detected(t, ans["response"]))
+        th = quest.threshold()
+        skip = [x.trial for x in session.trials if x.group == t.group and x.trial > t.trial] \
+            if quest.finished() else []
+        return {"shown_stimulus": shown.stimulus, "shown_level": shown.level,
+                "quest_state": quest.to_json(), "quest_threshold": th["threshold"],
+                "quest_ci_low": th["ci_low"], "quest_ci_high": th["ci_high"], "skip": skip}
+
     with session.db() as conn:
         try:
             status = store.insert_answer(conn, session.participant, session.session,
-                                         session.n_trials, ans, timestamp)
+                                         session.n_trials, ans, timestamp, adaptive=adaptive)
         except store.Conflict as e:
             raise RequestError(409, str(e)) from None
-        n = store.count_answers(conn, session.participant, session.session)
-    return {"status": status, "trial": ans["trial"], "next_trial": n + 1,
-            "finished": n >= session.n_trials}
+        nxt = store.next_open_trial(conn, session.participant, session.session)
+    return {"status": status, "trial": ans["trial"], "next_trial": nxt or session.n_trials + 1,
+            "finished": nxt is None, "next": session.resolve(nxt).to_dict() if nxt else None}
+
+
+def detected(trial: Trial, response: str) -> bool:
+    """The psychometric outcome of an answer: yes/no "incorrect" (an error seen);
+    2AFC the original chosen as the physically correct motion.
+
+    >>> t = Trial(1, "s", "c", "g", "k", 10.0, 1, task="2afc", first="modified")
+    >>> detected(t, "second"), detected(t, "first")
+    (True, False)
+    """
+    if trial.task == "2afc":
+        return (response == "first") == (trial.first == "original")
+    return response == "incorrect"
 
 
 def submit_demographics(session: Session, payload: dict) -> dict:

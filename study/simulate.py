@@ -24,6 +24,22 @@ Model file (TOML)::
     levels    = [0, 17, 25, 37, 50]
     p_correct = [0.72, 0.71, 0.72, 0.56, 0.41]  # probabilities (or percentages > 1)
 
+Studies with a quest+ or a 2AFC group (or ``population=...``) are answered by
+observers with known psychometric functions instead
+(:class:`flipstudy.analysis.adaptive.Observer`, the analysis's curve): each
+simulated participant gets one observer per group, drawn from a population
+(:func:`flipstudy.analysis.adaptive.population`; x* normal, width log-uniform,
+base rate uniform, fixed lapse: :data:`DEFAULT_POPULATION`), with one base rate γ
+per participant for all their yes/no groups (the shared originals are judged
+with it).  A yes/no trial is answered "incorrect" with the observer's
+P(detected) at the level shown, a 2AFC trial picks the original as the correct
+one with that probability.  Adaptive trials are resolved
+(:meth:`flipstudy.study.session.Session.resolve`) and answered like any other;
+constant and adaptive groups of one participant share nothing but γ.  The
+observers' parameters (the truth an analysis should recover) are stored with
+the session (``sessions.simulated_truth``, JSON) and exported as
+``simulated_truth.csv`` (:func:`flipstudy.study.export.export_responses`).
+
 Simulated participants are ``sim001``, ``sim002``, …; each one's random
 numbers come from SHA-256 of the seed and the ID, so the answers do not depend
 on how many others are simulated.  Every answer goes as JSON bytes through the
@@ -64,6 +80,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from flipstudy.analysis.simulate import PAPER_TABLE2
 
+from . import store
 from .session import SessionError, load_study, open_session, submit_answer, submit_demographics
 from .validate import DEMOGRAPHIC_FIELDS, PREFER_NOT, parse_json_object
 
@@ -220,28 +237,86 @@ def _post(fn, session, obj: dict) -> dict:
     return fn(session, parse_json_object(json.dumps(obj).encode()))
 
 
+#: the population of simulated observers (keywords of flipstudy.analysis.adaptive.population):
+#: x* ~ N(25, 8) % within 3..57 %, width log-uniform 8..40 %, γ uniform 0.05..0.45, λ = 0.02
+DEFAULT_POPULATION = {"threshold": (25.0, 8.0), "width": (8.0, 40.0), "gamma": (0.05, 0.45),
+                      "lapse": 0.02, "bounds": (3.0, 57.0)}
+
+
+def needs_observers(design) -> bool:
+    """Does the design have a quest+ or 2AFC group (answered by :func:`draw_observers`)?"""
+    return any(g.adaptive or g.task == "2afc" for g in design.groups)
+
+
+def draw_observers(design, rng: np.random.Generator, population: dict | None = None) -> dict:
+    """One simulated participant's observers: ``{group: Observer}`` (the shared
+    originals' pseudo-group judged by the participant's yes/no observer), one γ
+    for all yes/no groups."""
+    from dataclasses import replace
+
+    from flipstudy.analysis.adaptive import population as draw
+    from flipstudy.stimuli.design import SHARED_ORIGINAL_GROUP
+    pop = {**DEFAULT_POPULATION, **(population or {})}
+    out, gamma = {}, None
+    for g in design.groups:
+        (o,) = draw(1, rng, g.task, **pop)
+        if g.task == "yes-no":
+            gamma = o.gamma if gamma is None else gamma
+            o = replace(o, gamma=gamma)
+        out[g.name] = o
+    sharing = [g.name for g in design.groups if g.task == "yes-no" and g.original == "shared"]
+    if sharing:
+        out[SHARED_ORIGINAL_GROUP] = out[sharing[0]]
+    return out
+
+
+def truth_json(observers: dict) -> str:
+    """The observers' parameters as stored in ``sessions.simulated_truth``."""
+    from flipstudy.stimuli.design import SHARED_ORIGINAL_GROUP
+    groups = {g: {"task": o.task, "threshold": o.threshold, "width": o.width, "gamma": o.gamma,
+                  "lapse": o.lapse} for g, o in observers.items() if g != SHARED_ORIGINAL_GROUP}
+    return json.dumps({"model": "observers", "groups": groups}, sort_keys=True)
+
+
+def _observer_response(o, t, u: float) -> str:
+    """The answer of observer ``o`` to the resolved trial ``t`` for a uniform draw ``u``."""
+    seen = u < float(o.p_detect(t.level))
+    if t.task == "2afc":                    # seen: the original picked as the correct one
+        return "first" if seen == (t.first == "original") else "second"
+    return "incorrect" if seen else "correct"
+
+
 def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None, seed: int = 0,
-             progress=None) -> list[str]:
+             progress=None, population: dict | None = None) -> list[str]:
     """Simulate ``n`` participants (``sim001``…) answering every trial of the study.
 
     ``model`` is an :class:`ObserverModel`, a TOML file, or None (the paper's
-    Table 2).  Unfinished simulated participants are resumed; finished ones are
+    Table 2; for a study with quest+ or 2AFC groups: observers drawn from
+    ``population``, see the module docstring; ``population`` given: observers in
+    any study).  Unfinished simulated participants are resumed; finished ones are
     left as they are (their answers would be the same).  Returns the IDs.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1 or n > 9999:
         raise FlipstudyValueError(f"--participants: expected 1 to 9999, got {n!r}")
+    study = load_study(study_dir)
+    observers = population is not None or (model is None and needs_observers(study.design))
+    if observers and model is not None:
+        raise FlipstudyValueError("simulate: pass an observer model or a population, not both")
+    if not observers and any(g.task == "2afc" for g in study.design.groups):
+        raise ModelError("an observer model (ratings of yes/no answers) cannot answer the 2afc "
+                         "groups; simulate them with observers (no --model)")
     if model is None:
         model = DEFAULT_MODEL
     elif not isinstance(model, ObserverModel):
         model = load_model(model)
-    study = load_study(study_dir)
     rows = study.by_name
-    model = _with_shared_original(model, study.manifest)
-    groups = {r["group"] for r in study.manifest if r["group"] != "reference"}
-    for g in sorted(groups):                   # fail before anything is stored
-        for r in study.manifest:
-            if r["group"] == g:
-                model.p_correct(g, float(r["level"]))
+    if not observers:
+        model = _with_shared_original(model, study.manifest)
+        groups = {r["group"] for r in study.manifest if r["group"] != "reference"}
+        for g in sorted(groups):                   # fail before anything is stored
+            for r in study.manifest:
+                if r["group"] == g:
+                    model.p_correct(g, float(r["level"]))
     ids = sim_ids(n)
     for pid in ids:
         try:
@@ -269,10 +344,19 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
         rt = np.exp(rng.normal(np.log(1100.0), 0.4, T))
         jitter = rng.normal(0.0, 8.0, T)
         late = rng.poisson(0.3, T)
+        if observers:
+            obs = draw_observers(study.design, rng, population)
+            with session.db() as conn:
+                store.set_simulated_truth(conn, pid, session.session, truth_json(obs))
+        nxt = state["next_trial"]
         for t, ui, rti, ji, li in zip(session.trials, u, rt, jitter, late):
-            if t.trial < state["next_trial"]:
+            if t.trial != nxt:                 # answered, or a skipped quest+ slot
                 continue
-            p = model.probability(t.group, t.level, shift)
+            t = session.resolve(t.trial)
+            if observers:
+                response = _observer_response(obs[t.group], t, float(ui))
+            else:
+                response = "correct" if ui < model.probability(t.group, t.level, shift) else "incorrect"
             row = rows[t.stimulus]
             try:
                 dur = 1000.0 * float(row.get("frames", "nan")) / float(row.get("fps", "nan"))
@@ -280,12 +364,12 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
                 dur = float("nan")
             if not math.isfinite(dur) or dur <= 0:
                 dur = 2000.0
-            _post(submit_answer, session, {
+            nxt = _post(submit_answer, session, {
                 "participant": pid, "session": session.session, "trial": t.trial,
-                "stimulus": t.stimulus, "response": "correct" if ui < p else "incorrect",
+                "stimulus": t.stimulus, "response": response,
                 "rt_ms": round(float(min(max(rti, 150.0), 20000.0)), 1),
                 "shown_ms": round(max(dur + float(ji), 0.0), 1),
-                "late_frames": int(li), "replays": 0, "input": "simulated"})
+                "late_frames": int(li), "replays": 0, "input": "simulated"})["next_trial"]
         session.close()
         if progress is not None:
             progress(pid, session)

@@ -5,15 +5,20 @@ answer is acknowledged), foreign keys on.  Every write is one ``BEGIN
 IMMEDIATE … COMMIT`` transaction, so a killed server (even ``kill -9``) leaves
 either the whole answer or none of it.
 
-Schema (version 1, also in ``PRAGMA user_version``)::
+Schema (version 2, also in ``PRAGMA user_version``)::
 
     meta(key PRIMARY KEY, value)                      schema_version
     sessions(participant, session, source, seed, manifest_sha256, n_trials,
-             started, finished)                       PRIMARY KEY (participant, session)
+             started, finished,
+             simulated_truth)                         PRIMARY KEY (participant, session)
     trials(participant, session, trial, stimulus, clip, group_name, kind,
-           level, repetition)                         PRIMARY KEY (participant, session, trial)
+           level, repetition,
+           method, task, first, original, skipped)    PRIMARY KEY (participant, session, trial)
     responses(participant, session, trial, response, rt_ms, shown_ms,
-              late_frames, replays, input, timestamp) PRIMARY KEY (participant, session, trial)
+              late_frames, replays, input, timestamp,
+              shown_stimulus, shown_level, quest_state,
+              quest_threshold, quest_ci_low, quest_ci_high)
+                                                      PRIMARY KEY (participant, session, trial)
     demographics(participant, session, age, gender, animation_experience,
                  gymnastics_experience, timestamp)    PRIMARY KEY (participant, session)
 
@@ -21,6 +26,21 @@ The trial order is written (``trials``) in the same transaction that creates
 the session, before the first trial is served.  The responses' primary key makes
 a second answer to the same trial impossible.  Timestamps are ISO 8601 UTC with
 milliseconds (``2026-01-05T10:00:00.123Z``).
+
+Version 2 (adaptive and 2AFC groups) added the nullable columns after each line
+break: a trial's ``method`` (constant / quest+), ``task`` (yes-no / 2afc),
+``first`` (what a 2AFC trial shows first), ``original`` (its comparison) and
+``skipped`` (1: a quest+ slot left out, its group stopped early); an answer's
+``shown_stimulus``/``shown_level`` (what an adaptive slot showed; the slot is
+stored with stimulus ``""`` and level :data:`SLOT_LEVEL`), ``quest_state`` (the
+group's QUEST+ state after it, JSON) and the threshold's posterior mean and 95 %
+interval then; a simulated session's ``simulated_truth`` (JSON).  NULL reads as
+version 1 did (constant, yes-no, not skipped).  New databases also accept the
+2AFC responses "first" and "second".  A version-1 database is migrated when
+opened: the columns are added (``ALTER TABLE … ADD COLUMN``) in one transaction
+that also sets the version; its rows stay as they were.  SQLite cannot widen its
+responses CHECK in place, so a migrated database takes no 2AFC answers
+(:func:`accepts_2afc`): a 2AFC study needs a new study folder.
 """
 from __future__ import annotations
 
@@ -34,7 +54,9 @@ from pathlib import Path
 from .order import Trial
 
 DB_NAME = "sessions.sqlite"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: the stored level of an adaptive slot before it is shown (what it showed is in responses)
+SLOT_LEVEL = -1.0
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (
@@ -50,6 +72,7 @@ CREATE TABLE IF NOT EXISTS sessions (
     n_trials        INTEGER NOT NULL CHECK (n_trials >= 1),
     started         TEXT    NOT NULL,
     finished        TEXT,
+    simulated_truth TEXT,
     PRIMARY KEY (participant, session)
 );
 CREATE TABLE IF NOT EXISTS trials (
@@ -62,6 +85,11 @@ CREATE TABLE IF NOT EXISTS trials (
     kind        TEXT    NOT NULL,
     level       REAL    NOT NULL,
     repetition  INTEGER NOT NULL CHECK (repetition >= 1),
+    method      TEXT,
+    task        TEXT,
+    first       TEXT,
+    original    TEXT,
+    skipped     INTEGER,
     PRIMARY KEY (participant, session, trial),
     FOREIGN KEY (participant, session) REFERENCES sessions (participant, session)
 );
@@ -69,13 +97,19 @@ CREATE TABLE IF NOT EXISTS responses (
     participant TEXT    NOT NULL,
     session     INTEGER NOT NULL,
     trial       INTEGER NOT NULL,
-    response    TEXT    NOT NULL CHECK (response IN ('correct', 'incorrect')),
+    response    TEXT    NOT NULL CHECK (response IN ('correct', 'incorrect', 'first', 'second')),
     rt_ms       REAL    NOT NULL CHECK (rt_ms >= 0),
     shown_ms    REAL    NOT NULL CHECK (shown_ms >= 0),
     late_frames INTEGER NOT NULL CHECK (late_frames >= 0),
     replays     INTEGER NOT NULL DEFAULT 0 CHECK (replays >= 0),
     input       TEXT    NOT NULL,
     timestamp   TEXT    NOT NULL,
+    shown_stimulus  TEXT,
+    shown_level     REAL,
+    quest_state     TEXT,
+    quest_threshold REAL,
+    quest_ci_low    REAL,
+    quest_ci_high   REAL,
     PRIMARY KEY (participant, session, trial),
     FOREIGN KEY (participant, session, trial) REFERENCES trials (participant, session, trial)
 );
@@ -91,6 +125,22 @@ CREATE TABLE IF NOT EXISTS demographics (
     FOREIGN KEY (participant, session) REFERENCES sessions (participant, session)
 );
 """
+
+#: version 1 → 2: nullable columns only (the rows stay as they are)
+MIGRATE_1_TO_2 = [
+    "ALTER TABLE sessions ADD COLUMN simulated_truth TEXT",
+    "ALTER TABLE trials ADD COLUMN method TEXT",
+    "ALTER TABLE trials ADD COLUMN task TEXT",
+    "ALTER TABLE trials ADD COLUMN first TEXT",
+    "ALTER TABLE trials ADD COLUMN original TEXT",
+    "ALTER TABLE trials ADD COLUMN skipped INTEGER",
+    "ALTER TABLE responses ADD COLUMN shown_stimulus TEXT",
+    "ALTER TABLE responses ADD COLUMN shown_level REAL",
+    "ALTER TABLE responses ADD COLUMN quest_state TEXT",
+    "ALTER TABLE responses ADD COLUMN quest_threshold REAL",
+    "ALTER TABLE responses ADD COLUMN quest_ci_low REAL",
+    "ALTER TABLE responses ADD COLUMN quest_ci_high REAL",
+]
 
 
 class Conflict(Exception):
@@ -129,9 +179,17 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
                     conn.execute("INSERT OR REPLACE INTO meta VALUES ('schema_version', ?)",
                                  (str(SCHEMA_VERSION),))
                     conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+        elif version == 1:
+            with transaction(conn):
+                if conn.execute("PRAGMA user_version").fetchone()[0] == 1:   # not raced
+                    for stmt in MIGRATE_1_TO_2:
+                        conn.execute(stmt)
+                    conn.execute("INSERT OR REPLACE INTO meta VALUES ('schema_version', ?)",
+                                 (str(SCHEMA_VERSION),))
+                    conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
         elif version != SCHEMA_VERSION:
-            raise FlipstudyStateError(f"{path}: schema version {version}; this flipstudy reads version "
-                               f"{SCHEMA_VERSION}")
+            raise FlipstudyStateError(f"{path}: schema version {version}; this flipstudy reads versions "
+                               f"1 and {SCHEMA_VERSION}")
     except BaseException:
         conn.close()
         raise
@@ -194,16 +252,81 @@ def create_session(conn, participant: str, session: int, source: str, seed: int,
 
 def _insert_trials(conn, participant: str, session: int, trials: list[Trial]) -> None:
     conn.executemany(
-        "INSERT INTO trials VALUES (?,?,?,?,?,?,?,?,?)",
-        [(participant, session, t.trial, t.stimulus, t.clip, t.group, t.kind, t.level,
-          t.repetition) for t in trials])
+        "INSERT INTO trials (participant, session, trial, stimulus, clip, group_name, kind, level, "
+        "repetition, method, task, first, original) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+        [(participant, session, t.trial, t.stimulus, t.clip, t.group, t.kind,
+          SLOT_LEVEL if t.adaptive else t.level, t.repetition, t.method, t.task, t.first,
+          t.original) for t in trials])
 
 
 def load_trials(conn, participant: str, session: int) -> list[Trial]:
+    """The stored trial order (an adaptive slot's level is NaN; NULLs of a version-1
+    row read as constant, yes-no)."""
     rows = conn.execute("SELECT * FROM trials WHERE participant=? AND session=? ORDER BY trial",
                         (participant, session)).fetchall()
-    return [Trial(r["trial"], r["stimulus"], r["clip"], r["group_name"], r["kind"], r["level"],
-                  r["repetition"]) for r in rows]
+    out = []
+    for r in rows:
+        method = r["method"] or "constant"
+        out.append(Trial(r["trial"], r["stimulus"], r["clip"], r["group_name"], r["kind"],
+                         float("nan") if method == "quest+" else r["level"], r["repetition"],
+                         method, r["task"] or "yes-no", r["first"] or "", r["original"] or ""))
+    return out
+
+
+def accepts_2afc(conn) -> bool:
+    """Does the responses table accept "first"/"second" (a database created at
+    version 2; a migrated version-1 one keeps its CHECK)?"""
+    sql = conn.execute("SELECT sql FROM sqlite_master WHERE type='table' AND name='responses'"
+                       ).fetchone()[0]
+    return "'second'" in sql
+
+
+def next_open_trial(conn, participant: str, session: int) -> int | None:
+    """The current trial: the first one neither answered nor skipped (None: done)."""
+    return conn.execute("""
+        SELECT MIN(t.trial) FROM trials t
+        WHERE t.participant=? AND t.session=? AND COALESCE(t.skipped, 0) = 0
+          AND NOT EXISTS (SELECT 1 FROM responses r WHERE r.participant = t.participant
+                          AND r.session = t.session AND r.trial = t.trial)""",
+                        (participant, session)).fetchone()[0]
+
+
+def skipped_trials(conn, participant: str, session: int) -> list[int]:
+    """The session's skipped quest+ slots (their group stopped early)."""
+    return [r[0] for r in conn.execute(
+        "SELECT trial FROM trials WHERE participant=? AND session=? AND skipped=1 ORDER BY trial",
+        (participant, session))]
+
+
+def last_quest_state(conn, participant: str, session: int, group: str) -> str | None:
+    """The QUEST+ state stored with the group's latest answer (None: no answer yet)."""
+    row = conn.execute("""
+        SELECT r.quest_state FROM responses r JOIN trials t
+             ON t.participant = r.participant AND t.session = r.session AND t.trial = r.trial
+        WHERE r.participant=? AND r.session=? AND t.group_name=? AND r.quest_state IS NOT NULL
+        ORDER BY r.trial DESC LIMIT 1""", (participant, session, group)).fetchone()
+    return None if row is None else row[0]
+
+
+def set_simulated_truth(conn, participant: str, session: int, truth_json: str) -> None:
+    """Record a simulated session's observer parameters (JSON) once: the same
+    value again is accepted, a different one is a :class:`Conflict`."""
+    with transaction(conn):
+        row = conn.execute("SELECT source, simulated_truth FROM sessions WHERE participant=? AND "
+                           "session=?", (participant, session)).fetchone()
+        if row is None or row["source"] != "simulated":
+            raise Conflict(f"{participant}/{session} is not a simulated session")
+        if row["simulated_truth"] not in (None, truth_json):
+            raise Conflict(f"{participant}/{session}: another simulated truth is stored")
+        conn.execute("UPDATE sessions SET simulated_truth=? WHERE participant=? AND session=?",
+                     (truth_json, participant, session))
+
+
+def truth_rows(conn) -> list[dict]:
+    """(participant, session, simulated_truth JSON) of the simulated sessions that have one."""
+    return [dict(r) for r in conn.execute(
+        "SELECT participant, session, simulated_truth FROM sessions WHERE simulated_truth IS NOT "
+        "NULL ORDER BY participant, session")]
 
 
 def answered_trials(conn, participant: str, session: int) -> dict[int, sqlite3.Row]:
@@ -220,14 +343,20 @@ def count_answers(conn, participant: str, session: int) -> int:
 # --- answers --------------------------------------------------------------------------------
 
 def insert_answer(conn, participant: str, session: int, n_trials: int, answer: dict,
-                  timestamp: str | None = None) -> str:
+                  timestamp: str | None = None, adaptive=None) -> str:
     """Store one checked answer (see :func:`flipstudy.study.validate.parse_answer`).
 
     Returns ``"stored"``, or ``"duplicate"`` when the same response to the same
     trial is already stored (nothing is written).  Raises :class:`Conflict` when
     the trial was answered differently (the first answer is kept) or is not the
-    participant's current trial (the first unanswered one).  The session is
-    marked finished in the same transaction as its last answer.
+    participant's current trial (the first one neither answered nor skipped).
+
+    An adaptive (quest+) trial needs ``adaptive(conn, trial_row)``: called inside
+    the transaction, after the checks, it returns ``shown_stimulus``,
+    ``shown_level``, ``quest_state``, ``quest_threshold``, ``quest_ci_low``,
+    ``quest_ci_high`` and ``skip`` (trial numbers of the group's slots to leave
+    out) or raises :class:`Conflict`; everything is written in the one
+    transaction.  The session is marked finished with its last open trial.
     """
     trial = answer["trial"]
     with transaction(conn):
@@ -238,21 +367,46 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
                 return "duplicate"
             raise Conflict(f"trial {trial} is already answered ({old['response']}); "
                            f"the first answer is kept")
-        n = count_answers(conn, participant, session)
-        if trial != n + 1:
-            raise Conflict(f"trial {trial} is not the current trial (trial {n + 1} is next)")
-        row = conn.execute("SELECT stimulus FROM trials WHERE participant=? AND session=? AND trial=?",
+        current = next_open_trial(conn, participant, session)
+        if trial != current:
+            raise Conflict(f"trial {trial} is not the current trial (" +
+                           (f"trial {current} is next)" if current else "the session is finished)"))
+        row = conn.execute("SELECT * FROM trials WHERE participant=? AND session=? AND trial=?",
                            (participant, session, trial)).fetchone()
         if row is None:
             raise Conflict(f"trial {trial} does not exist in this session")
-        if row["stimulus"] != answer["stimulus"]:
+        extra = {}
+        if (row["method"] or "constant") == "quest+":
+            if adaptive is None:
+                raise Conflict(f"trial {trial} is adaptive (quest+); its level is chosen by the session")
+            extra = adaptive(conn, row)
+        elif row["stimulus"] != answer["stimulus"]:
             raise Conflict(f"trial {trial} shows {row['stimulus']!r}, not {answer['stimulus']!r}")
         ts = timestamp or utc_now()
-        conn.execute("INSERT INTO responses VALUES (?,?,?,?,?,?,?,?,?,?)",
-                     (participant, session, trial, answer["response"], answer["rt_ms"],
-                      answer["shown_ms"], answer["late_frames"], answer.get("replays", 0),
-                      answer.get("input", "click"), ts))
-        if trial == n_trials:
+        try:
+            conn.execute(
+                "INSERT INTO responses (participant, session, trial, response, rt_ms, shown_ms, "
+                "late_frames, replays, input, timestamp, shown_stimulus, shown_level, quest_state, "
+                "quest_threshold, quest_ci_low, quest_ci_high) VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                (participant, session, trial, answer["response"], answer["rt_ms"],
+                 answer["shown_ms"], answer["late_frames"], answer.get("replays", 0),
+                 answer.get("input", "click"), ts, extra.get("shown_stimulus"),
+                 extra.get("shown_level"), extra.get("quest_state"), extra.get("quest_threshold"),
+                 extra.get("quest_ci_low"), extra.get("quest_ci_high")))
+        except sqlite3.IntegrityError as e:
+            if "CHECK" in str(e) and not accepts_2afc(conn):
+                raise FlipstudyStateError(
+                    f"response {answer['response']!r}: this study's sessions.sqlite was made by "
+                    f"an older flipstudy (schema 1) and accepts only correct/incorrect; run a 2AFC "
+                    f"study in a new study folder") from None
+            raise
+        skip = [int(t) for t in extra.get("skip", ())]
+        if skip:
+            conn.executemany("UPDATE trials SET skipped=1 WHERE participant=? AND session=? AND "
+                             "trial=? AND method='quest+' AND NOT EXISTS (SELECT 1 FROM responses r "
+                             "WHERE r.participant=trials.participant AND r.session=trials.session "
+                             "AND r.trial=trials.trial)", [(participant, session, t) for t in skip])
+        if next_open_trial(conn, participant, session) is None:
             conn.execute("UPDATE sessions SET finished=? WHERE participant=? AND session=?",
                          (ts, participant, session))
     return "stored"
@@ -285,9 +439,9 @@ def status_rows(conn) -> list[dict]:
     """One dict per session: participant, session, source, answered, total,
     started, last_answer, finished, simulated (bool), complete (bool: every
     trial answered)."""
-    rows = conn.execute("""
+    rows = conn.execute(f"""
         SELECT s.participant, s.session, s.source, s.n_trials AS total, s.started, s.finished,
-               COUNT(r.trial) AS answered, MAX(r.timestamp) AS last_answer
+               COUNT(r.trial) AS answered, MAX(r.timestamp) AS last_answer, {_SKIPPED} AS skipped
         FROM sessions s LEFT JOIN responses r
              ON r.participant = s.participant AND r.session = s.session
         GROUP BY s.participant, s.session
@@ -295,20 +449,34 @@ def status_rows(conn) -> list[dict]:
     out = [dict(r) for r in rows]
     for r in out:
         r["simulated"] = r["source"] == "simulated"
-        r["complete"] = r["answered"] >= r["total"]
+        r["complete"] = r["answered"] + r["skipped"] >= r["total"]
+        del r["skipped"]
     return out
+
+
+#: SQL: the skipped slots of session ``s``
+_SKIPPED = ("(SELECT COUNT(*) FROM trials tk WHERE tk.participant = s.participant AND "
+            "tk.session = s.session AND tk.skipped = 1)")
 
 
 def response_rows(conn, *, include_simulated: bool = False) -> list[dict]:
     """Every answered trial joined with its trial row, ordered by participant,
     session, trial; ``simulated`` (0/1: a simulated participant's) and
-    ``complete`` (0/1: its session has every trial answered) on every row."""
+    ``complete`` (0/1: its session has every trial answered or skipped) on every
+    row; ``stimulus`` and ``level`` are what was shown (an adaptive slot's from
+    its answer); ``method``, ``task``, ``first``, ``original_stimulus`` and the
+    quest+ posterior after the answer (``quest_threshold``, ``quest_ci_low``,
+    ``quest_ci_high``; None for constant trials)."""
     rows = conn.execute(f"""
-        SELECT t.participant, t.session, t.trial, t.stimulus, t.group_name, t.level, t.repetition,
+        SELECT t.participant, t.session, t.trial, COALESCE(r.shown_stimulus, t.stimulus) AS stimulus,
+               t.group_name, COALESCE(r.shown_level, t.level) AS level, t.repetition,
                r.response, r.rt_ms, r.shown_ms, r.timestamp, t.clip, t.kind, r.late_frames,
                r.replays, r.input, s.source, s.source = 'simulated' AS simulated,
                (SELECT COUNT(*) FROM responses r2 WHERE r2.participant = s.participant
-                    AND r2.session = s.session) >= s.n_trials AS complete
+                    AND r2.session = s.session) + {_SKIPPED} >= s.n_trials AS complete,
+               COALESCE(t.method, 'constant') AS method, COALESCE(t.task, 'yes-no') AS task,
+               COALESCE(t.first, '') AS first, COALESCE(t.original, '') AS original_stimulus,
+               r.quest_threshold, r.quest_ci_low, r.quest_ci_high
         FROM responses r
         JOIN trials t ON t.participant = r.participant AND t.session = r.session AND t.trial = r.trial
         JOIN sessions s ON s.participant = r.participant AND s.session = r.session
@@ -323,12 +491,12 @@ def participant_rows(conn, *, include_simulated: bool = False) -> list[dict]:
                d.gymnastics_experience, s.started, s.finished, s.n_trials,
                (SELECT COUNT(*) FROM responses r WHERE r.participant = s.participant
                     AND r.session = s.session) AS answered,
-               s.source = 'simulated' AS simulated
+               s.source = 'simulated' AS simulated, {_SKIPPED} AS skipped
         FROM sessions s LEFT JOIN demographics d
              ON d.participant = s.participant AND d.session = s.session
         {"" if include_simulated else "WHERE s.source != 'simulated'"}
         ORDER BY s.participant, s.session""").fetchall()
     out = [dict(r) for r in rows]
     for r in out:
-        r["complete"] = int(r["answered"] >= r["n_trials"])
+        r["complete"] = int(r["answered"] + r.pop("skipped") >= r["n_trials"])
     return out

@@ -13,7 +13,10 @@ import math
 import re
 
 PARTICIPANT_RE = re.compile(r"[A-Za-z0-9_-]{1,32}")
-RESPONSES = ("correct", "incorrect")
+RESPONSES = ("correct", "incorrect", "first", "second")
+#: the responses each task accepts (yes/no: the motion judged correct or not; 2AFC:
+#: which of the two motions was judged physically correct)
+TASK_RESPONSES = {"yes-no": ("correct", "incorrect"), "2afc": ("first", "second")}
 INPUTS = ("key", "click", "simulated")
 MAX_BODY = 8192                 # bytes of one posted JSON object
 MAX_RT_MS = 3_600_000.0         # one hour: anything longer is not a reaction time
@@ -146,6 +149,22 @@ def parse_answer(obj: dict, *, participant: str, session: int, n_trials: int,
     if out["replays"] and not replay_allowed:
         raise RequestError(400, "replays: this study's design does not allow replaying a motion")
     return out
+
+
+def check_task_response(task: str, response: str) -> str:
+    """A response that fits the trial's task (400 otherwise).
+
+    >>> check_task_response("2afc", "first")
+    'first'
+    >>> check_task_response("yes-no", "first")
+    Traceback (most recent call last):
+    ...
+    flipstudy.study.validate.RequestError: response: a yes-no trial is answered correct or incorrect, not 'first'
+    """
+    ok = TASK_RESPONSES.get(task, TASK_RESPONSES["yes-no"])
+    if response not in ok:
+        raise RequestError(400, f"response: a {task} trial is answered {' or '.join(ok)}, not {response!r}")
+    return response
 
 
 def parse_demographics(obj: dict, *, participant: str, session: int) -> dict:

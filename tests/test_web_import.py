@@ -240,3 +240,62 @@ def test_repeats_of_flagged_trials_are_kept_beside_the_first_answer(study, tmp_p
     df = load_responses(study / "web")
     assert len(df[df["trial"] == 3]) == 1 and df.loc[df["trial"] == 3, "response"].item() == "incorrect"
     assert len(df) == 8
+
+
+# --- 2AFC records ------------------------------------------------------------------------------
+
+def _2afc_records(study_dir, pid):
+    """A 2AFC run's records: each answer carries task, first and original."""
+    st = load_study(study_dir)
+    trials = {t.trial: t for t in web_trial_order(order_groups(st.design, st.manifest),
+                                                  st.design.repetitions, st.design.seed, pid)}
+    recs = run_records(study_dir, pid, responses={i: "first" if i % 2 else "second" for i in trials})
+    for r in recs:
+        if r["record"] == "answer" and trials[r["trial"]].task == "2afc":
+            t = trials[r["trial"]]
+            r.update(task="2afc", first=t.first, original=t.original, frames_expected=24,
+                     frames_presented=24)
+        elif r["record"] == "answer":
+            r["response"] = "correct"
+    return recs, trials
+
+
+@pytest.fixture
+def study_2afc(tmp_path):
+    from _kinds import design_text, make_study
+    groups = [{"name": "up", "sign": 1, "levels": [0, 25, 50], "task": "2afc"},
+              {"name": "down", "sign": -1, "levels": [0, 40]}]
+    return make_study(tmp_path / "s2", design_text(groups), videos=False)
+
+
+def test_2afc_records_import_with_first_and_comparison(study_2afc, tmp_path):
+    recs, trials = _2afc_records(study_2afc, "F01")
+    out = import_web(study_2afc, [jsonl(tmp_path / "f.jsonl", recs)])
+    assert out["answers"] == len(trials) == 8
+    got = rows(study_2afc)
+    assert [(r["task"], r["first"], r["original_stimulus"], r["method"]) for r in got] == [
+        (t.task, t.first, t.original, "constant") for t in trials.values()]
+    assert {r["response"] for r in got if r["task"] == "2afc"} == {"first", "second"}
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda r: r.update(first="modified" if r["first"] == "original" else "original"), r"first '\w+', but trial"),
+    (lambda r: r.update(original="backflip_down_0"), r"original 'backflip_down_0', but trial"),
+    (lambda r: r.update(response="correct"), "response: must be one of first, second, got 'correct'"),
+    (lambda r: r.pop("task"), "task None, but trial"),
+])
+def test_a_2afc_record_that_does_not_fit_its_trial_is_refused(study_2afc, tmp_path, change, message):
+    recs, trials = _2afc_records(study_2afc, "F02")
+    bad = next(r for r in recs if r["record"] == "answer" and r.get("task") == "2afc")
+    change(bad)
+    with pytest.raises(WebImportError, match=message):
+        import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", recs)])
+    assert not (study_2afc / "web").exists()
+
+
+def test_a_yes_no_record_with_a_2afc_answer_is_refused(study_2afc, tmp_path):
+    recs, trials = _2afc_records(study_2afc, "F03")
+    bad = next(r for r in recs if r["record"] == "answer" and "task" not in r)
+    bad["response"] = "first"
+    with pytest.raises(WebImportError, match="response: must be one of correct, incorrect, got 'first'"):
+        import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", recs)])

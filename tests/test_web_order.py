@@ -33,11 +33,11 @@ SHAPES = {
 }
 
 
-def _node(groups, reps, seed, ids):
+def _node(groups, reps, seed, ids, fields="t.trial, t.stimulus, t.group, t.repetition"):
     script = (f"const o = require({json.dumps(str(JS))});"
               f"const g = {json.dumps(groups)};"
               f"console.log(JSON.stringify({json.dumps(ids)}.map((p) => o.webTrialOrder(g, {reps}, {seed}, p)"
-              f".map((t) => [t.trial, t.stimulus, t.group, t.repetition]))));")
+              f".map((t) => [{fields}]))));")
     r = subprocess.run(["node", "-e", script], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout)
@@ -94,3 +94,55 @@ def test_local_order_is_unchanged(tmp_path):
     """The local page keeps its Mersenne-Twister order (reproduce's bytes)."""
     st = _study(tmp_path, **SHAPES["per-group"])
     assert trial_order(st.design, st.manifest, "P01")[0].stimulus == "backflip_smooth-increase_0"
+
+
+# --- 2AFC groups: which motion comes first, from the same generator --------------------------
+
+TWO_AFC_SHAPES = {
+    "2afc": ([{"name": "up", "sign": 1, "levels": [0, 25, 50], "task": "2afc"},
+              {"name": "down", "sign": -1, "levels": [0, 10, 20, 40], "task": "2afc"}], 2, "per-group"),
+    "mixed-shared": ([{"name": "up", "sign": 1, "levels": [0, 17, 50]},
+                      {"name": "down", "sign": -1, "levels": [0, 30], "task": "2afc"}], 3, "shared"),
+}
+
+
+def _2afc_study(tmp_path, shape):
+    from _kinds import design_text, make_study
+    groups, reps, original = TWO_AFC_SHAPES[shape]
+    return load_study(make_study(tmp_path / "s", design_text(groups, repetitions=reps, original=original),
+                                 videos=False))
+
+
+@pytest.mark.skipif(shutil.which("node") is None, reason="needs node to run the site's JavaScript")
+@pytest.mark.parametrize("shape", sorted(TWO_AFC_SHAPES))
+def test_javascript_2afc_order_and_first_equal_python_twin(tmp_path, shape):
+    st = _2afc_study(tmp_path, shape)
+    groups = order_groups(st.design, st.manifest)
+    got = _node(groups, st.design.repetitions, st.design.seed, IDS,
+                fields="t.trial, t.stimulus, t.group, t.repetition, t.task || 'yes-no', t.first || '', "
+                       "t.original || ''")
+    for pid, js in zip(IDS, got):
+        py = web_trial_order(groups, st.design.repetitions, st.design.seed, pid)
+        assert js == [[t.trial, t.stimulus, t.group, t.repetition, t.task, t.first, t.original] for t in py], pid
+
+
+@pytest.mark.parametrize("shape", sorted(TWO_AFC_SHAPES))
+def test_web_2afc_order_is_balanced_like_the_local_one(tmp_path, shape):
+    st = _2afc_study(tmp_path, shape)
+    groups = order_groups(st.design, st.manifest)
+    two = {g.name for g in st.design.groups if g.task == "2afc"}
+    firsts = Counter()
+    for pid in IDS:
+        web = web_trial_order(groups, st.design.repetitions, st.design.seed, pid)
+        local = trial_order(st.design, st.manifest, pid)
+        # the same trials (stimulus, comparison, task) as the local session's, no level 0 in 2AFC
+        key = lambda t: (t.stimulus, t.repetition, t.task, t.original)  # noqa: E731
+        assert sorted(map(key, web)) == sorted(map(key, local))
+        assert all(t.level > 0 and t.original.endswith("_0") or t.original.endswith("_original")
+                   for t in web if t.task == "2afc")
+        for g in two:
+            f = Counter(t.first for t in web if t.group == g)
+            assert set(f) <= {"original", "modified"} and abs(f["original"] - f["modified"]) <= 1, (pid, g, f)
+            firsts.update(t.first for t in web if t.group == g)
+        assert all(t.first == "" and t.original == "" for t in web if t.task == "yes-no")
+    assert firsts["original"] and firsts["modified"]

@@ -10,6 +10,7 @@ options, calls one library function and prints what it did:
 * :mod:`.reproduce` — ``reproduce``
 * :mod:`.concat` — ``concat``;  :mod:`.jump` — ``jump``
 * :mod:`.web` — ``export-web``, ``import-web``
+* :mod:`.plan` — ``plan``
 
 Heavy libraries (pandas, pyvista, …) are imported by the command that needs them.
 """
@@ -21,7 +22,7 @@ import sys
 
 from .common import load_clip
 
-FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web")
+FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web", "plan")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -72,6 +72,17 @@ def _images(specs):
     return out
 
 
+def _design_specs(sources):
+    """The QUEST+ models of the groups of the study folder's design.toml (beside the first
+    responses table), to replay adaptive answers; None without a design."""
+    from flipstudy.analysis.io import resolve_responses_path
+    from flipstudy.stimuli.design import load_design
+
+    from .plan import quest_specs
+    design = resolve_responses_path(sources[0]).parent / "design.toml"
+    return quest_specs(load_design(design)) if design.is_file() else None
+
+
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
     from flipstudy.analysis.io import NeedsExport, combine_responses, resolve_responses_path
@@ -82,6 +93,7 @@ def handler(args) -> int:
         if len(args.responses) > 1:
             src = combine_responses(args.responses)
         res = analyze(src, out, correction=args.correction, images=_images(args.image) or None,
+                      quest_specs=_design_specs(args.responses),
                       seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
                       gee=not args.no_gee, figures=not args.no_figures,
                       include_simulated=args.include_simulated,
@@ -120,7 +132,14 @@ def handler(args) -> int:
                 print(f"  {t['group']:20s} {t['threshold']:5.1f} %  [{t['threshold_ci_low']:.1f}, {hi}]")
             else:
                 print(f"  {t['group']:20s} not reached")
-    notable = [n for n in res.notes if "not found" in n or "no images" in n or "failed" in n]
+    if res.group_thresholds is not None and len(res.group_thresholds):
+        print("per-participant thresholds x* (thresholds_participants.csv), per group:")
+        for _, t in res.group_thresholds.iterrows():
+            print(f"  {t['group']:20s} {t['method']:8s} {t['task']:6s} N = {t['n_participants']:<3d} "
+                  f"median {t['median']:5.1f} %  quartiles [{t['q25']:.1f}, {t['q75']:.1f}]  "
+                  f"mean 95 % interval width {t['mean_ci_width']:.1f} %")
+    notable = [n for n in res.notes if "not found" in n or "no images" in n or "failed" in n
+               or "differ from the ones the session stored" in n or "no design" in n]
     for n in notable:
         print(f"note: {n}")
     print(f"\nwrote {len(res.files)} files to {out}/ (table.csv, table_paper.md/.tex, figures, notes.md)")

@@ -186,7 +186,10 @@ def add_commands(subparsers) -> None:
         description="Simulated participants answer every trial through the same validation and "
                     "storage as the participant page. The observer model gives P(correct) per "
                     "group and level (default: the paper's Table 2 ratings) with a per-participant "
-                    "logit shift ~ N(0, sigma).")
+                    "logit shift ~ N(0, sigma). A study with quest+ or 2afc groups is answered by "
+                    "observers with known psychometric functions instead (one per group and "
+                    "participant, drawn from a population); export --include-simulated writes "
+                    "their parameters to simulated_truth.csv.")
     add_study_dir(p)
     p.add_argument("--participants", type=_positive_int, required=True, metavar="N",
                    help="number of simulated participants (IDs sim001..)")

@@ -236,6 +236,49 @@
     }
   };
 
+  // Wait for the answer: `choices` is [[response, button, key], ...]; replay(): play the
+  // motion(s) again (answers wait until it ends).  Resolves {response, input, rt_ms, replays}.
+  function awaitAnswer(choices, bR, replay) {
+    let replays = 0;
+    const tEnabled = performance.now();
+    return new Promise((resolve) => {
+      let busy = false;
+      const enable = (on) => { for (const [, b] of choices) b.disabled = !on; if (bR) bR.disabled = !on; };
+      const finish = (response, input) => {
+        if (busy) return;
+        busy = true;
+        document.removeEventListener('keydown', onKey);
+        enable(false);
+        choices.find(([r]) => r === response)[1].classList.add('chosen');
+        resolve({response, input, rt_ms: performance.now() - tEnabled, replays});
+      };
+      const onKey = (e) => {
+        if (busy || e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
+        const k = (e.key || '').toLowerCase();
+        const c = choices.find(([, , key]) => key === k);
+        if (c) finish(c[0], 'key');
+      };
+      document.addEventListener('keydown', onKey);
+      for (const [r, b] of choices) b.addEventListener('click', () => finish(r, 'click'));
+      if (bR) {
+        bR.addEventListener('click', async () => {
+          if (busy) return;
+          busy = true; enable(false); replays += 1;
+          await replay();
+          busy = false; enable(true);
+        });
+      }
+      enable(true);
+    });
+  }
+
+  // prefetch the next two trials' videos while the participant answers (an adaptive
+  // trial's videos are known only when it is served)
+  function prefetch(ctx) {
+    ctx.data.timeline.slice(ctx.index + 1).filter((x) => x.type === 'trial' || x.type === 'trial-2afc')
+      .slice(0, 2).forEach((x) => (x.videos || (x.video ? [x.video] : [])).forEach((u) => loadVideo(u)));
+  }
+
   plugins.trial = async (s, ctx) => {
     if (document.activeElement) document.activeElement.blur();
     const video = newVideo();
@@ -251,6 +294,7 @@
     h('p', {class: 'prompt', text: s.prompt}),
     h('div', {class: 'actions'}, bC, bI, bR));
     app.dataset.trial = String(s.trial);
+    app.dataset.stimulus = s.stimulus;
 
     const [src] = await Promise.all([loadVideo(s.video), sleep(s.iti_ms || 0)]);
     await prepare(video, src);
@@ -260,50 +304,76 @@
     const m = await playMeasured(video);
     app.dataset.playing = '0';
     video.classList.add('hidden');        // a blank stage while answering
-    // prefetch the next two trials' videos while the participant answers
-    ctx.data.timeline.slice(ctx.index + 1).filter((x) => x.type === 'trial').slice(0, 2)
-      .forEach((x) => loadVideo(x.video));
+    prefetch(ctx);
 
-    let replays = 0;
-    const tEnabled = performance.now();
-    const answer = await new Promise((resolve) => {
-      let busy = false;
-      const enable = (on) => { bC.disabled = !on; bI.disabled = !on; if (bR) bR.disabled = !on; };
-      const finish = (response, input) => {
-        if (busy) return;
-        busy = true;
-        document.removeEventListener('keydown', onKey);
-        enable(false);
-        (response === 'correct' ? bC : bI).classList.add('chosen');
-        resolve({response, input, rt_ms: performance.now() - tEnabled});
-      };
-      const onKey = (e) => {
-        if (busy || e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
-        const k = (e.key || '').toLowerCase();
-        if (k === KEYS.correct) finish('correct', 'key');
-        else if (k === KEYS.incorrect) finish('incorrect', 'key');
-      };
-      document.addEventListener('keydown', onKey);
-      bC.addEventListener('click', () => finish('correct', 'click'));
-      bI.addEventListener('click', () => finish('incorrect', 'click'));
-      if (bR) {
-        bR.addEventListener('click', async () => {
-          if (busy) return;
-          busy = true; enable(false); replays += 1;
-          video.classList.remove('hidden');
-          await playMeasured(video);
-          video.classList.add('hidden');
-          busy = false; enable(true);
-        });
-      }
-      enable(true);
-    });
-    await postJSON(s.submit, {
+    const answer = await awaitAnswer([['correct', bC, KEYS.correct], ['incorrect', bI, KEYS.incorrect]], bR,
+      async () => {
+        video.classList.remove('hidden');
+        await playMeasured(video);
+        video.classList.add('hidden');
+      });
+    ctx.next = (await postJSON(s.submit, {
       participant: ctx.data.participant, session: ctx.data.session, trial: s.trial,
       stimulus: s.stimulus, response: answer.response, rt_ms: round1(answer.rt_ms),
-      shown_ms: round1(m.shown_ms), late_frames: m.late_frames, replays, input: answer.input,
-    });
+      shown_ms: round1(m.shown_ms), late_frames: m.late_frames, replays: answer.replays, input: answer.input,
+    })).next_trial;
     await dropVideo(s.video);
+  };
+
+  // Two-alternative forced choice: the two motions one after the other (a label "1" / "2"
+  // on the stage, a blank gap between them), then "which was physically correct?".
+  // shown_ms and late_frames add up both showings.
+  plugins['trial-2afc'] = async (s, ctx) => {
+    if (document.activeElement) document.activeElement.blur();
+    const keys = s.keys || {first: 'f', second: 'j'};
+    const videos = [newVideo(), newVideo()];
+    const fix = h('div', {class: 'fixation', text: '+'});
+    const label = h('div', {class: 'interval hidden'});
+    const bF = h('button', {class: 'first', 'data-response': 'first', disabled: true}, 'First',
+      h('kbd', {text: keys.first.toUpperCase()}));
+    const bS = h('button', {class: 'second', 'data-response': 'second', disabled: true}, 'Second',
+      h('kbd', {text: keys.second.toUpperCase()}));
+    const bR = s.replay ? h('button', {class: 'replay', text: 'Replay both', disabled: true}) : null;
+    show(h('div', {class: 'progress'}, h('span', {text: `Trial ${s.trial} of ${s.of}`}),
+      h('span', {text: `${keys.first.toUpperCase()} = first · ${keys.second.toUpperCase()} = second`})),
+    h('div', {class: 'stage pair'}, ...videos, fix, label),
+    h('p', {class: 'prompt', text: s.prompt}),
+    h('div', {class: 'actions'}, bF, bS, bR));
+    app.dataset.trial = String(s.trial);
+    app.dataset.stimulus = s.stimulus;
+
+    const [srcs] = await Promise.all([Promise.all(s.videos.map((u) => loadVideo(u))), sleep(s.iti_ms || 0)]);
+    await Promise.all(videos.map((v, i) => prepare(v, srcs[i])));
+    fix.classList.add('hidden');
+    const labels = s.labels || ['1', '2'];
+    const playPair = async () => {
+      const out = [];
+      app.dataset.playing = '1';
+      for (let i = 0; i < 2; i++) {
+        label.textContent = labels[i];
+        label.classList.remove('hidden');
+        app.dataset.interval = String(i + 1);
+        if (i === 1) await sleep(s.gap_ms || 0);     // the blank gap, "2" already on the stage
+        videos[i].classList.remove('hidden');
+        out.push(await playMeasured(videos[i]));
+        videos[i].classList.add('hidden');
+      }
+      label.classList.add('hidden');
+      app.dataset.interval = '';
+      app.dataset.playing = '0';
+      return out;
+    };
+    const shown = await playPair();
+    prefetch(ctx);
+
+    const answer = await awaitAnswer([['first', bF, keys.first], ['second', bS, keys.second]], bR, playPair);
+    ctx.next = (await postJSON(s.submit, {
+      participant: ctx.data.participant, session: ctx.data.session, trial: s.trial,
+      stimulus: s.stimulus, response: answer.response, rt_ms: round1(answer.rt_ms),
+      shown_ms: round1(shown[0].shown_ms + shown[1].shown_ms),
+      late_frames: shown[0].late_frames + shown[1].late_frames, replays: answer.replays, input: answer.input,
+    })).next_trial;
+    await Promise.all(s.videos.map((u) => dropVideo(u)));
   };
 
   // ---- runner --------------------------------------------------------------------------
@@ -320,9 +390,15 @@
   async function main() {
     const data = await getJSON('/api/session');
     KEYS = data.keys;
-    const ctx = {data, index: 0};
+    const ctx = {data, index: 0, next: null};
     for (let i = data.start; i < data.timeline.length; i++) {
-      const s = data.timeline[i];
+      let s = data.timeline[i];
+      // the server's next open trial: quest+ slots of a group that stopped early
+      // (stop_width) are passed over, and so are breaks once nothing is left
+      const isTrial = s.type === 'trial' || s.type === 'trial-2afc';
+      if (ctx.next && ((isTrial && s.trial < ctx.next) || (s.type === 'break' && ctx.next > data.n_trials))) continue;
+      // an adaptive trial: its level is chosen when it is served
+      if (s.adaptive && !s.stimulus) s = await getJSON(`/api/trial/${s.trial}`);
       const plugin = plugins[s.type];
       if (!plugin) throw new Error(`unknown screen type ${s.type}`);
       ctx.index = i;

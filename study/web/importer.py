@@ -52,14 +52,13 @@ import zipfile
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
-from flipstudy.stimuli.exceptions import FlipstudyError
 
 from .. import store
-from ..export import PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
+from ..export import ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
 from ..psychds import write_dataset_description
 from ..session import load_study
-from ..validate import (DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE,
-                        RESPONSES)
+from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
+from ._fields import WebImportError, _bool, _need, _num, _str
 from .order import order_groups, web_trial_order
 from .site import FORMAT, HOSTS
 
@@ -69,14 +68,15 @@ WEB_COLUMNS = ["source", "run_id", "frames_expected", "frames_presented", "frame
                "dropped_pct", "playback_ms", "video_ms", "refresh_hz", "timing", "playback_flagged",
                "max_dropped_pct", "repeat", "source_file"]
 COLUMNS = RESPONSE_COLUMNS + WEB_COLUMNS
+#: a study with 2AFC groups: the local export's task columns too (no quest+ online)
+COLUMNS_2AFC = RESPONSE_COLUMNS + [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
                                                  "user_agent"]
 KINDS = ("start", "demographics", "answer", "end")
+#: the answers each task takes: yes/no judges one motion, 2AFC names the interval judged
+#: physically correct
+RESPONSES_BY_TASK = {"yes-no": ("correct", "incorrect"), "2afc": ("first", "second")}
 MAX_FILE = 256 * 1024 * 1024
-
-
-class WebImportError(FlipstudyError, ValueError):
-    """A results file that cannot be imported; the message names file and line or row."""
 
 
 # --- reading ---------------------------------------------------------------------------------
@@ -161,48 +161,6 @@ def read_records(path) -> list[tuple[str, dict]]:
 
 # --- checking --------------------------------------------------------------------------------
 
-def _num(v, where, key, lo=0.0, hi=math.inf, *, integer=False, optional=False):
-    if v is None and optional:
-        return None
-    if isinstance(v, bool) or v is None:
-        raise WebImportError(f"{where}: {key}: expected a number, got {v!r}")
-    if isinstance(v, str):
-        try:
-            v = float(v)
-        except ValueError:
-            raise WebImportError(f"{where}: {key}: expected a number, got {v!r}") from None
-    v = float(v)
-    if not math.isfinite(v) or not lo <= v <= hi:
-        raise WebImportError(f"{where}: {key}: {v:g} is outside {lo:g}..{hi:g}")
-    if integer:
-        if v != int(v):
-            raise WebImportError(f"{where}: {key}: expected a whole number, got {v:g}")
-        return int(v)
-    return v
-
-
-def _bool(v, where, key):
-    if isinstance(v, bool):
-        return v
-    if isinstance(v, str) and v.lower() in ("true", "false"):
-        return v.lower() == "true"
-    raise WebImportError(f"{where}: {key}: expected true or false, got {v!r}")
-
-
-def _str(v, where, key, options=None):
-    if not isinstance(v, str) or not v:
-        raise WebImportError(f"{where}: {key}: expected text, got {v!r}")
-    if options is not None and v not in options:
-        raise WebImportError(f"{where}: {key}: must be one of {', '.join(options)}, got {v!r}")
-    return v
-
-
-def _need(rec, where, keys):
-    missing = [k for k in keys if k not in rec]
-    if missing:
-        raise WebImportError(f"{where}: missing field(s) {', '.join(missing)}")
-
-
 COMMON = ("format", "record", "site_id", "study", "manifest_sha256", "host", "participant", "run_id",
           "run_started", "timestamp")
 ANSWER = ("trial", "stimulus", "group", "level", "repetition", "response", "rt_ms", "shown_ms",
@@ -248,12 +206,20 @@ class _Checker:
             got = {"stimulus": rec["stimulus"], "group": rec["group"],
                    "level": _num(rec["level"], where, "level", -1e6, 1e6),
                    "repetition": _num(rec["repetition"], where, "repetition", 1, 1000, integer=True)}
+            task = getattr(want, "task", "") or "yes-no"
+            if task == "2afc":          # which motion came first, and the comparison, as the order says
+                got.update(task=rec.get("task"), first=rec.get("first"), original=rec.get("original"))
+            elif rec.get("task", "yes-no") != "yes-no":
+                got["task"] = rec.get("task")
             for k in got:
                 if got[k] != getattr(want, k):
                     raise WebImportError(f"{where}: trial {t}: {k} {got[k]!r}, but trial {t} of "
                                          f"participant {pid} is {getattr(want, k)!r} ({want.stimulus})")
-            out.update(got, trial=t, clip=want.clip, kind=want.kind,
-                       response=_str(rec["response"], where, "response", RESPONSES),
+            got.pop("original", None)
+            out.update(got, trial=t, clip=want.clip, kind=want.kind, method="constant", task=task,
+                       first=getattr(want, "first", "") or "",
+                       original_stimulus=getattr(want, "original", "") or "",
+                       response=_str(rec["response"], where, "response", RESPONSES_BY_TASK[task]),
                        rt_ms=_num(rec["rt_ms"], where, "rt_ms", 0, MAX_RT_MS),
                        shown_ms=_num(rec["shown_ms"], where, "shown_ms", 0, MAX_SHOWN_MS),
                        input=_str(rec["input"], where, "input", ("key", "click")),
@@ -352,7 +318,7 @@ def _fmt(v):
     return str(v)
 
 
-def _tables(merged: dict, n_trials: int):
+def _tables(merged: dict, n_trials: int, columns=COLUMNS):
     runs = {}
     for (run, *_), (r, _w, _f) in merged.items():
         runs.setdefault(run, {"participant": r["participant"], "run_started": r["run_started"],
@@ -372,12 +338,12 @@ def _tables(merged: dict, n_trials: int):
     rows = []
     for r, f in sorted(answers, key=lambda x: (x[0]["participant"], sessions[x[0]["run_id"]], x[0]["trial"],
                                                x[0]["repeat"])):
-        row = {c: r.get(c) for c in COLUMNS}
+        row = {c: r.get(c) for c in columns}
         row.update(session=sessions[r["run_id"]], late_frames=r["frames_dropped"], simulated=False,
                    complete=count.get(r["run_id"], 0) >= n_trials, source=f"web-{r['host']}",
                    source_file=f, rt_ms=f"{r['rt_ms']:.1f}", shown_ms=f"{r['shown_ms']:.1f}",
                    level=f"{r['level']:g}")
-        rows.append({c: _fmt(row.get(c)) for c in COLUMNS})
+        rows.append({c: _fmt(row.get(c)) for c in columns})
     parts = []
     for run, info in sorted(runs.items(), key=lambda x: (x[1]["participant"], sessions[x[0]])):
         demo = merged.get((run, "demographics"), ({},))[0]
@@ -474,7 +440,8 @@ def import_web(study_dir, files) -> dict:
         if r["status"] == "imported":
             r["new_answers"] = sum(1 for k, (_rec, _w, fn) in merged.items()
                                    if k[1] == "answer" and fn == r["stored"] and k not in before)
-    rows, parts = _tables(merged, n_trials)
+    columns = COLUMNS_2AFC if any(g.task == "2afc" for g in study.design.groups) else COLUMNS
+    rows, parts = _tables(merged, n_trials, columns)
     # write: the files as they were first, then the tables built from all of them
     imports.mkdir(parents=True, exist_ok=True)
     for stored, data in new_files:
@@ -491,9 +458,9 @@ def import_web(study_dir, files) -> dict:
                 "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
     atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
     out = d / "responses.csv"
-    atomic_write_text(out, _table_text(COLUMNS, rows))
+    atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
-    desc = write_dataset_description(d, study.dir, COLUMNS, source="web sessions")
+    desc = write_dataset_description(d, study.dir, columns, source="web sessions")
     return {"files": report, "answers": len(rows), "participants": len({p["participant"] for p in parts}),
             "sessions": len(parts), "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/"
                                                    f"{p['n_trials']})" for p in parts if p["complete"] != "true"],

@@ -20,6 +20,10 @@ JavaScript file under node and in Chromium and compare.
 * Shuffle: Fisher–Yates from the last element down (``j = below(i + 1)``).
 * Sample k of ``0..R-1``: the first k places of a partial Fisher–Yates
   (``j = i + below(R - i)``).
+* ``random()``: ``u / 2**32`` for the next output ``u``.
+* 2AFC groups: after the last block, :func:`flipstudy.study.order.balance_first`
+  (the local rule) sets which motion each 2AFC trial shows first, half each way
+  within each group, drawn with this generator's ``shuffle`` and ``random``.
 
 The local page's order is untouched (the same participant gets a different,
 equally random order online than locally); the site stores nothing about the
@@ -36,7 +40,7 @@ from __future__ import annotations
 
 from flipstudy.stimuli.exceptions import FlipstudyValueError
 
-from ..order import Trial, group_stimuli
+from ..order import Trial, balance_first, group_stimuli
 
 RULE = "flipstudy-web-order/1 (sfc32 seeded by FNV-1a; the rule of flipstudy.study.order)"
 M32 = 0xFFFFFFFF
@@ -85,6 +89,10 @@ class Sfc32:
         """An integer in ``[0, n)``."""
         return (self.next() * n) >> 32
 
+    def random(self) -> float:
+        """A number in ``[0, 1)``."""
+        return self.next() / 4294967296
+
     def shuffle(self, x: list) -> None:
         for i in range(len(x) - 1, 0, -1):
             j = self.below(i + 1)
@@ -100,12 +108,21 @@ class Sfc32:
 
 def order_groups(design, manifest: list[dict]) -> list[list]:
     """The groups as the site's config holds them: ``[[group, [{stimulus, clip,
-    kind, level}, ...]], ...]`` in the design's order, rows in manifest order."""
+    kind, level}, ...]], ...]`` in the design's order, rows in manifest order (the
+    constant trials' rows of :func:`flipstudy.study.order.group_stimuli`); a 2AFC
+    group's rows also carry ``task`` ("2afc") and ``original`` (the comparison)."""
     groups = group_stimuli(manifest, design)
     if not groups:
         raise FlipstudyValueError("manifest.csv has no test stimuli (only reference rows)")
-    return [[g, [{"stimulus": r["stimulus"], "clip": r.get("clip", ""), "kind": r.get("kind", ""),
-                  "level": float(r["level"])} for r in rows]] for g, rows in groups.items()]
+    tasks = {g.name: getattr(g, "task", "yes-no") for g in design.groups}
+
+    def row(r, g):
+        out = {"stimulus": r["stimulus"], "clip": r.get("clip", ""), "kind": r.get("kind", ""),
+               "level": float(r["level"])}
+        if tasks.get(g) == "2afc":
+            out.update(task="2afc", original=r.get("original", ""))
+        return out
+    return [[g, [row(r, g) for r in rows]] for g, rows in groups.items()]
 
 
 def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
@@ -130,7 +147,10 @@ def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
                 break
         for row, g in block:
             trials.append(Trial(len(trials) + 1, row["stimulus"], row["clip"], g, row["kind"],
-                                float(row["level"]), rep))
+                                float(row["level"]), rep, task=row.get("task", "yes-no"),
+                                original=row.get("original", "")))
+    if any(t.task == "2afc" for t in trials):
+        trials = balance_first(trials, rng.shuffle, rng.random)
     return trials
 
 

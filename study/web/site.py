@@ -56,7 +56,7 @@ from .order import RULE, order_groups
 FORMAT = "flipstudy-web/1"
 HOSTS = ("static", "jatos", "pavlovia")
 STATIC = Path(__file__).resolve().parent / "static"
-OWN_FILES = ("flipstudy-order.js", "flipstudy-web.js", "flipstudy-web.css")
+OWN_FILES = ("flipstudy-order.js", "flipstudy-2afc.js", "flipstudy-web.js", "flipstudy-web.css")
 #: URL query parameters read as the participant ID, first found wins (Prolific's first)
 PARTICIPANT_PARAMS = ("PROLIFIC_PID", "participant", "PARTICIPANT_ID", "workerId", "id")
 SITE_RECORD = "flipstudy-site.json"
@@ -96,20 +96,35 @@ def _texts(study, n_trials: int) -> dict:
     screens = {s["type"]: s for s in local_timeline.build_timeline(
         shim, {"answered": 0, "demographics": False})["timeline"]}
     ex = screens.get("examples", {})
-    keys = dict(local_timeline.KEYS)
-    return {"instructions_title": screens["instructions"]["title"],
-            "instructions": screens["instructions"]["paragraphs"],
-            "demographics_title": screens["demographics"]["title"],
-            "demographics_text": screens["demographics"]["text"],
-            "examples_title": ex.get("title", ""), "examples_text": ex.get("text", ""),
-            "examples_button": ex.get("button", "Start the test"),
-            "keys_sentence": local_timeline._keys_sentence(keys),
-            "prompt": "Was this motion physically correct?",
-            "end_title": screens["end"]["title"],
-            "end_saved": "All your answers are saved. The study is complete.",
-            "end_static": "The study is complete. Please download your answers and send the file "
-                          "to the experimenter as they asked you to.",
-            "end_download": "A copy of your answers stays in this browser; you may also download it."}
+    words = local_timeline.texts(study.design)
+    out = {"instructions_title": screens["instructions"]["title"],
+           "instructions": screens["instructions"]["paragraphs"],
+           "demographics_title": screens["demographics"]["title"],
+           "demographics_text": screens["demographics"]["text"],
+           "examples_title": ex.get("title", ""), "examples_text": ex.get("text", ""),
+           "examples_button": ex.get("button", "Start the test"),
+           "keys_sentence": words["keys_sentence"],
+           "prompt": local_timeline.PROMPT,
+           "end_title": screens["end"]["title"],
+           "end_saved": "All your answers are saved. The study is complete.",
+           "end_static": "The study is complete. Please download your answers and send the file "
+                         "to the experimenter as they asked you to.",
+           "end_download": "A copy of your answers stays in this browser; you may also download it."}
+    if not local_timeline.is_default(study.design):
+        out.update(prompt_2afc=local_timeline.PROMPT_2AFC, remember=words["remember"], noun=words["noun"])
+    return out
+
+
+def refuse_adaptive(design) -> None:
+    """Raise :class:`SiteError` naming the first adaptive (QUEST+) group: the site runs
+    constant-stimuli groups only; QUEST+ runs in the local session runner."""
+    for g in design.groups:
+        if (getattr(g, "method", "constant") or "constant") != "constant":
+            raise SiteError(
+                f"design.toml: [[groups]] {g.name!r}: method = {g.method!r} is adaptive; QUEST+ "
+                f"runs in the local session runner (flipstudy run), not in the exported site. "
+                f"Export a design whose groups are all method = \"constant\", or run this study "
+                f"with flipstudy run")
 
 
 def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_pct: float | None = None,
@@ -120,6 +135,7 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
     if host not in HOSTS:
         raise SiteError(f"host {host!r}: choose one of {', '.join(HOSTS)}")
     design = study.design
+    refuse_adaptive(design)
     if max_dropped_pct is None:
         max_dropped_pct = design.session.max_dropped_pct
     groups = order_groups(design, study.manifest)
@@ -144,6 +160,8 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
         "videos": vids, "demographic_fields": DEMOGRAPHIC_FIELDS, "texts": _texts(study, n),
         "jspsych_version": jsp.PACKAGES["jspsych"],
     }
+    if not local_timeline.is_default(design):
+        cfg.update(keys_2afc=dict(local_timeline.KEYS_2AFC), gap_ms=local_timeline.GAP_MS)
     cfg["site_id"] = hashlib.sha256(json.dumps(cfg, sort_keys=True).encode()).hexdigest()[:16]
     return cfg
 
@@ -156,7 +174,7 @@ def _index_html(host: str, scripts: list[str]) -> str:
     tags = ([f'<script src="jatos.js"></script>'] if host == "jatos" else [])
     tags += [f'<script src="lib/{s}"></script>' for s in scripts]
     tags += ['<script src="config.js"></script>', '<script src="flipstudy-order.js"></script>',
-             '<script src="flipstudy-web.js"></script>']
+             '<script src="flipstudy-2afc.js"></script>', '<script src="flipstudy-web.js"></script>']
     return "\n".join([
         "<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
         f'<meta http-equiv="Content-Security-Policy" content="{csp}">',
@@ -183,6 +201,7 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     overrides it (the site record says which)."""
     from flipstudy.render.record import StaleRenderError, check_rendered
     study = load_study(study_dir)
+    refuse_adaptive(study.design)
     out = Path(out)
     if host not in HOSTS:
         raise SiteError(f"--host {host!r}: choose one of {', '.join(HOSTS)}")

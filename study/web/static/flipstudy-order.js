@@ -7,6 +7,10 @@
 //   below  floor(u * n / 2^32) for the next 32-bit output u
 //   shuffle Fisher-Yates from the last element down, j = below(i + 1)
 //   sample  k of 0..n-1: the first k places of a partial Fisher-Yates, j = i + below(n - i)
+//   random  u / 2^32 for the next output u
+//   2AFC    after the last block, balanceFirst (flipstudy.study.order.balance_first): in each
+//           2AFC group half the trials show the original first, half the modified motion
+//           (an odd one drawn with random() < 0.5), shuffled, in the trials' order
 'use strict';
 (function (root) {
   const RULE = 'flipstudy-web-order/1 (sfc32 seeded by FNV-1a; the rule of flipstudy.study.order)';
@@ -48,6 +52,7 @@
       return t;
     }
     below(n) { return Math.floor(this.next() * n / 4294967296); }
+    random() { return this.next() / 4294967296; }
     shuffle(x) {
       for (let i = x.length - 1; i > 0; i--) {
         const j = this.below(i + 1);
@@ -76,11 +81,32 @@
         if (!trials.length || nStimuli === 1 || block[0][0].stimulus !== trials[trials.length - 1].stimulus) break;
       }
       for (const [row, g] of block) {
-        trials.push({trial: trials.length + 1, stimulus: row.stimulus, clip: row.clip, group: g,
-                     kind: row.kind, level: row.level, repetition: rep});
+        const t = {trial: trials.length + 1, stimulus: row.stimulus, clip: row.clip, group: g,
+                   kind: row.kind, level: row.level, repetition: rep};
+        if (row.task === '2afc') Object.assign(t, {task: '2afc', first: '', original: row.original});
+        trials.push(t);
       }
     }
+    if (trials.some((t) => t.task === '2afc')) balanceFirst(trials, rng);
     return trials;
+  }
+
+  // which motion each 2AFC trial shows first: half each way within each group
+  function balanceFirst(trials, rng) {
+    const byGroup = new Map();
+    trials.forEach((t, i) => {
+      if (t.task !== '2afc') return;
+      if (!byGroup.has(t.group)) byGroup.set(t.group, []);
+      byGroup.get(t.group).push(i);
+    });
+    for (const idx of byGroup.values()) {
+      const n = idx.length;
+      const firsts = [];
+      for (let k = 0; k < Math.floor(n / 2); k++) firsts.push('original', 'modified');
+      if (n % 2) firsts.push(rng.random() < 0.5 ? 'original' : 'modified');
+      rng.shuffle(firsts);
+      idx.forEach((i, k) => { trials[i].first = firsts[k]; });
+    }
   }
 
   function makeBlock(groups, rng) {
@@ -105,7 +131,7 @@
     return block;
   }
 
-  const api = {RULE, fnv1a32, orderKey, Sfc32, webTrialOrder};
+  const api = {RULE, fnv1a32, orderKey, Sfc32, webTrialOrder, balanceFirst};
   if (typeof module !== 'undefined' && module.exports) module.exports = api;
   else root.FlipstudyOrder = api;
 })(typeof window !== 'undefined' ? window : globalThis);

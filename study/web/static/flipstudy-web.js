@@ -372,18 +372,18 @@
           loop_function: (data) => data.values()[0].response === 0});
       });
     } else {
-      const next = answered < n ? `The study continues with motion ${answered + 1} of ${n}.`
+      const next = answered < n ? `The study continues with ${C.texts.noun || 'motion'} ${answered + 1} of ${n}.`
         : 'The study continues with the motions shown once more.';
       tl.push({type: jsPsychHtmlButtonResponse, choices: ['Continue'],
                stimulus: card('Welcome back', [`Your first ${answered} answers are saved. ${next}`,
-                                                'Remember: some motions are physically correct and some are not.', C.texts.keys_sentence]),
+                                                C.texts.remember || 'Remember: some motions are physically correct and some are not.', C.texts.keys_sentence]),
                on_load: () => setScreen('resume', 'instructions')});
     }
     const every = Math.max(1, C.break_every);
     for (const t of trials.slice(answered)) {
       if (t.trial > 1 && (t.trial - 1) % every === 0 && t.trial - 1 > answered) {
         tl.push({type: jsPsychHtmlButtonResponse, choices: ['Continue'],
-                 stimulus: card('Break', [`Take a short rest. ${t.trial - 1} of ${n} motions done. Continue when you are ready.`]),
+                 stimulus: card('Break', [`Take a short rest. ${t.trial - 1} of ${n} ${C.texts.noun || 'motion'}s done. Continue when you are ready.`]),
                  on_load: () => setScreen(`break-${t.trial - 1}`, 'break')});
       }
       tl.push(...trialNodes(t, 0));
@@ -401,6 +401,9 @@
     tl.push(endNode());
 
     function trialNodes(t, repeat) {
+      if (t.task === '2afc') {
+        return window.Flipstudy2afc.nodes(t, repeat, {C, jsPsych, esc, setScreen, watchPlayback, emit, refresh, n, app});
+      }
       const info = C.videos[t.stimulus];
       const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
       const progress = repeat ? `Once more: motion ${t.trial} of ${n}` : `Motion ${t.trial} of ${n}`;
