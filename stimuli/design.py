@@ -72,6 +72,9 @@ class Group:
     levels: list[float]         # nominal error in percent (magnitude; 0 = original)
     original: str = "own"       # "shared": its level 0 is the clip's shared original
     style: str | None = None    # character style of its stimuli (None: the study's)
+    policy: str | None = None   # gravity: what stays ("takeoff-velocity" | "apex-height" | "flight-time")
+    axis: str | None = None     # acceleration: "horizontal" | "vertical"
+    span: str | None = None     # time-scale: "flight" | "whole"
 
 
 @dataclass(frozen=True)
@@ -207,7 +210,7 @@ STUDY_KEYS = ("name", "seed", "fps", "repetitions", "total_mass", "com_policy", 
 SESSION_KEYS = ("replay", "break_every", "max_dropped_pct", "repeat_dropped")
 OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
 CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
-GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original", "style")
+GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original", "style", "policy", "axis", "span")
 #: the character styles a design may choose (drawn by flipstudy.render.characters)
 CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
@@ -232,7 +235,42 @@ LEVELS_MAX = 20                       # levels per group
 LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the original
                 ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
                 ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
-                ("takeoff-angle", -1): (100.0, True)}       # −100 % leaves no horizontal velocity
+                ("takeoff-angle", -1): (100.0, True),       # −100 % leaves no horizontal velocity
+                # the ballistic kinds (flipstudy.stimuli.ballistic)
+                ("gravity", 1): (300.0, False),             # up to 4 g
+                ("gravity", -1): (100.0, True),             # no gravity: no landing
+                ("horizontal-velocity", 1): (100.0, False),
+                ("horizontal-velocity", -1): (100.0, True),
+                ("vertical-velocity", 1): (100.0, False),
+                ("vertical-velocity", -1): (100.0, True),   # the COM must come down to the floor
+                ("acceleration", 1): (100.0, True),         # percent of 9.81 m/s²; a vertical one
+                ("acceleration", -1): (100.0, True),        # of +100 % would cancel gravity
+                ("time-scale", 1): (300.0, False),          # up to 4× speed
+                ("time-scale", -1): (100.0, True),          # −100 % stops the motion
+                ("pose-rate", 1): (1000.0, False)}          # poses per second (0: the original)
+#: the option each kind takes, as a group key, and its values (the first: the default;
+#: None: the key must be given)
+KIND_OPTIONS = {"gravity": ("policy", None, ("takeoff-velocity", "apex-height", "flight-time")),
+                "acceleration": ("axis", None, ("horizontal", "vertical")),
+                "time-scale": ("span", "flight", ("flight", "whole"))}
+
+
+def _kind_options(g: dict, kind: str, sign: int, wg: str) -> dict:
+    """The group keys ``policy`` / ``axis`` / ``span`` of its kind (refused on the
+    other kinds), and the sign a pose-rate group must have."""
+    key = KIND_OPTIONS.get(kind, (None,))[0]
+    for other in ("policy", "axis", "span"):
+        if other in g and other != key:
+            owner = [k for k, v in KIND_OPTIONS.items() if v[0] == other][0]
+            raise DesignError(f"{wg}.{other}: only {owner} groups have a{'n' if other[0] in 'a' else ''} "
+                              f"{other}")
+    if kind == "pose-rate" and sign != 1:
+        raise DesignError(f"{wg}.sign: a pose-rate group's levels are poses per second; its sign is 1")
+    if key is None:
+        return {}
+    _, default, values = KIND_OPTIONS[kind]
+    return {key: _get(g, key, str, wg, ... if default is None else default,
+                      lambda v: None if v in values else f"must be one of {list(values)}")}
 MAX_DESIGN_BYTES = 1_000_000
 
 
@@ -401,6 +439,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         elif "profile" in g:
             raise DesignError(f"{wg}.profile: only angular-momentum groups have a profile")
         sign = _get(g, "sign", int, wg, 1, lambda v: None if v in (1, -1) else "must be 1 or -1")
+        options = _kind_options(g, kind, sign, wg)
         levels = _get(g, "levels", list, wg)
         if not levels:
             raise DesignError(f"{wg}.levels: at least one level is needed")
@@ -433,7 +472,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         if orig == "shared" and gstyle is not None and gstyle != (design.style or "ellipsoids"):
             raise DesignError(f"{wg}.style: a group drawn as {gstyle!r} cannot share the clip's "
                               f"original (drawn in the study's style); use original = \"own\"")
-        design.groups.append(Group(gname, kind, profile, sign, sorted(lv), orig, gstyle))
+        design.groups.append(Group(gname, kind, profile, sign, sorted(lv), orig, gstyle, **options))
     gnames = [g.name for g in design.groups]
     if len(set(gnames)) != len(gnames):
         raise DesignError(f"{src}: groups: duplicate group names "

@@ -28,7 +28,7 @@ contact instants (what a different push or landing would do), never in the air.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -40,7 +40,10 @@ from .flight import path_values
 from .motion.clip import Clip, derived_meta
 from .physics import center_of_mass
 
-KINDS = ("angular-momentum", "takeoff-angle")
+KINDS = ("angular-momentum", "takeoff-angle",
+         # the ballistic kinds of flipstudy.stimuli.ballistic
+         "gravity", "horizontal-velocity", "vertical-velocity", "acceleration", "time-scale",
+         "pose-rate")
 PROFILES = ("smooth", "abrupt")
 COM_POLICIES = ("angle", "landing")
 
@@ -63,6 +66,9 @@ class Injected:
     flight_s: float
     takeoff_time: float = float("nan")    # contact instants of the new clip, seconds
     landing_time: float = float("nan")
+    opts: dict = field(default_factory=dict)   # the kind's options (policy, axis, span, rate)
+    air_acc: np.ndarray | None = None          # the COM's acceleration in the air it was built
+                                               # with (None: free fall at the original's g)
 
 
 def _need_flight(a: Analysis) -> None:
