@@ -160,7 +160,7 @@ def inject_gravity(a: Analysis, error: float, policy: str) -> Injected:
     >>> from flipstudy import analyse, builtin
     >>> a = analyse(builtin("jump"))
     >>> s = inject_gravity(a, -0.2, "flight-time")
-    >>> round(s.flight_s / a.flight_s, 6), round(-s.air_acc[1] / a.apparent_gravity, 6)
+    >>> round(s.flight_s / a.flight_s, 6), round(float(-s.air_acc[1] / a.apparent_gravity), 6)
     (1.0, 0.8)
     """
     if policy not in GRAVITY_POLICIES:
@@ -275,8 +275,14 @@ def held_times(n_frames: int, fps: float, rate: float) -> np.ndarray:
     >>> held_times(6, 120.0, 40.0) * 120
     array([0., 0., 0., 3., 3., 3.])
     """
-    t = np.arange(n_frames) / fps
-    return np.floor(t * rate + 1e-9) / rate
+    return held_frames(n_frames, fps, rate) / fps
+
+
+def held_frames(n_frames: int, fps: float, rate: float) -> np.ndarray:
+    """(F,) the source frame (fractional) shown at each frame: update j = ⌊k·rate/fps⌋
+    is source frame j·fps/rate (a whole frame when the rate divides fps)."""
+    j = np.floor(np.arange(n_frames) * (rate / fps) + 1e-9)
+    return j * (fps / rate)
 
 
 def inject_pose_rate(a: Analysis, rate: float) -> Injected:
@@ -290,8 +296,9 @@ def inject_pose_rate(a: Analysis, rate: float) -> Injected:
         raise StimulusError(f"pose-rate {rate!r} poses per second: expected more than 0 and fewer "
                             f"than the clip's {fps:g} frames per second")
     t_to, t_ld, c0, c1, v0, g = _flight(a)
-    ts = held_times(clip.num_frames, fps, rate)
-    new = sample(clip, ts * fps)
+    src = held_frames(clip.num_frames, fps, rate)
+    ts = src / fps
+    new = sample(clip, src)
     air = (ts > t_to) & (ts < t_ld)
     shift = np.zeros_like(new.root_pos)
     shift[air] = a.path_at(ts[air]) - center_of_mass(new, a.body)[air]
