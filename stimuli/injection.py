@@ -19,6 +19,11 @@ The motion is split into the COM path and the motion relative to the COM.
   the jump"); vertical velocity, duration and L are untouched; the landing and
   everything after it move along the jump direction.
 
+The kinds of the wider perception literature (gravity, take-off velocity
+components, added accelerations, time scale, pose rate) are built the same way
+in :mod:`flipstudy.stimuli.ballistic` and measured in
+:mod:`flipstudy.stimuli.ballistic_measure`.
+
 Every stimulus is then *measured* by the analyser (:func:`measure`), and
 :func:`check` refuses one whose measured error misses the nominal, or whose
 COM in the air leaves free fall by more than the original's own measurement
