@@ -130,16 +130,15 @@ def measure_ballistic(original: Analysis, inj: Injected) -> dict:
     # the instants of the motion shown (pose-rate: the original's, which its held
     # poses sample; its display instants are inj's)
     t_to, t_ld = (o.takeoff_time, o.landing_time) if held else (inj.takeoff_time, inj.landing_time)
-    # the original, fitted the same way (its own frames strictly inside)
+    # the original: the analyser's own ballistic path (the one every stimulus is
+    # built from: x and z straight, y a parabola), at its own instants
     to_o, ld_o = o.takeoff, o.landing
-    t_o = np.arange(to_o, ld_o + 1) / o.clip.fps
-    cf_o = fit_free(o.com[to_o:ld_o + 1], t_o)
-    g_o = -2.0 * cf_o[1, 0]
+    g_o = float(o.apparent_gravity)
+    c0_o, c1_o = o.path_at(np.array([o.takeoff_time, o.landing_time]))
+    v_o = o.takeoff_velocity
     c0, v = _at(cf, t_to)
     c1, _ = _at(cf, t_ld)
-    c0_o, v_o = _at(cf_o, o.takeoff_time)
-    c1_o, _ = _at(cf_o, o.landing_time)
-    acc, acc_o = 2.0 * cf[:, 0], 2.0 * cf_o[:, 0]
+    acc, acc_o = 2.0 * cf[:, 0], np.array([0.0, -g_o, 0.0])
     g = -acc[1]
     vh, vh_o = np.hypot(v[0], v[2]), np.hypot(v_o[0], v_o[2])
     u = np.array([v_o[0], 0.0, v_o[2]]) / vh_o if vh_o > 1e-9 else np.zeros(3)
@@ -159,7 +158,8 @@ def measure_ballistic(original: Analysis, inj: Injected) -> dict:
                                             float(np.median(Lo[max(ld_o - 2, to_o):ld_o + 1])) - 1.0)
     expected = inj.air_acc if inj.air_acc is not None else np.array([0.0, -g_o, 0.0])
     out["air_acc_dev"] = _departure(t, com, expected)
-    out["air_acc_dev_original"] = _departure(t_o, o.com[to_o:ld_o + 1], np.array([0.0, -g_o, 0.0]))
+    out["air_acc_dev_original"] = _departure(np.arange(to_o, ld_o + 1) / o.clip.fps,
+                                             o.com[to_o:ld_o + 1], acc_o)
     p = mo.p
     out["dp_takeoff"] = float(np.linalg.norm(p[i0] - p[max(i0 - 2, 0)]))
     out["dp_landing"] = float(np.linalg.norm(p[min(i1 + 2, p.shape[0] - 1)] - p[i1]))

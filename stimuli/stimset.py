@@ -242,8 +242,11 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 inj = inject_angular_momentum(a, group.sign * level / 100.0, group.profile,
                                               design.com_policy)
             elif group.kind in BALLISTIC_KINDS:
-                inj = inject_kind(a, group.kind, group.sign * level / 100.0,
-                                  group.policy or group.axis or group.span, rate=level)
+                try:
+                    inj = inject_kind(a, group.kind, group.sign * level / 100.0,
+                                      group.policy or group.axis or group.span, rate=level)
+                except StimulusError as e:
+                    raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
             else:
                 inj = inject_takeoff_angle(a, group.sign * level / 100.0)
             if inj.kind == "reference":

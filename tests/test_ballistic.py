@@ -282,3 +282,36 @@ def test_a_study_of_the_new_kinds_builds_and_records_them(tmp_path):
     d.clips = d.clips[:1]
     build_stimuli(d, tmp_path / "p", progress=False)
     assert (tmp_path / "p" / "manifest.csv").read_text().splitlines()[0].split(",") == MANIFEST_COLUMNS
+
+
+def test_a_level_the_clip_cannot_take_is_refused_naming_the_stimulus(tmp_path):
+    from flipstudy.stimuli.stimset import build_stimuli
+    d = parse_design(BASE + 'kind = "pose-rate"\nlevels = [0, 150]')      # the study runs at 120 fps
+    with pytest.raises(StimulusError, match=r"jump_g_150 \(group 'g', level 150\): pose-rate 150"):
+        build_stimuli(d, tmp_path / "s", progress=False)
+    assert not (tmp_path / "s").exists()
+    with pytest.raises(DesignError, match="at most 1000 poses per second"):
+        parse_design(BASE + 'kind = "pose-rate"\nlevels = [2000]')
+
+
+@pytest.mark.shared("mocap/88_01.bvh")
+@pytest.mark.parametrize("kind,opt,e", [("gravity", "takeoff-velocity", -0.3), ("gravity", "flight-time", 0.3),
+                                        ("horizontal-velocity", None, 0.3), ("vertical-velocity", None, -0.1),
+                                        ("acceleration", "horizontal", -0.2), ("time-scale", "whole", 0.5)])
+def test_kinds_on_a_captured_flip(real88, kind, opt, e):
+    """CMU 88_01 at its true 60 fps: the flight carries its capture noise (the
+    original's own in-air departure is ~145 m/s²); the stimulus' COM is the exact
+    path, within the real-data tolerance of its nominal."""
+    inj = inject_kind(real88, kind, e, opt)
+    m = measure_ballistic(real88, inj)
+    assert m["measured_error_pct"] == pytest.approx(100 * e, abs=2.0)
+    assert m["air_acc_dev"] < 0.05 < m["air_acc_dev_original"]
+    assert abs(m["landing_height_change_mm"]) < 0.5
+    check(m, inj, 2.0, kind)
+
+
+@pytest.fixture(scope="module")
+def real88():
+    from _shared import shared_file
+    from flipstudy.stimuli import load_bvh
+    return analyse(load_bvh(shared_file("88_01.bvh"), fps=60))
