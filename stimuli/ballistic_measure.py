@@ -73,13 +73,16 @@ def pose_updates(clip: Clip) -> tuple[np.ndarray, float, float]:
 
 
 def _sequence(a: Analysis, inj: Injected):
-    """The poses the stimulus shows and their times: every frame, or for pose-rate
-    the distinct poses at their update instants (a clip at the update rate); the
-    first and last index strictly inside the airborne span; their momenta."""
+    """The poses the stimulus shows and their times: the frames of the airborne
+    span and three either side, or for pose-rate the distinct poses at their
+    update instants (a clip at the update rate); the first and last index
+    strictly inside the airborne span; their momenta (each phase differenced
+    on its own)."""
     clip, fps = inj.clip, inj.clip.fps
-    if inj.kind != "pose-rate":
-        mo = momentum(clip, a.body, [inj.takeoff, inj.landing + 1])
-        return np.arange(clip.num_frames) / fps, mo, inj.takeoff, inj.landing
+    if inj.kind != "pose-rate":              # the flight and three frames either side
+        lo, hi = max(0, inj.takeoff - 3), min(clip.num_frames, inj.landing + 4)
+        mo = momentum(clip.slice(lo, hi), a.body, [inj.takeoff - lo, inj.landing + 1 - lo])
+        return np.arange(lo, hi) / fps, mo, inj.takeoff - lo, inj.landing - lo
     frames, rate, t0 = pose_updates(clip)
     t = t0 + np.round((frames / fps - t0) * rate) / rate
     pc = Clip(clip.skeleton, rate, clip.root_pos[frames], clip.rotations[frames],

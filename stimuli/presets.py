@@ -11,7 +11,7 @@ comment says which one was chosen.  ``PAPER_DESIGN`` (Majkowska & Faloutsos
 ['flipping-with-physics-2007', 'gravity']
 >>> from flipstudy.stimuli.design import parse_design
 >>> [len(parse_design(t).groups) for t in PRESETS.values()]
-[5, 8, 2, 4, 1]
+[5, 8, 12, 2, 4, 1]
 """
 
 from __future__ import annotations
@@ -71,6 +71,32 @@ REITSMA_POLLARD_2003 = """\
         _group(f"{axis[0]}-{'acceleration' if s > 0 else 'deceleration'}", "acceleration", s,
                [0, 5, 10, 20, 30], axis=axis) for axis in ("horizontal", "vertical") for s in (1, -1))
 
+REITSMA_ANDREWS_POLLARD_2008 = """\
+# Reitsma, Andrews & Pollard 2008, "Effect of character animacy and preparatory motion on
+# perceptual magnitude of errors in ballistic motion" (Eurographics 2008): the errors of
+# Reitsma & Pollard 2003 on three characters, from a human-like one to an abstract one;
+# sensitivity followed error type and size alike on all three, and was higher for some
+# error types on the most human-like character.
+#
+# Assumed here:
+# - the characters: flipstudy's styles "mannequin" (human-like), "stick" and
+#   "point-light" (the most abstract it draws) stand in for the paper's three; each
+#   group has its own original, drawn in its style;
+# - the errors: an increase of horizontal and of vertical take-off velocity and an added
+#   horizontal acceleration and deceleration (as in the reitsma-pollard-2003 preset),
+#   on the built-in jump, levels 0-40 % (accelerations 0-30 % of 9.81 m/s²);
+# - not built: the paper's second experiment without the preparatory motion (the
+#   ballistic phase alone); flipstudy's stimuli always show the whole clip.
+""" + _HEAD.format(name="reitsma-andrews-pollard-2008", seed=20080414, fps=120, reps=2) + \
+    _clips("jump") + "".join(
+        _group(f"{name}-{style}", kind, sign, levels, **opts, style=style)
+        for style in ("mannequin", "stick", "point-light")
+        for name, kind, sign, levels, opts in (
+            ("h-velocity", "horizontal-velocity", 1, [0, 10, 20, 30, 40], {}),
+            ("v-velocity", "vertical-velocity", 1, [0, 10, 20, 30, 40], {}),
+            ("h-acceleration", "acceleration", 1, [0, 5, 10, 20, 30], {"axis": "horizontal"}),
+            ("h-deceleration", "acceleration", -1, [0, 5, 10, 20, 30], {"axis": "horizontal"})))
+
 GRAVITY = """\
 # Gravity in the air (McManus et al. 2011; La Scaleia et al. 2020): the same motions
 # under a lower or higher gravity; lower gravity was detected slightly more easily,
@@ -118,6 +144,7 @@ POSE_RATE = """\
 #: preset name → design text (the first is the default of ``flipstudy init``)
 PRESETS = {"flipping-with-physics-2007": PAPER_DESIGN,
            "reitsma-pollard-2003": REITSMA_POLLARD_2003,
+           "reitsma-andrews-pollard-2008": REITSMA_ANDREWS_POLLARD_2008,
            "gravity": GRAVITY,
            "time-scale": TIME_SCALE,
            "pose-rate": POSE_RATE}

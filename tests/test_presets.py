@@ -26,18 +26,20 @@ def test_the_cli_offers_every_preset():
 
 def small(text: str) -> str:
     """The preset with its first clip only, the first group of each kind and
-    option (policy, axis, span), and levels [0, largest]."""
+    option (policy, axis, span) and of each style, and levels [0, largest]."""
     d = parse_design(text)
     first, *rest = [c.name for c in d.clips]
     for c in rest:
         text = text.replace(f'[[clips]]\nname = "{c}"\nsource = "{c}"\n\n', "")
     text = re.sub(r"\[reference\]\nclips = \[[^\]]*\]", f'[reference]\nclips = ["{first}"]', text)
     head, *groups = text.split("[[groups]]\n")
-    seen, keep = set(), []
+    seen, styles, keep = set(), set(), []
     for g in groups:
         key = tuple(re.findall(r'^(?:kind|profile|policy|axis|span) = .*$', g, re.M))
-        if key not in seen:
+        style = tuple(re.findall(r'^style = .*$', g, re.M))
+        if key not in seen or style not in styles:
             seen.add(key)
+            styles.add(style)
             keep.append(g)
     text = head + "".join("[[groups]]\n" + g for g in keep)
     return re.sub(r"levels = \[([^\]]*)\]",

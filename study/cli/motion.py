@@ -12,8 +12,8 @@ from .common import add_clip_args, add_json, add_mass, add_out, add_study_dir, l
 
 #: the names of flipstudy.stimuli.presets.PRESETS (written out: building the parser
 #: imports no numpy; a test checks they agree)
-PRESET_NAMES = ("flipping-with-physics-2007", "reitsma-pollard-2003", "gravity", "time-scale",
-                "pose-rate")
+PRESET_NAMES = ("flipping-with-physics-2007", "reitsma-pollard-2003", "reitsma-andrews-pollard-2008",
+                "gravity", "time-scale", "pose-rate")
 
 
 def cmd_inspect(args) -> int:
