@@ -206,6 +206,26 @@ def jump_truth():
     return Truth("jump")
 
 
+@settings(max_examples=15, deadline=None)
+@given(case=st.sampled_from([(k, o) for k, o, _ in CASES[::2]]), e=st.floats(-0.45, 0.45),
+       name=st.sampled_from(CLIPS))
+def test_any_kind_at_any_level_is_measured_within_half_a_point(truths, case, e, name):
+    kind, opt = case
+    tr = truths[name]
+    inj = inject_kind(tr.a, kind, e, opt)
+    k = 1 + e if (kind, opt) == ("time-scale", "whole") else 1.0
+    _, _, acc, v, acc2 = flight_of(inj.clip, tr.body, tr.fps, tr.t_to / k)
+    acc_x, v_x, _ = expected(tr, kind, opt, e)
+    assert np.abs(acc2 - acc_x).max() < 0.02 and v == pytest.approx(v_x, abs=1e-3)
+    m = measure_ballistic(tr.a, inj)
+    assert m["measured_error_pct"] == pytest.approx(100 * e, abs=0.5)
+
+
+@pytest.fixture(scope="module")
+def truths():
+    return {n: Truth(n) for n in CLIPS}
+
+
 def test_impossible_flights_are_refused(jump_truth):
     a = jump_truth.a
     with pytest.raises(StimulusError, match="poses per second"):
