@@ -71,6 +71,24 @@ G0 = 9.81
 GRAVITY_POLICIES = ("takeoff-velocity", "apex-height", "flight-time")
 AXES = ("horizontal", "vertical")
 SPANS = ("flight", "whole")
+#: design level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
+BALLISTIC_LEVEL_BOUNDS = {
+    ("gravity", 1): (300.0, False),             # up to 4 g
+    ("gravity", -1): (100.0, True),             # no gravity: no landing
+    ("horizontal-velocity", 1): (100.0, False),
+    ("horizontal-velocity", -1): (100.0, True),
+    ("vertical-velocity", 1): (100.0, False),
+    ("vertical-velocity", -1): (100.0, True),   # the COM must come down to the floor
+    ("acceleration", 1): (100.0, True),         # percent of 9.81 m/s²; a vertical one
+    ("acceleration", -1): (100.0, True),        # of +100 % would cancel gravity
+    ("time-scale", 1): (300.0, False),          # up to 4× speed
+    ("time-scale", -1): (100.0, True),          # −100 % stops the motion
+    ("pose-rate", 1): (1000.0, False)}          # poses per second (0: the original)
+#: the design option (a group key) each kind takes and its values (the default, or
+#: None when the key must be given)
+KIND_OPTIONS = {"gravity": ("policy", None, GRAVITY_POLICIES),
+                "acceleration": ("axis", None, AXES),
+                "time-scale": ("span", "flight", SPANS)}
 #: kinds this module makes, and the group option each one takes (None: none)
 BALLISTIC_KINDS = {"gravity": "policy", "horizontal-velocity": None, "vertical-velocity": None,
                    "acceleration": "axis", "time-scale": "span", "pose-rate": None}

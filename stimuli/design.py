@@ -45,6 +45,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
+from .ballistic import BALLISTIC_LEVEL_BOUNDS, KIND_OPTIONS
 from .injection import COM_POLICIES, KINDS, PROFILES
 
 
@@ -236,23 +237,8 @@ LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the 
                 ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
                 ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
                 ("takeoff-angle", -1): (100.0, True),       # −100 % leaves no horizontal velocity
-                # the ballistic kinds (flipstudy.stimuli.ballistic)
-                ("gravity", 1): (300.0, False),             # up to 4 g
-                ("gravity", -1): (100.0, True),             # no gravity: no landing
-                ("horizontal-velocity", 1): (100.0, False),
-                ("horizontal-velocity", -1): (100.0, True),
-                ("vertical-velocity", 1): (100.0, False),
-                ("vertical-velocity", -1): (100.0, True),   # the COM must come down to the floor
-                ("acceleration", 1): (100.0, True),         # percent of 9.81 m/s²; a vertical one
-                ("acceleration", -1): (100.0, True),        # of +100 % would cancel gravity
-                ("time-scale", 1): (300.0, False),          # up to 4× speed
-                ("time-scale", -1): (100.0, True),          # −100 % stops the motion
-                ("pose-rate", 1): (1000.0, False)}          # poses per second (0: the original)
-#: the option each kind takes, as a group key, and its values (the first: the default;
-#: None: the key must be given)
-KIND_OPTIONS = {"gravity": ("policy", None, ("takeoff-velocity", "apex-height", "flight-time")),
-                "acceleration": ("axis", None, ("horizontal", "vertical")),
-                "time-scale": ("span", "flight", ("flight", "whole"))}
+                **BALLISTIC_LEVEL_BOUNDS}                   # gravity, velocities, ... pose rate
+MAX_DESIGN_BYTES = 1_000_000
 
 
 def _kind_options(g: dict, kind: str, sign: int, wg: str) -> dict:
@@ -271,7 +257,6 @@ def _kind_options(g: dict, kind: str, sign: int, wg: str) -> dict:
     _, default, values = KIND_OPTIONS[kind]
     return {key: _get(g, key, str, wg, ... if default is None else default,
                       lambda v: None if v in values else f"must be one of {list(values)}")}
-MAX_DESIGN_BYTES = 1_000_000
 
 
 def _typename(typ) -> str:
