@@ -335,3 +335,18 @@ def real88():
     from _shared import shared_file
     from flipstudy.stimuli import load_bvh
     return analyse(load_bvh(shared_file("88_01.bvh"), fps=60))
+
+
+@pytest.mark.parametrize("e", [1.0, -0.5])
+def test_time_scale_whole_plays_the_ground_phases_at_the_same_speed(jump_truth, e):
+    tr = jump_truth
+    inj = inject_kind(tr.a, "time-scale", e, "whole")
+    k = 1 + e
+    P, P0 = inj.clip.joint_positions(), tr.clip.joint_positions()
+    # frame i shows the original at frame k·i: whole frames where k·i is one
+    i = np.arange(inj.clip.num_frames)
+    whole = np.flatnonzero(np.isclose(k * i, np.round(k * i)))
+    ground = whole[(whole < inj.takeoff) | (whole > inj.landing)]
+    assert ground.size > 100
+    assert np.abs(P[ground] - P0[np.round(k * ground).astype(int)]).max() < 1e-9
+    assert inj.clip.num_frames == int((tr.clip.num_frames - 1) / k) + 1
