@@ -53,6 +53,7 @@ except ModuleNotFoundError:  # Python 3.10
 
 from .groupkeys import (GRID_MAX, LEVELS_MAX, METHODS, QUEST_KEYS, TASKS, QuestSpec,  # noqa: F401
                         parse_levels, parse_method_task, parse_quest)
+from .ballistic import BALLISTIC_LEVEL_BOUNDS, KIND_OPTIONS
 from .injection import COM_POLICIES, KINDS, PROFILES
 
 
@@ -79,6 +80,9 @@ class Group:
     method: str = "constant"    # "constant" stimuli | "quest+" (adaptive over the levels)
     task: str = "yes-no"        # "yes-no" | "2afc" (original and modified, which was correct?)
     quest: QuestSpec | None = None   # a quest+ group's settings
+    policy: str | None = None   # gravity: what stays ("takeoff-velocity" | "apex-height" | "flight-time")
+    axis: str | None = None     # acceleration: "horizontal" | "vertical"
+    span: str | None = None     # time-scale: "flight" | "whole"
 
     @property
     def adaptive(self) -> bool:
@@ -242,7 +246,7 @@ SESSION_KEYS = ("replay", "break_every", "max_dropped_pct", "repeat_dropped")
 OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
 CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
 GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original", "style", "method", "task",
-              *QUEST_KEYS)
+              "policy", "axis", "span", *QUEST_KEYS)
 #: the character styles a design may choose (drawn by flipstudy.render.characters)
 CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
@@ -266,8 +270,27 @@ TRIALS_MAX = 3000                     # test trials per participant (repetitions
 LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the original
                 ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
                 ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
-                ("takeoff-angle", -1): (100.0, True)}       # −100 % leaves no horizontal velocity
+                ("takeoff-angle", -1): (100.0, True),       # −100 % leaves no horizontal velocity
+                **BALLISTIC_LEVEL_BOUNDS}                   # gravity, velocities, ... pose rate
 MAX_DESIGN_BYTES = 1_000_000
+
+
+def _kind_options(g: dict, kind: str, sign: int, wg: str) -> dict:
+    """The group keys ``policy`` / ``axis`` / ``span`` of its kind (refused on the
+    other kinds), and the sign a pose-rate group must have."""
+    key = KIND_OPTIONS.get(kind, (None,))[0]
+    for other in ("policy", "axis", "span"):
+        if other in g and other != key:
+            owner = [k for k, v in KIND_OPTIONS.items() if v[0] == other][0]
+            raise DesignError(f"{wg}.{other}: only {owner} groups have a{'n' if other[0] in 'a' else ''} "
+                              f"{other}")
+    if kind == "pose-rate" and sign != 1:
+        raise DesignError(f"{wg}.sign: a pose-rate group's levels are poses per second; its sign is 1")
+    if key is None:
+        return {}
+    _, default, values = KIND_OPTIONS[kind]
+    return {key: _get(g, key, str, wg, ... if default is None else default,
+                      lambda v: None if v in values else f"must be one of {list(values)}")}
 
 
 def _style_ok(v: str):
@@ -379,6 +402,7 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         elif "profile" in g:
             raise DesignError(f"{wg}.profile: only angular-momentum groups have a profile")
         sign = _get(g, "sign", int, wg, 1, lambda v: None if v in (1, -1) else "must be 1 or -1")
+        options = _kind_options(g, kind, sign, wg)
         top, excluded = LEVEL_BOUNDS[(kind, sign)]
         lv = parse_levels(g, wg, kind, sign, top, excluded)
         method, task = parse_method_task(g, wg, design.task)
@@ -397,7 +421,8 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         if orig == "shared" and gstyle is not None and gstyle != (design.style or "ellipsoids"):
             raise DesignError(f"{wg}.style: a group drawn as {gstyle!r} cannot share the clip's "
                               f"original (drawn in the study's style); use original = \"own\"")
-        design.groups.append(Group(gname, kind, profile, sign, lv, orig, gstyle, method, task, quest))
+        design.groups.append(Group(gname, kind, profile, sign, lv, orig, gstyle, method, task, quest,
+                                   **options))
     gnames = [g.name for g in design.groups]
     if len(set(gnames)) != len(gnames):
         raise DesignError(f"{src}: groups: duplicate group names "

@@ -96,6 +96,8 @@ def parse_levels(g: dict, where: str, kind: str, sign: int, top: float, excluded
         if v > top or (excluded and v >= top):
             limit = f"below {top:g} %" if excluded else f"at most {top:g} %"
             why = " (it stops the rotation)" if kind == "angular-momentum" and sign < 0 else ""
+            if kind == "pose-rate":
+                what, limit = "a pose rate", f"at most {top:g} poses per second"
             raise DesignError(f"{where}.levels: {_pct(v)} % is out of range: {what} must be "
                               f"{limit}{why}")
         lv.append(float(v))

@@ -19,6 +19,11 @@ The motion is split into the COM path and the motion relative to the COM.
   the jump"); vertical velocity, duration and L are untouched; the landing and
   everything after it move along the jump direction.
 
+The kinds of the wider perception literature (gravity, take-off velocity
+components, added accelerations, time scale, pose rate) are built the same way
+in :mod:`flipstudy.stimuli.ballistic` and measured in
+:mod:`flipstudy.stimuli.ballistic_measure`.
+
 Every stimulus is then *measured* by the analyser (:func:`measure`), and
 :func:`check` refuses one whose measured error misses the nominal, or whose
 COM in the air leaves free fall by more than the original's own measurement
@@ -28,7 +33,7 @@ contact instants (what a different push or landing would do), never in the air.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -40,7 +45,10 @@ from .flight import path_values
 from .motion.clip import Clip, derived_meta
 from .physics import center_of_mass
 
-KINDS = ("angular-momentum", "takeoff-angle")
+KINDS = ("angular-momentum", "takeoff-angle",
+         # the ballistic kinds of flipstudy.stimuli.ballistic
+         "gravity", "horizontal-velocity", "vertical-velocity", "acceleration", "time-scale",
+         "pose-rate")
 PROFILES = ("smooth", "abrupt")
 COM_POLICIES = ("angle", "landing")
 
@@ -63,6 +71,9 @@ class Injected:
     flight_s: float
     takeoff_time: float = float("nan")    # contact instants of the new clip, seconds
     landing_time: float = float("nan")
+    opts: dict = field(default_factory=dict)   # the kind's options (policy, axis, span, rate)
+    air_acc: np.ndarray | None = None          # the COM's acceleration in the air it was built
+                                               # with (None: free fall at the original's g)
 
 
 def _need_flight(a: Analysis) -> None:

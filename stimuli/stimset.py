@@ -50,6 +50,8 @@ from ._progress import Progress
 from .analyse import analyse
 from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
 from .injection import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
+from .ballistic import BALLISTIC_KINDS, inject_kind
+from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
 from .exceptions import FlipstudyError
 from .motion.bvh import bvh_text, load_bvh
 from .motion.clip import Clip
@@ -228,25 +230,39 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                                     f"phase, so it cannot carry the study's errors")
             base[c.name] = a
         rows = []
+        extended = uses_ballistic_kinds(design)
         for name, spec, group, level in todo:
             a = base[spec.name]
             if group is None or level == 0:
                 inj = Injected(a.clip, group.kind if group else "reference",
                                group.profile if group else None, 0.0, a.takeoff, a.landing,
                                np.arange(a.clip.num_frames, dtype=float), a.flight_s,
-                               a.takeoff_time, a.landing_time)
+                               a.takeoff_time, a.landing_time, opts=_options(group))
             elif group.kind == "angular-momentum":
                 inj = inject_angular_momentum(a, group.sign * level / 100.0, group.profile,
                                               design.com_policy)
+            elif group.kind in BALLISTIC_KINDS:
+                try:
+                    inj = inject_kind(a, group.kind, group.sign * level / 100.0,
+                                      group.policy or group.axis or group.span, rate=level)
+                except StimulusError as e:
+                    raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
             else:
                 inj = inject_takeoff_angle(a, group.sign * level / 100.0)
             if inj.kind == "reference":
                 m = measure(a, Injected(a.clip, "takeoff-angle", None, 0.0, a.takeoff, a.landing,
                                         None, a.flight_s, a.takeoff_time, a.landing_time))
                 m["measured_error_pct"] = 0.0
+            elif inj.kind in BALLISTIC_KINDS:
+                m = measure_ballistic(a, inj)
+                check(m, inj, design.tolerance_pct, name)
             else:
                 m = measure(a, inj)
                 check(m, inj, design.tolerance_pct, name)
+            if extended and inj.kind not in BALLISTIC_KINDS:
+                m = {**measure_ballistic(a, inj), **m}
+                m["nominal_value"], m["measured_value"] = (group.sign * level if group else 0.0), \
+                    m["measured_error_pct"]
             text = bvh_text(inj.clip, 1.0)
             data = text.encode()
             npz = npz_bytes(clip_arrays(inj.clip, inj.takeoff, inj.landing))
@@ -258,7 +274,8 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 "kind": group.kind if group else "reference",
                 "profile": (group.profile or "") if group else "",
                 "level": level,
-                "nominal_error_pct": (group.sign * level if level else 0.0) if group else 0.0,
+                "nominal_error_pct": 100.0 * inj.error if group and group.kind in BALLISTIC_KINDS
+                else (group.sign * level if level else 0.0) if group else 0.0,
                 "measured_error_pct": m["measured_error_pct"],
                 "takeoff_angle_deg": m["takeoff_angle_deg"],
                 "takeoff_angle_change_deg": m["takeoff_angle_change_deg"],
@@ -276,6 +293,7 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 **{k: m[k] for k in ("air_acc_dev", "air_acc_dev_original", "dv_takeoff",
                                      "dv_landing", "L_error_touchdown_pct", "below_floor_mm")},
                 **({"style": design.style_of(group) or "ellipsoids"} if design.styled else {}),
+                **({k: m[k] for k in EXTRA_COLUMNS} if extended else {}),
             })
             bar.step(name)
         write_manifest(tmp / "manifest.csv", rows)
@@ -291,6 +309,19 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
     return rows
 
 
+def uses_ballistic_kinds(design: Design) -> bool:
+    """Does a design use a kind of :mod:`flipstudy.stimuli.ballistic`?  Its
+    manifest then has the columns of :data:`flipstudy.stimuli.ballistic_measure.EXTRA_COLUMNS`
+    (after ``style``), for every row."""
+    return any(g.kind in BALLISTIC_KINDS for g in design.groups)
+
+
+def _options(group) -> dict:
+    """A group's kind options as an Injected holds them (policy, axis, span)."""
+    return {k: getattr(group, k) for k in ("policy", "axis", "span")
+            if group is not None and getattr(group, k, None)}
+
+
 def _fmt(v) -> str:
     if isinstance(v, (float, np.floating)):
         if not np.isfinite(v):
@@ -301,11 +332,13 @@ def _fmt(v) -> str:
 
 
 def write_manifest(path: Path, rows: list[dict]) -> None:
-    """The manifest; a ``style`` column (the character style) is added last when
-    the rows have one (a design that chooses a style)."""
+    """The manifest; a ``style`` column (the character style) is added when the
+    rows have one (a design that chooses a style), then the ballistic kinds'
+    columns when they have those."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    cols = MANIFEST_COLUMNS + (["style"] if rows and "style" in rows[0] else [])
+    cols = MANIFEST_COLUMNS + (["style"] if rows and "style" in rows[0] else []) + \
+        (EXTRA_COLUMNS if rows and "quantity" in rows[0] else [])
     w.writerow(cols)
     for r in rows:
         w.writerow([_fmt(r[c]) for c in cols])

@@ -82,7 +82,8 @@ def test_paper_design_parses():
 
 @pytest.mark.parametrize("old,new,field", [
     ('seed = 20070803', 'seed = "x"', "seed"),
-    ('kind = "takeoff-angle"', 'kind = "gravity"', "kind"),
+    ('kind = "takeoff-angle"', 'kind = "gravitation"', "kind"),
+    ('kind = "takeoff-angle"', 'kind = "gravity"', "missing field 'policy'"),
     ('profile = "abrupt"\nsign = 1', 'profile = "sudden"\nsign = 1', "profile"),
     ('sign = -1', 'sign = 2', "sign"),
     ('levels = [0, 10, 20, 30, 40]', 'levels = [0, -10]', "levels"),

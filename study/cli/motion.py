@@ -10,6 +10,11 @@ from pathlib import Path
 
 from .common import add_clip_args, add_json, add_mass, add_out, add_study_dir, load_clip
 
+#: the names of flipstudy.stimuli.presets.PRESETS (written out: building the parser
+#: imports no numpy; a test checks they agree)
+PRESET_NAMES = ("flipping-with-physics-2007", "reitsma-pollard-2003", "reitsma-andrews-pollard-2008",
+                "gravity", "time-scale", "pose-rate")
+
 
 def cmd_inspect(args) -> int:
     from flipstudy.stimuli import analyse
@@ -70,16 +75,24 @@ def cmd_inspect(args) -> int:
 
 
 def cmd_init(args) -> int:
-    from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
+    from flipstudy.stimuli.design import parse_design
+    from flipstudy.stimuli.presets import PRESETS
     from flipstudy.stimuli._io import atomic_write_text
     out = Path(args.design)
     if out.exists() and not args.force:
         print(f"flipstudy init: {out} exists; pass --force to overwrite", file=sys.stderr)
         return 1
-    parse_design(PAPER_DESIGN)          # the template must always be valid
-    atomic_write_text(out, PAPER_DESIGN)
-    print(f"wrote {out}: the design of Majkowska & Faloutsos 2007, Section 7 "
-          f"(backflip and frontflip; 5 error groups × 5 levels; each motion shown twice)")
+    preset = args.preset or "flipping-with-physics-2007"
+    text = PRESETS[preset]
+    d = parse_design(text)              # the template must always be valid
+    atomic_write_text(out, text)
+    if args.preset is None:
+        print(f"wrote {out}: the design of Majkowska & Faloutsos 2007, Section 7 "
+              f"(backflip and frontflip; 5 error groups × 5 levels; each motion shown twice)")
+    else:
+        print(f"wrote {out}: the preset {preset} ({', '.join(c.name for c in d.clips)}; "
+              f"{len(d.groups)} error groups, {d.n_test_stimuli()} test stimuli; each motion shown "
+              f"{d.repetitions} times); its comments say what was assumed")
     print(f"next: flipstudy stimuli {out} --out STUDY_DIR")
     return 0
 
@@ -205,6 +218,8 @@ def add_commands(subparsers) -> None:
                        description="Write the design of the paper's study (Section 7) as a TOML file to edit.")
     p.add_argument("design", metavar="DESIGN.toml")
     p.add_argument("--force", action="store_true", help="overwrite an existing file")
+    p.add_argument("--preset", metavar="NAME", choices=PRESET_NAMES,
+                   help="a ready design of another study instead: " + ", ".join(PRESET_NAMES))
     p.set_defaults(func=cmd_init)
 
     p = subparsers.add_parser("stimuli", help="generate, measure and write the stimuli of a design",
