@@ -19,6 +19,7 @@ from matplotlib.figure import Figure
 
 from .io import group_order
 from .stats import PsychometricFit
+from .units import POSE_RATE, level_label, magnitude_label, magnitudes, pose_rate_of
 
 #: Okabe & Ito (2008), "Color Universal Design"; yellow last (weak on white)
 OKABE_ITO = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442"]
@@ -60,10 +61,13 @@ def _dodge(n: int, step: float) -> np.ndarray:
     return (np.arange(n) - (n - 1) / 2) * step
 
 
-def _level_axis(ax, levels):
+def _level_axis(ax, levels, unit="%"):
     ticks = sorted(set(float(v) for v in levels))
     ax.set_xticks(ticks)
-    ax.set_xticklabels([f"{t:g}" for t in ticks])
+    if unit == "ms":                  # a pose-rate hold: the ms, and the poses/s under it
+        ax.set_xticklabels([f"{t:.0f}\n({1000 / t:g}/s)" if t > 0 else "0\n(orig.)" for t in ticks])
+    else:
+        ax.set_xticklabels([f"{t:g}" for t in ticks])
     span = (max(ticks) - min(ticks)) or 1.0
     ax.set_xlim(min(ticks) - 0.06 * span, max(ticks) + 0.06 * span)
 
@@ -74,15 +78,17 @@ def _panel_grid(n: int):
     return nrows, ncols
 
 
-def ratings_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
+def ratings_figure(table: pd.DataFrame, ci_label: str = "95% CI", kinds: dict | None = None) -> Figure:
     """Mean rating (% judged correct) against the error level with bootstrap
     confidence intervals over participants: one panel per block of groups that
     share their levels (the paper's angular-momentum and take-off blocks), one
-    line per group."""
+    line per group.  ``kinds`` (group → error kind): a pose-rate block's axis is
+    in poses/s."""
     from .tables import blocks
+    kinds = kinds or {}
     groups = group_order(table["group"].unique())
     sty = group_styles(groups)
-    bl = blocks(table)
+    bl = blocks(table, kinds)
     widths = [max(len(g), 1.0) + 1.2 for _, g in bl]
     with style():
         fig = Figure(figsize=(min(2.0 + 1.25 * sum(widths), 7.2), 3.4), layout="constrained")
@@ -100,7 +106,7 @@ def ratings_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
                             lw=1.5, elinewidth=0.9, label=g, zorder=3)
             ax.axhline(50, color="0.55", lw=0.8, ls=":", zorder=1)
             _level_axis(ax, levels)
-            ax.set_xlabel("error level (%)")
+            ax.set_xlabel(level_label(kinds.get(gs[0])))
         axes[0].set_ylim(0, 100)
         axes[0].set_yticks(range(0, 101, 20))
         axes[0].set_ylabel("rated correct (%)")
@@ -129,10 +135,23 @@ def _label_panels(axes, n: int, ylabel: str, xlabel: str) -> None:
         axes.flat[j].set_visible(False)
 
 
-def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
+def _own_xlabels(axes, labels) -> None:
+    """Each panel its own x label when the panels' units differ (else as set)."""
+    if len(set(labels)) > 1:
+        for ax, lab in zip(axes.flat, labels):
+            ax.set_xlabel(lab)
+    elif labels and labels[0] != "error level (%)" and labels[0] != "error magnitude |level| (%)":
+        for ax in axes.flat:
+            if ax.get_xlabel():
+                ax.set_xlabel(labels[0])
+
+
+def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI", kinds: dict | None = None) -> Figure:
     """d′ against the error level, one panel per group: the pooled d′ (filled,
     as in the paper) and the mean of the participants' d′ (open), each with its
-    bootstrap interval over participants."""
+    bootstrap interval over participants.  ``kinds`` (group → error kind): a
+    pose-rate group's axis is in poses/s."""
+    kinds = kinds or {}
     groups = group_order(table["group"].unique())
     sty = group_styles(groups)
     nrows, ncols = _panel_grid(len(groups))
@@ -163,6 +182,7 @@ def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI") -> Figure:
             _level_axis(ax, x)
             ax.set_ylim(lo, hi)
         _label_panels(axes, len(groups), "sensitivity d′", "error level (%)")
+        _own_xlabels(axes, [level_label(kinds.get(g)) for g in groups])
         handles = [mpl.lines.Line2D([], [], color="0.2", marker="o", ls="-", mec="white", label="pooled d′ (as in the paper)"),
                    mpl.lines.Line2D([], [], color="0.2", marker="o", ls="none", mfc="white",
                                     label="mean of participants' d′")]
@@ -195,8 +215,9 @@ def _point_intervals(fit: PsychometricFit, table: pd.DataFrame | None):
     lo, hi = np.empty_like(p), np.empty_like(p)
     z = 1.959963984540054
     sub = None if table is None else table[table["group"] == fit.group]
+    kind = POSE_RATE if fit.unit == "ms" else None
     for i, x in enumerate(fit.x):
-        rows = None if sub is None else sub[sub["level"].abs() == x]
+        rows = None if sub is None else sub[magnitudes(sub["level"].to_numpy(float), kind) == x]
         if rows is not None and len(rows) == 1 and np.isfinite(rows["rating_ci_low"].iloc[0]):
             lo[i] = 1 - rows["rating_ci_high"].iloc[0] / 100
             hi[i] = 1 - rows["rating_ci_low"].iloc[0] / 100
@@ -232,13 +253,15 @@ def _draw_fit(ax, fit: PsychometricFit, colour, marker, table=None, annotate=Tru
         ax.plot([max(lo_, 0), min(hi_draw, xmax * 1.04)], [pt, pt], color=colour, lw=2.6, alpha=0.35,
                 solid_capstyle="butt", zorder=2)
         ax.plot([fit.threshold], [pt], marker="|", color=colour, ms=9, mew=1.6, zorder=4)
-        txt = f"x* = {fit.threshold:.0f} %"
+        txt = f"x* = {fit.threshold:.0f} {fit.unit}"
+        if fit.unit == "ms":
+            txt += f" ({pose_rate_of(fit.threshold):.1f}/s)"
         txt += (f"\n[{fit.ci_low:.0f}, {fit.ci_high:.0f}]" if np.isfinite(fit.ci_high)
                 else f"\n[{fit.ci_low:.0f}, open]")
     else:
         txt = "threshold\nnot reached"
         if np.isfinite(fit.threshold_extrapolated) and fit.threshold_extrapolated < 10 * xmax:
-            txt += f"\n(≈ {fit.threshold_extrapolated:.0f} % extrapolated)"
+            txt += f"\n(≈ {fit.threshold_extrapolated:.0f} {fit.unit} extrapolated)"
     ax.text(0.04, 0.96, txt, transform=ax.transAxes, va="top", ha="left", fontsize=7.8, color="0.15")
 
 
@@ -246,7 +269,8 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
                         method_note: str = "", ylabel: str = "P(judged incorrect)") -> Figure:
     """One panel per group: P(judged incorrect) (2AFC: ``ylabel`` P(original chosen))
     against |level| with the fitted function, the base rate γ (dotted), the
-    detection threshold x* (where P = (1 + γ)/2; dashed) and its interval (shaded bar)."""
+    detection threshold x* (where P = (1 + γ)/2; dashed) and its interval (shaded bar).
+    A pose-rate group's panel (its fit's unit ``ms``) is against the hold time 1000/N."""
     groups = [f.group for f in fits]
     sty = group_styles(group_order(table["group"].unique()) if table is not None else groups)
     nrows, ncols = _panel_grid(max(len(fits), 1))
@@ -258,9 +282,10 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
             c, m = sty.get(f.group, (OKABE_ITO[0], "o"))
             _draw_fit(ax, f, c, m, table)
             ax.set_title(f.group, color=c, fontweight="bold")
-            _level_axis(ax, np.r_[0.0, f.x])
+            _level_axis(ax, np.r_[0.0, f.x], f.unit)
             ax.set_ylim(0, 1)
         _label_panels(axes, len(fits), ylabel, "error magnitude |level| (%)")
+        _own_xlabels(axes, [magnitude_label(POSE_RATE if f.unit == "ms" else None) for f in fits])
         if len(fits) < nrows * ncols:
             ax = axes.flat[len(fits)]
             ax.set_visible(True)
@@ -434,11 +459,18 @@ def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict 
             c, m = sty.get(f.group, (OKABE_ITO[0], "o"))
             _draw_fit(ax_c, f, c, m, table, annotate=False, label=f.group)
         ax_c.set_ylim(0, 1)
-        ax_c.set_xlabel("error magnitude |level| (%)")
+        units = sorted({f.unit for f in fits})
+        if units == ["ms"]:
+            ax_c.set_xlabel(magnitude_label(POSE_RATE))
+        elif "ms" in units:           # one axis, two units: say which groups are which
+            ax_c.set_xlabel("error magnitude: |level| (%); pose-rate groups: hold 1000/N (ms)")
+        else:
+            ax_c.set_xlabel("error magnitude |level| (%)")
         ax_c.set_ylabel("P(judged incorrect)")
         ax_c.set_title("psychometric functions (◇ threshold x*: P = (1 + γ)/2)", fontsize=9)
         if fits:
-            _level_axis(ax_c, np.r_[0.0, np.concatenate([f.x for f in fits])])
+            _level_axis(ax_c, np.r_[0.0, np.concatenate([f.x for f in fits])],
+                        units[0] if len(units) == 1 else "%")
             ax_c.legend(loc="upper left", frameon=False, fontsize=7.5)
         # what is missing is said in the notes (notes.md), never printed into the figure
     return fig, notes

@@ -16,6 +16,7 @@ from .stats import fit_psychometric, gee_levels
 from .tables import paper_layout, to_latex, to_markdown
 from .tasks import fit_tasks, has_tasks, split, summarize_tasks, thresholds_frame
 from .thresholds import group_thresholds, participant_thresholds
+from .units import group_kinds, is_pose_rate, pose_rate_of
 
 #: the default figure-sheet image slots, in display order
 IMAGE_SLOTS = ("ghost original", "ghost strongest error", "trail original", "trail strongest error")
@@ -50,6 +51,7 @@ class Result:
     settings: dict = field(default_factory=dict)
     participant_thresholds: pd.DataFrame | None = None
     group_thresholds: pd.DataFrame | None = None
+    kinds: dict = field(default_factory=dict)       # group → error kind (column ``kind``)
 
     def to_dict(self) -> dict:
         """JSON-ready summary (what ``flipstudy analyze --json`` prints)."""
@@ -254,10 +256,16 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                      "posterior mean with its 95 % equal-tailed posterior interval, the same definition "
                      "for adaptive and constant groups; thresholds_groups.csv: their distribution "
                      "per group beside the pooled psignifit x*.")
-    paper = paper_layout(table) if len(table) else pd.DataFrame(columns=["group"])
+    kinds = group_kinds(df)
+    if any(is_pose_rate(k) for k in kinds.values()):
+        notes.append("Pose-rate groups (" + ", ".join(g for g in group_order(kinds) if is_pose_rate(kinds[g]))
+                     + "): levels are poses per second N (0: the original motion); their psychometric "
+                     "function and threshold x* are against the time each pose is held, 1000/N ms "
+                     "(the original at 0 ms), so x* in ms is N* = 1000/x* poses per second.")
+    paper = paper_layout(table, kinds=kinds) if len(table) else pd.DataFrame(columns=["group"])
     result = Result(table=table, participants=participants, gee=g, thresholds=thresholds, fits=fits,
                     paper=paper, notes=notes, participant_thresholds=per_participant,
-                    group_thresholds=per_group,
+                    group_thresholds=per_group, kinds=kinds,
                     settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
                               "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
                               "n_participants": int(df["participant"].nunique()),
@@ -279,9 +287,9 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
         caption += " 2AFC groups: percent correct choices (d′ = √2·z(P correct))."
     if len(table):
         files["table_paper.md"] = out / "table_paper.md"
-        files["table_paper.md"].write_text(to_markdown(table, caption), encoding="utf-8")
+        files["table_paper.md"].write_text(to_markdown(table, caption, kinds), encoding="utf-8")
         files["table_paper.tex"] = out / "table_paper.tex"
-        files["table_paper.tex"].write_text(to_latex(table, caption), encoding="utf-8")
+        files["table_paper.tex"].write_text(to_latex(table, caption, kinds=kinds), encoding="utf-8")
     files["participants.csv"] = out / "participants.csv"
     participants.to_csv(files["participants.csv"], index=False)
     if gee and len(g):
@@ -305,9 +313,9 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
         afc_fits = [f for f in fits if getattr(f, "task", "yes-no") == "2afc"]
         figs = []
         if len(yn_table):
-            figs.append(("ratings", ratings_figure(yn_table, ci_label)))
+            figs.append(("ratings", ratings_figure(yn_table, ci_label, kinds)))
         if len(table):
-            figs.append(("dprime", dprime_figure(table, ci_label)))
+            figs.append(("dprime", dprime_figure(table, ci_label, kinds)))
         if yn_fits:
             figs.append(("psychometric", psychometric_figure(yn_fits, yn_table, "psignifit 4 (Bayesian, MAP)")))
         if afc_fits:
@@ -349,12 +357,14 @@ def _notes_md(r: Result) -> str:
              f"{', '.join(s['groups'])}.", "",
              f"Correction for rates of 0 or 1: **{s['correction']}** — {s['correction_text']}.", ""]
     lines += [f"- {n}" for n in r.notes]
-    lines += ["", "## Table (paper layout)", "", to_markdown(r.table, s["participants_label"] + ".")]
+    lines += ["", "## Table (paper layout)", "", to_markdown(r.table, s["participants_label"] + ".", r.kinds)]
     if len(r.thresholds):
         lines += ["## Detection thresholds", "",
                   "| group | x* (%) | interval | P(reached) | γ | λ | note |", "|:--|--:|:--|--:|--:|--:|:--|"]
         for _, t in r.thresholds.iterrows():
             x = "not reached" if not t["reached"] else f"{t['threshold']:.1f}"
+            if is_pose_rate(r.kinds.get(t["group"])):      # a hold time, not a percent
+                x = x if not t["reached"] else f"{x} ms = {pose_rate_of(t['threshold']):.1f} poses/s"
             hi = "open" if not np.isfinite(t["threshold_ci_high"]) else f"{t['threshold_ci_high']:.1f}"
             lo = "—" if not np.isfinite(t["threshold_ci_low"]) else f"{t['threshold_ci_low']:.1f}"
             lines.append(f"| {t['group']} | {x} | [{lo}, {hi}] | {t['p_reached']:.2f} | "

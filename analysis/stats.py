@@ -13,7 +13,8 @@ GEE
 Psychometric function
     Per group, ``P(incorrect | x) = γ + (1 − γ − λ) Φ((x − m) / s)`` against the
     error magnitude ``x = |level|`` (trials pooled over participants and signed
-    levels), with ``γ`` the base rate (lower asymptote: originals and
+    levels; of a ``pose-rate`` group the hold time ``1000/N`` ms, see
+    :mod:`.units`), with ``γ`` the base rate (lower asymptote: originals and
     undetectable errors), ``λ`` the lapse rate, ``m`` psignifit's threshold of
     the unscaled sigmoid and width ``w = s (Φ⁻¹(.95) − Φ⁻¹(.05))``.
 
@@ -54,6 +55,7 @@ import pandas as pd
 from scipy.special import ndtr, ndtri
 
 from .io import group_order, level_order
+from .units import group_kinds, magnitude_unit, magnitudes
 
 _WSCALE = float(ndtri(0.95) - ndtri(0.05))      # width = scale * 3.29 (psignifit, alpha = .05)
 
@@ -180,6 +182,7 @@ class PsychometricFit:
     threshold_extrapolated: float    # x* of the point estimate, even beyond the range (inf: never)
     note: str = ""
     samples: np.ndarray = field(default=None, repr=False)
+    unit: str = "%"                  # of x and the thresholds: "%" or "ms" (pose-rate hold)
 
     @property
     def reached(self) -> bool:
@@ -200,9 +203,11 @@ class PsychometricFit:
                 "eta": p.get("eta", np.nan), "max_level": float(self.x.max()), "note": self.note}
 
 
-def pooled_magnitudes(sub: pd.DataFrame):
-    """(|level|, k incorrect, n trials) of one group, pooled over participants and signs."""
-    mag = sub["level"].abs().to_numpy()
+def pooled_magnitudes(sub: pd.DataFrame, kind=None):
+    """(magnitude, k incorrect, n trials) of one group, pooled over participants and
+    signs: the magnitude is ``|level|``, or for ``kind="pose-rate"`` the hold time
+    ``1000/N`` ms (:func:`.units.magnitudes`; the original at 0)."""
+    mag = magnitudes(sub["level"].to_numpy(float), kind)
     xs = np.unique(mag)
     idx = np.searchsorted(xs, mag)
     n = np.bincount(idx, minlength=len(xs)).astype(float)
@@ -210,7 +215,7 @@ def pooled_magnitudes(sub: pd.DataFrame):
     return xs.astype(float), k, n
 
 
-def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_note=""):
+def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_note="", unit="%"):
     x_hat = float(detection_threshold(params["threshold"], params["width"], params["gamma"],
                                       params["lambda"]))
     xmax = float(x.max())
@@ -222,7 +227,7 @@ def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_not
     if np.isfinite(x_hat) and x_hat < xmin - 1e-9 * max(1.0, abs(xmin)):
         thr = np.nan
         notes.append(f"no threshold: P(incorrect) is above (1 + γ)/2 = {0.5 * (1 + params['gamma']):.2f} "
-                     f"already at the smallest tested level ({xmin:g} %; x* = {x_hat:.1f} by "
+                     f"already at the smallest tested level ({xmin:g} {unit}; x* = {x_hat:.1f} by "
                      f"extrapolation): the original is judged incorrect about as often as the errors")
     elif np.isfinite(x_hat) and x_hat <= xmax:
         thr = x_hat
@@ -230,7 +235,7 @@ def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_not
         thr = np.nan
         if np.isfinite(x_hat):
             notes.append(f"not reached: P(incorrect) = (1 + γ)/2 = {0.5 * (1 + params['gamma']):.2f} "
-                         f"only beyond the largest tested level ({xmax:g} %), extrapolated at {x_hat:.1f} %")
+                         f"only beyond the largest tested level ({xmax:g} {unit}), extrapolated at {x_hat:.1f} {unit}")
         else:
             notes.append(f"not reached: the fitted curve stays below (1 + γ)/2 = "
                          f"{0.5 * (1 + params['gamma']):.2f} (flat or lapse-limited)")
@@ -241,7 +246,7 @@ def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_not
     if not np.isfinite(lo):
         lo = np.nan
     return PsychometricFit(group, method, x, k, n, params, thr, float(lo), float(hi), p_reached,
-                           x_hat, "; ".join(notes), samples=xs_samples)
+                           x_hat, "; ".join(notes), samples=xs_samples, unit=unit)
 
 
 #: the values of ``method`` (of :func:`fit_psychometric`, ``analyze`` and ``--psychometric``)
@@ -253,9 +258,11 @@ PSIGNIFIT_GRID = {"threshold": 30, "width": 25, "lambda": 12, "gamma": 15, "eta"
 PSIGNIFIT_MOVING = {"threshold": 10, "width": 10, "lambda": 5, "gamma": 5, "eta": 5}
 
 
-def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-no") -> PsychometricFit:
+def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-no",
+                  unit="%") -> PsychometricFit:
     """Bayesian fit with psignifit 4 (see module doc).  ``task="2afc"``: ``k`` counts
-    correct choices and psignifit's 2AFC experiment type fixes γ = ½ (x*: P = 0.75)."""
+    correct choices and psignifit's 2AFC experiment type fixes γ = ½ (x*: P = 0.75).
+    ``unit``: of ``x`` (``"%"``, or ``"ms"`` for a pose-rate group's hold time)."""
     import psignifit
     data = np.column_stack([x, k, n])
     if task == "2afc":
@@ -285,7 +292,7 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
     s = res.posterior_samples(n_samples, random_state=np.random.default_rng(seed))
     gam = s["gamma"] if "gamma" in s else np.full_like(s["threshold"], params["gamma"])
     xs = detection_threshold(s["threshold"], s["width"], gam, s["lambda"])
-    return _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note)
+    return _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note, unit)
 
 
 def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
@@ -293,7 +300,9 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
     """One :class:`PsychometricFit` per group (a group with fewer than two
     magnitudes, or one psignifit cannot fit, is skipped with a note), and notes.
     ``method``: ``"psignifit"`` or ``"none"`` (no fits).  ``task="2afc"``: the
-    answers are 2AFC (correct choices counted from column ``detected``), γ = ½."""
+    answers are 2AFC (correct choices counted from column ``detected``), γ = ½.
+    A ``pose-rate`` group (column ``kind``) is fitted against its hold time
+    ``1000/N`` ms (:mod:`.units`; its fit's ``unit`` is ``"ms"``)."""
     method = method.lower()
     if method not in METHODS:
         hint = " (the own maximum-likelihood fit was removed: psignifit is the one fit)" \
@@ -305,13 +314,15 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
         return fits, notes
     if task == "2afc":
         df = df.assign(incorrect=df["detected"])
+    kinds = group_kinds(df)
     for g in group_order(df["group"].unique()):
-        x, k, n = pooled_magnitudes(df[df["group"] == g])
+        x, k, n = pooled_magnitudes(df[df["group"] == g], kinds.get(g))
         if len(x) < 2:
             notes.append(f"{g}: a single error magnitude, no psychometric function fitted")
             continue
         try:
-            fits.append(fit_psignifit(g, x, k, n, ci=ci, seed=seed, task=task))
+            fits.append(fit_psignifit(g, x, k, n, ci=ci, seed=seed, task=task,
+                                      unit=magnitude_unit(kinds.get(g))))
         except Exception as e:  # noqa: BLE001 — a group psignifit cannot fit is a note, never a crash
             notes.append(f"{g}: psignifit failed ({type(e).__name__}: {e}); no psychometric function fitted")
     return fits, notes

@@ -3,6 +3,9 @@
 Groups are rows, levels are columns; groups that share the same set of levels
 form one block with its own header row (the paper's Table 2 has two blocks:
 angular momentum 0/17/25/37/50 % and take-off angle 0/10/20/30/40 %).
+Levels are headed in their unit: percent, or poses per second for a ``pose-rate``
+group (``kinds``: group → error kind, :func:`.units.group_kinds`), which forms
+its own block and its own columns.
 """
 from __future__ import annotations
 
@@ -13,6 +16,7 @@ import unicodedata
 import pandas as pd
 
 from .io import group_order, level_order
+from .units import level_unit
 
 MISSING = "—"
 
@@ -46,30 +50,39 @@ def _cell(sub: pd.DataFrame, lv: float, minus: str) -> str:
     return fmt_cell(r["rating_pct"], r["dprime"], minus)
 
 
-def fmt_level(lv: float) -> str:
-    return f"{lv:g} %".replace("-", "−")
+def fmt_level(lv: float, unit: str = "%") -> str:
+    """A level as a column head: ``"17 %"``, ``"−25 %"``, ``"15 poses/s"``."""
+    return f"{lv:g} {unit}".replace("-", "−")
 
 
-def blocks(table: pd.DataFrame) -> list[tuple[list[float], list[str]]]:
-    """Groups sharing a level set, in table order: [(levels, groups), …]."""
+def blocks(table: pd.DataFrame, kinds: dict | None = None) -> list[tuple[list[float], list[str]]]:
+    """Groups sharing a level set and unit, in table order: [(levels, groups), …]."""
+    kinds = kinds or {}
     out: dict[tuple, list[str]] = {}
     for g in group_order(table["group"].unique()):
         lv = tuple(level_order(table.loc[table["group"] == g, "level"]))
-        out.setdefault(lv, []).append(g)
-    return [(list(k), v) for k, v in out.items()]
+        out.setdefault((lv, level_unit(kinds.get(g))), []).append(g)
+    return [(list(k[0]), v) for k, v in out.items()]
 
 
-def paper_layout(table: pd.DataFrame, minus: str = "-") -> pd.DataFrame:
+def paper_layout(table: pd.DataFrame, minus: str = "-", kinds: dict | None = None) -> pd.DataFrame:
     """Wide table, one row per group, one column per level (union of all
-    levels, sorted by magnitude); cells ``"72 (.00)"``, empty where a group did
-    not test a level."""
-    levels = level_order(table["level"])
+    levels, sorted by magnitude; percent levels first, then those of pose-rate
+    groups in poses/s); cells ``"72 (.00)"``, empty where a group did not test a
+    level."""
+    kinds = kinds or {}
+    groups = group_order(table["group"].unique())
+    unit = {g: level_unit(kinds.get(g)) for g in groups}
+    cols = []
+    for u in dict.fromkeys(sorted(unit.values(), key=lambda u: u != "%")):
+        mine = table["group"].map(lambda g: unit.get(g) == u).astype(bool)
+        cols += [(lv, u) for lv in level_order(table.loc[mine, "level"])]
     rows = []
-    for g in group_order(table["group"].unique()):
+    for g in groups:
         sub = table[table["group"] == g].set_index("level")
         row = {"group": g}
-        for lv in levels:
-            row[fmt_level(lv)] = _cell(sub, lv, minus) if lv in sub.index else ""
+        for lv, u in cols:
+            row[fmt_level(lv, u)] = _cell(sub, lv, minus) if lv in sub.index and u == unit[g] else ""
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -82,13 +95,14 @@ def _block_rows(table, levels, groups, minus):
     return out
 
 
-def to_markdown(table: pd.DataFrame, caption: str = "") -> str:
+def to_markdown(table: pd.DataFrame, caption: str = "", kinds: dict | None = None) -> str:
     """GitHub Markdown, one table per block of groups sharing their levels."""
     parts = []
+    kinds = kinds or {}
     if caption:
         parts.append(caption + "\n")
-    for levels, groups in blocks(table):
-        head = ["group"] + [fmt_level(lv) for lv in levels]
+    for levels, groups in blocks(table, kinds):
+        head = ["group"] + [fmt_level(lv, level_unit(kinds.get(groups[0]))) for lv in levels]
         lines = ["| " + " | ".join(head) + " |",
                  "|" + "|".join([":---"] + ["---:"] * len(levels)) + "|"]
         for r in _block_rows(table, levels, groups, "−"):
@@ -125,11 +139,13 @@ def _tex_escape(s: str) -> str:
     return "".join(c if c.isprintable() else " " for c in s)
 
 
-def to_latex(table: pd.DataFrame, caption: str = "", label: str = "tab:ratings") -> str:
+def to_latex(table: pd.DataFrame, caption: str = "", label: str = "tab:ratings",
+             kinds: dict | None = None) -> str:
     """A LaTeX table, one header row per block of groups sharing their levels, as in the
     paper.  Pure ASCII; it compiles with pdflatex and no package, and uses booktabs' rules
     when the document loads ``\\usepackage{booktabs}`` (plain ``\\hline`` otherwise)."""
-    bl = blocks(table)
+    kinds = kinds or {}
+    bl = blocks(table, kinds)
     ncol = max(len(levels) for levels, _ in bl)
     lines = [r"\begin{table}[t]", r"  \centering",
              r"  % booktabs rules when the document loads booktabs, \hline and \cline otherwise",
@@ -145,7 +161,8 @@ def to_latex(table: pd.DataFrame, caption: str = "", label: str = "tab:ratings")
     for bi, (levels, groups) in enumerate(bl):
         if bi:
             lines.append(r"    \midrule")
-        head = ["Error group"] + [_tex_escape(f"{lv:g} %").replace("-", "$-$") for lv in levels]
+        u = level_unit(kinds.get(groups[0]))
+        head = ["Error group"] + [_tex_escape(f"{lv:g} {u}").replace("-", "$-$") for lv in levels]
         head += [""] * (ncol - len(levels))
         lines.append("    " + " & ".join(head) + r" \\")
         lines.append(f"    \\flipstudyrule{{2-{len(levels) + 1}}}")

@@ -416,3 +416,62 @@ def test_degenerate_groups_never_crash():
         f = fit_psignifit("g", x, k, n, seed=0)
         assert np.isnan(f.threshold) and f.note
         assert 0 <= f.params["gamma"] <= 0.9 and 0 <= f.params["lambda"] <= 0.5
+
+
+# ------------------------------------------------------------------ pose-rate groups
+
+def _pose_rate_answers(rng, hold_thr=50.0, width=30.0, gamma=0.15, lam=0.02, reps=60, n_part=6):
+    """A percent group (take-off) and a pose-rate group whose P(incorrect) rises as the
+    poses per second N fall: the true curve is in the hold time 1000/N ms, with the
+    detection threshold x* = ``hold_thr`` ms (N* = 1000/x*)."""
+    from flipstudy.analysis.stats import psychometric_curve as pc
+    # m such that P(hold_thr) = (1 + γ)/2 on the curve with this width, γ, λ
+    F = (1 - gamma) / (2 * (1 - gamma - lam))
+    m = hold_thr - width / (norm.ppf(0.95) - norm.ppf(0.05)) * norm.ppf(F)
+    rows = []
+    for g, kind, levels in (("poses", "pose-rate", [0, 10, 15, 20, 30]),
+                            ("takeoff", "takeoff-angle", [0, 10, 20, 30, 40])):
+        for lv in levels:
+            x = (1000.0 / lv if lv else 0.0) if kind == "pose-rate" else lv
+            p = pc(x, m, width, gamma, lam)
+            for i in range(reps * n_part):
+                rows.append({"participant": f"P{i % n_part + 1}", "group": g, "level": lv, "kind": kind,
+                             "response": "incorrect" if rng.random() < p else "correct"})
+    return pd.DataFrame(rows)
+
+
+def test_pose_rate_group_threshold_in_ms_recovers_the_pose_rate(tmp_path):
+    from flipstudy.analysis.units import magnitudes
+    df = _pose_rate_answers(np.random.default_rng(7))
+    # the magnitude is the hold time: the fewest poses per second give the largest magnitude
+    assert magnitudes([30, 20, 15, 10], "pose-rate").tolist() == pytest.approx([1000 / 30, 50, 1000 / 15, 100])
+    r = analyze(df, tmp_path, n_boot=100, gee=False, figures=True)
+    by = {f.group: f for f in r.fits}
+    f = by["poses"]
+    assert f.unit == "ms" and by["takeoff"].unit == "%"
+    assert sorted(f.x.tolist()) == pytest.approx([0, 1000 / 30, 50, 1000 / 15, 100])
+    assert f.reached, f.note
+    assert f.ci_low <= 50 <= f.ci_high                       # the true hold threshold
+    assert abs(1000 / f.threshold - 20) < 2.5                # maps back to N* = 20 poses/s
+    assert 1000 / f.ci_high <= 20 <= 1000 / f.ci_low
+    # read as a percent (|level|), the same answers would fall with the magnitude
+    k = df[df["group"] == "poses"].groupby("level")["response"].apply(lambda s: (s == "incorrect").mean())
+    assert k[10] > k[30]
+    # tables: pose-rate levels as written, in poses/s; the percent group's columns unchanged
+    cols = list(r.paper.columns)
+    assert "10 poses/s" in cols and "30 poses/s" in cols and "40 %" in cols and "15 %" not in cols
+    assert r.paper.set_index("group").loc["takeoff", "10 poses/s"] == ""
+    md = (tmp_path / "table_paper.md").read_text()
+    assert "| group | 0 poses/s | 10 poses/s | 15 poses/s | 20 poses/s | 30 poses/s |" in md
+    assert "0 poses/s" in (tmp_path / "table_paper.tex").read_text()
+    assert "poses/s" in (tmp_path / "notes.md").read_text()
+
+
+def test_psychometric_figure_labels_each_groups_unit():
+    from flipstudy.analysis.figures import psychometric_figure
+    df = _pose_rate_answers(np.random.default_rng(3), reps=20)
+    fits, _ = fit_psychometric(load_responses(df), seed=0)
+    fig = psychometric_figure(fits)
+    labels = {ax.get_title(): ax.get_xlabel() for ax in fig.axes if ax.get_visible() and ax.get_title()}
+    assert "ms" in labels["poses"] and "1000/N" in labels["poses"]
+    assert labels["takeoff"] == "error magnitude |level| (%)"
