@@ -16,6 +16,8 @@ one, and the software with its versions.
 >>> d = json.loads(p.read_text())
 >>> d["@type"], d["schemaVersion"], [v["name"] for v in d["variableMeasured"]]
 ('Dataset', 'Psych-DS 0.1.0', ['participant', 'response'])
+>>> COLUMNS["kind"]
+'kind of error (angular-momentum, takeoff-angle, gravity, horizontal-velocity, vertical-velocity, acceleration, time-scale, pose-rate)'
 """
 from __future__ import annotations
 
@@ -25,6 +27,7 @@ import platform
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
+from flipstudy.stimuli.injection import KINDS
 
 FILE = "dataset_description.json"
 SCHEMA_VERSION = "Psych-DS 0.1.0"
@@ -36,14 +39,15 @@ COLUMNS = {
     "trial": "trial number within the session (1-based)",
     "stimulus": "stimulus name (manifest.csv)",
     "group": "error group of the stimulus",
-    "level": "nominal error in percent (0 = the original motion)",
+    "level": "nominal error in percent (0 = the original motion); of kind pose-rate, poses "
+             "per second (0 = the original motion)",
     "repetition": "which showing of the stimulus (1-based)",
     "response": "the answer: correct or incorrect (physically plausible or not)",
     "rt_ms": "reaction time in milliseconds, from the end of the motion to the answer",
     "shown_ms": "how long the motion was shown, milliseconds ('playing' to 'ended')",
     "timestamp": "when the answer was stored (ISO 8601, UTC)",
     "clip": "base clip of the stimulus",
-    "kind": "kind of error (angular-momentum, takeoff-angle)",
+    "kind": "kind of error (" + ", ".join(KINDS) + ")",
     "style": "character style the stimulus was drawn in (ellipsoids, capsules, stick, "
              "point-light, mannequin; from manifest.csv)",
     "late_frames": "frames shown late or dropped during the motion",
