@@ -299,3 +299,38 @@ def test_a_yes_no_record_with_a_2afc_answer_is_refused(study_2afc, tmp_path):
     bad["response"] = "first"
     with pytest.raises(WebImportError, match="response: must be one of correct, incorrect, got 'first'"):
         import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", recs)])
+
+
+def _add_styles(study_dir):
+    """Give the demo study's manifest a ``style`` column (as ``flipstudy stimuli`` writes
+    it for a styled design): alternate stick / point-light by stimulus."""
+    p = study_dir / "manifest.csv"
+    with open(p, newline="") as f:
+        rd = csv.DictReader(f)
+        fields, recs = list(rd.fieldnames), list(rd)
+    styles = {}
+    for i, r in enumerate(recs):
+        r["style"] = styles[r["stimulus"]] = ("stick", "point-light")[i % 2]
+    with open(p, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=fields + ["style"], lineterminator="\n")
+        w.writeheader()
+        w.writerows(recs)
+    return styles
+
+
+def test_import_web_carries_the_manifest_style_like_export(study, tmp_path):
+    # no style column in the manifest: none in the table either
+    import_web(study, [jsonl(tmp_path / "plain.jsonl", run_records(study, "W01"))])
+    assert "style" not in (study / "web" / "responses.csv").read_text().splitlines()[0].split(",")
+    styled = make_demo_study(tmp_path / "styled", videos=False, levels=(0, 25), repetitions=2)
+    styles = _add_styles(styled)
+    assert len(set(styles.values())) == 2
+    _local_session(styled, "L01")
+    local = export_responses(styled)["responses"].read_text().splitlines()[0].split(",")
+    import_web(styled, [jsonl(tmp_path / "w.jsonl", run_records(styled, "W01"))])
+    web = (styled / "web" / "responses.csv").read_text().splitlines()[0].split(",")
+    assert web[:len(local)] == local and web[web.index("kind") + 1] == "style"   # export's position
+    got = rows(styled)
+    assert len(got) == 8 and [r["style"] for r in got] == [styles[r["stimulus"]] for r in got]
+    d = json.loads((styled / "web" / "dataset_description.json").read_text())
+    assert "style" in [v["name"] for v in d["variableMeasured"]]

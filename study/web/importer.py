@@ -29,7 +29,8 @@ an ID that also has sessions in ``sessions.sqlite`` is refused.  Each browser
 run of a participant is a session, numbered by the run's start time.
 
 The rows are the local export's columns (``source`` = ``web-jatos``,
-``web-pavlovia`` or ``web-static``) plus the playback record: ``frames_expected,
+``web-pavlovia`` or ``web-static``; ``style`` after ``kind`` when the manifest
+has a style column, as ``flipstudy export`` writes it) plus the playback record: ``frames_expected,
 frames_presented, frames_dropped, dropped_pct, playback_ms, video_ms,
 refresh_hz, timing, playback_flagged, max_dropped_pct``, ``repeat`` and ``run_id``,
 ``source_file``.
@@ -54,7 +55,8 @@ from pathlib import Path
 from flipstudy.stimuli._io import atomic_write_text
 
 from .. import store
-from ..export import ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS
+from ..export import (ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS, _manifest_styles,
+                      response_columns)
 from ..psychds import write_dataset_description
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
@@ -70,6 +72,18 @@ WEB_COLUMNS = ["source", "run_id", "frames_expected", "frames_presented", "frame
 COLUMNS = RESPONSE_COLUMNS + WEB_COLUMNS
 #: a study with 2AFC groups: the local export's task columns too (no quest+ online)
 COLUMNS_2AFC = RESPONSE_COLUMNS + [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] + WEB_COLUMNS
+
+
+def web_columns(two_afc: bool, styled: bool) -> list[str]:
+    """The columns of ``web/responses.csv``: :data:`COLUMNS` or :data:`COLUMNS_2AFC`,
+    with ``style`` after ``kind`` (as ``flipstudy export`` writes it) when the
+    manifest has a style column.
+
+    >>> web_columns(False, True)[11:14], web_columns(True, False) == COLUMNS_2AFC
+    (['clip', 'kind', 'style'], True)
+    """
+    task = [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] if two_afc else []
+    return response_columns(styled) + task + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
                                                  "user_agent"]
 KINDS = ("start", "demographics", "answer", "end")
@@ -440,8 +454,12 @@ def import_web(study_dir, files) -> dict:
         if r["status"] == "imported":
             r["new_answers"] = sum(1 for k, (_rec, _w, fn) in merged.items()
                                    if k[1] == "answer" and fn == r["stored"] and k not in before)
-    columns = COLUMNS_2AFC if any(g.task == "2afc" for g in study.design.groups) else COLUMNS
+    styles = _manifest_styles(study.dir)
+    columns = web_columns(any(g.task == "2afc" for g in study.design.groups), styles is not None)
     rows, parts = _tables(merged, n_trials, columns)
+    if styles is not None:                      # the stimulus's character style, as `export` has it
+        for r in rows:
+            r["style"] = styles.get(r["stimulus"], "")
     # write: the files as they were first, then the tables built from all of them
     imports.mkdir(parents=True, exist_ok=True)
     for stored, data in new_files:
