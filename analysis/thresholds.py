@@ -14,6 +14,10 @@ the responses do not: ``specs`` maps a group to ``(levels, task, QuestSettings)`
 QUEST+ group's last stored ``quest_threshold`` / ``quest_ci_*`` is used, and a
 constant group's model is built on the levels it was answered at.
 
+A constant ``pose-rate`` group (column ``kind``) is replayed against the hold
+time 1000/N ms of its levels N (:mod:`.units`), as its pooled fit is, so its x*
+are in ms; a QUEST+ pose-rate group is replayed on N as its session ran it.
+
 >>> import pandas as pd
 >>> from flipstudy.analysis.adaptive import Observer
 >>> o, rng = Observer(20.0, 10.0, 0.5, 0.02, "2afc"), np.random.default_rng(0)
@@ -33,6 +37,7 @@ import pandas as pd
 from .adaptive import LEVEL_ATOL, Quest, QuestSettings, quest_model
 from .adaptive_sim import QuestBatch
 from .io import ResponsesError, group_order
+from .units import group_kinds, is_pose_rate, magnitudes
 
 PARTICIPANT_COLUMNS = ["participant", "group", "task", "method", "n_trials", "threshold", "ci_low",
                        "ci_high", "sd", "source", "stored_threshold", "stored_ci_low",
@@ -69,15 +74,18 @@ def participant_thresholds(df: pd.DataFrame, specs: dict | None = None) -> tuple
     task = _col(df, "task", "yes-no")
     method = _col(df, "method", "constant")
     rows, notes, mismatched = [], [], []
+    kinds = group_kinds(df)
     for g in group_order(df["group"].unique()):
         in_g = (df["group"] == g).to_numpy()
         for (t, m) in dict.fromkeys(zip(task[in_g], method[in_g])):
             sub_g = df[in_g & (task == t).to_numpy() & (method == m).to_numpy()]
             spec = specs.get(g)
+            kind = kinds.get(g) if m == "constant" else None       # a hold time in ms: constant only
             if spec is not None:
-                model = quest_model(spec[0], spec[1], spec[2])
+                levels = np.unique(magnitudes(spec[0], kind)) if is_pose_rate(kind) else spec[0]
+                model = quest_model(levels, spec[1], spec[2])
             elif m == "constant":
-                mags = np.unique(np.abs(sub_g["level"].to_numpy(float)))
+                mags = np.unique(magnitudes(sub_g["level"].to_numpy(float), kind))
                 if len(mags[mags > 0] if t == "2afc" else mags) < 2:
                     notes.append(f"{g}: answers at a single error magnitude, no per-participant "
                                  f"thresholds")
@@ -89,7 +97,7 @@ def participant_thresholds(df: pd.DataFrame, specs: dict | None = None) -> tuple
                              f"session's stored thresholds are used, not recomputed")
             for pid, sub in sub_g.groupby("participant", sort=True):
                 sub = _answer_order(sub)
-                x = np.abs(sub["level"].to_numpy(float))
+                x = magnitudes(sub["level"].to_numpy(float), kind)
                 det = sub["detected"].to_numpy().astype(bool)
                 stored = [float(pd.to_numeric(sub[c], errors="coerce").iloc[-1]) if c in sub.columns
                           else np.nan for c in STORED]

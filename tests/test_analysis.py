@@ -475,3 +475,16 @@ def test_psychometric_figure_labels_each_groups_unit():
     labels = {ax.get_title(): ax.get_xlabel() for ax in fig.axes if ax.get_visible() and ax.get_title()}
     assert "ms" in labels["poses"] and "1000/N" in labels["poses"]
     assert labels["takeoff"] == "error magnitude |level| (%)"
+
+
+def test_per_participant_pose_rate_thresholds_in_ms():
+    from flipstudy.analysis.thresholds import participant_thresholds
+    df = _pose_rate_answers(np.random.default_rng(11), reps=40, n_part=3)
+    df = df[df["group"] == "poses"].assign(detected=lambda d: d["response"] == "incorrect",
+                                           task="yes-no", method="constant")
+    t, notes = participant_thresholds(df)
+    assert len(t) == 3 and (t["source"] == "replayed").all(), notes
+    # the true hold threshold is 50 ms = 20 poses/s: each x* near it, in most 95 % intervals
+    assert (abs(t["threshold"] - 50) < 6).all() and (abs(1000 / t["threshold"] - 20) < 2.5).all(), t
+    assert ((t["ci_low"] <= 50) & (50 <= t["ci_high"])).sum() >= 2, t
+    assert (t["ci_high"] - t["ci_low"] < 20).all(), t
