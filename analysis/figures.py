@@ -63,6 +63,16 @@ def _dodge(n: int, step: float) -> np.ndarray:
 
 def _level_axis(ax, levels, unit="%"):
     ticks = sorted(set(float(v) for v in levels))
+    if unit == "mixed":               # percent and ms on one axis: whole numbers, none crowded
+        span = (ticks[-1] - ticks[0]) or 1.0
+        kept = [ticks[0]]
+        for t in ticks[1:]:
+            if t - kept[-1] > 0.04 * span:
+                kept.append(t)
+        ax.set_xticks(kept)
+        ax.set_xticklabels([f"{t:.0f}" for t in kept])
+        ax.set_xlim(ticks[0] - 0.06 * span, ticks[-1] + 0.06 * span)
+        return
     ax.set_xticks(ticks)
     if unit == "ms":                  # a pose-rate hold: the ms, and the poses/s under it
         ax.set_xticklabels([f"{t:.0f}\n({1000 / t:g}/s)" if t > 0 else "0\n(orig.)" for t in ticks])
@@ -470,7 +480,7 @@ def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict 
         ax_c.set_title("psychometric functions (◇ threshold x*: P = (1 + γ)/2)", fontsize=9)
         if fits:
             _level_axis(ax_c, np.r_[0.0, np.concatenate([f.x for f in fits])],
-                        units[0] if len(units) == 1 else "%")
+                        units[0] if len(units) == 1 else "mixed")
             ax_c.legend(loc="upper left", frameon=False, fontsize=7.5)
         # what is missing is said in the notes (notes.md), never printed into the figure
     return fig, notes
