@@ -224,7 +224,8 @@ class Cluster:
         from distributed import as_completed
         try:
             for fut in as_completed(list(futures)):
-                on_result(futures[fut], fut.result())
+                on_result(futures.pop(fut), fut.result())
+                fut.release()            # the worker forgets the task (its inputs, its result)
         except BaseException:
             self.client.cancel(list(futures))
             raise
@@ -254,9 +255,13 @@ class Cluster:
         from flipstudy.render.workers import render_on_worker
         self.check_shared(Path(settings["out"]))
         s = self.client.submit(_value, settings, pure=False)
-        futs = {self.client.submit(_checked, self.versions, render_on_worker, s, t, pure=False,
-                                   key=f"render-{t['stimulus']}-{secrets.token_hex(4)}"): t
-                for t in tasks}
+        bodies, futs = {}, {}
+        for t in tasks:                  # each body (~100 kB) sent once, not with every task
+            if id(t["body"]) not in bodies:
+                bodies[id(t["body"])] = self.client.submit(_value, t["body"], pure=False)
+            t = {**t, "body": bodies[id(t["body"])]}
+            futs[self.client.submit(_checked, self.versions, render_on_worker, s, t, pure=False,
+                                    key=f"render-{t['stimulus']}-{secrets.token_hex(4)}")] = t
         self._gather(futs, lambda t, res: done(res))
 
     def close(self) -> None:
