@@ -159,7 +159,7 @@ class Cluster:
         try:
             if kind == "local":
                 self._local = LocalCluster(n_workers=where, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR)
+                                           dashboard_address=":0", silence_logs=logging.ERROR)
                 self.client = Client(self._local)
             else:
                 self.client = Client(where, timeout=timeout)
@@ -223,8 +223,9 @@ class Cluster:
         cluster's task stream); the first error cancels the rest and is raised."""
         from distributed import as_completed
         try:
-            for fut in as_completed(list(futures)):
-                on_result(futures.pop(fut), fut.result())
+            # results gathered in the background as tasks finish, not one round trip each
+            for fut, result in as_completed(list(futures), with_results=True):
+                on_result(futures.pop(fut), result)
                 fut.release()            # the worker forgets the task (its inputs, its result)
         except BaseException:
             self.client.cancel(list(futures))

@@ -203,3 +203,33 @@ def test_one_worker_renders_200_videos_in_flat_memory(tmp_path):
     grown = max(late) - min(mid)
     # measured here: ~2 MB; 17 MB while the worker kept every finished task's inputs
     assert grown < 10e6, f"the worker grew by {grown / 1e6:.1f} MB over the last 100 videos"
+
+
+def test_cli_cluster_option_builds_and_names_a_bad_address(tmp_path, capsys, cluster):
+    from flipstudy.study.cli import main
+    (tmp_path / "d.toml").write_text(DESIGN.format(levels="25"))
+    assert main(["stimuli", str(tmp_path / "d.toml"), "--out", str(tmp_path / "bad"),
+                 "--cluster", "head:8786", "--quiet"]) == 1
+    assert "--cluster 'head:8786': expected tcp://HOST:PORT" in capsys.readouterr().err
+    assert not (tmp_path / "bad").exists()
+    addr = cluster.client.scheduler.address
+    assert main(["stimuli", str(tmp_path / "d.toml"), "--out", str(tmp_path / "s"),
+                 "--cluster", addr, "--quiet"]) == 0
+    assert "wrote 4 stimuli" in capsys.readouterr().out
+    assert len(read_manifest(tmp_path / "s")) == 4
+
+
+def test_a_failing_stimulus_fails_the_cluster_build_as_locally(tmp_path, cluster):
+    from flipstudy.stimuli.injection import StimulusError
+    d = parse_design(DESIGN.format(levels="25").replace("seed = 11", "seed = 11\ntolerance_pct = 1e-9"))
+    with pytest.raises(StimulusError) as local:
+        build_stimuli(d, tmp_path / "local", progress=False)
+    with pytest.raises(StimulusError) as there:
+        build_stimuli(d, tmp_path / "cluster", progress=False, cluster=cluster)
+    # the error of whichever failing stimulus finished first, word for word as locally
+    failing = ["backflip_smooth-increase_25", "backflip_angle_10"]
+    assert any(n in str(local.value) for n in failing)
+    name = next(n for n in failing if n in str(there.value))
+    if name in str(local.value):
+        assert str(there.value) == str(local.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []   # nothing published, no staging left
