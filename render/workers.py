@@ -199,6 +199,9 @@ def render_on_worker(settings: dict, task: dict) -> dict:
     import threading
     if _WORKER_LOCK is None:
         _WORKER_LOCK = threading.Lock()
+    # each worker process writes in its own subfolder: a task rerun after its worker
+    # was killed never shares a file with the dead worker's last (orphaned) encoder
+    settings = {**settings, "partial": str(Path(settings["partial"]) / f"w{os.getpid()}")}
     with _WORKER_LOCK:
         if _WORKER.get("settings") != settings:
             _close_worker()

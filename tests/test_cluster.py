@@ -138,6 +138,41 @@ def test_a_worker_killed_mid_build_has_its_tasks_rerun(tmp_path, cluster):
     assert before[victim] not in worker_pids(cluster).values()    # it was really killed
 
 
+def test_a_worker_killed_mid_render_has_its_video_made_again(tmp_path, cluster):
+    from flipstudy.render.record import check_rendered
+    study = tmp_path / "study"
+    rows = build_stimuli(design((10, 25)), study, progress=False)
+    before = worker_pids(cluster)
+    box = {}
+
+    def run():
+        try:
+            box["rec"] = render_study(study, what="video", size=(64, 48), fps=15.0,
+                                      progress=False, cluster=cluster)
+        except BaseException as e:  # noqa: BLE001 — reported below
+            box["error"] = e
+    th = threading.Thread(target=run)
+    th.start()
+    victim, t_end = None, time.monotonic() + 60
+    while victim is None and time.monotonic() < t_end and th.is_alive():
+        busy = [a for a, ts in cluster.client.processing().items()
+                if any(str(t).startswith("render-") for t in ts)]
+        if busy:
+            victim = busy[0]
+            time.sleep(0.3)               # inside the render (scene, frames, ffmpeg)
+            os.kill(before[victim], signal.SIGKILL)
+        else:
+            time.sleep(0.01)
+    th.join(180)
+    assert victim is not None, "no render task was ever seen processing"
+    assert "error" not in box, box.get("error")
+    assert box["rec"]["made"] == len(rows)
+    check_rendered(study)                              # every video recorded, intact
+    assert not list((study / "render").glob(".partial-*"))
+    cluster.client.wait_for_workers(2, timeout=60)
+    assert before[victim] not in worker_pids(cluster).values()
+
+
 def test_a_worker_with_other_versions_is_refused_before_any_work(tmp_path, cluster):
     mine = cl.installed_versions()
     fake = functools.partial(dict, **{**mine, "numpy": "1.0.0"})
