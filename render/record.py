@@ -107,7 +107,7 @@ def read_record(out_dir) -> dict | None:
 def up_to_date(out: Path, fname: str, have: dict | None, want: dict) -> bool:
     """Whether ``out/fname`` is the output recorded as ``have`` and that record
     says it was made as ``want`` says (same stimulus, settings, placement)."""
-    if not have or {k: v for k, v in have.items() if k not in ("bytes", "sha256")} != want:
+    if not have or {k: v for k, v in have.items() if k not in ("bytes", "sha256", "renderer")} != want:
         return False
     f = out / fname
     try:

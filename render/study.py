@@ -122,7 +122,8 @@ def _character(row: dict, style, study_dir) -> str:
 
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
-                 progress: bool = True, orient: bool = True, force: bool = False) -> dict:
+                 progress: bool = True, orient: bool = True, force: bool = False,
+                 cluster=None) -> dict:
     """Render the stimuli of a study with one style, one take-off spot and one
     camera per base clip (fitted to all its stimuli; ``cameras`` in the record,
     and each stimulus's ``camera``); returns (and writes to ``render/render.json``) the settings.  With
@@ -133,7 +134,10 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     (the stimulus's sha256, its placement, the settings that change pixels and
     the library versions) and the file's size and sha256; an output whose record
     matches and whose file is intact is kept, anything else is made again
-    (``force``: everything).  ``render.json`` is rewritten atomically after every
+    (``force``: everything).  ``cluster`` (a :class:`flipstudy.study.cluster.Cluster`):
+    render on its workers instead of ``jobs`` local processes; each output's
+    record names the OpenGL renderer and versions that drew it (``renderer``).
+    ``render.json`` is rewritten atomically after every
     stimulus, so an interrupted render loses at most the outputs in flight, and
     those never appear under their final names.
 
@@ -267,16 +271,17 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
                             "camera": cam}
             for r, o, y, t0_, t1_, cam in zip(rows, st.offsets, st.yaws, takeoffs, landings,
                                               camera_of)}
-    jobs = max(1, min(int(jobs or os.cpu_count() or 1), max(len(tasks), 1)))
+    jobs = max(1, min(int(jobs or os.cpu_count() or 1), max(len(tasks), 1))) if cluster is None \
+        else cluster.n_workers
     t_start = time.perf_counter()
     made = [0]
 
     def record() -> dict:
         files = {n: {} for n in info}
         for fname, o_ in outputs.items():
-            if o_.get("stimulus") in files and o_ == {**expected.get(fname, {}),
-                                                     "bytes": o_.get("bytes"),
-                                                     "sha256": o_.get("sha256")}:
+            if o_.get("stimulus") in files and "bytes" in o_ and "sha256" in o_ and \
+                    {k: v for k, v in o_.items() if k not in ("bytes", "sha256", "renderer")} \
+                    == expected.get(fname):
                 files[o_["stimulus"]][o_["kind"]] = fname
         return {
             "study": str(study_dir.resolve()),
@@ -308,7 +313,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         try:
             publish(res, out)
             for kind, f in res["files"].items():
-                outputs[f["file"]] = {**expected[f["file"]], "bytes": f["bytes"], "sha256": f["sha256"]}
+                outputs[f["file"]] = {**expected[f["file"]], "bytes": f["bytes"], "sha256": f["sha256"],
+                                      "renderer": res.get("renderer")}
                 made[0] += 1
             write()
         finally:
@@ -317,7 +323,10 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
 
     write()                        # drops records of outputs whose files are gone
     try:
-        run_tasks(settings, tasks, jobs, done)
+        if cluster is None:
+            run_tasks(settings, tasks, jobs, done)
+        else:                      # one task per stimulus on the cluster's workers
+            cluster.map_render(settings, tasks, done)
     finally:
         bar.close()
         import shutil

@@ -161,7 +161,53 @@ def _render_task(task: dict) -> dict:
         # (:func:`publish`), so no file stands in render/ that render.json does not record
         files[kind] = {"file": fname, **info, "partial": str(f),
                        "frames": None if frames_tmp is None else str(frames_tmp)}
-    return {"stimulus": name, "files": files, "seconds": round(time.perf_counter() - t_start, 3)}
+    return {"stimulus": name, "files": files, "seconds": round(time.perf_counter() - t_start, 3),
+            "renderer": _renderer(scene)}
+
+
+def _renderer(scene) -> dict:
+    """What drew this worker's pixels: the OpenGL vendor, renderer and version
+    strings of its render window, the window class, and the library versions
+    (once per worker process); recorded per output in ``render.json``."""
+    if "renderer" not in _WORKER:
+        from .record import versions
+        info = {}
+        try:
+            text = scene.plotter.render_window.ReportCapabilities() or ""
+        except Exception:  # noqa: BLE001 — a window that cannot report: recorded as unknown
+            text = ""
+        names = {"OpenGL vendor string": "gl_vendor", "OpenGL renderer string": "gl_renderer",
+                 "OpenGL version string": "gl_version"}
+        for line in text.splitlines():
+            k, _, v = line.partition(":")
+            if k.strip() in names:
+                info[names[k.strip()]] = v.strip()
+        info["window"] = scene.plotter.render_window.GetClassName()
+        _WORKER["renderer"] = {**info, "versions": versions()}
+    return _WORKER["renderer"]
+
+
+_WORKER_LOCK = None
+
+
+def render_on_worker(settings: dict, task: dict) -> dict:
+    """One task of :func:`run_tasks`, in a long-lived process that renders for
+    any study (a Dask worker, :mod:`flipstudy.study.cluster`): the scene is built
+    on first use and rebuilt only when ``settings`` change; one task at a time
+    per process (a lock: the GL context is not shared between threads)."""
+    global _WORKER_LOCK
+    import threading
+    if _WORKER_LOCK is None:
+        _WORKER_LOCK = threading.Lock()
+    # each worker process writes in its own subfolder: a task rerun after its worker
+    # was killed never shares a file with the dead worker's last (orphaned) encoder
+    settings = {**settings, "partial": str(Path(settings["partial"]) / f"w{os.getpid()}")}
+    with _WORKER_LOCK:
+        if _WORKER.get("settings") != settings:
+            _close_worker()
+            _WORKER.pop("renderer", None)
+            _init_worker(settings)
+        return _render_task(task)
 
 
 def publish(res: dict, out: Path) -> None:
@@ -307,4 +353,4 @@ def run_tasks(settings: dict, tasks: list, jobs: int, done) -> None:
         _run_pool(settings, tasks, jobs, done)
 
 
-__all__ = ["PARTIAL_PREFIX", "run_tasks", "publish", "clear_partials"]
+__all__ = ["PARTIAL_PREFIX", "run_tasks", "publish", "clear_partials", "render_on_worker"]

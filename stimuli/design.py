@@ -407,6 +407,10 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         lv = parse_levels(g, wg, kind, sign, top, excluded)
         method, task = parse_method_task(g, wg, design.task)
         quest = parse_quest(g, wg, method, task, lv)
+        if method == "quest+" and kind == "pose-rate":
+            raise DesignError(f"{wg}.method: QUEST+ assumes the error grows with the level, and a "
+                              f"pose rate's error grows as the level (poses per second) falls; run "
+                              f"pose-rate groups with method = \"constant\"")
         if task == "2afc" and (0.0 not in lv or len(lv) < 2):
             raise DesignError(f"{wg}.levels: a 2afc group shows each level beside the original, so "
                               f"its levels need 0 (the original) and at least one error level, got "

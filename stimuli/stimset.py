@@ -195,13 +195,15 @@ class StudyFolderError(FlipstudyError, FileExistsError):
 
 
 def build_stimuli(design: Design, out, force: bool = False, progress: bool = True,
-                  replace_check=None) -> list[dict]:
+                  replace_check=None, cluster=None) -> list[dict]:
     """Generate, measure and write the stimulus set of ``design`` into ``out``.
 
     ``force``: replace an existing ``out`` that holds only a previous build's
     files.  ``replace_check(folder, foreign_names)``: called when ``out`` holds
     anything else; it raises to refuse, returns to allow (see the module
     docstring).  Raises :class:`StudyLocked` when another build holds ``out``.
+    ``cluster``: a :class:`flipstudy.study.cluster.Cluster` that makes the
+    stimuli (:func:`make_stimulus`) on its workers, into the same staging folder.
     """
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -211,10 +213,11 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
             if not force:
                 raise FlipstudyFileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
             _check_replaceable(out, replace_check, out)      # fail before the work, not after
-        return _build(design, out, force, progress, replace_check)
+        return _build(design, out, force, progress, replace_check, cluster)
 
 
-def _build(design: Design, out: Path, force: bool, progress: bool, replace_check) -> list[dict]:
+def _build(design: Design, out: Path, force: bool, progress: bool, replace_check,
+           cluster=None) -> list[dict]:
     todo = plan(design)
     bar = Progress(len(todo), "stimuli", progress)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
@@ -229,73 +232,14 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 raise StimulusError(f"clips '{c.name}' ({c.source}): the analyser finds no flight "
                                     f"phase, so it cannot carry the study's errors")
             base[c.name] = a
-        rows = []
-        extended = uses_ballistic_kinds(design)
-        for name, spec, group, level in todo:
-            a = base[spec.name]
-            if group is None or level == 0:
-                inj = Injected(a.clip, group.kind if group else "reference",
-                               group.profile if group else None, 0.0, a.takeoff, a.landing,
-                               np.arange(a.clip.num_frames, dtype=float), a.flight_s,
-                               a.takeoff_time, a.landing_time, opts=_options(group))
-            elif group.kind == "angular-momentum":
-                inj = inject_angular_momentum(a, group.sign * level / 100.0, group.profile,
-                                              design.com_policy)
-            elif group.kind in BALLISTIC_KINDS:
-                try:
-                    inj = inject_kind(a, group.kind, group.sign * level / 100.0,
-                                      group.policy or group.axis or group.span, rate=level)
-                except StimulusError as e:
-                    raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
-            else:
-                inj = inject_takeoff_angle(a, group.sign * level / 100.0)
-            if inj.kind == "reference":
-                m = measure(a, Injected(a.clip, "takeoff-angle", None, 0.0, a.takeoff, a.landing,
-                                        None, a.flight_s, a.takeoff_time, a.landing_time))
-                m["measured_error_pct"] = 0.0
-            elif inj.kind in BALLISTIC_KINDS:
-                m = measure_ballistic(a, inj)
-                check(m, inj, design.tolerance_pct, name)
-            else:
-                m = measure(a, inj)
-                check(m, inj, design.tolerance_pct, name)
-            if extended and inj.kind not in BALLISTIC_KINDS:
-                m = {**measure_ballistic(a, inj), **m}
-                m["nominal_value"], m["measured_value"] = (group.sign * level if group else 0.0), \
-                    m["measured_error_pct"]
-            text = bvh_text(inj.clip, 1.0)
-            data = text.encode()
-            npz = npz_bytes(clip_arrays(inj.clip, inj.takeoff, inj.landing))
-            (tmp / f"{name}.bvh").write_bytes(data)
-            (tmp / f"{name}.npz").write_bytes(npz)
-            rows.append({
-                "stimulus": name, "clip": spec.name,
-                "group": group.name if group else "reference",
-                "kind": group.kind if group else "reference",
-                "profile": (group.profile or "") if group else "",
-                "level": level,
-                "nominal_error_pct": 100.0 * inj.error if group and group.kind in BALLISTIC_KINDS
-                else (group.sign * level if level else 0.0) if group else 0.0,
-                "measured_error_pct": m["measured_error_pct"],
-                "takeoff_angle_deg": m["takeoff_angle_deg"],
-                "takeoff_angle_change_deg": m["takeoff_angle_change_deg"],
-                "takeoff": inj.takeoff, "landing": inj.landing,
-                "seed": derived_seed(design.seed, name),
-                "sha256": hashlib.sha256(data).hexdigest(),
-                "L_ratio_window": m["L_ratio_window"], "L_change_pct": m["L_change_pct"],
-                "flight_s": m["flight_s"], "jump_height_m": m["jump_height_m"],
-                "jump_length_m": m["jump_length_m"], "dp_takeoff": m["dp_takeoff"],
-                "dp_landing": m["dp_landing"], "frames": inj.clip.num_frames, "fps": inj.clip.fps,
-                "bvh": f"{name}.bvh", "npz": f"{name}.npz",
-                "original": original_of(design, spec.name, group),
-                "accept_unphysical": "true" if spec.accept_unphysical else "false",
-                "takeoff_time": inj.takeoff_time, "landing_time": inj.landing_time,
-                **{k: m[k] for k in ("air_acc_dev", "air_acc_dev_original", "dv_takeoff",
-                                     "dv_landing", "L_error_touchdown_pct", "below_floor_mm")},
-                **({"style": design.style_of(group) or "ellipsoids"} if design.styled else {}),
-                **({k: m[k] for k in EXTRA_COLUMNS} if extended else {}),
-            })
-            bar.step(name)
+        items = [(it, base[it[1].name]) for it in todo]
+        if cluster is None:
+            rows = []
+            for it, a in items:
+                rows.append(make_stimulus(design, a, it, tmp))
+                bar.step(it[0])
+        else:                             # one task per stimulus; rows back in plan order
+            rows = cluster.map_stimuli(make_stimulus, design, items, tmp, bar)
         write_manifest(tmp / "manifest.csv", rows)
         if design.path is not None:
             shutil.copyfile(design.path, tmp / "design.toml")
@@ -320,6 +264,80 @@ def _options(group) -> dict:
     """A group's kind options as an Injected holds them (policy, axis, span)."""
     return {k: getattr(group, k) for k in ("policy", "axis", "span")
             if group is not None and getattr(group, k, None)}
+
+
+def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
+    """Make one stimulus of ``plan(design)`` (``item``: name, clip spec, group,
+    level) from its base clip's analysis ``a``: write its ``.bvh`` and ``.npz``
+    into ``folder`` and return its manifest row.  It depends on nothing but its
+    arguments (its seed is :func:`derived_seed` of the design seed and the name),
+    so it gives the same bytes in any process and in any order: what a cluster
+    worker runs (:mod:`flipstudy.study.cluster`)."""
+    name, spec, group, level = item
+    tmp = Path(folder)
+    extended = uses_ballistic_kinds(design)
+    if group is None or level == 0:
+        inj = Injected(a.clip, group.kind if group else "reference",
+                       group.profile if group else None, 0.0, a.takeoff, a.landing,
+                       np.arange(a.clip.num_frames, dtype=float), a.flight_s,
+                       a.takeoff_time, a.landing_time, opts=_options(group))
+    elif group.kind == "angular-momentum":
+        inj = inject_angular_momentum(a, group.sign * level / 100.0, group.profile,
+                                      design.com_policy)
+    elif group.kind in BALLISTIC_KINDS:
+        try:
+            inj = inject_kind(a, group.kind, group.sign * level / 100.0,
+                              group.policy or group.axis or group.span, rate=level)
+        except StimulusError as e:
+            raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
+    else:
+        inj = inject_takeoff_angle(a, group.sign * level / 100.0)
+    if inj.kind == "reference":
+        m = measure(a, Injected(a.clip, "takeoff-angle", None, 0.0, a.takeoff, a.landing,
+                                None, a.flight_s, a.takeoff_time, a.landing_time))
+        m["measured_error_pct"] = 0.0
+    elif inj.kind in BALLISTIC_KINDS:
+        m = measure_ballistic(a, inj)
+        check(m, inj, design.tolerance_pct, name)
+    else:
+        m = measure(a, inj)
+        check(m, inj, design.tolerance_pct, name)
+    if extended and inj.kind not in BALLISTIC_KINDS:
+        m = {**measure_ballistic(a, inj), **m}
+        m["nominal_value"], m["measured_value"] = (group.sign * level if group else 0.0), \
+            m["measured_error_pct"]
+    text = bvh_text(inj.clip, 1.0)
+    data = text.encode()
+    npz = npz_bytes(clip_arrays(inj.clip, inj.takeoff, inj.landing))
+    (tmp / f"{name}.bvh").write_bytes(data)
+    (tmp / f"{name}.npz").write_bytes(npz)
+    return {
+        "stimulus": name, "clip": spec.name,
+        "group": group.name if group else "reference",
+        "kind": group.kind if group else "reference",
+        "profile": (group.profile or "") if group else "",
+        "level": level,
+        "nominal_error_pct": 100.0 * inj.error if group and group.kind in BALLISTIC_KINDS
+        else (group.sign * level if level else 0.0) if group else 0.0,
+        "measured_error_pct": m["measured_error_pct"],
+        "takeoff_angle_deg": m["takeoff_angle_deg"],
+        "takeoff_angle_change_deg": m["takeoff_angle_change_deg"],
+        "takeoff": inj.takeoff, "landing": inj.landing,
+        "seed": derived_seed(design.seed, name),
+        "sha256": hashlib.sha256(data).hexdigest(),
+        "L_ratio_window": m["L_ratio_window"], "L_change_pct": m["L_change_pct"],
+        "flight_s": m["flight_s"], "jump_height_m": m["jump_height_m"],
+        "jump_length_m": m["jump_length_m"], "dp_takeoff": m["dp_takeoff"],
+        "dp_landing": m["dp_landing"], "frames": inj.clip.num_frames, "fps": inj.clip.fps,
+        "bvh": f"{name}.bvh", "npz": f"{name}.npz",
+        "original": original_of(design, spec.name, group),
+        "accept_unphysical": "true" if spec.accept_unphysical else "false",
+        "takeoff_time": inj.takeoff_time, "landing_time": inj.landing_time,
+        **{k: m[k] for k in ("air_acc_dev", "air_acc_dev_original", "dv_takeoff",
+                             "dv_landing", "L_error_touchdown_pct", "below_floor_mm")},
+        **({"style": design.style_of(group) or "ellipsoids"} if design.styled else {}),
+        **({k: m[k] for k in EXTRA_COLUMNS} if extended else {}),
+    }
 
 
 def _fmt(v) -> str:

@@ -72,7 +72,7 @@ def _say(quiet: bool, text: str) -> None:
 
 
 def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = None,
-              size=SIZE, force: bool = False, quiet: bool = False) -> dict:
+              size=SIZE, force: bool = False, quiet: bool = False, cluster=None) -> dict:
     """Run the whole pipeline into ``out``; returns ``{"files": {...}, "seconds": {...},
     "table_md": str, "result": analysis Result}``.
 
@@ -126,7 +126,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
         t = stage(2, "stimuli: inject and measure every error")
         study = work / "study"
-        rows = build_stimuli(design, study, progress=not quiet)
+        rows = build_stimuli(design, study, progress=not quiet, cluster=cluster)
         worst = max(abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"]))
                     for r in rows if r["kind"] != "reference")
         seconds["stimuli"] = time.perf_counter() - t
@@ -135,7 +135,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         t = stage(3, f"render: videos, ghost and trail composites at {size[0]}x{size[1]} "
                      f"({aa.upper() if aa != 'none' else 'no'} anti-aliasing)")
         rec = render_study(study, what=("video", "ghost", "trail"), size=size, jobs=jobs,
-                           style=STYLE, progress=not quiet)
+                           style=STYLE, progress=not quiet, cluster=cluster)
         seconds["render"] = time.perf_counter() - t
 
         t = stage(4, f"sessions: {participants} simulated participants (observers of the paper's "

@@ -121,3 +121,24 @@ def test_a_grid_group_builds_every_level_within_tolerance(tmp_path):
     for r in manifest:
         assert abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"])) <= 1.0
         assert (tmp_path / "s" / r["bvh"]).is_file()
+
+
+def test_a_pose_rate_group_is_refused_as_quest_plus_and_runs_as_constant_stimuli():
+    """QUEST+ assumes the error grows with the level; a pose rate's falls with it."""
+    text = """[study]
+name = "p"
+seed = 1
+fps = 60
+
+[[clips]]
+name = "backflip"
+source = "backflip"
+
+[[groups]]
+name = "pr"
+kind = "pose-rate"
+levels = [0, 10, 15, 20, 30]
+"""
+    assert parse_design(text).groups[0].method == "constant"
+    with pytest.raises(DesignError, match=r"groups\[0\] \(pr\)\.method: QUEST\+ assumes"):
+        parse_design(text + 'method = "quest+"\n')

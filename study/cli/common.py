@@ -9,7 +9,7 @@ import argparse
 from flipstudy.stimuli.loading import load_clip
 
 __all__ = ["load_clip", "add_clip", "add_units", "add_clip_args", "add_mass", "add_json", "add_out",
-           "add_study_dir"]
+           "add_study_dir", "add_cluster"]
 
 
 def add_clip(p: argparse.ArgumentParser) -> None:
@@ -48,3 +48,13 @@ def add_out(p: argparse.ArgumentParser, metavar: str, help: str | None = None) -
 def add_study_dir(p: argparse.ArgumentParser, help: str | None = None) -> None:
     """The positional STUDY_DIR, the study folder a command works on."""
     p.add_argument("study_dir", metavar="STUDY_DIR", help=help)
+
+
+def add_cluster(p: argparse.ArgumentParser) -> None:
+    """``--cluster ADDRESS``: run the work on Dask distributed (see
+    :mod:`flipstudy.study.cluster`)."""
+    p.add_argument("--cluster", metavar="ADDRESS", default=None,
+                   help="run on Dask distributed: tcp://HOST:PORT of a running `dask scheduler`, "
+                        "or local:N for a LocalCluster of N worker processes; the workers need "
+                        "the study folder at the same path (shared filesystem) and the same "
+                        "versions as this client")

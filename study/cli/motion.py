@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 
-from .common import add_clip_args, add_json, add_mass, add_out, add_study_dir, load_clip
+from .common import add_clip_args, add_cluster, add_json, add_mass, add_out, add_study_dir, load_clip
 
 #: the names of flipstudy.stimuli.presets.PRESETS (written out: building the parser
 #: imports no numpy; a test checks they agree)
@@ -109,8 +109,10 @@ def cmd_stimuli(args) -> int:
         replaced["answers"] = refuse_real_answers(folder, foreign, shown=Path(args.out))
         replaced["foreign"] = foreign
 
-    rows = build_stimuli(design, args.out, force=args.force, progress=not args.quiet,
-                         replace_check=replace_check)
+    from flipstudy.study.cluster import open_cluster
+    with open_cluster(args.cluster) as cluster:
+        rows = build_stimuli(design, args.out, force=args.force, progress=not args.quiet,
+                             replace_check=replace_check, cluster=cluster)
     if replaced:
         print(f"replaced {args.out}: it held no real participant's answers "
               f"({describe(replaced['answers'])}); removed with it: {', '.join(replaced['foreign'])}")
@@ -232,6 +234,7 @@ def add_commands(subparsers) -> None:
                         "answer (then move it aside with `flipstudy archive STUDY_DIR`); a study "
                         "with only simulated answers is replaced, and the command says so")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_cluster(p)
     p.set_defaults(func=cmd_stimuli)
 
     p = subparsers.add_parser("archive", help="move a whole study folder aside (STUDY-archived-DATE)",

@@ -23,7 +23,7 @@ from flipstudy.stimuli.exceptions import FlipstudyError
 import argparse
 import sys
 
-from .common import add_clip, add_out, add_study_dir, add_units
+from .common import add_clip, add_cluster, add_out, add_study_dir, add_units
 
 
 def _size(text: str):
@@ -77,10 +77,13 @@ def cmd_render(args) -> int:
     from flipstudy.render.study import parse_what, render_study
     try:
         what = parse_what(args.what)
-        rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs,
-                           fps=args.video_fps,
-                           style=_style(args.style), frames=args.frames, progress=not args.quiet,
-                           orient=not args.no_orient, force=args.force)
+        from flipstudy.study.cluster import open_cluster
+        with open_cluster(args.cluster) as cluster:
+            rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs,
+                               fps=args.video_fps,
+                               style=_style(args.style), frames=args.frames,
+                               progress=not args.quiet, orient=not args.no_orient,
+                               force=args.force, cluster=cluster)
     except FlipstudyError as e:
         print(f"flipstudy render: error: {e}", file=sys.stderr)
         return 1
@@ -165,6 +168,7 @@ def add_commands(subparsers) -> None:
                    help="make every output again (default: only what is missing or stale, i.e. "
                         "made from another stimulus file or with other settings)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_cluster(p)
     p.set_defaults(func=cmd_render)
 
     f = subparsers.add_parser(

@@ -7,11 +7,15 @@ from flipstudy.stimuli.exceptions import FlipstudyError
 
 from flipstudy.study.reproduce import reproduce, summary_text
 
+from .common import add_cluster
+
 
 def cmd_reproduce(args) -> int:
     try:
-        r = reproduce(args.out, participants=args.participants, seed=args.seed, jobs=args.jobs,
-                      force=args.force, quiet=args.quiet)
+        from flipstudy.study.cluster import open_cluster
+        with open_cluster(args.cluster) as cluster:
+            r = reproduce(args.out, participants=args.participants, seed=args.seed,
+                          jobs=args.jobs, force=args.force, quiet=args.quiet, cluster=cluster)
     except FlipstudyError as e:
         print(f"flipstudy reproduce: error: {e}", file=sys.stderr)
         return 1
@@ -36,4 +40,5 @@ def add_commands(subparsers) -> None:
                    help="render worker processes (default: number of CPUs)")
     p.add_argument("--force", action="store_true", help="replace OUT if it exists")
     p.add_argument("--quiet", action="store_true", help="no progress output")
+    add_cluster(p)
     p.set_defaults(func=cmd_reproduce)
