@@ -66,15 +66,15 @@ def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_
     return "\n".join(lines)
 
 
-def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, size=(64, 48),
-                    videos: bool = True, **design) -> Path:
-    """Write ``design.toml``, ``manifest.csv`` and ``render/<stimulus>.mp4`` into ``out``
-    (keyword arguments go to :func:`demo_design_text`)."""
+def write_placeholder_study(out, text: str, *, frames: int, fps: float,
+                            sha256=lambda i: "0" * 64) -> list[dict]:
+    """Write ``out/design.toml`` (``text``) and a ``manifest.csv`` naming every
+    stimulus the design plans (placeholder numbers, no motion files: sessions read
+    only the manifest); return the manifest rows.  ``sha256(i)`` gives row i's hash."""
     from flipstudy.stimuli.design import parse_design
     from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    text = demo_design_text(**design)
     (out / "design.toml").write_text(text)
     d = parse_design(text, out / "design.toml")
     rows = []
@@ -84,11 +84,21 @@ def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, siz
                  kind=group.kind if group else "reference",
                  profile=(group.profile or "") if group else "", level=level,
                  nominal_error_pct=(group.sign * level) if group else 0.0, takeoff=10, landing=20,
-                 seed=0, sha256="0" * 64, frames=video_frames, fps=video_fps,
+                 seed=0, sha256=sha256(len(rows)), frames=frames, fps=fps,
                  bvh=f"{name}.bvh", npz=f"{name}.npz",
                  original=original_of(d, spec.name, group), accept_unphysical="false")
         rows.append(r)
     write_manifest(out / "manifest.csv", rows)
+    return rows
+
+
+def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, size=(64, 48),
+                    videos: bool = True, **design) -> Path:
+    """Write ``design.toml``, ``manifest.csv`` and ``render/<stimulus>.mp4`` into ``out``
+    (keyword arguments go to :func:`demo_design_text`)."""
+    out = Path(out)
+    rows = write_placeholder_study(out, demo_design_text(**design), frames=video_frames,
+                                   fps=video_fps)
     if videos:
         palette = [(230, 180, 40), (80, 170, 230), (220, 90, 90), (120, 200, 120), (200, 120, 220)]
         for i, r in enumerate(rows):

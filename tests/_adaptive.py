@@ -67,25 +67,9 @@ def design_text(groups=("yn", "quest"), *, trials: int = 12, repetitions: int = 
 def make_study(out, text: str | None = None, **kw) -> Path:
     """``out/design.toml`` and a manifest of every stimulus the design plans (no
     motion files: sessions read only the manifest)."""
-    from flipstudy.stimuli.design import parse_design
-    from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    text = text or design_text(**kw)
-    (out / "design.toml").write_text(text)
-    d = parse_design(text, out / "design.toml")
-    rows = []
-    for name, spec, group, level in plan(d):
-        r = {c: 0.0 for c in MANIFEST_COLUMNS}
-        r.update(stimulus=name, clip=spec.name, group=group.name if group else "reference",
-                 kind=group.kind if group else "reference",
-                 profile=(group.profile or "") if group else "", level=level,
-                 nominal_error_pct=(group.sign * level) if group else 0.0, takeoff=10, landing=20,
-                 seed=0, sha256="0" * 64, frames=60, fps=30.0, bvh=f"{name}.bvh", npz=f"{name}.npz",
-                 original=original_of(d, spec.name, group), accept_unphysical="false")
-        rows.append(r)
-    write_manifest(out / "manifest.csv", rows)
-    return out
+    from flipstudy.study.demo import write_placeholder_study
+    write_placeholder_study(out, text or design_text(**kw), frames=60, fps=30.0)
+    return Path(out)
 
 
 def answer(session, trial, response, *, rt_ms=700.0, input="click") -> dict:

@@ -43,24 +43,9 @@ def make_study(out, text: str, *, frames: int = 12, fps: float = 30.0, size=(96,
                videos: bool = True) -> Path:
     """``design.toml`` (``text``), ``manifest.csv`` and (``videos``) one placeholder video
     per stimulus (colour ``PALETTE[i]`` for manifest row i) with its ``render.json``."""
-    from flipstudy.stimuli.design import parse_design
-    from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
+    from flipstudy.study.demo import write_placeholder_study
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "design.toml").write_text(text)
-    d = parse_design(text, out / "design.toml")
-    rows = []
-    for name, spec, group, level in plan(d):
-        r = {c: 0.0 for c in MANIFEST_COLUMNS}
-        r.update(stimulus=name, clip=spec.name, group=group.name if group else "reference",
-                 kind=group.kind if group else "reference",
-                 profile=(group.profile or "") if group else "", level=level,
-                 nominal_error_pct=(group.sign * level) if group else 0.0, takeoff=10, landing=20,
-                 seed=0, sha256=f"{len(rows):064x}", frames=frames, fps=fps,
-                 bvh=f"{name}.bvh", npz=f"{name}.npz",
-                 original=original_of(d, spec.name, group), accept_unphysical="false")
-        rows.append(r)
-    write_manifest(out / "manifest.csv", rows)
+    rows = write_placeholder_study(out, text, frames=frames, fps=fps, sha256=lambda i: f"{i:064x}")
     if not videos:
         return out
     for i, r in enumerate(rows):
