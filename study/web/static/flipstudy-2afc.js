@@ -12,9 +12,9 @@
 // counted and flagged against max_dropped_pct as for one motion.
 'use strict';
 (function (root) {
-  // env: {C, jsPsych, esc, setScreen, watchPlayback, emit, refresh, n, app}
+  // env: {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, emit, refresh, n, app}
   function nodes(t, repeat, env) {
-    const {C, jsPsych, esc, setScreen, watchPlayback, emit} = env;
+    const {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, emit} = env;
     const keys = C.keys_2afc;
     const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
     const progress = repeat ? `Once more: trial ${t.trial} of ${env.n}` : `Trial ${t.trial} of ${env.n}`;
@@ -67,14 +67,7 @@
         if (tEnabled === null) tEnabled = performance.now();
         if (first === null) first = watches.slice();      // the first showing's playback
         const buttons = document.querySelectorAll('#jspsych-html-button-response-btngroup button');
-        onKey = (e) => {
-          if (e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
-          const k = (e.key || '').toLowerCase();
-          const i = k === keys.first ? 0 : k === keys.second ? 1 : -1;
-          if (i < 0 || buttons[i].disabled) return;
-          input = 'key';
-          buttons[i].click();
-        };
+        onKey = answerKeys(buttons, keys.first, keys.second, () => { input = 'key'; });
         document.addEventListener('keydown', onKey);
       },
       on_finish: (data) => {

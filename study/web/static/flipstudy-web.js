@@ -208,6 +208,19 @@
     });
   }
 
+  // Answer keys of a two-button question: key0 / key1 click button 0 / 1 once it is enabled
+  // (the yes/no trial's F/J and the 2AFC question's F/J); onKeyInput runs first.
+  function answerKeys(buttons, key0, key1, onKeyInput) {
+    return (e) => {
+      if (e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
+      const k = (e.key || '').toLowerCase();
+      const i = k === key0 ? 0 : k === key1 ? 1 : -1;
+      if (i < 0 || buttons[i].disabled) return;
+      onKeyInput();
+      buttons[i].click();
+    };
+  }
+
   function watchPlayback(video, info) {
     const m = {timing: null, first: null, last: null, seen: new Set(), tFirst: null, tPlaying: null, tEnded: null, done: false};
     const fps = info.fps;
@@ -402,7 +415,7 @@
 
     function trialNodes(t, repeat) {
       if (t.task === '2afc') {
-        return window.Flipstudy2afc.nodes(t, repeat, {C, jsPsych, esc, setScreen, watchPlayback, emit, refresh, n, app});
+        return window.Flipstudy2afc.nodes(t, repeat, {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, emit, refresh, n, app});
       }
       const info = C.videos[t.stimulus];
       const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
@@ -454,14 +467,7 @@
              if (tEnabled === null) tEnabled = performance.now();
              if (bR) { bR.disabled = false; buttons.forEach((b) => b.removeAttribute('disabled')); }
            });
-           onKey = (e) => {
-             if (e.repeat || e.ctrlKey || e.metaKey || e.altKey) return;
-             const k = (e.key || '').toLowerCase();
-             const i = k === keys.correct ? 0 : k === keys.incorrect ? 1 : -1;
-             if (i < 0 || buttons[i].disabled) return;
-             input = 'key';
-             buttons[i].click();
-           };
+           onKey = answerKeys(buttons, keys.correct, keys.incorrect, () => { input = 'key'; });
            document.addEventListener('keydown', onKey);
          },
          on_finish: (data) => {
