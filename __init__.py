@@ -37,7 +37,7 @@ Every user error is a :class:`FlipstudyError`:
 ...     print(e)
 unknown built-in clip 'cartwheel'; valid names: backflip, frontflip, jump
 """
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError
 
 _LAZY = ("BVHError", "Body", "Clip", "Skeleton", "analyse", "builtin", "load_bvh", "save_bvh", "Analysis")
 

@@ -1,0 +1,47 @@
+"""The one family of user errors: every error a user can act on (a bad file, a
+design field, a refused edit) is a :class:`FlipstudyError`, whose message names
+the file and line, or the field, and what was expected.  The CLI prints these in
+one line; any other exception is a bug and is shown with its traceback.
+
+The concrete classes keep ``ValueError`` as a second base so code written
+against the older classes (``except ValueError``) still catches them.
+"""
+from __future__ import annotations
+
+
+class FlipstudyError(Exception):
+    """Base of every flipstudy user error (see :mod:`flipstudy.errors`).
+
+    Example
+    -------
+    >>> from flipstudy import FlipstudyError, load_bvh
+    >>> try:
+    ...     load_bvh("no-such-file.bvh")
+    ... except FlipstudyError as e:
+    ...     print(type(e).__name__, "|", e)
+    BVHError | no-such-file.bvh: cannot read file: ...
+    """
+
+
+class FlipstudyValueError(FlipstudyError, ValueError):
+    """A user error that is also a ``ValueError`` (bad value in a file or field)."""
+
+
+class FlipstudyFileNotFoundError(FlipstudyError, FileNotFoundError):
+    """A file or folder the user named (or a step before this one should have made) is absent."""
+
+
+class FlipstudyFileExistsError(FlipstudyError, FileExistsError):
+    """An output the user named exists and would be replaced (``--force`` not given)."""
+
+
+class FlipstudyOSError(FlipstudyError, OSError):
+    """A file the user named cannot be read or written (the message names it and why)."""
+
+
+class FlipstudyStateError(FlipstudyError, RuntimeError):
+    """A file is in a state this flipstudy cannot use (e.g. a newer schema version)."""
+
+
+__all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
+           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError"]
