@@ -69,3 +69,9 @@ def pytest_generate_tests(metafunc):
         else:
             metafunc.parametrize("shared_bvh", [pytest.param(
                 None, marks=pytest.mark.skip(reason=missing_reason()))], ids=["no-shared-data"])
+
+
+# tests/_support holds the tests' shared builders (on the path, see pyproject.toml), not
+# tests: not collected (--doctest-modules would import them, and _mujoco_model.py needs
+# the optional mujoco, which the one test using it skips without)
+collect_ignore = ["_support"]

@@ -13,7 +13,7 @@ from flipstudy.render.staging import stage
 from flipstudy.render.style import Style
 from flipstudy.render.video import iter_frames, render_video
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
+SHARED = Path(__file__).resolve().parents[3] / "shared"
 CMU = SHARED / "mocap" / "88_01.bvh"
 PLAIN = Style(ground=False, background="#ffffff", anti_aliasing="none")
 

@@ -26,7 +26,7 @@ from flipstudy.stimuli.motion import Clip, Skeleton, load_bvh  # noqa: E402
 
 from _mujoco_model import FreePieces  # noqa: E402
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
+SHARED = Path(__file__).resolve().parents[3] / "shared"
 TOL = 1e-2            # the acceptance bound: 1 % relative error on |L|
 ROUNDOFF = 1e-8       # two correct implementations agree to round-off (~1e-15 measured)
 

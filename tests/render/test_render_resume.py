@@ -18,7 +18,7 @@ from flipstudy.render.record import StaleRenderError, check_rendered
 from flipstudy.render.study import render_study
 from test_render import _write_study, jumper
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 pytestmark = pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads /proc")
 
 

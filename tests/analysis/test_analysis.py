@@ -19,7 +19,7 @@ from flipstudy.analysis.simulate import PAPER_TABLE2, paper_panel, sdt_observers
 from flipstudy.analysis.stats import detection_threshold, fit_psychometric, gee_levels, psychometric_curve
 from flipstudy.analysis.tables import fmt_cell, fmt_dprime, paper_layout, to_latex, to_markdown
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def make_responses(cells: dict, n_participants: int = 4, groups_extra: dict | None = None) -> pd.DataFrame:

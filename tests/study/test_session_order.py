@@ -114,7 +114,7 @@ def test_order_does_not_depend_on_python_hash_seed():
     for seed in ("1", "2"):
         env = dict(os.environ, PYTHONHASHSEED=seed)
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                             cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                             cwd=os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                              check=True)
         outs.add(out.stdout)
     assert len(outs) == 1

@@ -184,7 +184,7 @@ def test_a_sigkilled_session_resumes_with_the_same_posterior_and_next_level(tmp_
     proc = subprocess.Popen([sys.executable, "-c", CHILD.format(tests=tests, study=str(killed),
                                                                  wait=wait)],
                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-                            env={**os.environ, "PYTHONPATH": tests})
+                            env={**os.environ, "PYTHONPATH": os.pathsep.join([tests, str(Path(__file__).parents[1] / "_support")])})
     study_k = load_study(killed)
     slots = [t.trial for t in open_session(study_k, "P01").trials if t.adaptive]
     kill_at = slots[4]                             # killed after the 5th adaptive answer

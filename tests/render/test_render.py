@@ -25,8 +25,8 @@ from flipstudy.render.scene import Scene
 from flipstudy.render.style import Style, rgb8
 from flipstudy.render.study import RENDER_KINDS, parse_size, render_study
 
-SHARED = Path(__file__).resolve().parents[2] / "shared"
-HAVE_SYNTH = (Path(__file__).resolve().parents[1] / "stimuli" / "synth" / "__init__.py").exists()
+SHARED = Path(__file__).resolve().parents[3] / "shared"
+HAVE_SYNTH = (Path(__file__).resolve().parents[2] / "stimuli" / "synth" / "__init__.py").exists()
 
 # a plain style for pixel tests: no ground, pure white background, no AA
 PLAIN = Style(ground=False, background="#ffffff", anti_aliasing="none")

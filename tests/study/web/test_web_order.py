@@ -17,7 +17,7 @@ from flipstudy.study.order import trial_order
 from flipstudy.study.session import load_study
 from flipstudy.study.web.order import Sfc32, fnv1a32, order_groups, order_key, web_trial_order
 
-JS = Path(__file__).resolve().parents[1] / "study" / "web" / "static" / "flipstudy-order.js"
+JS = Path(__file__).resolve().parents[3] / "study" / "web" / "static" / "flipstudy-order.js"
 IDS = ["P01", "P02", "K01", "sim001", "5f3c9a1b2d4e6f7081920a1b", "W-x_9", "a", "Z" * 32]
 
 

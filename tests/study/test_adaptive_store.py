@@ -149,7 +149,7 @@ def test_new_databases_store_2afc_answers_and_new_columns(tmp_path):
 
 
 def _old_order_module():
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     try:
         src = subprocess.run(["git", "-C", str(root), "show", "200504d:study/order.py"],
                              capture_output=True, text=True, check=True).stdout

@@ -21,7 +21,7 @@ from flipstudy.study.archive import StudyHasAnswers, answers_in, refuse_real_ans
 from flipstudy.study.cli import main as flipstudy
 from flipstudy.study.session import load_study, open_session, submit_answer
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 DESIGN = """[study]
 name = "tiny"
