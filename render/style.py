@@ -34,7 +34,7 @@ OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2",
 #: costs measured by ``benchmarks/bench_render_ceiling.py --aa`` at 640x480, per
 #: CPU-second): ``"fxaa"`` (VTK's FXAA filter, the default: a frame costs about
 #: 2.5x what it costs with ``"none"``; the error on the character's edges,
-#: against a supersampled reference, halves — ``tests/test_render.py``),
+#: against a supersampled reference, halves — ``tests/render/test_render.py``),
 #: ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos filter: about 7x,
 #: edges a little finer than FXAA's) and ``"none"``.  MSAA is not offered: under
 #: depth peeling it drops every translucent surface (ghosts).

@@ -79,7 +79,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     Example
     -------
     Not run with the doctests: the whole pipeline (52 stimuli rendered) takes
-    about two minutes; ``tests/test_reproduce.py`` runs it.
+    about two minutes; ``tests/study/test_reproduce.py`` runs it.
 
     >>> r = reproduce("paper/")                  # doctest: +SKIP
     >>> sorted(r["files"])[:3]                   # doctest: +SKIP

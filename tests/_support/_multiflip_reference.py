@@ -1,6 +1,6 @@
 """A test's reference copy, kept on purpose: the plain multi-flip implementation
 (one call does everything, nothing prepared or cached) that
-``tests/test_fast_paths.py`` compares :mod:`flipstudy.stimuli.edit.multiflip`
+``tests/stimuli/test_fast_paths.py`` compares :mod:`flipstudy.stimuli.edit.multiflip`
 with, result for result.  It repeats much of that module by design (the
 ``duplicates`` pairs between the two are this copy); the package never imports it.
 
@@ -31,7 +31,7 @@ analyser (:func:`measure`).
 """
 # The implementation of stimuli/edit/multiflip.py before its pre-processing was split
 # out (commit 36cbc1e): the functions the fast path changed, kept verbatim as the plain
-# path tests/test_fast_paths.py compares the fast one with; the rest is imported (the
+# path tests/stimuli/test_fast_paths.py compares the fast one with; the rest is imported (the
 # flight measures it shares with the module from stimuli/edit/flight_measures.py; its
 # own copy of measure, which no test called, is gone).
 from __future__ import annotations

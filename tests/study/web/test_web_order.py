@@ -2,7 +2,7 @@
 (flipstudy.study.web.order) for many participant IDs and design shapes, and has the
 structure of flipstudy.study.order: every stimulus once per repetition, groups
 interleaved, no motion twice in a row across a block boundary.  The JavaScript runs
-under node (skipped without it); in Chromium, tests/test_web_browser.py compares
+under node (skipped without it); in Chromium, tests/study/web/test_web_browser.py compares
 the order of the session it runs."""
 import json
 import shutil
