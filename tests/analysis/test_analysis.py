@@ -303,6 +303,7 @@ def paper_run(tmp_path_factory):
     return out, csv, res
 
 
+@pytest.mark.slow
 def test_analyze_writes_everything(paper_run):
     out, csv, res = paper_run
     names = {"table.csv", "table_paper.csv", "table_paper.md", "table_paper.tex", "participants.csv",
@@ -325,6 +326,7 @@ def test_analyze_writes_everything(paper_run):
                                          "reached", "note"} <= set(res.thresholds.columns)
 
 
+@pytest.mark.slow
 def test_analyze_is_byte_identical_for_a_seed(paper_run, tmp_path):
     out, csv, res = paper_run
     again = analyze(csv, tmp_path, psychometric="psignifit", n_boot=500, seed=3, figures=False)
@@ -407,6 +409,7 @@ def test_analysis_imports_nothing_of_the_other_packages():
                 assert part not in {"study", "render", "stimuli"}, (f.name, m)
 
 
+@pytest.mark.slow
 def test_degenerate_groups_never_crash():
     """Every answer alike (all correct, all incorrect): no threshold, a note, sane parameters."""
     x = np.array([0, 17, 25, 37, 50.0])
@@ -440,6 +443,7 @@ def _pose_rate_answers(rng, hold_thr=50.0, width=30.0, gamma=0.15, lam=0.02, rep
     return pd.DataFrame(rows)
 
 
+@pytest.mark.slow
 def test_pose_rate_group_threshold_in_ms_recovers_the_pose_rate(tmp_path):
     from flipstudy.analysis.units import magnitudes
     df = _pose_rate_answers(np.random.default_rng(7))

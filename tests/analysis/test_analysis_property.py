@@ -100,6 +100,7 @@ def _draw_only(fig, stem):
     return paths
 
 
+@pytest.mark.slow
 def test_table2_panel_full_analysis_with_figures(tmp_path):
     """The 19-participant panel whose pooled cells are Table 2's ratings, the whole
     pipeline writing every figure (it crashed in the d' figure before)."""
@@ -115,6 +116,7 @@ def test_table2_panel_full_analysis_with_figures(tmp_path):
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @example(df=table2_ratings_panel(19))
 @given(df=response_tables())
+@pytest.mark.slow
 def test_analyze_never_crashes_on_a_valid_table(df, monkeypatch_save):
     """The whole pipeline but the psychometric fits (psignifit takes ~1 s a group;
     the next test gives it fewer tables)."""

@@ -41,6 +41,7 @@ def default_study_videos(tmp_path_factory):
     return study, rows
 
 
+@pytest.mark.slow
 def test_default_study_videos_centre_and_fill_the_frame(default_study_videos):
     study, rows = default_study_videos
     W, H = SIZE

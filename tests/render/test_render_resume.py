@@ -113,6 +113,7 @@ def tiny_study(folder: Path, n: int) -> Path:
 RENDER = ["--size", "64x48", "--video-fps", "30", "--jobs", "2", "--quiet"]
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_render_at_once_and_a_rerun_makes_only_the_rest(tmp_path, monkeypatch):
     n = 6
     study = tiny_study(tmp_path / "study", n)

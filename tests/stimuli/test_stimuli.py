@@ -116,6 +116,7 @@ def _real_design(tmp_path, tol=2.0, groups=None):
     return load_design(p)
 
 
+@pytest.mark.slow
 def test_default_design_on_builtin_flips_is_exact(tmp_path):
     """The paper's design on the built-in flips: every stimulus within ±1 point of
     its nominal error (measured by the analyser), AM stimuli keep the take-off
@@ -148,6 +149,7 @@ def test_default_design_on_builtin_flips_is_exact(tmp_path):
     assert {r["original"] for r in man if r["kind"] == "angular-momentum"} == {r["stimulus"] for r in orig}
 
 
+@pytest.mark.slow
 def test_default_design_from_real_cmu_flips(tmp_path):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path)
@@ -168,6 +170,7 @@ def test_default_design_from_real_cmu_flips(tmp_path):
     assert int(npz["takeoff"]) == int(r["takeoff"]) and clip.num_frames == int(r["frames"])
 
 
+@pytest.mark.slow
 def test_same_design_same_bytes_and_atomic_replace(tmp_path):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path)
@@ -206,6 +209,7 @@ def test_interrupted_run_leaves_nothing(tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
 
 
+@pytest.mark.slow
 def test_tolerance_refuses_noisy_real_stimuli(tmp_path):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path, tol=0.5)
@@ -214,6 +218,7 @@ def test_tolerance_refuses_noisy_real_stimuli(tmp_path):
     assert not (tmp_path / "strict").exists()
 
 
+@pytest.mark.slow
 def test_design_with_a_multiflip_base_clip(tmp_path):
     """The paper's study run on the method's own output: a double backflip base clip."""
     text = PAPER_DESIGN.replace('source = "backflip"', 'source = "backflip"\nflips = 2\nk_ratio = 1.0')

@@ -206,6 +206,7 @@ def _probe_elsewhere(root, path, token):
     return cl._probe_files(path.replace(root, root + "-elsewhere"), token)
 
 
+@pytest.mark.slow
 def test_one_worker_renders_200_videos_in_flat_memory(tmp_path):
     import psutil
     from test_render import _write_study, jumper

@@ -16,6 +16,7 @@ def run(tmp_path_factory):
     return out, r
 
 
+@pytest.mark.slow
 def test_every_stage_leaves_its_outputs(run):
     out, r = run
     man = list(csv.DictReader(open(out / "study" / "manifest.csv")))
@@ -42,6 +43,7 @@ def test_every_stage_leaves_its_outputs(run):
     assert not list(out.parent.glob(".paper.partial-*"))
 
 
+@pytest.mark.slow
 def test_existing_output_is_refused(run, tmp_path):
     out, _ = run
     with pytest.raises(ReproduceError, match="not empty"):
@@ -76,6 +78,7 @@ def test_cli_refuses_a_nonempty_folder_cleanly(tmp_path, capsys):
     assert (tmp_path / "x" / "keep.txt").read_text() == "mine"
 
 
+@pytest.mark.slow
 def test_simulated_panel_is_marked_and_real_participants_go_elsewhere(run):
     from flipstudy.study.reproduce import summary_text
     out, r = run
@@ -90,6 +93,7 @@ def test_simulated_panel_is_marked_and_real_participants_go_elsewhere(run):
     assert "--out mystudy" in text and "flipstudy run mystudy --participant P01" in text
 
 
+@pytest.mark.slow
 def test_force_refused_while_the_study_holds_a_real_answer(run, tmp_path):
     import hashlib
     import shutil

@@ -121,6 +121,7 @@ TWO_AFC = [{"name": "smooth-increase", "sign": 1, "levels": [0, 25, 50], "task":
            {"name": "smooth-decrease", "sign": -1, "levels": [0, 25, 50], "task": "2afc"}]
 
 
+@pytest.mark.slow
 def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
     study_dir = make_study(tmp_path / "study", design_text(TWO_AFC, repetitions=2, replay=True, break_every=5))
     session = open_session(load_study(study_dir), "A01")
@@ -193,6 +194,7 @@ MIXED = [{"name": "smooth-increase", "sign": 1, "levels": [0, 25]},
           "method": "quest+", "trials": 6}]
 
 
+@pytest.mark.slow
 def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path):
     from flipstudy.analysis.adaptive import Quest, QuestSettings, quest_model
     study_dir = make_study(tmp_path / "study", design_text(MIXED, repetitions=2, break_every=40))

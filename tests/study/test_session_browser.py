@@ -216,6 +216,7 @@ def answers_in_db(study_dir):
         conn.close()
 
 
+@pytest.mark.slow
 def test_server_killed_mid_session_resumes_and_loses_nothing(page, tiny, tmp_path):
     port = _free_port()
     srv = Server(tiny, "K01", port)

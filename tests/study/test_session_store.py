@@ -390,6 +390,7 @@ def test_simulate_refuses_unknown_groups_before_storing(tmp_path):
     assert not (d / "sessions.sqlite").exists() or rows(d, "sessions") == 0
 
 
+@pytest.mark.slow
 def test_simulated_panel_reproduces_table_2(tmp_path):
     """A large panel's rating per cell lands near the model (the paper's Table 2)."""
     d = make_demo_study(tmp_path / "s", videos=False, repetitions=1,

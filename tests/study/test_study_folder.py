@@ -271,6 +271,7 @@ while True:
 """
 
 
+@pytest.mark.slow
 def test_sigkilled_builds_never_leave_out_without_a_complete_study(tmp_path):
     out = tmp_path / "study"
     d3, d4 = design_file(tmp_path, 3), design_file(tmp_path, 4)

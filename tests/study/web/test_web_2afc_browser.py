@@ -70,6 +70,7 @@ def _answer(page, t, response, how, n_answers, check_colours=None, shot=None):
     page.wait_for_function(f"window.flipstudyState.checkpoint.answers().length >= {n_answers}")
 
 
+@pytest.mark.slow
 def test_2afc_site_session_import_analyze(page, tmp_path, jspsych_dir):  # noqa: F811
     study = make_study(tmp_path / "study", design_text(GROUPS, repetitions=2, break_every=3))
     site = tmp_path / "site"
@@ -153,6 +154,7 @@ def test_export_web_refuses_quest_groups_by_name(tmp_path):
     json.dumps(site_config(load_study(make_study(tmp_path / "ok", design_text(GROUPS), videos=False))))
 
 
+@pytest.mark.slow
 def test_2afc_replay_on_the_site_plays_both_again(page, tmp_path, jspsych_dir):  # noqa: F811
     """[session] replay = true: "Replay both" runs the pair again (nothing to answer while
     it plays); the answer is kept once with replays = 1."""

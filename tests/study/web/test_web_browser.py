@@ -260,6 +260,7 @@ def _opened(page, site, participant, blocked):
         yield host
 
 
+@pytest.mark.slow
 def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  # noqa: F811
     """Pavlovia's protocol: a session opened, the records saved after each answer, closed at the end."""
     study = make_demo_study(tmp_path / "study", levels=(0, 25), repetitions=1, video_frames=12,
@@ -292,6 +293,7 @@ def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  #
     assert _csv(study / "web" / "participants.csv")[0]["age"] == "41"
 
 
+@pytest.mark.slow
 def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_path):  # noqa: F811
     site = tmp_path / "site"
     r = export_site(study, site, host="jatos", iti_ms=50, max_dropped_pct=10.0, jspsych_dir=jspsych_dir)
@@ -420,6 +422,7 @@ def _download(page, tmp_path, name="download.jsonl"):
     return path
 
 
+@pytest.mark.slow
 def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  # noqa: F811
     """[session] repeat_dropped = true: the 240 fps stimulus's two trials (flagged) come
     back after trial 8, in the trials' order, once each, with a reload between them;
@@ -488,6 +491,7 @@ def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  #
     assert "Repeats: 2 trial(s)" in (out / "notes.md").read_text()
 
 
+@pytest.mark.slow
 def test_replay_is_counted_and_the_answer_kept_once(page, tmp_path, jspsych_dir):  # noqa: F811
     """[session] replay = true: a Replay button once the motion has been shown; while the
     replay plays no answer can be given; the answer's record counts the replays."""
