@@ -35,7 +35,7 @@ def test_twin_gives_questplus_next_levels_and_posteriors(task, answers):
             assert summ[k][j] == pytest.approx(t[k], rel=1e-9, abs=1e-9)
 
 
-@pytest.mark.parametrize("task", ["yes-no", "2afc"])
+@pytest.mark.parametrize("task", ["yes-no", pytest.param("2afc", marks=pytest.mark.slow)])
 def test_parameter_recovery_coverage_of_95_intervals(task):
     """200 observers drawn from a population, 40 QUEST+ trials each: the 95 % posterior
     intervals of x* cover the true x* in 85–99 % of the observers, and the

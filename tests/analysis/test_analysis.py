@@ -288,11 +288,16 @@ def test_markdown_and_latex_layout():
 # ------------------------------------------------------------------ pipeline
 
 @pytest.fixture(scope="module")
-def paper_run(tmp_path_factory):
-    out = tmp_path_factory.mktemp("analysis")
-    df = paper_panel(19, seed=7)
-    csv = out / "responses.csv"
-    df.to_csv(csv, index=False)
+def paper_csv(tmp_path_factory):
+    csv = tmp_path_factory.mktemp("analysis") / "responses.csv"
+    paper_panel(19, seed=7).to_csv(csv, index=False)
+    return csv
+
+
+@pytest.fixture(scope="module")
+def paper_run(paper_csv):
+    csv = paper_csv
+    out = csv.parent
     img = out / "ghost.png"
     from matplotlib.figure import Figure
     fig = Figure(figsize=(2, 1.5))
@@ -356,8 +361,8 @@ def run_cli(argv):
     return args.func(args)
 
 
-def test_cli_csv_json(paper_run, tmp_path, capsys):
-    _, csv, _ = paper_run
+def test_cli_csv_json(paper_csv, tmp_path, capsys):
+    csv = paper_csv
     code = run_cli(["analyze", str(csv), "--out", str(tmp_path), "--psychometric", "none", "--no-figures",
                     "--n-boot", "200", "--correction", "1/2N", "--json"])
     assert code == 0
@@ -367,8 +372,8 @@ def test_cli_csv_json(paper_run, tmp_path, capsys):
     assert (tmp_path / "table.csv").is_file()
 
 
-def test_cli_study_folder(paper_run, tmp_path, capsys):
-    _, csv, _ = paper_run
+def test_cli_study_folder(paper_csv, tmp_path, capsys):
+    csv = paper_csv
     study = tmp_path / "study"
     study.mkdir()
     assert run_cli(["analyze", str(study)]) == 2

@@ -185,6 +185,7 @@ def test_same_design_same_bytes_and_atomic_replace(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(".")) == []
 
 
+@pytest.mark.slow
 def test_interrupted_run_leaves_nothing(tmp_path, monkeypatch):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path)
