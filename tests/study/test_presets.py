@@ -46,7 +46,9 @@ def small(text: str) -> str:
                   lambda m: f"levels = [0, {m.group(1).split(',')[-1].strip()}]", text)
 
 
-@pytest.mark.parametrize("name", NEW)
+# the two largest presets build in the slow run; the others keep the path in the default one
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n.startswith("reitsma-") else n
+                                  for n in NEW])
 def test_preset_builds_and_runs_end_to_end(tmp_path, name):
     d = parse_design(PRESETS[name])
     rows = build_stimuli(d, tmp_path / "full", progress=False)
