@@ -12,9 +12,16 @@ skip with a reason naming the missing path when it is absent:
 """
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 
 import pytest
+
+# A suite started with SIGINT ignored (a background job of a non-interactive shell,
+# `nohup`) would hand that on to the commands the tests stop with ctrl-c (they would
+# run on); a handled signal is reset to the default in a child, so handle it here.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 SHARED_DIR = Path(__file__).resolve().parents[2] / "shared"
 BVH_FOLDERS = ("mocap", "peer-bvh")
