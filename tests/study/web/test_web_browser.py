@@ -272,7 +272,7 @@ def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  #
     with _opened(page, site, "V07", blocked) as host:
         for i in (1, 2):
             _answer(page, i, RESP[i - 1], HOW[i - 1])
-        page.wait_for_function("window.flipstudyState.checkpoint.s.sent >= "
+        page.wait_for_function("() => window.flipstudyState.checkpoint.s.sent >= "
                                "window.flipstudyState.checkpoint.records.length")
         (key, text), = host.saved.items()                  # one file per run, replaced each time
         assert key.startswith("demo_V07_r") and key.endswith(".csv")
