@@ -117,7 +117,7 @@ def answer_trial(page, trial, response, how, replay=False):
             break
         if sid and sid.startswith("break-") or sid == "resume":
             page.click("#app button.primary")
-            page.wait_for_function(f"document.getElementById('app').dataset.screenId !== '{sid}'")
+            page.wait_for_function(f"() => document.getElementById('app').dataset.screenId !== '{sid}'")
             continue
         assert time.monotonic() < deadline, f"trial {trial} never came (screen {sid})"
         time.sleep(0.02)

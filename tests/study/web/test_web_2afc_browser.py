@@ -53,7 +53,7 @@ def _answer(page, t, response, how, n_answers, check_colours=None, shot=None):
             break
         if cur and (cur.startswith("break-") or cur == "resume"):
             page.click("#jspsych-html-button-response-btngroup button")
-            page.wait_for_function(f"document.getElementById('jspsych-target').dataset.screenId !== '{cur}'")
+            page.wait_for_function(f"() => document.getElementById('jspsych-target').dataset.screenId !== '{cur}'")
             continue
         assert time.monotonic() < deadline, f"{sid} never came (screen {cur})"
         time.sleep(0.02)
@@ -67,7 +67,7 @@ def _answer(page, t, response, how, n_answers, check_colours=None, shot=None):
         page.keyboard.press(keys[response])
     else:
         page.click(f"button.fs-{response}")
-    page.wait_for_function(f"window.flipstudyState.checkpoint.answers().length >= {n_answers}")
+    page.wait_for_function(f"() => window.flipstudyState.checkpoint.answers().length >= {n_answers}")
 
 
 @pytest.mark.slow

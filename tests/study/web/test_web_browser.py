@@ -203,7 +203,7 @@ def _answer_on(page, screen, response, how, n_answers):
             break
         if sid and (sid.startswith("break-") or sid in ("resume", "repeats")):
             page.click("#jspsych-html-button-response-btngroup button")
-            page.wait_for_function(f"document.getElementById('jspsych-target').dataset.screenId !== '{sid}'")
+            page.wait_for_function(f"() => document.getElementById('jspsych-target').dataset.screenId !== '{sid}'")
             continue
         assert time.monotonic() < deadline, f"{screen} never came (screen {sid})"
         time.sleep(0.02)
@@ -212,7 +212,7 @@ def _answer_on(page, screen, response, how, n_answers):
         page.keyboard.press("f" if response == "correct" else "j")
     else:
         page.click(f"button.fs-{response}")
-    page.wait_for_function(f"window.flipstudyState.checkpoint.answers().length >= {n_answers}")
+    page.wait_for_function(f"() => window.flipstudyState.checkpoint.answers().length >= {n_answers}")
 
 
 RESP = ["correct", "incorrect", "incorrect", "correct", "correct", "incorrect", "correct", "incorrect"]
