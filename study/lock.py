@@ -30,7 +30,7 @@ import os
 import socket
 from pathlib import Path
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError
 
 LOCK_DIR = ".locks"
 
@@ -121,3 +121,149 @@ class ParticipantLock:
 
     def __exit__(self, *exc):
         self.release()
+
+
+# --- a serving study is held open -------------------------------------------------------------
+#
+# Every ``flipstudy run`` holds ``STUDY_DIR/.locks/open.lock`` with a *shared* ``flock`` for as
+# long as it serves; a command that would replace, move or rebuild the study (``stimuli
+# --force``, ``archive``, ``init --force`` into it, ``reproduce --force`` onto it) takes the
+# same file *exclusively* (:func:`study_closed`) for as long as it works, so it is refused at
+# once while any server has the study open (the message names each server: pid, URL,
+# participant, from its ``run-<participant>.lock``), and a server cannot start while such a
+# command works.  The kernel drops a dead holder's lock (even after SIGKILL).
+
+OPEN_LOCK = "open.lock"
+
+
+class StudyInUse(FlipstudyError, RuntimeError):
+    """A command would replace a study that a ``flipstudy run`` server has open, or a
+    server would open a study that a command is replacing right now."""
+
+
+def _open_lock_path(study_dir) -> Path:
+    return Path(study_dir) / LOCK_DIR / OPEN_LOCK
+
+
+def live_servers(study_dir) -> list[dict]:
+    """What each live ``flipstudy run`` server of ``study_dir`` says about itself
+    (``participant``, ``pid``, ``url``, ...): the ``run-*.lock`` files still locked."""
+    out = []
+    for p in sorted((Path(study_dir) / LOCK_DIR).glob("run-*.lock")):
+        try:
+            fd = os.open(p, os.O_RDONLY)
+        except OSError:
+            continue
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+                fcntl.flock(fd, fcntl.LOCK_UN)          # nobody holds it: a dead server's file
+                continue
+            except BlockingIOError:
+                pass
+            data = os.read(fd, 65536)
+            try:
+                info = json.loads(data.decode()) if data.strip() else {}
+            except ValueError:
+                info = {}
+            out.append(info or {"participant": p.stem[4:]})
+        finally:
+            os.close(fd)
+    return out
+
+
+def describe_servers(servers: list[dict]) -> str:
+    """``"pid 123 at http://127.0.0.1:4000/ serving participant R01"``, joined by ``; ``."""
+    return "; ".join(
+        " ".join(x for x in (f"pid {s['pid']}" if s.get("pid") else "",
+                             f"at {s['url']}" if s.get("url") else "",
+                             f"serving participant {s['participant']}" if s.get("participant") else "")
+                 if x) or "a server" for s in servers) or "a `flipstudy run` server"
+
+
+class StudyOpen:
+    """The shared hold of one serving ``flipstudy run`` on its study (module text above)."""
+
+    def __init__(self, study_dir):
+        self.study_dir = Path(study_dir)
+        self.fd: int | None = None
+
+    def acquire(self) -> "StudyOpen":
+        path = _open_lock_path(self.study_dir)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        except BlockingIOError:
+            data = os.pread(fd, 4096, 0).decode(errors="replace").strip()
+            os.close(fd)
+            raise StudyInUse(f"{self.study_dir}: {data or 'another command'} is replacing this study "
+                             f"right now (lock {path}); start the session when it has finished")
+        self.fd = fd
+        return self
+
+    def release(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)
+            self.fd = None
+
+
+class study_closed:
+    """``with study_closed(STUDY_DIR, "stimuli --force"):`` hold the study closed to
+    servers while a command replaces, moves or rebuilds it; raises :class:`StudyInUse`
+    naming the servers that have it open.  A path that is not an existing folder
+    holds nothing (nothing can be serving it).
+
+    >>> import tempfile
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> server = StudyOpen(tmp.name).acquire()
+    >>> with study_closed(tmp.name, "archive"):
+    ...     pass
+    Traceback (most recent call last):
+        ...
+    flipstudy.study.lock.StudyInUse: ... is open in a `flipstudy run` server ...
+    >>> server.release()
+    >>> with study_closed(tmp.name, "archive"):
+    ...     StudyOpen(tmp.name).acquire()
+    Traceback (most recent call last):
+        ...
+    flipstudy.study.lock.StudyInUse: ...: flipstudy archive (pid ...) is replacing this study right now ...
+    >>> tmp.cleanup()
+    """
+
+    def __init__(self, study_dir, what: str):
+        self.study_dir, self.what = Path(study_dir), what
+        self.fd: int | None = None
+
+    def __enter__(self):
+        d = self.study_dir
+        if d.is_symlink() or not d.is_dir():
+            return self
+        path = _open_lock_path(d)
+        try:
+            path.parent.mkdir(exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError:                      # a read-only study: nothing of ours can serve it
+            return self
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise StudyInUse(
+                f"{d} is open in a `flipstudy run` server ({describe_servers(live_servers(d))}); "
+                f"`flipstudy {self.what}` would take the study away under the participant's "
+                f"answers. Stop the server first (Ctrl-C in its terminal), then run this again"
+            ) from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"flipstudy {self.what} (pid {os.getpid()})".encode(), 0)
+        self.fd = fd
+        return self
+
+    def __exit__(self, *exc):
+        if self.fd is not None:
+            try:
+                os.ftruncate(self.fd, 0)
+            except OSError:
+                pass
+            os.close(self.fd)
+            self.fd = None

@@ -343,7 +343,7 @@ def count_answers(conn, participant: str, session: int) -> int:
 # --- answers --------------------------------------------------------------------------------
 
 def insert_answer(conn, participant: str, session: int, n_trials: int, answer: dict,
-                  timestamp: str | None = None, adaptive=None) -> str:
+                  timestamp: str | None = None, adaptive=None, design_text: str | None = None) -> str:
     """Store one checked answer (see :func:`flipstudy.study.validate.parse_answer`).
 
     Returns ``"stored"``, or ``"duplicate"`` when the same response to the same
@@ -357,6 +357,11 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
     ``quest_ci_high`` and ``skip`` (trial numbers of the group's slots to leave
     out) or raises :class:`Conflict`; everything is written in the one
     transaction.  The session is marked finished with its last open trial.
+
+    ``design_text``: the study's ``design.toml``; the first answer records it and its
+    SHA-256 in ``meta`` (``design_toml``, ``design_sha256``), in the same
+    transaction; a different design with a recorded one is a :class:`Conflict`
+    (:mod:`flipstudy.study.frozen`).
     """
     trial = answer["trial"]
     with transaction(conn):
@@ -400,6 +405,8 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
                     f"an older flipstudy (schema 1) and accepts only correct/incorrect; run a 2AFC "
                     f"study in a new study folder") from None
             raise
+        if design_text is not None:
+            record_design(conn, design_text)
         skip = [int(t) for t in extra.get("skip", ())]
         if skip:
             conn.executemany("UPDATE trials SET skipped=1 WHERE participant=? AND session=? AND "
@@ -410,6 +417,20 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
             conn.execute("UPDATE sessions SET finished=? WHERE participant=? AND session=?",
                          (ts, participant, session))
     return "stored"
+
+
+def record_design(conn, design_text: str) -> None:
+    """Inside a write transaction: record the design with the first answer; refuse
+    (:class:`Conflict`) an answer given under another design than the recorded one."""
+    import hashlib
+    sha = hashlib.sha256(design_text.encode()).hexdigest()
+    old = conn.execute("SELECT value FROM meta WHERE key='design_sha256'").fetchone()
+    if old is None:
+        conn.executemany("INSERT INTO meta VALUES (?, ?)",
+                         [("design_sha256", sha), ("design_toml", design_text)])
+    elif old[0] != sha:
+        raise Conflict("the study's design.toml changed since its first answer; this answer was "
+                       "not stored (the design of a study with answers is frozen)")
 
 
 def insert_demographics(conn, participant: str, session: int, values: dict) -> str:

@@ -67,6 +67,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     from flipstudy.stimuli.exceptions import FlipstudyError
     try:
+        from ..owned import check_outputs
+        check_outputs(args.command, args)           # no output path is a study's own file
         return args.func(args)
     except KeyboardInterrupt:                       # Ctrl-C: one line, the shell's 128 + SIGINT
         return _interrupted(args.command)
