@@ -23,8 +23,9 @@ Example
 >>> design_change(st) is None
 True
 >>> _ = (st / "design.toml").write_text((st / "design.toml").read_text().replace("seed = 7", "seed = 8"))
->>> print(design_change(st))
-.../st/design.toml changed since the study's first answer (seed: 7 → 8) ...
+>>> msg = design_change(st)
+>>> "st/design.toml changed since the study's first answer (study.seed: 7 → 8)" in msg
+True
 >>> tmp.cleanup()
 """
 from __future__ import annotations

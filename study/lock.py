@@ -190,17 +190,28 @@ class StudyOpen:
 
     def acquire(self) -> "StudyOpen":
         path = _open_lock_path(self.study_dir)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-        except BlockingIOError:
-            data = os.pread(fd, 4096, 0).decode(errors="replace").strip()
+        while True:
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+            except FileNotFoundError:         # removed by a command that just finished: again
+                continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except BlockingIOError:
+                data = os.pread(fd, 4096, 0).decode(errors="replace").strip()
+                os.close(fd)
+                raise StudyInUse(f"{self.study_dir}: {data or 'another command'} is replacing this "
+                                 f"study right now (lock {path}); start the session when it has "
+                                 f"finished") from None
+            try:                              # the file a command removed on release: lock anew
+                same = os.fstat(fd).st_ino == os.stat(path).st_ino
+            except FileNotFoundError:
+                same = False
+            if same:
+                self.fd = fd
+                return self
             os.close(fd)
-            raise StudyInUse(f"{self.study_dir}: {data or 'another command'} is replacing this study "
-                             f"right now (lock {path}); start the session when it has finished")
-        self.fd = fd
-        return self
 
     def release(self) -> None:
         if self.fd is not None:
@@ -241,14 +252,19 @@ class study_closed:
             return self
         path = _open_lock_path(d)
         try:
+            self.made_dir = not path.parent.is_dir()
             path.parent.mkdir(exist_ok=True)
+            self.made_file = not path.exists()
             fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+            self.dir_fd = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY)
+            self.study_fd = os.open(d, os.O_RDONLY | os.O_DIRECTORY)
         except OSError:                      # a read-only study: nothing of ours can serve it
             return self
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             os.close(fd)
+            self._close_dirs()
             raise StudyInUse(
                 f"{d} is open in a `flipstudy run` server ({describe_servers(live_servers(d))}); "
                 f"`flipstudy {self.what}` would take the study away under the participant's "
@@ -259,11 +275,28 @@ class study_closed:
         self.fd = fd
         return self
 
+    def _close_dirs(self):
+        for name in ("dir_fd", "study_fd"):
+            fd = getattr(self, name, None)
+            if fd is not None:
+                os.close(fd)
+                setattr(self, name, None)
+
     def __exit__(self, *exc):
-        if self.fd is not None:
-            try:
-                os.ftruncate(self.fd, 0)
-            except OSError:
-                pass
-            os.close(self.fd)
-            self.fd = None
+        """Release; what this hold made (the lock file, ``.locks/``) is removed again,
+        through the folder's descriptors, so a study moved meanwhile (``archive``)
+        keeps no trace either.  A server that opened the removed file sees that it
+        is no longer the one at the path and locks the new one (:class:`StudyOpen`)."""
+        if self.fd is None:
+            return
+        try:
+            os.ftruncate(self.fd, 0)
+            if self.made_file:               # unlinked while still locked: no one holds the old inode
+                os.unlink(OPEN_LOCK, dir_fd=self.dir_fd)
+            if self.made_dir:
+                os.rmdir(LOCK_DIR, dir_fd=self.study_fd)
+        except OSError:                      # e.g. a server made its lock there meanwhile
+            pass
+        os.close(self.fd)
+        self.fd = None
+        self._close_dirs()
