@@ -342,6 +342,11 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
             resumed = Session(study, participant, s, source, trials, resumed=True)
             _check_quest_states(resumed, conn)
             return resumed
+        if last is None and participant in web_participants(study.dir):
+            raise SessionError(
+                f"participant {participant} has answers imported from the web site "
+                f"({study.dir / 'web' / 'participants.csv'}); one study has one participant-ID "
+                f"namespace across local, simulated and web sessions: choose another ID")
         s = 1 if last is None else last["session"] + 1
         if any(g.task == "2afc" for g in study.design.groups) and not store.accepts_2afc(conn):
             raise SessionError(f"{store.db_path(study.dir)} was made by an older flipstudy (schema "
@@ -365,6 +370,21 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         return Session(study, participant, s, source, trials, resumed=False)
     finally:
         conn.close()
+
+
+def web_participants(study_dir) -> set[str]:
+    """The participant IDs of the study's imported web results (``web/participants.csv``,
+    rebuilt by every ``import-web``)."""
+    import csv
+    p = Path(study_dir) / "web" / "participants.csv"
+    if not p.is_file():
+        return set()
+    try:
+        with p.open(newline="", encoding="utf-8", errors="replace") as f:
+            return {r.get("participant") or "" for r in csv.DictReader(f)} - {""}
+    except (OSError, csv.Error) as e:
+        raise SessionError(f"{p}: cannot be read ({e}); it lists the web participants, whose IDs "
+                           f"a local session may not take") from None
 
 
 def _check_quest_states(session: Session, conn) -> None:

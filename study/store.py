@@ -163,8 +163,11 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     path = db_path(study_dir)
     if not create and not path.exists():
         raise FlipstudyFileNotFoundError(f"{path}: no sessions yet (run `flipstudy run` or `flipstudy simulate`)")
+    existed = path.exists() and path.stat().st_size > 0
     conn = sqlite3.connect(path, timeout=30.0, isolation_level=None, check_same_thread=False)
     try:
+        if existed:
+            _check_readable(conn, path)
         conn.row_factory = sqlite3.Row
         _set_wal(conn)
         conn.execute("PRAGMA synchronous=FULL")
@@ -194,6 +197,35 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
         conn.close()
         raise
     return conn
+
+
+class CorruptDatabase(FlipstudyStateError):
+    """``sessions.sqlite`` is not a readable SQLite database (truncated, overwritten)."""
+
+
+def corrupt(path, e: Exception) -> CorruptDatabase:
+    """The error for a damaged database: names the file, says what to do, touches nothing."""
+    why = " ".join(str(e).split())[:200]
+    return CorruptDatabase(
+        f"{path}: not a readable SQLite database ({why}); it was left exactly as it is. It may "
+        f"have been truncated or overwritten: restore it from a backup or from the study's "
+        f"archive (`flipstudy archive` keeps everything), or move the study aside with "
+        f"`flipstudy archive` and ask for help recovering it (sqlite3 {path.name} '.recover')")
+
+
+def _check_readable(conn: sqlite3.Connection, path: Path) -> None:
+    """Before anything is written: the file is a database whose pages read
+    (``PRAGMA quick_check``); :class:`CorruptDatabase` otherwise."""
+    try:
+        row = conn.execute("PRAGMA quick_check(1)").fetchone()
+    except sqlite3.OperationalError as e:
+        if "locked" in str(e) or "busy" in str(e):
+            return                           # a writer holds it: checked by the next opener
+        raise corrupt(path, e) from None
+    except sqlite3.DatabaseError as e:
+        raise corrupt(path, e) from None
+    if row is None or row[0] != "ok":
+        raise corrupt(path, row[0] if row else "quick_check answered nothing")
 
 
 def _set_wal(conn: sqlite3.Connection, wait: float = 30.0) -> None:
