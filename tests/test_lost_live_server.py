@@ -100,6 +100,11 @@ def test_live_server_holds_its_study_and_never_acknowledges_a_lost_answer(study,
         r = _cli("init", study / "design.toml", "--force", "--preset", "gravity")
         assert r.returncode == 1 and "R01" in r.stderr, r.stderr
         assert (study / "design.toml").read_bytes() == (tmp_path / "design.toml").read_bytes()
+        r = _cli("reproduce", "--out", tmp_path, "--force", "--quiet")   # onto its parent folder
+        assert r.returncode == 1 and f"pid {server.proc.pid}" in r.stderr, r.stderr
+        r = _cli("render", study, "--force", "--size", "64x48", "--quiet")
+        assert r.returncode == 1 and f"pid {server.proc.pid}" in r.stderr, r.stderr
+        assert study.is_dir() and (study / "render" / "render.json").is_file()
         # the server goes on storing into the same study
         st, body = page.answer("R01", 3)
         assert st == 200 and body["status"] == "stored", body
