@@ -21,7 +21,8 @@ from flipstudy.study.demo import make_demo_study
 from flipstudy.study.session import SessionError, load_study, open_session
 from flipstudy.study.simulate import simulate
 from flipstudy.study.web._fields import WebImportError
-from flipstudy.study.web.importer import import_web, remember_site
+from flipstudy.study.web.importer import import_web
+from flipstudy.study.web.sites import remember_site
 from test_web_import import jsonl, run_records
 
 

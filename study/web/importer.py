@@ -66,6 +66,7 @@ from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
 from ._fields import WebImportError, _bool, _need, _num, _str
 from .order import order_groups, web_trial_order
+from .sites import SITES, read_sites as _sites
 from .site import FORMAT, HOSTS
 
 WEB_DIR = "web"
@@ -98,34 +99,6 @@ MAX_FILE = 256 * 1024 * 1024
 
 
 # --- reading ---------------------------------------------------------------------------------
-
-#: the sites exported from a study (``STUDY/web/sites.json``: site_id → host, folder, when)
-SITES = "sites.json"
-
-
-def remember_site(study_dir, site_id: str, host: str, out) -> None:
-    """Record in ``STUDY/web/sites.json`` that the site ``site_id`` was exported from
-    this study (``export-web``); ``import-web`` then takes results of these sites only."""
-    from ..store import utc_now
-    path = Path(study_dir) / WEB_DIR / SITES
-    sites = _sites(path) or {}
-    sites.setdefault(site_id, {"host": host, "out": str(out), "exported": utc_now()})
-    path.parent.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(path, json.dumps(sites, indent=1, sort_keys=True) + "\n")
-
-
-def _sites(path: Path) -> dict | None:
-    if not path.is_file():
-        return None
-    try:
-        got = json.loads(path.read_text())
-    except (OSError, ValueError) as e:
-        raise WebImportError(f"{path}: not readable ({e}); it lists the sites exported from this "
-                             f"study") from None
-    if not isinstance(got, dict):
-        raise WebImportError(f"{path}: expected a JSON object (site id → site)")
-    return got
-
 
 def _loads(text: str, where: str, what: str = "valid JSON"):
     """``json.loads`` whose every failure (bad JSON, nesting too deep for the parser) is
