@@ -108,7 +108,11 @@ def test_a_file_of_duplicate_records_is_not_kept(study, tmp_path):
     assert sorted((study / "web" / "imports").iterdir()) == kept    # not kept, so never re-read
     assert (study / "web" / "responses.csv").read_bytes() == table
     ledger = json.loads((study / "web" / "imports.json").read_text())
-    assert [e["file"] for e in ledger if "file" in e] == [str(tmp_path / "a.jsonl")]
+    assert [(e["file"], e.get("kept", True)) for e in ledger] == [(str(tmp_path / "a.jsonl"), True),
+                                                                 (str(big), False)]
+    # imported again: known by its hash, not read again
+    again = import_web(study, [big])
+    assert again["files"][0]["status"] == "already imported" and again["files"][0]["records"] == 0
 
 
 def test_import_web_of_a_folder_a_fifo_or_deep_json(study, tmp_path, capsys):

@@ -466,6 +466,10 @@ def import_web(study_dir, files) -> dict:
     checker = _Checker(study)
     n_trials = len(checker.order("x")) if checker.groups else 0
     kept_sha = {p.name.split("-", 1)[0]: p for p in _kept(d)}
+    # files read before that added nothing (not kept): known by their hash in the ledger
+    read_not_kept = {e.get("sha256") for e in (json.loads((d / LEDGER).read_text())
+                                                if (d / LEDGER).is_file() else [])
+                     if e.get("kept") is False}
     items = []
     for p in kept_sha.values():
         for where, rec in read_records(p):
@@ -478,7 +482,7 @@ def import_web(study_dir, files) -> dict:
         f = Path(f)
         data = read_results_file(f)
         sha = hashlib.sha256(data).hexdigest()[:16]
-        if sha in kept_sha or sha in seen:
+        if sha in kept_sha or sha in seen or sha in read_not_kept:
             report.append({"file": str(f), "status": "already imported", "records": 0, "new_answers": 0})
             continue
         seen.add(sha)
@@ -517,6 +521,9 @@ def import_web(study_dir, files) -> dict:
     names = {e["stored"] for e in ledger}
     ledger += [{"stored": p.name, "imported": None} for p in _kept(d) if p.name not in names
                and p.name not in {s for s, _ in new_files}]
+    ledger += [{"stored": None, "kept": False, "sha256": r["stored"].split("-", 1)[0], "file": r["file"],
+                "imported": utc_now(), "records": r["records"], "new_answers": 0}
+               for r in report if r["status"] == "nothing new"]
     ledger += [{"stored": r["stored"], "file": r["file"], "imported": utc_now(), "records": r["records"],
                 "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
     atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
