@@ -24,7 +24,7 @@ Example
 >>> tmp = tempfile.TemporaryDirectory()
 >>> st = make_demo_study(pathlib.Path(tmp.name) / "st")
 >>> owner(st / "sessions.sqlite")[1]
-'the database of its answers'
+'the answer database'
 >>> owner(st / "analysis" / "table.csv") is None
 True
 >>> refuse_owned(st / "manifest.csv", "export --out")
@@ -41,10 +41,10 @@ from flipstudy.errors import FlipstudyError
 
 #: top-level files of a study folder and what they are
 STUDY_FILES = {
-    "sessions.sqlite": "the database of its answers",
-    "sessions.sqlite-wal": "the database of its answers (write-ahead log)",
-    "sessions.sqlite-shm": "the database of its answers (shared memory)",
-    "sessions.sqlite-journal": "the database of its answers (journal)",
+    "sessions.sqlite": "the answer database",
+    "sessions.sqlite-wal": "the answer database's write-ahead log",
+    "sessions.sqlite-shm": "the answer database's shared memory",
+    "sessions.sqlite-journal": "the answer database's journal",
     "manifest.csv": "the stimulus list",
     "design.toml": "the design",
 }

@@ -110,5 +110,5 @@ def test_a_symlink_into_a_study_is_the_studys_file(st, tmp_path, capsys):
     link.symlink_to(st / "sessions.sqlite")
     before = snapshot(st)
     assert cli(["export", str(st), "--out", str(link)]) == 1
-    assert "the database of its answers" in capsys.readouterr().err
+    assert "the answer database of the study" in capsys.readouterr().err
     assert snapshot(st) == before
