@@ -154,3 +154,11 @@ def test_a_server_cannot_start_while_a_command_replaces_the_study(study):
         run.start(expect_url=False)
     assert run.proc.returncode == 1
     assert "stimuli --force" in run.text() and "replacing this study" in run.text()
+    assert not (study / ".locks" / "open.lock").exists()     # the hold leaves no trace
+    again = Run(study, "R03")                                # and, released, serves again
+    try:
+        page = Page(again.start())
+        assert page.answer("R03", 1)[1]["status"] == "stored"
+    finally:
+        again.stop()
+    assert _stored(study, "R03") == {1}
