@@ -147,28 +147,26 @@ def _open_lock_path(study_dir) -> Path:
 
 def live_servers(study_dir) -> list[dict]:
     """What each live ``flipstudy run`` server of ``study_dir`` says about itself
-    (``participant``, ``pid``, ``url``, ...): the ``run-*.lock`` files still locked."""
+    (``participant``, ``pid``, ``url``, ...): the ``run-*.lock`` files whose process
+    is alive.  Only read (no lock is taken, so a server starting now is not disturbed);
+    used to name the servers once :class:`study_closed` found the study held."""
     out = []
     for p in sorted((Path(study_dir) / LOCK_DIR).glob("run-*.lock")):
         try:
-            fd = os.open(p, os.O_RDONLY)
-        except OSError:
+            info = json.loads(p.read_text() or "{}")
+        except (OSError, ValueError):
             continue
-        try:
+        if not isinstance(info, dict):
+            continue
+        pid = info.get("pid")
+        if isinstance(pid, int) and pid > 0 and info.get("host") in (None, socket.gethostname()):
             try:
-                fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
-                fcntl.flock(fd, fcntl.LOCK_UN)          # nobody holds it: a dead server's file
-                continue
-            except BlockingIOError:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                continue                     # a dead server's file (SIGKILL leaves it)
+            except PermissionError:
                 pass
-            data = os.read(fd, 65536)
-            try:
-                info = json.loads(data.decode()) if data.strip() else {}
-            except ValueError:
-                info = {}
-            out.append(info or {"participant": p.stem[4:]})
-        finally:
-            os.close(fd)
+        out.append(info or {"participant": p.stem[4:]})
     return out
 
 
