@@ -93,7 +93,14 @@ def test_import_web_checks_the_study_name_and_the_site(study, tmp_path):
     with pytest.raises(WebImportError, match="site 's' was not exported from this study"):
         import_web(study, [jsonl(tmp_path / "b.jsonl", recs)])
     assert not (study / "web" / "responses.csv").exists()
-    out = import_web(study, [jsonl(tmp_path / "c.jsonl", [dict(r, site_id="abc123") for r in recs])])
+    good = jsonl(tmp_path / "c.jsonl", [dict(r, site_id="abc123") for r in recs])
+    design = study / "design.toml"
+    text = design.read_text()
+    design.write_text(text.replace("repetitions = 2", "repetitions = 2  # edited"))
+    with pytest.raises(WebImportError, match="site abc123 was exported when .*design.toml was another"):
+        import_web(study, [good])                      # a design edited after the export
+    design.write_text(text)
+    out = import_web(study, [good])
     assert out["answers"] == 8
 
 

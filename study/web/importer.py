@@ -219,6 +219,7 @@ class _Checker:
         self.orders = {}
         #: the site ids exported from this study (None: exported before they were recorded)
         self.sites = _sites(study.dir / WEB_DIR / SITES)
+        self.design_sha256 = hashlib.sha256(study.design_text.encode()).hexdigest()
 
     def order(self, pid):
         if pid not in self.orders:
@@ -246,6 +247,13 @@ class _Checker:
                 f"{where}: the site was exported from other stimuli (manifest sha256 "
                 f"{str(rec['manifest_sha256'])[:12]}…, this study's is {self.study.manifest_sha256[:12]}…); "
                 f"import it into the study it was exported from")
+        if self.sites is not None and self.sites[rec["site_id"]].get("design_sha256") not in \
+                (None, self.design_sha256):
+            raise WebImportError(
+                f"{where}: site {rec['site_id']} was exported when {self.study.dir / 'design.toml'} "
+                f"was another design (its SHA-256 then: "
+                f"{self.sites[rec['site_id']]['design_sha256'][:12]}…); a study's design is frozen "
+                f"once it has answers: restore the design the site was exported with")
         pid = rec["participant"]
         if not isinstance(pid, str) or not PARTICIPANT_RE.fullmatch(pid):
             raise WebImportError(f"{where}: participant {pid!r} is not a valid participant ID")

@@ -16,11 +16,17 @@ SITES = "sites.json"
 
 def remember_site(study_dir, site_id: str, host: str, out) -> None:
     """Record in ``STUDY/web/sites.json`` that the site ``site_id`` was exported from
-    this study (``export-web``); ``import-web`` then takes results of these sites only."""
+    this study (``export-web``), with the SHA-256 of its ``design.toml`` then;
+    ``import-web`` takes results of these sites only, and only while the design is
+    the one they were exported with."""
+    import hashlib
+
     from ..store import utc_now
     path = Path(study_dir) / WEB_DIR / SITES
     sites = read_sites(path) or {}
-    sites.setdefault(site_id, {"host": host, "out": str(out), "exported": utc_now()})
+    sha = hashlib.sha256((Path(study_dir) / "design.toml").read_bytes()).hexdigest()
+    sites.setdefault(site_id, {"host": host, "out": str(out), "exported": utc_now(),
+                               "design_sha256": sha})
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(path, json.dumps(sites, indent=1, sort_keys=True) + "\n")
 
