@@ -309,7 +309,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         # moving the files into place and recording them is one step that Ctrl-C does not
         # cut (SIGINT waits until both are done): no output unrecorded, none recorded absent
         import signal
-        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
         try:
             publish(res, out)
             for kind, f in res["files"].items():

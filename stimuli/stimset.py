@@ -444,6 +444,7 @@ def foreign_files(folder) -> list[str]:
             ours.update(r.get(k) or "" for k in ("bvh", "npz"))
     except (OSError, ValueError, csv.Error):
         ours = set()                      # no readable manifest: nothing here is known to be ours
+    ours.add(".locks")                    # who serves or replaces the study: no data of it
     return sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir() if p.name not in ours)
 
 

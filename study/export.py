@@ -152,11 +152,27 @@ def export_responses(study_dir, out=None, *, participants_out=None,
     "participants": path, "truth": path or None, "rows": n, "sessions": m, "real":
     [IDs], "simulated": [IDs written],
     "simulated_left_out": [IDs], "incomplete": ["P07/1 (6/18)", ...]}``."""
+    from .owned import EXPORT_FILES, refuse_owned
     study_dir = Path(study_dir)
     out = Path(out) if out is not None else study_dir / "responses.csv"
     pout = Path(participants_out) if participants_out is not None else out.parent / "participants.csv"
     if pout.resolve() == out.resolve():
         raise FlipstudyValueError(f"{out}: the responses and participants tables need different files")
+    for path, flag in ((out, "--out"), (pout, "--participants-out"),
+                       (out.parent / TRUTH_FILE, "--out (its simulated_truth.csv)")):
+        refuse_owned(path, f"export {flag}", study=study_dir, allow=tuple(EXPORT_FILES))
+    if out.name != "responses.csv":
+        # a table under another name must not replace the default export's tables beside it
+        from .owned import OwnedPathError, owner
+        for path, what in (((pout, "--participants-out FILE") if participants_out is None else (None, "")),
+                           (out.parent / TRUTH_FILE, "another --out folder")):
+            if path is not None and path.exists() and owner(path) is not None:
+                raise OwnedPathError(
+                    f"--out {out} would also write {path}, the table of the study's default export "
+                    f"(that goes with {out.parent / 'responses.csv'}); pass {what}, or export to "
+                    f"{out.parent / 'responses.csv'} or a folder outside the study")
+    from .frozen import refuse_changed_design
+    refuse_changed_design(study_dir, "export")
     conn = store.connect(study_dir, create=False)
     try:
         rows = [_fmt_response(r) for r in store.response_rows(conn, include_simulated=include_simulated)]

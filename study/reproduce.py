@@ -24,6 +24,8 @@ comes out should resemble the paper's, within the noise of 19 participants.
 """
 from __future__ import annotations
 
+import contextlib
+
 from flipstudy.stimuli.exceptions import FlipstudyError
 import os
 import shutil
@@ -96,15 +98,22 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     from .simulate import simulate
 
     from .archive import refuse_real_answers
+    from .lock import study_closed
 
     out = Path(out)
     if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
         raise ReproduceError(f"{out} exists and is not empty; choose another --out or pass --force "
                              f"to replace it")
 
-    def guard():                   # --force never replaces real participants' answers
-        if out.is_dir():
-            for d in [out, *sorted(p for p in out.iterdir() if p.is_dir())]:
+    def guard(stack=None):         # --force never replaces real participants' answers,
+        if out.is_dir():           # nor a study a `flipstudy run` server has open
+            for d in [out, *sorted(p for p in out.iterdir() if p.is_dir() and p.name != ".locks")]:
+                hold = study_closed(d, "reproduce --force")
+                if stack is None:
+                    with hold:
+                        pass
+                else:
+                    stack.enter_context(hold)
                 refuse_real_answers(d, shown=d, command="reproduce --force")
     guard()
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -158,14 +167,15 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         seconds["analysis"] = time.perf_counter() - t
 
         # move into place: nothing half-written is ever at OUT
-        guard()                    # answers may have arrived while the run went on
-        if out.exists():
-            old = out.with_name(f".{out.name}.old-{os.getpid()}")
-            out.rename(old)
-            work.rename(out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            work.rename(out)
+        with contextlib.ExitStack() as held:
+            guard(held)            # answers may have arrived while the run went on
+            if out.exists():
+                old = out.with_name(f".{out.name}.old-{os.getpid()}")
+                out.rename(old)
+                work.rename(out)
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                work.rename(out)
     except BaseException:
         shutil.rmtree(work, ignore_errors=True)
         raise

@@ -58,7 +58,8 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from .session import Session, SessionError, load_study, open_session, submit_answer, submit_demographics
+from .session import (Session, SessionError, StudyChanged, load_study, open_session, submit_answer,
+                      submit_demographics)
 from .timeline import build_timeline, is_default, trial_screen
 from .validate import MAX_BODY, RequestError, parse_json_object
 
@@ -163,11 +164,37 @@ async def _read_json(request: Request) -> dict:
     return parse_json_object(body)
 
 
+#: HTTP status of every request once the study changed under the server (the page shows the message)
+CHANGED_STATUS = 410
+
+
+def _changed_message(e: StudyChanged, stored_elsewhere: bool) -> str:
+    return ("This session cannot record answers any more: the study was changed on the "
+            "experimenter's computer" + (", so your last answer was NOT recorded" if stored_elsewhere
+                                          else "") +
+            ". Please tell the experimenter. (" + str(e) + ")")
+
+
 def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
-               on_answer=None) -> Starlette:
+               on_answer=None, on_changed=None) -> Starlette:
     """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
     Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
-    is called after every stored answer (the CLI prints progress)."""
+    is called after every stored answer (the CLI prints progress).
+
+    A pinned session (:meth:`Session.pin`) is checked before and after every
+    answer: once its study folder, database, manifest or design changed, every
+    API request is refused with status :data:`CHANGED_STATUS` and a message the
+    page shows, and an answer committed to a database that is no longer the
+    study's is never acknowledged as stored.  ``on_changed(message)`` is called
+    the first time (the CLI prints it)."""
+    told = []
+
+    def changed(e: StudyChanged, stored_elsewhere: bool = False) -> JSONResponse:
+        if not told:
+            told.append(True)
+            if on_changed is not None:
+                on_changed(str(e))
+        return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
     study = session.study
     render_dir = study.render_dir.resolve()
     videos = {f"{r['stimulus']}.mp4" for r in study.manifest}
@@ -185,6 +212,10 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         return Response(assets[name], media_type=STATIC_FILES[name], headers={"Cache-Control": "no-cache"})
 
     async def api_session(request: Request):
+        try:
+            session.check_intact()
+        except StudyChanged as e:
+            return changed(e)
         tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
 
@@ -204,18 +235,33 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         if not raw.isdigit() or not 1 <= int(raw) <= session.n_trials:
             return _error(404, f"no trial {raw[:20]!r} in this session (1 to {session.n_trials})")
         try:
+            session.check_intact()
             screen = await run_in_threadpool(current_trial, int(raw))
         except RequestError as e:
             return _error(e.status, e.message)
+        except StudyChanged as e:
+            return changed(e)
         return JSONResponse(screen, headers={"Cache-Control": "no-store"})
 
     async def _submit(request: Request, submit):
         """(result, None) of ``submit(session, JSON body)``, or (None, the error response)."""
+        def checked(obj):
+            session.check_intact()                   # not into a database that is not the study's
+            result = submit(session, obj)
+            try:
+                session.check_intact()               # committed into the study's own file?
+            except StudyChanged as e:
+                e.stored_elsewhere = True
+                raise
+            return result
+
         try:
             obj = await _read_json(request)
-            return await run_in_threadpool(submit, session, obj), None
+            return await run_in_threadpool(checked, obj), None
         except RequestError as e:
             return None, _error(e.status, e.message)
+        except StudyChanged as e:
+            return None, changed(e, getattr(e, "stored_elsewhere", False))
 
     async def api_answer(request: Request):
         result, err = await _submit(request, submit_answer)
@@ -294,15 +340,23 @@ def serve(study_dir, participant: str, *, host: str = "127.0.0.1", port: int = 0
         check_participant(participant)
     except RequestError as e:
         raise SessionError(e.message) from None
-    study = load_study(study_dir)
-    from .lock import ParticipantLock
-    lock = ParticipantLock(study.dir, participant).acquire(host_arg=host)
+    from .lock import ParticipantLock, StudyOpen
+    if Path(study_dir).is_dir():
+        held = StudyOpen(study_dir).acquire()     # no command replaces the study while it serves
+    else:
+        held = None
     try:
-        return _serve_locked(study, participant, lock, host=host, port=port,
-                             open_browser=open_browser, new_session=new_session, iti_ms=iti_ms,
-                             allowed_hosts=allowed_hosts, out=out)
+        study = load_study(study_dir)
+        lock = ParticipantLock(study.dir, participant).acquire(host_arg=host)
+        try:
+            return _serve_locked(study, participant, lock, host=host, port=port,
+                                 open_browser=open_browser, new_session=new_session, iti_ms=iti_ms,
+                                 allowed_hosts=allowed_hosts, out=out)
+        finally:
+            lock.release()
     finally:
-        lock.release()
+        if held is not None:
+            held.release()
 
 
 def _serve_locked(study, participant, lock, *, host, port, open_browser, new_session, iti_ms,
@@ -324,6 +378,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
         print(f"flipstudy run: note: took over the lock of a server that is gone "
               f"(pid {lock.previous['pid']}, since {lock.previous.get('since', '?')})", file=out)
     session = open_session(study, participant, new_session=new_session)
+    session.pin()                    # answers go into this folder's database, or are refused
     state = session.state()
     sock = bind(host, port)
     port = sock.getsockname()[1]
@@ -352,7 +407,12 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
             msg += " — session finished; press Ctrl-C to stop the server"
         print(msg, file=out, flush=True)
 
-    app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress)
+    def changed(message):
+        print(f"flipstudy run: error: {message}; no more answers are taken: stop this server "
+              f"(Ctrl-C) and start it again on the study as it is now", file=out, flush=True)
+
+    app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress,
+                     on_changed=changed)
     config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=False,
                             server_header=False, lifespan="off", timeout_graceful_shutdown=3)
     server = uvicorn.Server(config)

@@ -52,6 +52,34 @@ class SessionError(FlipstudyError, ValueError):
     """A session that cannot be opened; the message tells the experimenter what to do."""
 
 
+class StudyChanged(SessionError):
+    """The study folder a server serves was replaced or changed under it (its folder,
+    ``sessions.sqlite``, ``manifest.csv`` or ``design.toml``): the server stops taking
+    answers, since it could no longer store them in the study's own database."""
+
+
+def study_fingerprint(study_dir) -> dict:
+    """What identifies a study folder as the one a server opened: the identity
+    (device, inode) of the folder and of ``sessions.sqlite`` (None: absent), and
+    the SHA-256 of ``manifest.csv`` and ``design.toml`` (None: absent)."""
+    d = Path(study_dir)
+
+    def ident(p):
+        try:
+            st = p.stat()
+        except OSError:
+            return None
+        return (st.st_dev, st.st_ino)
+
+    def digest(p):
+        try:
+            return hashlib.sha256(p.read_bytes()).hexdigest()
+        except OSError:
+            return None
+    return {"folder": ident(d), "sessions.sqlite": ident(store.db_path(d)),
+            "manifest.csv": digest(d / "manifest.csv"), "design.toml": digest(d / "design.toml")}
+
+
 @dataclass
 class Study:
     """A study folder: its design, manifest and rendered videos."""
@@ -60,6 +88,7 @@ class Study:
     manifest: list[dict]
     manifest_sha256: str
     by_name: dict = field(default_factory=dict)
+    design_text: str = ""          # design.toml as read (recorded with the first answer)
 
     @property
     def render_dir(self) -> Path:
@@ -148,7 +177,8 @@ def load_study(study_dir) -> Study:
                            f"{design.repetitions} is {n_tests * design.repetitions} trials per "
                            f"participant; at most {TRIALS_MAX}")
     sha = hashlib.sha256((d / "manifest.csv").read_bytes()).hexdigest()
-    return Study(d, design, manifest, sha, {r["stimulus"]: r for r in manifest})
+    return Study(d, design, manifest, sha, {r["stimulus"]: r for r in manifest},
+                 (d / "design.toml").read_bytes().decode("utf-8", errors="replace"))
 
 
 @dataclass
@@ -162,6 +192,38 @@ class Session:
     resumed: bool = False
     _conn: object = field(default=None, repr=False)
     _lock: object = field(default_factory=threading.Lock, repr=False)
+    _pinned: dict | None = field(default=None, repr=False)
+    _changed: str | None = field(default=None, repr=False)
+
+    def pin(self) -> None:
+        """Remember which study folder this session stores into (:func:`study_fingerprint`),
+        with the database connection open on it; :meth:`check_intact` then refuses
+        once anything of it was replaced or changed.  The server pins its session."""
+        before = study_fingerprint(self.study.dir)
+        with self.db():
+            pass
+        after = study_fingerprint(self.study.dir)
+        if before != after or after["sessions.sqlite"] is None:
+            raise StudyChanged(f"{self.study.dir} changed while the session was being opened; "
+                               f"start it again")
+        self._pinned = after
+
+    def check_intact(self) -> None:
+        """Raise :class:`StudyChanged` when the pinned study folder was replaced or
+        its database, manifest or design changed (once changed, always refused)."""
+        if self._pinned is None:
+            return
+        if self._changed is None:
+            now = study_fingerprint(self.study.dir)
+            diff = [k for k in self._pinned if now[k] != self._pinned[k]]
+            if diff:
+                what = ("the folder was replaced or moved" if "folder" in diff else
+                        ", ".join(f"{k} {'is gone' if now[k] is None else 'was replaced' if k == 'sessions.sqlite' else 'changed'}"
+                                  for k in diff))
+                self._changed = (f"{self.study.dir}: {what} while this server was serving "
+                                 f"participant {self.participant}")
+        if self._changed is not None:
+            raise StudyChanged(self._changed)
 
     @property
     def n_trials(self) -> int:
@@ -249,6 +311,8 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         check_participant(participant)
     except RequestError as e:
         raise SessionError(e.message) from None
+    from .frozen import refuse_changed_design
+    refuse_changed_design(study.dir, "run" if source == "browser" else "simulate")
     conn = store.connect(study.dir)
     try:
         last = store.latest_session(conn, participant)
@@ -278,6 +342,11 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
             resumed = Session(study, participant, s, source, trials, resumed=True)
             _check_quest_states(resumed, conn)
             return resumed
+        if last is None and participant in web_participants(study.dir):
+            raise SessionError(
+                f"participant {participant} has answers imported from the web site "
+                f"({study.dir / 'web' / 'participants.csv'}); one study has one participant-ID "
+                f"namespace across local, simulated and web sessions: choose another ID")
         s = 1 if last is None else last["session"] + 1
         if any(g.task == "2afc" for g in study.design.groups) and not store.accepts_2afc(conn):
             raise SessionError(f"{store.db_path(study.dir)} was made by an older flipstudy (schema "
@@ -301,6 +370,21 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         return Session(study, participant, s, source, trials, resumed=False)
     finally:
         conn.close()
+
+
+def web_participants(study_dir) -> set[str]:
+    """The participant IDs of the study's imported web results (``web/participants.csv``,
+    rebuilt by every ``import-web``)."""
+    import csv
+    p = Path(study_dir) / "web" / "participants.csv"
+    if not p.is_file():
+        return set()
+    try:
+        with p.open(newline="", encoding="utf-8", errors="replace") as f:
+            return {r.get("participant") or "" for r in csv.DictReader(f)} - {""}
+    except (OSError, csv.Error) as e:
+        raise SessionError(f"{p}: cannot be read ({e}); it lists the web participants, whose IDs "
+                           f"a local session may not take") from None
 
 
 def _check_quest_states(session: Session, conn) -> None:
@@ -353,7 +437,8 @@ def submit_answer(session: Session, payload: dict, *, timestamp: str | None = No
     with session.db() as conn:
         try:
             status = store.insert_answer(conn, session.participant, session.session,
-                                         session.n_trials, ans, timestamp, adaptive=adaptive)
+                                         session.n_trials, ans, timestamp, adaptive=adaptive,
+                                         design_text=session.study.design_text or None)
         except store.Conflict as e:
             raise RequestError(409, str(e)) from None
         nxt = store.next_open_trial(conn, session.participant, session.session)

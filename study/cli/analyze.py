@@ -89,6 +89,9 @@ def handler(args) -> int:
     from flipstudy.analysis.pipeline import analyze
     try:
         src = resolve_responses_path(args.responses[0])
+        from ..frozen import refuse_changed_design
+        for r in args.responses:           # a study whose design changed after its answers
+            refuse_changed_design(resolve_responses_path(r).parent, "analyze")
         out = Path(args.out) if args.out else src.parent / "analysis"
         if len(args.responses) > 1:
             src = combine_responses(args.responses)

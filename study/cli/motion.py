@@ -77,7 +77,7 @@ def cmd_inspect(args) -> int:
 def cmd_init(args) -> int:
     from flipstudy.stimuli.design import parse_design
     from flipstudy.stimuli.presets import PRESETS
-    from flipstudy.stimuli._io import atomic_write_text
+    from flipstudy.study.frozen import write_design
     out = Path(args.design)
     if out.exists() and not args.force:
         print(f"flipstudy init: {out} exists; pass --force to overwrite", file=sys.stderr)
@@ -85,7 +85,7 @@ def cmd_init(args) -> int:
     preset = args.preset or "flipping-with-physics-2007"
     text = PRESETS[preset]
     d = parse_design(text)              # the template must always be valid
-    atomic_write_text(out, text)
+    write_design(out, text, force=args.force)   # never the design of a study with answers
     if args.preset is None:
         print(f"wrote {out}: the design of Majkowska & Faloutsos 2007, Section 7 "
               f"(backflip and frontflip; 5 error groups × 5 levels; each motion shown twice)")
@@ -110,7 +110,8 @@ def cmd_stimuli(args) -> int:
         replaced["foreign"] = foreign
 
     from flipstudy.study.cluster import open_cluster
-    with open_cluster(args.cluster) as cluster:
+    from flipstudy.study.lock import study_closed
+    with study_closed(args.out, "stimuli --force"), open_cluster(args.cluster) as cluster:
         rows = build_stimuli(design, args.out, force=args.force, progress=not args.quiet,
                              replace_check=replace_check, cluster=cluster)
     if replaced:

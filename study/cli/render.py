@@ -78,7 +78,10 @@ def cmd_render(args) -> int:
     try:
         what = parse_what(args.what)
         from flipstudy.study.cluster import open_cluster
-        with open_cluster(args.cluster) as cluster:
+        from flipstudy.study.lock import study_closed
+        import contextlib                # --force replaces videos a `run` server may be showing
+        held = study_closed(args.study_dir, "render --force") if args.force else contextlib.nullcontext()
+        with held, open_cluster(args.cluster) as cluster:
             rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs,
                                fps=args.video_fps,
                                style=_style(args.style), frames=args.frames,

@@ -86,6 +86,10 @@ def cmd_status(args) -> int:
         rows = status(d) if db_path(d).exists() else []
     except FlipstudyError as e:
         return _fail("status", e)
+    from ..frozen import design_change
+    changed = design_change(d)
+    if changed:                     # flagged on every call; run, export and analyze refuse
+        print(f"flipstudy status: WARNING: {changed}", file=sys.stderr)
     if args.json:
         print(json.dumps(rows, indent=2))
         return 0

@@ -42,6 +42,9 @@ def cmd_import_web(args) -> int:
     for f in r["files"]:
         if f["status"] == "imported":
             print(f"{f['file']}: {f['records']} records, {f['new_answers']} new answers")
+        elif f["status"] == "nothing new":
+            print(f"{f['file']}: {f['records']} records, every one already imported; the file is "
+                  f"not kept")
         else:
             print(f"{f['file']}: already imported (same content), nothing new")
     print(f"{r['responses']}: {r['answers']} answers of {r['participants']} web participant(s) in "

@@ -268,6 +268,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+    from .sites import remember_site           # import-web takes results of this study's sites only
+    remember_site(study.dir, cfg["site_id"], host, out)
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     return {"out": out, "host": host, "site_id": cfg["site_id"], "n_trials": cfg["n_trials"],
             "videos": len(videos), "jspsych": jsp.PACKAGES["jspsych"], "bytes": size,

@@ -245,5 +245,13 @@ def test_a_session_resumed_after_its_quest_settings_changed_is_refused(tmp_path)
     run(s, upto=next(t.trial for t in s.trials if t.adaptive))
     design = tmp_path / "s" / "design.toml"
     design.write_text(design.read_text().replace("method", "lapse = 0.05\nmethod"))
+    # issue 28: the design of a study with answers is frozen; refused before the QUEST+ check
+    from flipstudy.errors import FlipstudyError
+    with pytest.raises(FlipstudyError, match="design.toml changed since the study's first answer"):
+        open_session(load_study(tmp_path / "s"), "P01")
+    from flipstudy.study import store                  # a database from before that record:
+    conn = store.connect(tmp_path / "s")               # the QUEST+ check still refuses it
+    conn.execute("DELETE FROM meta WHERE key IN ('design_sha256', 'design_toml')")
+    conn.close()
     with pytest.raises(SessionError, match="QUEST\\+ state of group 'quest' does not fit"):
         open_session(load_study(tmp_path / "s"), "P01")

@@ -85,7 +85,8 @@ def test_jatos_pavlovia_download_read_alike_and_nothing_doubles(study, tmp_path)
     assert out["answers"] == 8 and out["files"][0]["new_answers"] == 8
     first = (study / "web" / "responses.csv").read_bytes()
     out = import_web(study, [b, a])                       # the same answers as CSV, and a again
-    assert [f["status"] for f in out["files"]] == ["imported", "already imported"]
+    # issue 28.9: a file adding no new record is read but not kept
+    assert [f["status"] for f in out["files"]] == ["nothing new", "already imported"]
     assert out["files"][0]["new_answers"] == 0 and out["answers"] == 8
     assert (study / "web" / "responses.csv").read_bytes() == first
     got = rows(study)
@@ -95,7 +96,7 @@ def test_jatos_pavlovia_download_read_alike_and_nothing_doubles(study, tmp_path)
     assert got[2]["frames_dropped"] == "6" and got[2]["late_frames"] == "6"
     assert got[0]["source_file"].endswith("-jatos.txt")
     assert sorted(p.name.split("-", 1)[1] for p in (study / "web" / "imports").iterdir()) == \
-           ["demo_W01_r1.csv", "jatos.txt"]
+           ["jatos.txt"]
     d = json.loads((study / "web" / "dataset_description.json").read_text())
     assert d["schemaVersion"].startswith("Psych-DS") and "playback_flagged" in [v["name"] for v in d["variableMeasured"]]
     assert any(x.get("name") == "manifest.csv" and len(x["sha256"]) == 64 for x in d["isBasedOn"])
