@@ -267,7 +267,7 @@ BREAK_EVERY_MAX = 10000
 SCALE_RANGE = (1e-4, 100.0)           # metres per file unit (mm is 0.001, m is 1)
 TRIALS_MAX = 3000                     # test trials per participant (repetitions × stimuli, quest+ trials)
 #: level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
-LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the original
+LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, True),     # |L| below 6× the original
                 ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
                 ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
                 ("takeoff-angle", -1): (100.0, True),       # −100 % leaves no horizontal velocity

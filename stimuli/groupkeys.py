@@ -54,9 +54,11 @@ def grid_levels(t: dict, where: str) -> list[float]:
     hi = _get(t, "to", float, w, check=lambda v: None if v > lo else f"expected more than from = {lo:g}")
     step = _get(t, "step", float, w, check=lambda v: None if v > 0 else "expected more than 0 (percent)")
     span = (hi - lo) / step
-    if span + 1 > GRID_MAX + 1e-6:
-        raise DesignError(f"{w}: from {lo:g} to {hi:g} in steps of {step:g} is {math.floor(span + 1e-9) + 1} "
-                          f"levels; a grid has at most {GRID_MAX} (a larger step)")
+    if not span + 1 <= GRID_MAX + 1e-6:        # also a step so small the count overflows
+        count = f"{math.floor(span + 1e-9) + 1}" if span < 1e6 else "over a million"
+        raise DesignError(f"{w}.step: from {lo:g} to {hi:g} in steps of {step:g} is {count} "
+                          f"levels; a grid has at most {GRID_MAX} (a step of at least "
+                          f"{(hi - lo) / (GRID_MAX - 1):g})")
     n = round(span)
     if abs(n - span) > 1e-6 * max(1.0, span):
         last = round(lo + math.floor(span) * step, 9)

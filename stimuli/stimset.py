@@ -50,7 +50,7 @@ from ._progress import Progress
 from .analyse import analyse
 from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
 from .injection import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
-from .ballistic import BALLISTIC_KINDS, inject_kind
+from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
 from .exceptions import FlipstudyError
 from .motion.bvh import bvh_text, load_bvh
@@ -232,6 +232,7 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 raise StimulusError(f"clips '{c.name}' ({c.source}): the analyser finds no flight "
                                     f"phase, so it cannot carry the study's errors")
             base[c.name] = a
+        check_design_flights(design, base)       # a level that cannot land: refused before any work
         items = [(it, base[it[1].name]) for it in todo]
         if cluster is None:
             rows = []
