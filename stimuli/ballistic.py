@@ -139,7 +139,7 @@ def planned_flight(a: Analysis, kind: str, error: float, option: str | None = No
 
     >>> from flipstudy import analyse, builtin
     >>> a = analyse(builtin("backflip"))
-    >>> Tn, _ = planned_flight(a, "acceleration", -0.9999, "vertical")   # g nearly cancelled
+    >>> Tn, _ = planned_flight(a, "acceleration", 0.9999, "vertical")   # g nearly cancelled
     >>> Tn > 1000 * a.flight_s
     True
     """

@@ -174,7 +174,7 @@ def test_level_bounds_property(level, sign, kind):
            ("takeoff-angle", 1): 100, ("takeoff-angle", -1): 100}[(kind, sign)]
     ok = 0 <= level and (level <= top if sign > 0 and kind == "takeoff-angle" else level < top)
     if ok:
-        assert parse_design(text, "d.toml").groups[0].levels == [level]
+        assert list(parse_design(text, "d.toml").groups[0].levels) == [level]
     else:
         with pytest.raises(DesignError, match=re.escape(f"{level:g} %")):
             parse_design(text, "d.toml")
