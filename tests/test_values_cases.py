@@ -39,6 +39,23 @@ def design(tmp_path, group: str):
     return p
 
 
+def refused_when_read(tmp_path, group: str) -> tuple:
+    """(design file, the DesignError's message) of a design refused by ``load_design``."""
+    p = design(tmp_path, group)
+    with pytest.raises(DesignError) as e:
+        load_design(p)
+    return p, str(e.value)
+
+
+def style_refusal(tmp_path, key: str, value: str) -> tuple:
+    """(style file, the StyleError's message) of a one-key style file."""
+    p = tmp_path / "my.toml"
+    p.write_text(f"[style]\n{key} = {value}\n")
+    with pytest.raises(StyleError) as e:
+        Style.from_toml(p)
+    return p, str(e.value)
+
+
 def build_in_subprocess(tmp_path, p):
     """``flipstudy stimuli`` of design ``p`` in a child with 1.5 GB of address space
     and 60 s: the cases that hung for minutes and ate 2.4 GB fail here on the old code."""
@@ -103,10 +120,8 @@ def test_a_long_but_landing_flight_is_still_built(tmp_path):
 
 # ------------------------------------------------------------ case 6: tracebacks
 def test_a_grid_step_of_1e_308_is_a_design_error_naming_the_step(tmp_path):
-    p = design(tmp_path, 'kind = "horizontal-velocity"\nlevels = {from = 0, to = 100, step = 1e-308}')
-    with pytest.raises(DesignError) as e:
-        load_design(p)
-    msg = str(e.value)
+    p, msg = refused_when_read(tmp_path, 'kind = "horizontal-velocity"\n'
+                                         'levels = {from = 0, to = 100, step = 1e-308}')
     assert str(p) in msg and "groups[0] (g).levels.step" in msg and "at most 401" in msg, msg
 
 
@@ -128,20 +143,13 @@ def test_a_pose_rate_of_1e_9_is_a_design_error_naming_group_and_level(tmp_path):
     ("ellipsoid_resolution", "[3000, 3000]", "from 3 to 100"),
 ])
 def test_a_style_value_that_took_minutes_is_refused_naming_file_and_key(tmp_path, key, value, allowed):
-    p = tmp_path / "my.toml"
-    p.write_text(f"[style]\n{key} = {value}\n")
-    with pytest.raises(StyleError) as e:
-        Style.from_toml(p)
-    msg = str(e.value)
+    p, msg = style_refusal(tmp_path, key, value)
     assert msg.startswith(f"{p}: [style] {key}: ") and allowed in msg, msg
 
 
 # ------------------------------------------------------------ case 7: unclear errors
 def test_angular_momentum_500_is_refused_when_read_naming_file_group_and_range(tmp_path):
-    p = design(tmp_path, 'kind = "angular-momentum"\nprofile = "smooth"\nlevels = [500]')
-    with pytest.raises(DesignError) as e:
-        load_design(p)
-    msg = str(e.value)
+    p, msg = refused_when_read(tmp_path, 'kind = "angular-momentum"\nprofile = "smooth"\nlevels = [500]')
     assert str(p) in msg and "groups[0] (g).levels" in msg and "below 500 %" in msg, msg
     p = design(tmp_path, 'kind = "angular-momentum"\nprofile = "abrupt"\nlevels = [0, 499]')
     p.write_text(p.read_text().replace("seed = 1", "seed = 1\ntolerance_pct = 5"))
@@ -171,11 +179,8 @@ def test_a_skeleton_the_body_model_cannot_map_names_its_file(tmp_path):
 ])
 def test_a_style_value_accepted_silently_is_refused_naming_file_key_and_range(tmp_path, key, value,
                                                                                allowed):
-    p = tmp_path / "my.toml"
-    p.write_text(f"[style]\n{key} = {value}\n")
-    with pytest.raises(FlipstudyError) as e:
-        Style.from_toml(p)
-    msg = str(e.value)
+    p, msg = style_refusal(tmp_path, key, value)
+    assert issubclass(StyleError, FlipstudyError)
     assert msg.startswith(f"{p}: [style] {key}: ") and allowed in msg and value.strip('"') in msg, msg
 
 
