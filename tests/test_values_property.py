@@ -161,7 +161,7 @@ def check_style(tmp_path, case):
     assert msg.startswith(f"{p}: [style] {key}"), msg
 
 
-FAST = settings(max_examples=4, deadline=None, suppress_health_check=list(HealthCheck))
+FAST = settings(max_examples=3, deadline=None, suppress_health_check=list(HealthCheck))
 SLOW = settings(max_examples=150, deadline=None, suppress_health_check=list(HealthCheck))
 
 
