@@ -43,5 +43,16 @@ class FlipstudyStateError(FlipstudyError, RuntimeError):
     """A file is in a state this flipstudy cannot use (e.g. a newer schema version)."""
 
 
+class StyleError(FlipstudyValueError):
+    """An invalid render style (:class:`flipstudy.render.style.Style`): the message
+    names the style file (when read from one), the key, the allowed values and the
+    value given; ``key`` is the field, ``detail`` the message without file and key."""
+
+    def __init__(self, message: str, key: str | None = None, detail: str | None = None):
+        super().__init__(message)
+        self.key = key
+        self.detail = detail if detail is not None else message.split(": ", 1)[-1]
+
+
 __all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
-           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError"]
+           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "StyleError"]

@@ -50,7 +50,7 @@ from ._progress import Progress
 from .analyse import analyse
 from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
 from .injection import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
-from .ballistic import BALLISTIC_KINDS, inject_kind
+from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
 from .exceptions import FlipstudyError
 from .motion.bvh import bvh_text, load_bvh
@@ -77,6 +77,7 @@ def load_base_clip(spec, design: Design) -> Clip:
     it was read at.  With ``flips``, the base clip passes the physics gate
     (:func:`physics_gate`) before it is made an N-flip one."""
     from . import BUILTIN_NAMES, builtin
+    where = f"{design.path}: " if design.path is not None else ""
     if spec.source in BUILTIN_NAMES:
         clip = builtin(spec.source, fps=spec.fps or design.fps, total_mass=design.total_mass)
     else:
@@ -84,7 +85,7 @@ def load_base_clip(spec, design: Design) -> Clip:
         if not p.is_absolute() and design.path is not None:
             p = design.path.parent / p
         if not p.exists():
-            raise DesignError(f"clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
+            raise DesignError(f"{where}clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
                               f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
         clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
         if getattr(design, "fps_given", False) and abs(clip.fps - design.fps) > 1e-9 * design.fps:
@@ -96,7 +97,7 @@ def load_base_clip(spec, design: Design) -> Clip:
         try:
             clip = multiflip(a, spec.flips, k_ratio=spec.k_ratio).clip
         except FlipEditError as e:
-            raise DesignError(f"clips '{spec.name}': flips = {spec.flips}: {e}") from None
+            raise DesignError(f"{where}clips '{spec.name}': flips = {spec.flips}: {e}") from None
         clip.meta["name"] = spec.name
     return clip
 
@@ -232,6 +233,7 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 raise StimulusError(f"clips '{c.name}' ({c.source}): the analyser finds no flight "
                                     f"phase, so it cannot carry the study's errors")
             base[c.name] = a
+        check_design_flights(design, base)       # a level that cannot land: refused before any work
         items = [(it, base[it[1].name]) for it in todo]
         if cluster is None:
             rows = []
@@ -244,9 +246,11 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
         if design.path is not None:
             shutil.copyfile(design.path, tmp / "design.toml")
         _install(tmp, out, force, replace_check)
-    except BaseException:
+    except BaseException as e:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(e, StimulusError) and design.path is not None and str(design.path) not in str(e):
+            raise StimulusError(f"{design.path}: {e}") from None       # name the design file
         raise
     finally:
         bar.close()

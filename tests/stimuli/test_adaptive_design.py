@@ -32,7 +32,7 @@ def test_a_grid_group_has_every_level_and_a_quest_group_counts_its_trials():
     d = parse_design(design('levels = {from = 0, to = 60, step = 1}\nmethod = "quest+"\ntrials = 35\n'
                             'threshold_prior = [5, 50]\nlapse = 0.01\n'))
     g = d.groups[0]
-    assert g.levels == [float(i) for i in range(61)] and g.adaptive and g.task == "yes-no"
+    assert list(g.levels) == [float(i) for i in range(61)] and g.adaptive and g.task == "yes-no"
     assert g.quest == QuestSpec(trials=35, threshold_prior=(5.0, 50.0), lapse=0.01)
     assert d.trials_per_participant() == 35
     assert len(d.stimulus_names()) == 1 + 60         # the shared original and 60 modified levels

@@ -3,6 +3,7 @@ the airborne frames are those whose lowest joint or end site is off the floor,
 the COM is computed with the built-in's true segment masses, and what the
 stimulus should be comes from the built-in's exact facts (g, v0, flight time)
 in closed form, not from the injector's numbers."""
+import dataclasses
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
@@ -299,7 +300,7 @@ def test_a_study_of_the_new_kinds_builds_and_records_them(tmp_path):
     paper = PAPER_DESIGN.replace('name = "frontflip"\nsource = "frontflip"', 'name = "jump"\nsource = "jump"')
     paper = paper.replace('clips = ["backflip", "jump"]', 'clips = []').replace("levels = [0, 17, 25, 37, 50]", "levels = [0, 50]")
     d = parse_design(paper.replace('clips = ["backflip", "frontflip"]', 'clips = []'))
-    d.clips = d.clips[:1]
+    d = dataclasses.replace(d, clips=d.clips[:1])      # a Design is frozen
     build_stimuli(d, tmp_path / "p", progress=False)
     assert (tmp_path / "p" / "manifest.csv").read_text().splitlines()[0].split(",") == MANIFEST_COLUMNS
 
@@ -307,7 +308,9 @@ def test_a_study_of_the_new_kinds_builds_and_records_them(tmp_path):
 def test_a_level_the_clip_cannot_take_is_refused_naming_the_stimulus(tmp_path):
     from flipstudy.stimuli.stimset import build_stimuli
     d = parse_design(BASE + 'kind = "pose-rate"\nlevels = [0, 150]')      # the study runs at 120 fps
-    with pytest.raises(StimulusError, match=r"jump_g_150 \(group 'g', level 150\): pose-rate 150"):
+    # refused before the build, naming group and level (a DesignError since issue 28)
+    with pytest.raises(DesignError, match=r"groups\[0\] \(g\).levels: 150 poses per second on clip "
+                                          r"'jump': a pose rate must be below the clip's 120"):
         build_stimuli(d, tmp_path / "s", progress=False)
     assert not (tmp_path / "s").exists()
     with pytest.raises(DesignError, match="at most 1000 poses per second"):

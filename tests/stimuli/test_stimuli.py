@@ -76,7 +76,7 @@ def test_paper_design_parses():
     d = parse_design(PAPER_DESIGN)
     assert [g.name for g in d.groups] == ["smooth-increase", "smooth-decrease", "abrupt-increase",
                                           "abrupt-decrease", "takeoff-increase"]
-    assert d.groups[0].levels == [0, 17, 25, 37, 50] and d.groups[-1].levels == [0, 10, 20, 30, 40]
+    assert list(d.groups[0].levels) == [0, 17, 25, 37, 50] and list(d.groups[-1].levels) == [0, 10, 20, 30, 40]
     assert d.repetitions == 2 and {c.name for c in d.clips} == {"backflip", "frontflip"}
 
 
