@@ -43,5 +43,11 @@ class FlipstudyStateError(FlipstudyError, RuntimeError):
     """A file is in a state this flipstudy cannot use (e.g. a newer schema version)."""
 
 
+class ManifestError(FlipstudyValueError):
+    """A study's ``manifest.csv`` that is not what a build writes (a missing or
+    unknown column, a cell that is not a number, a file it names that is missing
+    or changed); the message names the file, line and column."""
+
+
 __all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
-           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError"]
+           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "ManifestError"]

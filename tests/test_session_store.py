@@ -425,5 +425,5 @@ def test_sessions_on_a_stimulus_set_built_from_motion_capture(tmp_path):
     assert {(r["group"], r["level"]) for r in rs} == {
         (g, lv) for g in ("smooth-increase", "abrupt-decrease") for lv in ("0", "25")}
     shown = [float(r["shown_ms"]) for r in rs]
-    frames = float(study.by_name[rs[0]["stimulus"]]["frames"])
+    frames = study.by_name[rs[0]["stimulus"]].frames
     assert np.mean(shown) == pytest.approx(1000 * frames / 60.0, rel=0.05)

@@ -454,7 +454,7 @@ def import_web(study_dir, files) -> dict:
         if r["status"] == "imported":
             r["new_answers"] = sum(1 for k, (_rec, _w, fn) in merged.items()
                                    if k[1] == "answer" and fn == r["stored"] and k not in before)
-    styles = _manifest_styles(study.dir)
+    styles = _manifest_styles(study.stimuli)
     columns = web_columns(any(g.task == "2afc" for g in study.design.groups), styles is not None)
     rows, parts = _tables(merged, n_trials, columns)
     if styles is not None:                      # the stimulus's character style, as `export` has it
@@ -478,7 +478,7 @@ def import_web(study_dir, files) -> dict:
     out = d / "responses.csv"
     atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
-    desc = write_dataset_description(d, study.dir, columns, source="web sessions")
+    desc = write_dataset_description(d, study.dir, columns, source="web sessions", stimuli=study.stimuli)
     return {"files": report, "answers": len(rows), "participants": len({p["participant"] for p in parts}),
             "sessions": len(parts), "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/"
                                                    f"{p['n_trials']})" for p in parts if p["complete"] != "true"],
