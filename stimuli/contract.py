@@ -81,6 +81,8 @@ class _Typed:
             return p
         if not isinstance(v, str):
             raise TypeError(f"{name}: expected text, got {v!r}")
+        if any(c in v for c in "\r\n\x00"):            # a manifest cell is one line
+            raise TypeError(f"{name}: expected one line of text, got {v!r}")
         return v
 
     @staticmethod
@@ -263,12 +265,12 @@ class Stimulus(_Record):
               "accept_unphysical": bool, **{k: float for k in _FLOATS}}
 
     def __post_init__(self):
-        super().__post_init__()
-        if not STIMULUS_RE.fullmatch(self.stimulus):
+        if not STIMULUS_RE.fullmatch(_Typed.coerce(str, self.stimulus, "stimulus")):
             raise TypeError(f"stimulus: {self.stimulus!r} is not a plain file name (letters, digits, "
                             f"'_', '.', '-')")
-        if self.style is not None and not isinstance(self.style, str):
-            raise TypeError(f"style: expected text, got {self.style!r}")
+        super().__post_init__()
+        if self.style is not None:
+            _Typed.coerce(str, self.style, "style")
         if self.ballistic is not None and not isinstance(self.ballistic, Ballistic):
             raise TypeError(f"ballistic: expected Ballistic, got {self.ballistic!r}")
 
