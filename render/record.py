@@ -167,5 +167,5 @@ def check_rendered(stimuli, kind: str = "video", hash_files: bool = True) -> dic
 
 
 __all__ = ["RENDER_KINDS", "StudyRenderError", "StaleRenderError", "file_sha256", "versions",
-           "canonical_id", "stimulus_hashes", "read_record", "write_record", "up_to_date",
+           "canonical_id", "read_record", "write_record", "up_to_date",
            "check_rendered"]

@@ -521,6 +521,8 @@ def _parse(p: Path, text: str) -> list[Stimulus]:
         for cells in reader:
             where = f"{p} line {line + 1}"
             line = reader.line_num
+            if not cells:                       # a blank line (as csv.DictReader, skipped)
+                continue
             if len(cells) != len(header):
                 raise ManifestError(f"{where}: {len(cells)} cells, the header has {len(header)}")
             row = dict(zip(header, cells))

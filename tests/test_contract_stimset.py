@@ -215,6 +215,10 @@ def test_missing_files_changed_files_and_columns_are_refused(built, tmp_path):
     with pytest.raises(ManifestError, match=r"line 1: unknown column 'x'"):
         StimulusSet.read(d)
     lines = text.splitlines()
+    (d / "manifest.csv").write_text(text + "\n")         # a blank line: skipped, but the hash changes
+    blank = StimulusSet.read(d, files=False)
+    assert blank.stimuli == StimulusSet(d, blank.stimuli).stimuli and len(blank) == len(lines) - 1
+    assert blank.manifest_sha256 != hashlib.sha256(text.encode()).hexdigest()
     (d / "manifest.csv").write_text("\n".join(lines + [lines[-1]]) + "\n")
     with pytest.raises(ManifestError, match="listed more than once"):
         StimulusSet.read(d, files=False)

@@ -418,7 +418,7 @@ def test_sessions_on_a_stimulus_set_built_from_motion_capture(tmp_path):
     build_stimuli(parse_design(text, tmp_path / "d.toml"), tmp_path / "study", progress=False)
     d = tmp_path / "study"
     study = load_study(d)
-    assert [r["stimulus"] for r in study.references] == ["backflip_reference"]
+    assert [r.stimulus for r in study.references] == ["backflip_reference"]
     simulate(d, 2, seed=4)
     rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True)["responses"])
     assert len(rs) == 2 * 2 * 2 * 2
