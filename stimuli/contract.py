@@ -119,10 +119,19 @@ def _same(a, b) -> bool:
     return a == b or (isinstance(a, float) and isinstance(b, float) and a != a and b != b)
 
 
+#: the annotation of a manifest column → its type (other fields are not columns)
+_COLUMN_TYPES = {"str": str, "float": float, "int": int, "bool": bool, "PurePosixPath": PurePosixPath}
+
+
 class _Record:
-    """Typed, frozen manifest columns: coercion on construction, NaN-aware equality."""
+    """Typed, frozen manifest columns: coercion on construction, NaN-aware equality.
+    A field is a column when its annotation is one of :data:`_COLUMN_TYPES`."""
 
     _types: dict = {}
+
+    def __init_subclass__(cls, **kw):
+        super().__init_subclass__(**kw)
+        cls._types = {n: _COLUMN_TYPES[a] for n, a in cls.__annotations__.items() if a in _COLUMN_TYPES}
 
     def __post_init__(self):
         for f in fields(self):
@@ -193,19 +202,6 @@ class Ballistic(_Record):
     playback_rate: float = 1.0
     pose_rate: float = math.nan
 
-    _types = {"policy": str, "axis": str, "span": str, "quantity": str, "unit": str,
-              **{k: float for k in ("nominal_value", "measured_value", "apparent_gravity", "takeoff_vh",
-                                    "takeoff_vy", "air_acc_h", "air_acc_v", "flight_s_change_pct",
-                                    "apex_change_pct", "landing_shift_m", "landing_height_change_mm",
-                                    "playback_rate", "pose_rate")}}
-
-
-_FLOATS = ("level", "nominal_error_pct", "measured_error_pct", "takeoff_angle_deg",
-           "takeoff_angle_change_deg", "L_ratio_window", "L_change_pct", "flight_s", "jump_height_m",
-           "jump_length_m", "dp_takeoff", "dp_landing", "fps", "takeoff_time", "landing_time",
-           "air_acc_dev", "air_acc_dev_original", "dv_takeoff", "dv_landing", "L_error_touchdown_pct",
-           "below_floor_mm")
-
 
 @dataclass(frozen=True, eq=False)
 class Stimulus(_Record):
@@ -258,11 +254,6 @@ class Stimulus(_Record):
     below_floor_mm: float = 0.0
     style: str | None = None
     ballistic: Ballistic | None = None
-
-    _types = {"stimulus": str, "clip": str, "group": str, "kind": str, "profile": str,
-              "takeoff": int, "landing": int, "seed": int, "sha256": str, "frames": int,
-              "bvh": PurePosixPath, "npz": PurePosixPath, "original": str,
-              "accept_unphysical": bool, **{k: float for k in _FLOATS}}
 
     def __post_init__(self):
         if not STIMULUS_RE.fullmatch(_Typed.coerce(str, self.stimulus, "stimulus")):
