@@ -167,7 +167,11 @@ class _Record:
         vals = {}
         for c in cls.columns():
             t = cls._types[c]
-            text = row[c]
+            text = row.get(c)
+            if text is None:                    # an older manifest without this column
+                if t is float:
+                    vals[c] = math.nan          # not measured by the build that wrote it
+                continue
             try:
                 vals[c] = _Typed.parse(t, text)
             except ValueError:
@@ -307,6 +311,11 @@ MANIFEST_COLUMNS = Stimulus.columns()
 EXTRA_COLUMNS = Ballistic.columns()
 
 
+#: the columns every manifest has had (a manifest of an older build may lack the
+#: others; they read as NaN, "" or 0 and :meth:`StimulusSet.write` writes them all)
+REQUIRED_COLUMNS = MANIFEST_COLUMNS[:MANIFEST_COLUMNS.index("sha256") + 1]
+
+
 def manifest_columns(styled: bool, ballistic: bool) -> list[str]:
     """The header of a manifest with or without ``style`` and the ballistic columns."""
     return MANIFEST_COLUMNS + (["style"] if styled else []) + (EXTRA_COLUMNS if ballistic else [])
@@ -434,8 +443,10 @@ class StimulusSet:
 
     @classmethod
     def read(cls, folder, *, files: bool = True, design: bool = True) -> "StimulusSet":
-        """Read and check the stimulus set in ``folder``: its manifest's columns,
-        every number, stimulus names (plain, unique), and with ``files`` that
+        """Read and check the stimulus set in ``folder``: its manifest's columns
+        (those of :data:`REQUIRED_COLUMNS` at least; a column an older build did
+        not write reads as NaN, "" or 0), every number, stimulus names (plain,
+        unique), and with ``files`` that
         every ``.bvh``/``.npz`` exists and each ``.bvh`` has the sha256 the
         manifest records.  With ``design``, ``design.toml`` is read too when
         there is one.  Each problem is a :class:`ManifestError` naming the file
@@ -495,18 +506,16 @@ def _parse(p: Path, text: str) -> list[Stimulus]:
         styled = "style" in header
         ballistic = EXTRA_COLUMNS[0] in header
         want = manifest_columns(styled, ballistic)
-        if header != want:
-            missing = [c for c in want if c not in header]
+        if header != want:                  # an older build's manifest lacks some measured columns
+            need = REQUIRED_COLUMNS + (EXTRA_COLUMNS if ballistic else [])
+            missing = [c for c in need if c not in header]
             extra = [c for c in header if c not in want]
-            if missing:
-                why = f"no column {missing[0]!r}"
-            elif extra:
-                why = f"unknown column {extra[0]!r}"
-            else:
-                k = next(k for k, (a, b) in enumerate(zip(header, want)) if a != b)
-                why = f"column {k + 1} is {header[k]!r}, expected {want[k]!r}"
-            raise ManifestError(f"{p} line 1: {why} (a manifest from another flipstudy version?); "
-                                f"make the stimuli again (flipstudy stimuli DESIGN.toml --out DIR --force)")
+            twice = [c for c in header if header.count(c) > 1]
+            if missing or extra or twice:
+                why = (f"no column {missing[0]!r}" if missing else f"unknown column {extra[0]!r}"
+                       if extra else f"column {twice[0]!r} twice")
+                raise ManifestError(f"{p} line 1: {why}; make the stimuli again (flipstudy stimuli "
+                                    f"DESIGN.toml --out DIR --force)")
         out = []
         line = reader.line_num
         for cells in reader:

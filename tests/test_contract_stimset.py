@@ -208,8 +208,11 @@ def test_missing_files_changed_files_and_columns_are_refused(built, tmp_path):
     with pytest.raises(ManifestError, match=r"line 3: .* has sha256 .* the manifest says"):
         StimulusSet.read(d)
     text = (d / "manifest.csv").read_text()
+    (d / "manifest.csv").write_text(text.replace(",sha256,", ",sha,", 1))
+    with pytest.raises(ManifestError, match=r"line 1: no column 'sha256'"):
+        StimulusSet.read(d)
     (d / "manifest.csv").write_text(text.replace(",dp_landing,", ",dp_landed,", 1))
-    with pytest.raises(ManifestError, match=r"line 1: no column 'dp_landing'"):
+    with pytest.raises(ManifestError, match=r"line 1: unknown column 'dp_landed'"):
         StimulusSet.read(d)
     (d / "manifest.csv").write_text(text.replace("\n", ",x\n", 2))
     with pytest.raises(ManifestError, match=r"line 1: unknown column 'x'"):
@@ -228,6 +231,28 @@ def test_missing_files_changed_files_and_columns_are_refused(built, tmp_path):
     (d / "manifest.csv").unlink()
     with pytest.raises(FlipstudyFileNotFoundError, match="no manifest"):
         StimulusSet.read(d)
+
+
+def test_an_older_builds_manifest_still_opens_its_sessions(built, tmp_path):
+    """A study built before the last measured columns were added (below_floor_mm,
+    takeoff_time, ...) keeps its answers usable: those columns read as NaN (not
+    measured), the session's order is the same, and write() gives today's columns."""
+    from flipstudy.study.order import trial_order
+    from flipstudy.study.session import load_study
+    d = _copy(built, tmp_path)
+    (d / "design.toml").write_text(DESIGNS["paper"])
+    full = StimulusSet.read(d)
+    rows = list(csv.reader(io.StringIO((d / "manifest.csv").read_text(), newline="")))
+    keep = [k for k, c in enumerate(rows[0]) if c not in ("below_floor_mm", "takeoff_time", "fps", "frames")]
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerows([[r[k] for k in keep] for r in rows])
+    (d / "manifest.csv").write_text(buf.getvalue())
+    old = StimulusSet.read(d)
+    assert old.names == full.names and all(math.isnan(x.below_floor_mm) and math.isnan(x.fps) for x in old)
+    assert [x.landing_time for x in old] == [x.landing_time for x in full] and old.stimuli[0].frames == 0
+    study = load_study(d)
+    assert trial_order(study.design, study.stimuli, "P01") == trial_order(full.design, full, "P01")
+    assert old.manifest_text().split("\n", 1)[0] == ",".join(MANIFEST_COLUMNS)
 
 
 def test_every_stage_takes_the_set_it_was_handed(built, tmp_path):
