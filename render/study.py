@@ -1,6 +1,7 @@
 """Rendering a whole stimulus set: one style, one camera, one take-off spot.
 
-:func:`render_study` reads ``STUDY_DIR/manifest.csv``, loads every stimulus
+:func:`render_study` takes a study's :class:`~flipstudy.stimuli.contract.StimulusSet`
+(or its folder, read and checked once), loads every stimulus
 (:func:`load_stimuli`: ``STUDY_DIR/<stimulus>.bvh``, metres, the header's frame
 rate), places all of them with :func:`flipstudy.render.staging.stage` (take-off COM
 at the origin, one ground, one view direction), fits one camera per base clip to
@@ -109,7 +110,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
                  cluster=None) -> dict:
-    """Render the stimuli of a study with one style, one take-off spot and one
+    """Render the stimuli of a study (``study_dir``: its folder or its
+    :class:`~flipstudy.stimuli.contract.StimulusSet`) with one style, one take-off spot and one
     camera per base clip (fitted to all its stimuli; ``cameras`` in the record,
     and each stimulus's ``camera``); returns (and writes to ``render/render.json``) the settings.  With
     ``orient`` base clips that travel in other directions are turned about the
