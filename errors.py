@@ -54,5 +54,12 @@ class StyleError(FlipstudyValueError):
         self.detail = detail if detail is not None else message.split(": ", 1)[-1]
 
 
+class ManifestError(FlipstudyValueError):
+    """A study's ``manifest.csv`` that is not what a build writes (a missing or
+    unknown column, a cell that is not a number, a file it names that is missing
+    or changed); the message names the file, line and column."""
+
+
 __all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
-           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "StyleError"]
+           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "StyleError",
+           "ManifestError"]

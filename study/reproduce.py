@@ -35,6 +35,7 @@ import time
 from pathlib import Path
 
 from flipstudy.stimuli._progress import Progress
+from flipstudy.stimuli.contract import Stimulus, StimulusSet
 
 #: the original and its strongest error shown beside the curves on the sheet
 SHEET_ORIGINAL = "backflip_reference"
@@ -50,21 +51,21 @@ class ReproduceError(FlipstudyError, RuntimeError):
     """The reproduce run cannot start or a stage failed (message names which)."""
 
 
-def sheet_label(row: dict) -> str:
+def sheet_label(row: Stimulus) -> str:
     r"""A sheet panel's title: the stimulus and its error (kind, profile, signed
-    nominal level) from its manifest row.
+    nominal level).
 
-    >>> sheet_label({"stimulus": "backflip_abrupt-decrease_50", "kind": "angular-momentum",
-    ...              "profile": "abrupt", "nominal_error_pct": "-50.000000"})
+    >>> sheet_label(Stimulus("backflip_abrupt-decrease_50", "backflip", "abrupt-decrease",
+    ...                      "angular-momentum", "abrupt", 50.0, nominal_error_pct=-50.0))
     'backflip_abrupt-decrease_50\nangular momentum, abrupt, −50 %'
-    >>> sheet_label({"stimulus": "backflip_reference", "kind": "reference", "profile": ""})
+    >>> sheet_label(Stimulus("backflip_reference", "backflip", "reference", "reference"))
     'backflip_reference\noriginal (no error)'
     """
-    name, kind = row["stimulus"], row.get("kind", "")
-    if kind == "reference" or not float(row.get("nominal_error_pct") or 0.0):
+    name, kind = row.stimulus, row.kind
+    if kind == "reference" or not row.nominal_error_pct:
         return f"{name}\noriginal (no error)"
-    level = float(row["nominal_error_pct"])
-    parts = [kind.replace("-", " ")] + ([row["profile"]] if row.get("profile") else [])
+    level = row.nominal_error_pct
+    parts = [kind.replace("-", " ")] + ([row.profile] if row.profile else [])
     return f"{name}\n" + ", ".join(parts) + f", {'+' if level > 0 else '−'}{abs(level):g} %"
 
 
@@ -135,15 +136,15 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
         t = stage(2, "stimuli: inject and measure every error")
         study = work / "study"
-        rows = build_stimuli(design, study, progress=not quiet, cluster=cluster)
-        worst = max(abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"]))
-                    for r in rows if r["kind"] != "reference")
+        build_stimuli(design, study, progress=not quiet, cluster=cluster)
+        stimuli = StimulusSet.read(study)             # read and checked once, then handed on
+        worst = max(abs(r.measured_error_pct - r.nominal_error_pct) for r in stimuli.tests)
         seconds["stimuli"] = time.perf_counter() - t
 
         aa = Style.from_dict(STYLE).anti_aliasing
         t = stage(3, f"render: videos, ghost and trail composites at {size[0]}x{size[1]} "
                      f"({aa.upper() if aa != 'none' else 'no'} anti-aliasing)")
-        rec = render_study(study, what=("video", "ghost", "trail"), size=size, jobs=jobs,
+        rec = render_study(stimuli, what=("video", "ghost", "trail"), size=size, jobs=jobs,
                            style=STYLE, progress=not quiet, cluster=cluster)
         seconds["render"] = time.perf_counter() - t
 
@@ -151,16 +152,15 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
                      f"Table 2), exported")
         bar = Progress(participants, "participants", not quiet)
         try:
-            simulate(study, participants, seed=seed, progress=lambda pid, session: bar.step(pid))
+            simulate(stimuli, participants, seed=seed, progress=lambda pid, session: bar.step(pid))
         finally:
             bar.close()
-        exp = export_responses(study, include_simulated=True)      # marked simulated=true
+        exp = export_responses(stimuli, include_simulated=True)    # marked simulated=true
         seconds["sessions"] = time.perf_counter() - t
 
         t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
         render_dir = study / "render"
-        by_name = {r["stimulus"]: r for r in rows}
-        images = {f"{what}s: {sheet_label(by_name[name])}": render_dir / f"{name}_{what}.png"
+        images = {f"{what}s: {sheet_label(stimuli[name])}": render_dir / f"{name}_{what}.png"
                   for what in ("ghost", "trail") for name in (SHEET_ORIGINAL, SHEET_ERROR)}
         result = analyze(exp["responses"], work / "analysis", images=images, seed=seed,
                          include_simulated=True)
@@ -204,7 +204,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     missing = [str(p) for p in files.values() if not p.exists()]
     if missing:
         raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
-    return {"files": files, "seconds": seconds, "n_stimuli": len(rows), "worst_gap_pct": worst,
+    return {"files": files, "seconds": seconds, "n_stimuli": len(stimuli), "worst_gap_pct": worst,
             "n_videos": sum(1 for s in rec["stimuli"].values() if "video" in s["files"]),
             "n_responses": exp["rows"], "n_simulated": len(exp["simulated"]), "table_md": to_markdown(result.table), "result": result}
 

@@ -197,7 +197,7 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
     study = session.study
     render_dir = study.render_dir.resolve()
-    videos = {f"{r['stimulus']}.mp4" for r in study.manifest}
+    videos = {f"{r.stimulus}.mp4" for r in study.manifest}
     assets = {name: (STATIC_DIR / name).read_bytes() for name in STATIC_FILES}
     index = (STATIC_DIR / "index.html").read_bytes()
 
@@ -371,7 +371,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
                            f"{study.render_dir} (e.g. {missing[0]}.mp4); render them first: "
                            f"flipstudy render {study.dir}")
     try:       # every video made from the stimulus as it is now, all with one settings record
-        check_rendered(study.dir, "video", rows=study.manifest)
+        check_rendered(study.stimuli, "video")
     except StaleRenderError as e:
         raise SessionError(str(e)) from None
     if lock.previous and lock.previous.get("pid"):

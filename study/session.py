@@ -32,20 +32,20 @@ On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError
 import hashlib
-import re
 import threading
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+
+from flipstudy.stimuli.contract import STIMULUS_RE, Stimulus, StimulusSet  # noqa: F401  (STIMULUS_RE re-exported)
 
 from . import store
 from .order import Trial, participant_seed, reference_stimuli, trial_order
 from .validate import RequestError, check_participant, check_task_response, parse_answer, parse_demographics
 
 VIDEO_EXT = ".mp4"
-STIMULUS_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,200}")
 
 
 class SessionError(FlipstudyError, ValueError):
@@ -82,12 +82,25 @@ def study_fingerprint(study_dir) -> dict:
 
 @dataclass
 class Study:
-    """A study folder: its design, manifest and rendered videos."""
+    """A study folder: its design, stimuli (:class:`~flipstudy.stimuli.contract.StimulusSet`,
+    read and checked once) and rendered videos."""
     dir: Path
     design: object
-    manifest: list[dict]
-    manifest_sha256: str
-    by_name: dict = field(default_factory=dict)
+    stimuli: StimulusSet
+
+    @property
+    def manifest(self) -> tuple[Stimulus, ...]:
+        """The stimuli in manifest order."""
+        return self.stimuli.stimuli
+
+    @property
+    def manifest_sha256(self) -> str:
+        return self.stimuli.manifest_sha256
+
+    @property
+    def by_name(self) -> StimulusSet:
+        """Stimulus name → :class:`~flipstudy.stimuli.contract.Stimulus` (``name in``, ``[name]``)."""
+        return self.stimuli
     design_text: str = ""          # design.toml as read (recorded with the first answer)
 
     @property
@@ -98,11 +111,11 @@ class Study:
         return self.render_dir / f"{stimulus}{VIDEO_EXT}"
 
     @property
-    def references(self) -> list[dict]:
+    def references(self) -> list[Stimulus]:
         return reference_stimuli(self.manifest)
 
     def missing_videos(self) -> list[str]:
-        return [r["stimulus"] for r in self.manifest if not self.video_path(r["stimulus"]).is_file()]
+        return [r.stimulus for r in self.manifest if not self.video_path(r.stimulus).is_file()]
 
     def group(self, name: str):
         """The design's group ``name`` (None for the shared originals' pseudo-group)."""
@@ -122,7 +135,7 @@ class Study:
     def stimulus_at(self, group: str, clip: str, level: float) -> str:
         """The stimulus of ``group`` × ``clip`` × ``level`` (level 0 of a group that
         shares the original: the clip's shared original)."""
-        key = (group, clip, round(float(level), 6))
+        key = (group, clip, round(level, 6))
         if key not in self._levels:
             raise SessionError(f"{self.dir / 'manifest.csv'}: no stimulus of group {group!r}, clip "
                                f"{clip!r} at level {level:g} %; rebuild the stimuli")
@@ -134,40 +147,40 @@ class Study:
         if idx is None:
             idx = {}
             for r in self.manifest:
-                if r.get("group") in ("reference", None):
+                if r.is_reference:
                     continue
-                idx[(r["group"], r.get("clip", ""), round(float(r["level"]), 6))] = r["stimulus"]
-                if r.get("original"):
-                    idx.setdefault((r["group"], r.get("clip", ""), 0.0), r["original"])
+                idx[(r.group, r.clip, round(r.level, 6))] = r.stimulus
+                if r.original:
+                    idx.setdefault((r.group, r.clip, 0.0), r.original)
             self.__dict__["_level_index"] = idx
         return idx
 
 
 def load_study(study_dir) -> Study:
-    """Read ``STUDY_DIR/design.toml`` and ``STUDY_DIR/manifest.csv``."""
-    from flipstudy.stimuli.design import load_design
-    from flipstudy.stimuli.stimset import read_manifest
-    d = Path(study_dir)
-    if not d.is_dir():
-        raise SessionError(f"{d}: no such study folder (make one with `flipstudy stimuli DESIGN.toml "
-                           f"--out {d}`)")
+    """The study in ``study_dir`` (a folder, or a :class:`~flipstudy.stimuli.contract.StimulusSet`
+    already read): its ``design.toml`` and its ``manifest.csv``, read and checked once
+    (:meth:`StimulusSet.read <flipstudy.stimuli.contract.StimulusSet.read>`; the
+    motion files are not needed by a session, the videos are checked by
+    :func:`flipstudy.render.record.check_rendered`), and the session's limits."""
+    from flipstudy.stimuli.design import TRIALS_MAX
+    if isinstance(study_dir, StimulusSet):
+        stimuli, d = study_dir, study_dir.folder
+    else:
+        d = Path(study_dir)
+        if not d.is_dir():
+            raise SessionError(f"{d}: no such study folder (make one with `flipstudy stimuli DESIGN.toml "
+                               f"--out {d}`)")
+        stimuli = None
     if not (d / "design.toml").is_file():
         raise SessionError(f"{d / 'design.toml'}: missing; a study folder made by `flipstudy stimuli` "
                            f"holds a copy of its design")
-    design = load_design(d / "design.toml")
-    manifest = read_manifest(d)
-    for i, r in enumerate(manifest, start=2):
-        name = r.get("stimulus", "")
-        if not STIMULUS_RE.fullmatch(name or ""):
-            raise SessionError(f"{d / 'manifest.csv'}: line {i}: stimulus name {name!r} is not a "
-                               f"plain file name")
-    from flipstudy.stimuli.design import TRIALS_MAX
-    names = [r.get("stimulus", "") for r in manifest]
-    if len(set(names)) != len(names):
-        dup = sorted({n for n in names if names.count(n) > 1})
-        raise SessionError(f"{d / 'manifest.csv'}: stimulus {dup[0]!r} is listed more than once; "
-                           f"rebuild the stimuli with `flipstudy stimuli`")
-    n_tests = sum(1 for r in manifest if r.get("group") != "reference")
+    if stimuli is None:
+        stimuli = StimulusSet.read(d, files=False)
+    design = stimuli.design
+    if design is None:
+        from flipstudy.stimuli.design import load_design
+        design = load_design(d / "design.toml")
+    n_tests = len(stimuli.tests)
     if any(g.adaptive or g.task != "yes-no" for g in design.groups):
         n = design.trials_per_participant()
         if n > TRIALS_MAX:
@@ -176,9 +189,7 @@ def load_study(study_dir) -> Study:
         raise SessionError(f"{d / 'manifest.csv'}: {n_tests} test stimuli × repetitions = "
                            f"{design.repetitions} is {n_tests * design.repetitions} trials per "
                            f"participant; at most {TRIALS_MAX}")
-    sha = hashlib.sha256((d / "manifest.csv").read_bytes()).hexdigest()
-    return Study(d, design, manifest, sha, {r["stimulus"]: r for r in manifest},
-                 (d / "design.toml").read_bytes().decode("utf-8", errors="replace"))
+    return Study(d, design, stimuli, (d / "design.toml").read_bytes().decode("utf-8", errors="replace"))
 
 
 @dataclass

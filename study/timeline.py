@@ -209,7 +209,7 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
             "type": "examples", "id": "examples", "title": "Examples of correct motions",
             "text": "These motions are physically correct. Watch each one; you can watch "
                     "them again before you start.",
-            "stimuli": [{"video": video_url.format(name=r["stimulus"]),
+            "stimuli": [{"video": video_url.format(name=r.stimulus),
                          "label": f"Correct motion {i + 1} of {len(refs)}"}
                         for i, r in enumerate(refs)],
             "button": "Start the test"})

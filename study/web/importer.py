@@ -511,7 +511,7 @@ def import_web(study_dir, files) -> dict:
                 # every record of it is already kept: the file is not kept (nor re-read later)
                 r["status"], r["records_read"] = "nothing new", r["records"]
                 new_files = [(s, b) for s, b in new_files if s != r["stored"]]
-    styles = _manifest_styles(study.dir)
+    styles = _manifest_styles(study.stimuli)
     columns = web_columns(any(g.task == "2afc" for g in study.design.groups), styles is not None)
     rows, parts = _tables(merged, n_trials, columns)
     if styles is not None:                      # the stimulus's character style, as `export` has it
@@ -538,7 +538,7 @@ def import_web(study_dir, files) -> dict:
     out = d / "responses.csv"
     atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
-    desc = write_dataset_description(d, study.dir, columns, source="web sessions")
+    desc = write_dataset_description(d, study.dir, columns, source="web sessions", stimuli=study.stimuli)
     return {"files": report, "answers": len(rows), "participants": len({p["participant"] for p in parts}),
             "sessions": len(parts), "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/"
                                                    f"{p['n_trials']})" for p in parts if p["complete"] != "true"],

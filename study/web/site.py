@@ -48,7 +48,7 @@ from types import SimpleNamespace
 from flipstudy.stimuli.exceptions import FlipstudyError
 
 from .. import timeline as local_timeline
-from ..session import STIMULUS_RE, load_study
+from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS
 from . import jspsych as jsp
 from .order import RULE, order_groups
@@ -142,9 +142,8 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
     n = sum(len(rows) for _, rows in groups) * int(design.repetitions)
     vids = {}
     for r in study.manifest:
-        name = r["stimulus"]
-        v = (videos or {}).get(name) or {"frames": int(float(r.get("frames") or 0)),
-                                         "fps": float(r.get("fps") or 0),
+        name = r.stimulus
+        v = (videos or {}).get(name) or {"frames": r.frames, "fps": r.fps if r.fps > 0 else 0.0,
                                          "duration_s": 0.0}
         vids[name] = dict(v, video=f"stimuli/{name}.mp4")
     cfg = {
@@ -155,7 +154,7 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
         "max_dropped_pct": float(max_dropped_pct), "repeat_dropped": bool(design.session.repeat_dropped),
         "video_width": int(video_width),
         "participant_params": list(PARTICIPANT_PARAMS),
-        "references": [{"stimulus": r["stimulus"], "video": f"stimuli/{r['stimulus']}.mp4"}
+        "references": [{"stimulus": r.stimulus, "video": f"stimuli/{r.stimulus}.mp4"}
                        for r in study.references],
         "videos": vids, "demographic_fields": DEMOGRAPHIC_FIELDS, "texts": _texts(study, n),
         "jspsych_version": jsp.PACKAGES["jspsych"],
@@ -218,13 +217,10 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
         raise SiteError(f"{study.render_dir}: no video of {len(missing)} stimuli (e.g. {missing[0]}.mp4); "
                         f"render them first: flipstudy render {study.dir}")
     try:
-        check_rendered(study.dir, "video", rows=study.manifest)
+        check_rendered(study.stimuli, "video")
     except StaleRenderError as e:
         raise SiteError(str(e)) from None
-    for r in study.manifest:
-        if not STIMULUS_RE.fullmatch(r["stimulus"]):
-            raise SiteError(f"stimulus name {r['stimulus']!r} is not a plain file name")
-    videos = {r["stimulus"]: probe_video(study.video_path(r["stimulus"])) for r in study.manifest}
+    videos = {r.stimulus: probe_video(study.video_path(r.stimulus)) for r in study.manifest}
     cfg = site_config(study, host=host, iti_ms=iti_ms, max_dropped_pct=max_dropped_pct,
                       video_width=video_width, videos=videos)
     folder, packages = jsp.fetch(jspsych_dir)
@@ -235,7 +231,7 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
         scripts = jsp.copy_bundles(folder, tmp / "lib")
         (tmp / "stimuli").mkdir()
         for r in study.manifest:
-            shutil.copyfile(study.video_path(r["stimulus"]), tmp / "stimuli" / f"{r['stimulus']}.mp4")
+            shutil.copyfile(study.video_path(r.stimulus), tmp / "stimuli" / f"{r.stimulus}.mp4")
         for f in OWN_FILES:
             shutil.copyfile(STATIC / f, tmp / f)
         (tmp / "config.js").write_text("// written by flipstudy export-web; the study as data\n"

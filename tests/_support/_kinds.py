@@ -49,7 +49,7 @@ def make_study(out, text: str, *, frames: int = 12, fps: float = 30.0, size=(96,
     if not videos:
         return out
     for i, r in enumerate(rows):
-        write_test_video(out / "render" / f"{r['stimulus']}.mp4", size=size, frames=frames, fps=fps,
+        write_test_video(out / "render" / f"{r.stimulus}.mp4", size=size, frames=frames, fps=fps,
                          color=PALETTE[i % len(PALETTE)])
     write_demo_record(out, rows, size=size, fps=fps)
     return out
@@ -57,8 +57,8 @@ def make_study(out, text: str, *, frames: int = 12, fps: float = 30.0, size=(96,
 
 def colour_of(study_dir, stimulus: str) -> tuple[int, int, int]:
     """The colour of ``stimulus``'s placeholder video."""
-    from flipstudy.stimuli.stimset import read_manifest
-    names = [r["stimulus"] for r in read_manifest(study_dir)]
+    from flipstudy.stimuli.contract import StimulusSet
+    names = StimulusSet.read(study_dir, files=False, design=False).names
     return PALETTE[names.index(stimulus) % len(PALETTE)]
 
 

@@ -2,7 +2,6 @@
 
 Small images (160x120 and the like) and short clips keep this file fast.
 """
-import csv
 import json
 from pathlib import Path
 
@@ -334,19 +333,18 @@ def test_real_edited_flip_pixel_identical_before_takeoff():
 
 
 def _write_study(folder: Path, clips_and_names, t0, t1):
+    """A stimulus set of these clips (``.bvh``, ``.npz``, ``manifest.csv`` through the contract)."""
+    from flipstudy.stimuli.contract import Stimulus, StimulusSet
+    from flipstudy.stimuli.stimset import clip_arrays, npz_bytes
     rows = []
     for name, clip, level in clips_and_names:
         save_bvh(clip, folder / f"{name}.bvh", scale=1.0)
-        rows.append({"stimulus": name, "clip": "jumper", "group": "g",
-                     "kind": "reference" if level == 0 else "angular-momentum", "profile": "smooth",
-                     "level": level, "nominal_error_pct": level, "measured_error_pct": level,
-                     "takeoff_angle_deg": 60.0, "takeoff_angle_change_deg": 0.0,
-                     "takeoff": t0, "landing": t1, "seed": 1, "sha256": "",
-                     "frames": clip.num_frames, "fps": clip.fps, "bvh": f"{name}.bvh"})
-    with open(folder / "manifest.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+        (folder / f"{name}.npz").write_bytes(npz_bytes(clip_arrays(clip, t0, t1)))
+        rows.append(Stimulus(name, "jumper", "g", "reference" if level == 0 else "angular-momentum",
+                             "smooth", level, nominal_error_pct=level, measured_error_pct=level,
+                             takeoff_angle_deg=60.0, takeoff=t0, landing=t1, seed=1,
+                             frames=clip.num_frames, fps=clip.fps))
+    StimulusSet(folder, rows).write()
 
 
 def test_render_study_one_camera_identical_frames_before_takeoff(tmp_path):

@@ -306,7 +306,7 @@ def test_a_session_of_the_default_design_shows_each_motion_file_as_designed(tmp_
     d = study.design
     per_stim = collections.Counter(t.stimulus for t in s.trials)
     assert set(per_stim.values()) == {d.repetitions} and len(per_stim) == 2 * (4 * 4 + 1 + 5)
-    sha = {r["stimulus"]: r["sha256"] for r in study.manifest}
+    sha = {r.stimulus: r.sha256 for r in study.manifest}
     per_file = collections.Counter(sha[t.stimulus] for t in s.trials)
     for clip in ("backflip", "frontflip"):
         orig = sha[f"{clip}_original"]
@@ -315,11 +315,11 @@ def test_a_session_of_the_default_design_shows_each_motion_file_as_designed(tmp_
         groups = collections.Counter(t.group for t in s.trials if sha[t.stimulus] == orig)
         assert groups == {"original": 2, "takeoff-increase": 2}
     assert max(v for k, v in per_file.items()) == 2 * d.repetitions
-    man = {r["stimulus"]: r for r in study.manifest}
-    assert man["backflip_original"]["group"] == "original"
-    assert man["backflip_original"]["kind"] == "angular-momentum"
-    assert man["backflip_abrupt-decrease_37"]["original"] == "backflip_original"
-    assert man["backflip_takeoff-increase_20"]["original"] == "backflip_takeoff-increase_0"
+    man = study.by_name
+    assert man["backflip_original"].group == "original"
+    assert man["backflip_original"].kind == "angular-momentum"
+    assert man["backflip_abrupt-decrease_37"].original == "backflip_original"
+    assert man["backflip_takeoff-increase_20"].original == "backflip_takeoff-increase_0"
 
 
 def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
@@ -358,7 +358,8 @@ def test_a_session_refuses_a_manifest_with_duplicate_or_too_many_trials(tmp_path
     d = make_demo_study(tmp_path / "s", videos=False)
     man = (d / "manifest.csv").read_text().splitlines()
     (d / "manifest.csv").write_text("\n".join(man + [man[-1]]) + "\n")
-    with pytest.raises(SessionError, match="listed more than once"):
+    from flipstudy.errors import ManifestError
+    with pytest.raises(ManifestError, match="listed more than once"):
         load_study(d)
     row = man[-1].split(",")
     extra = [",".join([f"x{i}"] + row[1:]) for i in range(1600)]

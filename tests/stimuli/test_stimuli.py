@@ -8,7 +8,8 @@ import pytest
 from flipstudy.stimuli import analyse, load_bvh
 from flipstudy.stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
 from flipstudy.stimuli.injection import StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
-from flipstudy.stimuli.stimset import build_stimuli, read_manifest
+from flipstudy.stimuli.contract import StimulusSet
+from flipstudy.stimuli.stimset import build_stimuli
 
 from _shared import MOCAP, shared_file
 
@@ -123,7 +124,7 @@ def test_default_design_on_builtin_flips_is_exact(tmp_path):
     angle to 0.5° (default policy), take-off stimuli keep |L| to 1 %."""
     d = parse_design(PAPER_DESIGN)
     build_stimuli(d, tmp_path / "study", progress=False)
-    man = read_manifest(tmp_path / "study")
+    man = StimulusSet.read(tmp_path / "study", files=False, design=False).rows()
     assert len(man) == 2 + 2 * (4 * 4 + 1 + 5)      # the AM groups share one original per clip
     kinds = {r["kind"] for r in man}
     assert {"angular-momentum", "takeoff-angle"} <= kinds
@@ -154,7 +155,7 @@ def test_default_design_from_real_cmu_flips(tmp_path):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path)
     rows = build_stimuli(d, tmp_path / "study", progress=False)
-    man = read_manifest(tmp_path / "study")
+    man = StimulusSet.read(tmp_path / "study", files=False, design=False).rows()
     assert len(man) == len(rows) == 2 + 2 * (4 * 4 + 1 + 5)   # shared AM original per clip
     for r in man:
         assert (tmp_path / "study" / r["bvh"]).exists() and (tmp_path / "study" / r["npz"]).exists()

@@ -6,6 +6,7 @@ from collections import Counter
 
 from hypothesis import given, settings, strategies as st
 
+from flipstudy.stimuli.contract import Stimulus
 from flipstudy.stimuli.design import parse_design
 from flipstudy.stimuli.stimset import original_of, plan
 from flipstudy.study.order import trial_order
@@ -39,9 +40,8 @@ def design_text(groups, reps, two_clips):
 
 
 def manifest(d):
-    return [{"stimulus": n, "clip": c.name, "group": g.name if g else "reference",
-             "kind": g.kind if g else "reference", "level": f"{lv:.6f}",
-             "original": original_of(d, c.name, g)} for n, c, g, lv in plan(d)]
+    return [Stimulus(n, c.name, g.name if g else "reference", g.kind if g else "reference", level=lv,
+                     original=original_of(d, c.name, g)) for n, c, g, lv in plan(d)]
 
 
 @settings(max_examples=60, deadline=None)
@@ -54,7 +54,7 @@ def test_mixed_orders_hold_every_trial_once_per_repetition_and_balance_2afc(grou
     assert trials == trial_order(d, m, pid)                          # deterministic
     assert len(trials) == d.trials_per_participant()
     assert [t.trial for t in trials] == list(range(1, len(trials) + 1))
-    names = {r["stimulus"] for r in m}
+    names = {r.stimulus for r in m}
     const = Counter(t.stimulus for t in trials if not t.adaptive)
     assert all(n == reps for n in const.values()) and set(const) <= names
     for g in d.groups:

@@ -164,15 +164,18 @@ def _old_order_module():
 def test_the_paper_design_order_is_the_one_before_adaptive_groups():
     from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
     from flipstudy.stimuli.stimset import original_of, plan
+    from flipstudy.stimuli.contract import Stimulus
     from flipstudy.study.order import trial_order
     old = _old_order_module()
     d = parse_design(PAPER_DESIGN)
     manifest = [{"stimulus": n, "clip": c.name, "group": g.name if g else "reference",
                  "kind": g.kind if g else "reference", "level": f"{lv:.6f}",
                  "original": original_of(d, c.name, g)} for n, c, g, lv in plan(d)]
+    stimuli = [Stimulus(r["stimulus"], r["clip"], r["group"], r["kind"], level=float(r["level"]),
+                        original=r["original"]) for r in manifest]       # the same rows, typed
     for pid, session in (("P01", 1), ("P02", 1), ("x-7", 3)):
         a = old.trial_order(d, manifest, pid, session)
-        b = trial_order(d, manifest, pid, session)
+        b = trial_order(d, stimuli, pid, session)
         assert [tuple(vars(t).values()) for t in a] == \
             [(t.trial, t.stimulus, t.clip, t.group, t.kind, t.level, t.repetition) for t in b]
         assert all(t.method == "constant" and t.task == "yes-no" and not t.first for t in b)

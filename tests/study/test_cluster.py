@@ -22,7 +22,8 @@ cloudpickle.register_pickle_by_value(sys.modules[__name__])   # workers cannot i
 import flipstudy.study.cluster as cl  # noqa: E402
 from flipstudy.render.study import render_study  # noqa: E402
 from flipstudy.stimuli.design import parse_design  # noqa: E402
-from flipstudy.stimuli.stimset import build_stimuli, read_manifest  # noqa: E402
+from flipstudy.stimuli.contract import StimulusSet  # noqa: E402
+from flipstudy.stimuli.stimset import build_stimuli  # noqa: E402
 
 DESIGN = '''
 [study]
@@ -252,7 +253,7 @@ def test_cli_cluster_option_builds_and_names_a_bad_address(tmp_path, capsys, clu
     assert main(["stimuli", str(tmp_path / "d.toml"), "--out", str(tmp_path / "s"),
                  "--cluster", addr, "--quiet"]) == 0
     assert "wrote 4 stimuli" in capsys.readouterr().out
-    assert len(read_manifest(tmp_path / "s")) == 4
+    assert len(StimulusSet.read(tmp_path / "s", files=False, design=False).rows()) == 4
 
 
 def test_a_failing_stimulus_fails_the_cluster_build_as_locally(tmp_path, cluster):

@@ -11,7 +11,8 @@ from flipstudy.analysis.pipeline import analyze
 from flipstudy.render.study import render_study
 from flipstudy.stimuli.design import load_design, parse_design
 from flipstudy.stimuli.presets import PRESETS
-from flipstudy.stimuli.stimset import build_stimuli, read_manifest
+from flipstudy.stimuli.contract import StimulusSet
+from flipstudy.stimuli.stimset import build_stimuli
 from flipstudy.study.cli.motion import PRESET_NAMES
 from flipstudy.study.export import export_responses
 from flipstudy.study.simulate import ObserverModel, simulate
@@ -63,7 +64,7 @@ def test_preset_builds_and_runs_end_to_end(tmp_path, name):
     study = tmp_path / "study"
     build_stimuli(sd, study, progress=False)
     rec = render_study(study, size=(32, 24), jobs=1, fps=10, progress=False)
-    assert len(rec["stimuli"]) == len(read_manifest(study))
+    assert len(rec["stimuli"]) == len(StimulusSet.read(study, files=False, design=False).rows())
     model = ObserverModel({g.name: (np.array([0.0, max(g.levels)]), np.array([0.9, 0.1]))
                            for g in sd.groups}, sigma=0.1, source="test")
     assert simulate(study, 3, model=model, seed=1) == ["sim001", "sim002", "sim003"]

@@ -224,7 +224,7 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
                 _reach(page, i)
                 page.wait_for_selector('#app[data-playing="0"] button.correct:enabled')
                 assert page.get_attribute("#app", "data-stimulus") == stim     # the same level
-            level = float(study.by_name[stim]["level"])
+            level = study.by_name[stim].level
             answer[i] = "incorrect" if level > 30 else "correct"
             _answer(page, i, answer[i], "key" if i % 2 else "click")
         page.wait_for_selector('#app[data-screen-id="end"]')

@@ -7,6 +7,7 @@ import re
 import subprocess
 import sys
 
+from flipstudy.stimuli.contract import Stimulus, StimulusSet
 from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
 from flipstudy.stimuli.stimset import plan
 from flipstudy.study.order import participant_seed, reference_stimuli, trial_order
@@ -17,9 +18,8 @@ def paper_manifest():
     d = parse_design(PAPER_DESIGN)
     rows = []
     for name, spec, group, level in plan(d):
-        rows.append({"stimulus": name, "clip": spec.name,
-                     "group": group.name if group else "reference",
-                     "kind": group.kind if group else "reference", "level": f"{level:.6f}"})
+        rows.append(Stimulus(name, spec.name, group.name if group else "reference",
+                             group.kind if group else "reference", level=level))
     return d, rows
 
 
@@ -36,7 +36,7 @@ def test_paper_design_order_blocks_groups_and_levels():
     file is shown `repetitions` (2) times — before, each original was shown 10 times."""
     d, rows = paper_manifest()
     trials = trial_order(d, rows, "P01")
-    tests = [r for r in rows if r["group"] != "reference"]
+    tests = [r for r in rows if r.group != "reference"]
     assert len(tests) == 2 * (4 * 4 + 1 + 5)
     assert len(trials) == d.repetitions * len(tests) == 88
     assert [t.trial for t in trials] == list(range(1, 89))
@@ -46,7 +46,7 @@ def test_paper_design_order_blocks_groups_and_levels():
         block = [t for t in trials if t.repetition == rep]
         # every stimulus of every non-reference group exactly once per block
         assert collections.Counter(t.stimulus for t in block) == collections.Counter(
-            r["stimulus"] for r in tests)
+            r.stimulus for r in tests)
         # groups interleaved round by round: the take-off group (10 rows, the most) is in
         # every round, every other group at most once a round, so in every prefix of the
         # block no group is more than one ahead of it
@@ -59,10 +59,10 @@ def test_paper_design_order_blocks_groups_and_levels():
     assert {(t.group, t.clip, t.level) for t in trials if t.level == 0} == {
         (g, c, 0.0) for g in ("original", "takeoff-increase") for c in ("backflip", "frontflip")}
     # the trials are rows of the manifest, with its condition
-    by = {r["stimulus"]: r for r in rows}
+    by = {r.stimulus: r for r in rows}
     for t in trials:
-        assert (t.group, t.clip, t.level) == (by[t.stimulus]["group"], by[t.stimulus]["clip"],
-                                              float(by[t.stimulus]["level"]))
+        assert (t.group, t.clip, t.level) == (by[t.stimulus].group, by[t.stimulus].clip,
+                                              by[t.stimulus].level)
 
 
 def test_shared_originals_spread_over_the_block():
@@ -94,7 +94,7 @@ def test_order_is_random_within_group_and_seeded_per_participant():
     block1 = [t.stimulus for t in a1 if t.repetition == 1]
     block2 = [t.stimulus for t in a1 if t.repetition == 2]
     assert block1 != block2
-    manifest_order = [r["stimulus"] for r in rows if r["group"] == "smooth-increase"]
+    manifest_order = [r.stimulus for r in rows if r.group == "smooth-increase"]
     within = [s for s in block1 if "smooth-increase" in s]
     assert sorted(within) == sorted(manifest_order) and within != manifest_order
     # over many participants every group leads a block about equally often
@@ -107,7 +107,8 @@ def test_order_is_random_within_group_and_seeded_per_participant():
 def test_order_does_not_depend_on_python_hash_seed():
     code = ("import types; from study.order import trial_order;"
             "d = types.SimpleNamespace(seed=5, repetitions=2, groups=[]);"
-            "r = [{'stimulus': f'c_{g}_{l}', 'clip': 'c', 'group': g, 'kind': '', 'level': l}"
+            "from flipstudy.stimuli.contract import Stimulus;"
+            "r = [Stimulus(f'c_{g}_{l}', 'c', g, '', level=l)"
             "     for g in 'abcde' for l in (0, 10, 20, 30)];"
             "print(','.join(t.stimulus for t in trial_order(d, r, 'P01')))")
     outs = set()
@@ -122,7 +123,7 @@ def test_order_does_not_depend_on_python_hash_seed():
 
 def test_uneven_groups_are_all_used():
     d, rows = paper_manifest()
-    rows = [r for r in rows if not (r["group"] == "takeoff-increase" and r["level"] != "0.000000")]
+    rows = [r for r in rows if not (r.group == "takeoff-increase" and r.level != 0)]
     trials = trial_order(d, rows, "X")
     assert len(trials) == 2 * (len(rows) - 2)
     assert collections.Counter(t.group for t in trials)["takeoff-increase"] == 2 * 2
@@ -131,7 +132,7 @@ def test_uneven_groups_are_all_used():
 class _FakeSession:
     def __init__(self, design, rows, n=None, participant="P01"):
         from flipstudy.study.session import Study
-        self.study = Study(None, design, rows, "x", {r["stimulus"]: r for r in rows})
+        self.study = Study(None, design, StimulusSet(".", rows, design, "x"))
         self.trials = trial_order(design, rows, participant)[:n]
         self.participant, self.session = participant, 1
 
@@ -160,7 +161,7 @@ def test_timeline_screens_and_breaks():
     i_breaks = [i for i, x in enumerate(tl["timeline"]) if x["type"] == "break"]
     assert [tl["timeline"][i - 1]["trial"] for i in i_breaks] == [40, 80]
     ex = tl["timeline"][2]
-    assert [e["video"] for e in ex["stimuli"]] == [f"/stimuli/{r['stimulus']}.mp4"
+    assert [e["video"] for e in ex["stimuli"]] == [f"/stimuli/{r.stimulus}.mp4"
                                                    for r in reference_stimuli(rows)]
     assert all("correct" in e["label"].lower() for e in ex["stimuli"])
     assert tl["keys"] == {"correct": "f", "incorrect": "j"}
@@ -203,7 +204,7 @@ def test_replay_flag_comes_from_the_design():
 
 def test_no_motion_twice_in_a_row():
     d = parse_design(PAPER_DESIGN.replace("repetitions = 2", "repetitions = 4"))
-    rows = [{"stimulus": f"c_{g}_{lv}", "clip": "c", "group": g, "kind": "", "level": lv}
+    rows = [Stimulus(f"c_{g}_{lv}", "c", g, "", level=lv)
             for g in ("smooth-increase", "abrupt-decrease") for lv in (0, 25)]
     for i in range(300):
         t = trial_order(d, rows, f"P{i}")

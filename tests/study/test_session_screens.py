@@ -91,7 +91,7 @@ def test_api_trial_serves_the_current_trial_only(tmp_path):
             assert screen["stimulus"] == want.stimulus and want.stimulus in s.study.by_name
             if n < s.n_trials:
                 assert _get(srv.url + f"api/trial/{n + 1}")[0] == 409       # not yet
-            level = float(s.study.by_name[want.stimulus]["level"])
+            level = s.study.by_name[want.stimulus].level
             submit_answer(s, {"participant": "P01", "session": 1, "trial": n, "stimulus": screen["stimulus"],
                               "response": "incorrect" if level > 20 else "correct", "rt_ms": 500.0,
                               "shown_ms": 400.0, "late_frames": 0})
@@ -112,7 +112,7 @@ def test_served_adaptive_levels_follow_quest(tmp_path, task):
     with ServerThread(create_app(s, iti_ms=0)) as srv:
         for n in range(1, s.n_trials + 1):
             _, screen = _get(srv.url + f"api/trial/{n}")
-            level = float(s.study.by_name[screen["stimulus"]]["level"])
+            level = s.study.by_name[screen["stimulus"]].level
             assert level == q.next_level()
             if task == "2afc":
                 seen = "first" if level < 30 else ("first" if screen["first"] == "original" else "second")

@@ -419,12 +419,12 @@ def test_sessions_on_a_stimulus_set_built_from_motion_capture(tmp_path):
     build_stimuli(parse_design(text, tmp_path / "d.toml"), tmp_path / "study", progress=False)
     d = tmp_path / "study"
     study = load_study(d)
-    assert [r["stimulus"] for r in study.references] == ["backflip_reference"]
+    assert [r.stimulus for r in study.references] == ["backflip_reference"]
     simulate(d, 2, seed=4)
     rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True)["responses"])
     assert len(rs) == 2 * 2 * 2 * 2
     assert {(r["group"], r["level"]) for r in rs} == {
         (g, lv) for g in ("smooth-increase", "abrupt-decrease") for lv in ("0", "25")}
     shown = [float(r["shown_ms"]) for r in rs]
-    frames = float(study.by_name[rs[0]["stimulus"]]["frames"])
+    frames = study.by_name[rs[0]["stimulus"]].frames
     assert np.mean(shown) == pytest.approx(1000 * frames / 60.0, rel=0.05)

@@ -15,7 +15,8 @@ from pathlib import Path
 import pytest
 
 from flipstudy.stimuli.design import parse_design
-from flipstudy.stimuli.stimset import (StudyFolderError, StudyLocked, build_stimuli, read_manifest,
+from flipstudy.stimuli.contract import StimulusSet
+from flipstudy.stimuli.stimset import (StudyFolderError, StudyLocked, build_stimuli,
                              study_lock)
 from flipstudy.study.archive import StudyHasAnswers, answers_in, refuse_real_answers
 from flipstudy.study.cli import main as flipstudy
@@ -62,7 +63,7 @@ def complete(folder: Path) -> str:
     if not folder.is_dir():
         return "missing"
     try:
-        rows = read_manifest(folder)
+        rows = StimulusSet.read(folder, files=False, design=False).rows()
     except FileNotFoundError:
         return "no manifest"
     want = {"manifest.csv"} | {r["bvh"] for r in rows} | {r["npz"] for r in rows}
@@ -127,7 +128,7 @@ def test_force_replaces_a_study_with_only_simulated_answers_and_says_so(study, t
                       "--quiet"]) == 0
     out = capsys.readouterr().out
     assert "simulated participant" in out and "sessions.sqlite" in out
-    assert complete(study) == "" and read_manifest(study)[0]["seed"] != ""
+    assert complete(study) == "" and StimulusSet.read(study, files=False, design=False).rows()[0]["seed"] != ""
     assert leftovers(tmp_path, "study") == []
 
 
@@ -212,7 +213,7 @@ def test_two_concurrent_builds_the_second_fails_at_once(tmp_path):
         assert "is writing this study folder right now" in b.stderr and "pid" in b.stderr
         go.touch()
         assert a.wait(timeout=60) == 0, a.stderr.read()
-    assert complete(out) == "" and read_manifest(out)[0]["seed"] != ""
+    assert complete(out) == "" and StimulusSet.read(out, files=False, design=False).rows()[0]["seed"] != ""
     # the study is the first build's (design seed 3), and the lock file is gone
     assert (out / "design.toml").read_text() == DESIGN.format(seed=3)
     assert leftovers(tmp_path, "study") == []

@@ -43,7 +43,7 @@ from test_session_browser import ARGS, CHROMIUM, TIMEOUT, page, pw  # noqa: F401
 
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study, write_demo_record, write_test_video
-from flipstudy.stimuli.stimset import read_manifest
+from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.study.web import jspsych as jsp
 from flipstudy.study.web.importer import import_web
 from flipstudy.study.web.order import web_trial_order
@@ -175,7 +175,7 @@ def study(tmp_path):
     d = make_demo_study(tmp_path / "study", levels=(0, 25), repetitions=2, break_every=3,
                         video_frames=12, video_fps=30.0, size=(160, 120))
     write_test_video(d / "render" / f"{FAST}.mp4", size=(160, 120), frames=96, fps=240.0)
-    write_demo_record(d, read_manifest(d), size=(160, 120), fps=30.0)
+    write_demo_record(d, StimulusSet.read(d, files=False), size=(160, 120), fps=30.0)
     return d
 
 
@@ -432,7 +432,7 @@ def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  #
                             video_frames=12, video_fps=30.0, size=(160, 120), repeat_dropped=True,
                             max_dropped_pct=20)
     write_test_video(study / "render" / f"{FAST}.mp4", size=(160, 120), frames=96, fps=240.0)
-    write_demo_record(study, read_manifest(study), size=(160, 120), fps=30.0)
+    write_demo_record(study, StimulusSet.read(study, files=False), size=(160, 120), fps=30.0)
     site = tmp_path / "site"
     r = export_site(study, site, host="static", iti_ms=20, jspsych_dir=jspsych_dir)
     assert (r["max_dropped_pct"], r["repeat_dropped"]) == (20.0, True)      # the design's
@@ -485,9 +485,9 @@ def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  #
                 "--psychometric", "none", "--n-boot", "50"]) == 0
     table = _csv(out / "table.csv")
     assert sum(int(t["n"]) for t in table) == 8                # each trial once: the repeat for the flagged
-    m = next(x for x in read_manifest(study) if x["stimulus"] == FAST)
+    m = StimulusSet.read(study, files=False)[FAST]
     cells = {(t["group"], float(t["level"])): int(t["n_incorrect"]) for t in table}
-    assert cells.pop((m["group"], float(m["level"]))) == 2     # the repeats' "incorrect", not "correct"
+    assert cells.pop((m.group, m.level)) == 2     # the repeats' "incorrect", not "correct"
     assert set(cells.values()) == {0}
     assert "Repeats: 2 trial(s)" in (out / "notes.md").read_text()
 
