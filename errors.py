@@ -43,5 +43,10 @@ class FlipstudyStateError(FlipstudyError, RuntimeError):
     """A file is in a state this flipstudy cannot use (e.g. a newer schema version)."""
 
 
-__all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
+class CalibrationError(FlipstudyValueError):
+    """A calibration file (``flipstudy calibrate``, ``score --calibration``) that cannot be
+    read or used: the message names the file and the field."""
+
+
+__all__ = ["CalibrationError", "FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
            "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError"]

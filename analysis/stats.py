@@ -52,7 +52,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy.special import ndtr, ndtri
+from scipy.special import ndtri
+
+from flipstudy.stimuli.calibration import psychometric_curve  # noqa: F401 (one formula; re-exported)
 
 from .io import group_order, level_order
 from .units import group_kinds, magnitude_unit, magnitudes
@@ -149,12 +151,6 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
 
 # ------------------------------------------------------------- psychometric functions
 
-def psychometric_curve(x, threshold, width, gamma, lam):
-    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w)."""
-    s = np.asarray(width, float) / _WSCALE
-    return gamma + (1 - gamma - lam) * ndtr((np.asarray(x, float) - threshold) / s)
-
-
 def detection_threshold(threshold, width, gamma, lam):
     """``x*`` where P(incorrect) = (1 + γ)/2 (vectorised; +inf where never reached)."""
     threshold, width, gamma, lam = np.broadcast_arrays(*(np.asarray(a, float)
@@ -182,6 +178,8 @@ class PsychometricFit:
     threshold_extrapolated: float    # x* of the point estimate, even beyond the range (inf: never)
     note: str = ""
     samples: np.ndarray = field(default=None, repr=False)
+    #: posterior samples of the parameters (threshold, width, gamma, lambda), for calibrations
+    param_samples: dict = field(default=None, repr=False)
     unit: str = "%"                  # of x and the thresholds: "%" or "ms" (pose-rate hold)
 
     @property
@@ -292,7 +290,11 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
     s = res.posterior_samples(n_samples, random_state=np.random.default_rng(seed))
     gam = s["gamma"] if "gamma" in s else np.full_like(s["threshold"], params["gamma"])
     xs = detection_threshold(s["threshold"], s["width"], gam, s["lambda"])
-    return _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note, unit)
+    fit = _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note, unit)
+    fit.param_samples = {"threshold": np.asarray(s["threshold"], float),
+                         "width": np.asarray(s["width"], float), "gamma": np.asarray(gam, float),
+                         "lambda": np.asarray(s["lambda"], float)}
+    return fit
 
 
 def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
