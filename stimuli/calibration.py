@@ -152,7 +152,7 @@ class Calibration:
         entry first, then an entry pooled over variants and signs (``pooled``); a
         ``style`` given must match (an entry without a style matches any); among
         several, the one with most real participants.  None: not calibrated."""
-        sign = int(np.sign(sign))
+        sign, variant = int(np.sign(sign)), variant or None
         cands = [f for f in self.functions if f.kind == kind and f.task == task
                  and (style is None or f.style in (None, style))]
         for tier in (lambda f: not f.pooled and f.variant == variant and f.sign == sign,

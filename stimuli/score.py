@@ -78,23 +78,31 @@ class ClipScore:
     p_any_high: float
     worst: ErrorScore | None
     note: str = ""
+    warnings: tuple = ()               # the measurement's (e.g. a frame time gravity contradicts)
 
     @property
     def duration(self) -> float:
         return (self.frames - 1) / self.fps if self.fps else 0.0
 
-    def summary(self) -> str:
+    def summary(self, brief: bool = False) -> str:
+        """One line per error (``brief``: the scored ones, and the unscored counted)."""
         lines = [f"{self.name}: P(anything noticed) = {_pct(self.p_any)} "
                  f"[{_pct(self.p_any_low)}, {_pct(self.p_any_high)}]"
                  + (f"; worst moment {self.worst.worst_t:.3f} s ({self.worst.label()})"
                     if self.worst is not None else "")]
         for e in self.errors:
+            if brief and not e.scored:
+                continue
             p = (f"p = {_pct(e.p)} [{_pct(e.p_low)}, {_pct(e.p_high)}]" if e.scored
                  else "measured, not scored")
-            lines.append(f"  {e.label():30s} {e.phase:10s} {e.size:+9.2f} {e.unit:6s} "
+            lines.append(f"  {e.label():33s} {e.phase:10s} {e.size:+9.2f} {e.unit:9s} "
                          f"{e.t0:6.3f}–{e.t1:6.3f} s  {p}" + (f"  ({e.note})" if e.note else ""))
-        if self.note:
+        if brief:
+            n = sum(not e.scored for e in self.errors)
+            lines.append(f"  {n} more measured, not scored (no calibration): flipstudy score for all")
+        elif self.note:
             lines.append(f"  note: {self.note}")
+        lines += [f"  warning: {w}" for w in self.warnings]
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -145,37 +153,30 @@ def _clean(v):
     return v
 
 
-def _phases(clip, m) -> tuple:
-    ph = getattr(m, "phases", None)
-    if ph:
-        return tuple((str(p[0]), float(p[1]), float(p[2])) if isinstance(p, (tuple, list))
-                     else (str(p.label), float(p.t0), float(p.t1)) for p in ph)
-    from .analyse import analyse
-    a = analyse(clip)
-    T = (clip.num_frames - 1) / clip.fps
-    if a.flight is None:
-        return (("ground", 0.0, T),)
-    return (("ground", 0.0, float(a.takeoff_time)), ("flight", float(a.takeoff_time), float(a.landing_time)),
-            ("ground", float(a.landing_time), T))
+def _phases(m) -> tuple:
+    """((name, t0, t1), ...) of a :class:`~flipstudy.stimuli.measure.Measurement`."""
+    return tuple((str(p[0]), float(p[2]), float(p[3])) for p in m.phases)
 
 
 def score_measurement(items, cal: Calibration, *, task="yes-no", style=None, rng_draws=None):
     """ErrorScores of measured inconsistencies, and (p_any, low, high)."""
     errors, draws = [], []
     for it in items:
-        size = float(it.size)
+        size, same = float(it.size), getattr(it, "same_as", "")
         f = cal.lookup(it.kind, it.variant, 1 if size >= 0 else -1, task, style)
-        base = dict(kind=it.kind, variant=it.variant, phase=str(it.phase), size=size, unit=str(it.unit),
+        base = dict(kind=it.kind, variant=it.variant or None, phase=str(it.phase), size=size, unit=str(it.unit),
                     t0=float(it.t0), t1=float(it.t1), worst_t=float(it.worst_t))
         if f is None:
             errors.append(ErrorScore(**base))
             continue
         p, lo, hi = f.p_noticed(abs(size))
-        note = f"beyond the calibrated range (largest tested {f.max_level:g} {f.unit})" \
-            if abs(size) > f.max_level else ""
+        notes = [f"beyond the calibrated range (largest tested {f.max_level:g} {f.unit})"
+                 if abs(size) > f.max_level else "",
+                 f"the same departure as {same}: counted once" if same else ""]
         errors.append(ErrorScore(**base, p=float(p), p_low=float(lo), p_high=float(hi),
-                                 calibration=f.describe(), note=note))
-        draws.append(f.p_noticed_samples(abs(size)))
+                                 calibration=f.describe(), note="; ".join(filter(None, notes))))
+        if not same:                      # an item repeating another kind's is counted once
+            draws.append(f.p_noticed_samples(abs(size)))
     if draws:
         n = min(len(d) for d in draws)
         miss = 1.0 - np.stack([d[:n] for d in draws])
@@ -206,6 +207,6 @@ def score(clips, calibration=None, *, task: str = "yes-no", style: str | None = 
         unscored = sorted({e.label() for e in errors if not e.scored and abs(e.size) > 0})
         note = ("not scored (no calibration): " + ", ".join(unscored) + "; P(anything noticed) "
                 "counts the scored errors only") if unscored else ""
-        out.append(ClipScore(str(clip.meta.get("name", "clip")), float(clip.fps), int(clip.num_frames),
-                             _phases(clip, m), errors, p_any, lo, hi, worst, note))
+        out.append(ClipScore(m.name, float(clip.fps), int(clip.num_frames), _phases(m), errors,
+                             p_any, lo, hi, worst, note, tuple(m.warnings)))
     return ScoreResult(tuple(out), cal.path or cal.description)

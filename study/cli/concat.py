@@ -122,7 +122,7 @@ def cmd_concat(args) -> int:
     for k in ("plot", "ghost"):
         if k in out:
             print(f"  {k:<22}{out[k]}")
-    print("\n".join("  score: " + ln for ln in scored.summary().splitlines()))
+    print("\n".join("  score: " + ln for ln in scored.summary(brief=True).splitlines()))
     return 0
 
 

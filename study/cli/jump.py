@@ -98,7 +98,7 @@ def cmd_jump(args) -> int:
     print(f"  springs    k = {', '.join(f'{v:g}' for v in r.k)} × strength {r.strength:g}")
     for k, v in figs.items():
         print(f"  {k:<10s} {v}")
-    print("\n".join("  score: " + ln for ln in scored.summary().splitlines()))
+    print("\n".join("  score: " + ln for ln in scored.summary(brief=True).splitlines()))
     return 0
 
 

@@ -26,7 +26,7 @@ def _expand(specs) -> list[str]:
 def score_lines(clip, calibration=None) -> list[str]:
     """An editor's output scored (:func:`flipstudy.stimuli.score.score`), as report lines."""
     from flipstudy.stimuli.score import score
-    return ["score: " + ln for ln in score(clip, calibration).clips[0].summary().splitlines()]
+    return ["score: " + ln for ln in score(clip, calibration).clips[0].summary(brief=True).splitlines()]
 
 
 def cmd_score(args) -> int:
