@@ -34,7 +34,8 @@ import numpy as np
 import pandas as pd
 
 from flipstudy.errors import CalibrationError
-from flipstudy.stimuli.calibration import Calibration, PsychFunction, file_sha256
+from flipstudy.stimuli.calibration import WIDTH_SCALE as _WS
+from flipstudy.stimuli.calibration import Calibration, PsychFunction, file_sha256, psychometric_curve
 
 from .io import load_responses, resolve_responses_path, select_participants
 from .simulate import PAPER_TABLE2
@@ -201,3 +202,80 @@ def _fit_rows(sub, key, *, pooled, seed, n_samples):
                          n_real=sub.loc[~sim, "pid"].nunique(), n_simulated=sub.loc[sim, "pid"].nunique(),
                          source=int(sub["source"].iloc[0]), pooled=pooled, seed=seed,
                          n_samples=n_samples, unit=magnitude_unit(kind))]
+
+
+# ---------------------------------------------------------------- checks
+
+AM_GROUPS = ("smooth-increase", "smooth-decrease", "abrupt-increase", "abrupt-decrease")
+
+
+def predict_ratings(fn: PsychFunction, levels) -> pd.DataFrame:
+    """Predicted mean rating (% judged correct) = 100 (1 − P(incorrect | x)) at each
+    level, the posterior median with its 95 % interval."""
+    x = np.abs(np.asarray(levels, float))
+    s = fn.samples
+    P = psychometric_curve(x[None], s[:, 0:1], s[:, 1:2], s[:, 2:3], s[:, 3:4])
+    med, lo, hi = np.quantile(100 * (1 - P), [0.5, 0.025, 0.975], axis=0)
+    return pd.DataFrame({"level": x, "predicted": med, "pred_low": lo, "pred_high": hi})
+
+
+def leave_one_out(seed: int = 0, n_samples: int = 400) -> pd.DataFrame:
+    """Each angular-momentum group of FwP Table 2 predicted from the other three:
+    calibrated on those three (:func:`fwp_calibration`), the held-out group (a variant
+    and sign the calibration lacks) is scored by the entry pooled over them.  One row
+    per held-out group and level: observed rating, predicted (95 % interval), error
+    (predicted − observed, rating points)."""
+    rows = []
+    table = fwp_counts()
+    for g in AM_GROUPS:
+        cal = fwp_calibration([h for h in AM_GROUPS if h != g], seed=seed, n_samples=n_samples)
+        kind, variant, sign = FWP_GROUPS[g]
+        fn = cal.lookup(kind, variant, sign)
+        assert fn is not None and fn.pooled
+        obs = table[table["group"] == g]
+        pred = predict_ratings(fn, obs["level"])
+        rows.append(pred.assign(group=g, observed=[
+            float(PAPER_TABLE2[g]["rating"][PAPER_TABLE2[g]["levels"].index(int(lv))]) for lv in obs["level"]]))
+    out = pd.concat(rows, ignore_index=True)
+    out["error"] = out["predicted"] - out["observed"]
+    return out[["group", "level", "observed", "predicted", "pred_low", "pred_high", "error"]]
+
+
+def simulated_check(*, truth=(30.0, 25.0, 0.2, 0.02), levels=(0, 10, 20, 30, 40, 50),
+                    n_participants=19, repetitions=4, n_test=4000, bins=8, seed=0) -> dict:
+    """Observers with a known psychometric function (``truth`` = threshold m, width,
+    γ, λ): a simulated panel answers ``repetitions`` times per level, a function is
+    calibrated on its answers (:func:`fit_function`), and ``n_test`` fresh answers at
+    uniformly random magnitudes (0 … 1.2 × the largest level) are compared with what
+    the calibration predicts: binned by predicted P(judged incorrect), each bin's
+    observed rate with its 95 % Clopper–Pearson interval, and the prediction's 95 %
+    interval over the calibration's posterior; ``inside``: the two intervals meet.
+    Returns ``{"function", "bins": DataFrame(pred, pred_low, pred_high, observed, n, k,
+    ci_low, ci_high, inside)}``."""
+    from scipy.stats import beta
+    rng = np.random.default_rng(seed)
+    lv = np.asarray(levels, float)
+    n = np.full(lv.shape, n_participants * repetitions, float)
+    k = rng.binomial(n.astype(int), psychometric_curve(lv, *truth))
+    fn = fit_function(("simulated", None, 1, None), lv, k, n, n_real=0, n_simulated=n_participants,
+                      seed=seed)
+    x = rng.uniform(0, 1.2 * lv.max(), n_test)
+    answered = rng.random(n_test) < psychometric_curve(x, *truth)
+    pred = fn.p_incorrect(x)
+    edges = np.quantile(pred, np.linspace(0, 1, bins + 1))
+    idx = np.clip(np.searchsorted(edges, pred, side="right") - 1, 0, bins - 1)
+    rows = []
+    for b in range(bins):
+        m = idx == b
+        nb, kb = int(m.sum()), int(answered[m].sum())
+        lo = beta.ppf(0.025, kb, nb - kb + 1) if kb > 0 else 0.0
+        hi = beta.ppf(0.975, kb + 1, nb - kb) if kb < nb else 1.0
+        ps = fn.samples
+        pb = psychometric_curve(x[m][None], ps[:, 0:1], ps[:, 1:2], ps[:, 2:3], ps[:, 3:4]).mean(1)
+        plo, phi = np.quantile(pb, [0.025, 0.975])
+        rows.append((float(pred[m].mean()), float(plo), float(phi), kb / nb, nb, kb, float(lo), float(hi)))
+    t = pd.DataFrame(rows, columns=["pred", "pred_low", "pred_high", "observed", "n", "k", "ci_low",
+                                    "ci_high"])
+    # on the diagonal: the observed rate's binomial interval meets the prediction's interval
+    t["inside"] = (t["pred_low"] <= t["ci_high"]) & (t["pred_high"] >= t["ci_low"])
+    return {"function": fn, "bins": t}
