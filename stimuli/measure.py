@@ -85,6 +85,12 @@ GROUND_FRAMES = 3
 #: a component slower than this (m/s) has no meaningful % change (a vertical jump's
 #: horizontal velocity): its % items are left out with a warning
 MIN_SPEED = 0.05
+#: ground frames within this (m, for a 1.7 m body; or 3 RMS of the flight's own fit) of the
+#: flight's parabola are the flight's, at most EXTEND_S seconds beside the contact
+#: instant (on exact synthetic data the push's last frame leaves the parabola by
+#: 8 µm, a velocity changed at the instant by millimetres)
+ON_PATH = 3e-6
+EXTEND_S = 0.05
 #: a foot point is on the floor while within this (m, for a 1.7 m body) of its contact level
 SKATE_TOUCH = 0.02
 
@@ -201,6 +207,11 @@ def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, f
     j = int(np.argmax(gain))
     c0, c1, c2 = coef[j, :, 0]
     k = ks[j]
+    if gain[j] < 0.5 * rss0[j]:
+        # the step explains less than half of what the line leaves: no step (the line
+        # alone, over every inner sample, gives the trend)
+        c1, c0 = np.polyfit(u[1:-1], L[1:-1], 1)
+        return 100.0 * c1 / c0, 0.0, float(0.5 * (tau[k - 1] + tau[k])), float(c0)
     before = c0 + c1 * u[k]
     return (100.0 * c1 / c0, 100.0 * c2 / before, float(0.5 * (tau[k - 1] + tau[k])), float(c0))
 
@@ -223,6 +234,19 @@ def velocity_jolt(t: np.ndarray, com: np.ndarray) -> tuple[float, float]:
     coef, rss = _batched_lstsq(X, com, np.ones((K, n)))
     j = int(np.argmin(rss))
     return float(np.linalg.norm(coef[j, 3])), float(tk[j])
+
+
+def _quad(cf: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(n,3) a fitted quadratic's positions at times ``t``."""
+    return cf[:, 0] * t[:, None] ** 2 + cf[:, 1] * t[:, None] + cf[:, 2]
+
+
+def _ground_fit(com: np.ndarray, fps: float, frames: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """(n,3) positions at times ``t`` of a quadratic through ``frames``."""
+    tf = frames / fps
+    A = np.stack([tf * tf, tf, np.ones_like(tf)], 1)
+    c = np.linalg.lstsq(A, com[frames], rcond=None)[0]
+    return np.stack([t * t, t, np.ones_like(t)], 1) @ c
 
 
 def _ground_velocity(com: np.ndarray, fps: float, frames: np.ndarray, t: float) -> np.ndarray:
@@ -253,6 +277,9 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
     >>> abs(m.get("gravity", phase="flight 1")[0].size) < 0.01      # exact free fall
     True
     """
+    frames, rate, u0 = pose_updates(clip)
+    if np.isfinite(rate) and rate < 0.95 * clip.fps and frames.size >= 10:
+        return _held(clip, frames, rate, u0)
     a = analysis if analysis is not None else analyse(clip, estimate=False)
     clip = a.clip
     fps = float(clip.fps)
@@ -264,6 +291,8 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
     flights = sorted(a.flights, key=lambda f: f.takeoff)
     com, Ln = a.com, np.linalg.norm(a.L, axis=1)
     frame_t = np.arange(F) / fps
+    from .flight import body_size
+    size = body_size(clip) / 1.7
 
     # phases
     phases, edges = [], [0.0]
@@ -309,41 +338,84 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
             warnings.append(f"{ph}: no horizontal travel at take-off; the horizontal acceleration "
                             f"is given as a magnitude")
         add("acceleration", "horizontal", ph, 100.0 * along / G0, t_to, t_ld, mid)
-        T = t_ld - t_to
-        smooth, step, t_step, _ = split_trend_step(t - t_to, Ln[fr], T)
+
+        # contacts: the ground phase before (after) against the flight.  Frames beside the
+        # flight that still lie on its parabola are the flight's (a stimulus whose feet stay
+        # at the floor a few frames after its velocity changed): the velocity changes where
+        # the COM leaves the parabola, which is where the two sides are compared
+        res = com[fr] - _quad(cf, t)
+        thr = max(3.0 * float(np.sqrt(np.mean(np.sum(res * res, 1)))), ON_PATH * size)
+        prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
+        next_start = flights[i].takeoff_time if i < len(flights) else np.inf
+        inst = {}
+        for p, t_c, side in ((f"takeoff {i}", t_to, -1), (f"landing {i}", t_ld, 1)):
+            lim = (frame_t >= prev_end - 1e-9) if side < 0 else (frame_t <= next_start + 1e-9)
+            near = (frame_t <= t_c + 1e-9) if side < 0 else (frame_t >= t_c - 1e-9)
+            g_fr = np.flatnonzero(lim & near)
+            g_fr = g_fr[::-1] if side < 0 else g_fr                  # nearest the contact first
+            k = g_fr[:int(round(EXTEND_S * fps))]
+            on = np.linalg.norm(com[k] - _quad(cf, frame_t[k]), axis=1) <= thr
+            n_on = int(np.argmin(on)) if not on.all() else on.size
+            n_on = n_on if n_on > 1 else 0          # the frame at the instant is both sides'
+            if n_on:
+                if n_on < k.size:                    # where the position meets: the instant
+                    tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
+                    gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
+                    t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+                    if abs(t_c * fps - k[n_on - 1]) < 0.1:  # at a frame: it is both sides'
+                        t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
+                warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
+                                f"ground phase the analyser finds; its velocity changes at "
+                                f"{t_c:.4f} s, where the sides are compared")
+            gf = np.sort(g_fr[n_on:][:GROUND_FRAMES])
+            if gf.size < 3:
+                warnings.append(f"{p}: fewer than 3 ground frames beside it; not measured")
+                continue
+            vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+            if not n_on and np.linalg.norm(va - vg) > 0.05 and g_fr.size:
+                # the velocity changes: the instant is where the two sides' positions meet,
+                # between the nearest ground frame and the flight's nearest frame
+                tt = np.linspace(g_fr[0], g_fr[0] - side, 41) / fps
+                gq = _ground_fit(com, fps, gf, tt)
+                t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+                vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+            inst[side] = t_c
+            add(f"{p.split()[0]}-velocity-jump", "", p, np.linalg.norm(va - vg), t_c, t_c, t_c)
+            _components(add, warnings, p, va, vg, t_c, takeoff=side < 0)
+
+        # |L| over the flight, from the instants where the COM joins and leaves its parabola
+        t0_, t1_ = inst.get(-1, t_to), inst.get(1, t_ld)
+        smooth, step, t_step, _ = split_trend_step(t - t0_, Ln[fr], t1_ - t0_)
         add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
         add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
-            t_to + t_step if np.isfinite(t_step) else mid)
+            t0_ + t_step if np.isfinite(t_step) else mid)
         jolt, t_j = velocity_jolt(t, com[fr])
         add("air-jolt", "", ph, jolt, t_to, t_ld, t_j)
 
-        # contacts: the ground phase before (after) against the flight
-        prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
-        gb = np.flatnonzero((frame_t <= t_to + 1e-9) & (frame_t >= prev_end - 1e-9))[-GROUND_FRAMES:]
-        if gb.size >= 3:
-            vg, va = _ground_velocity(com, fps, gb, t_to), v_air(t_to)
-            p = f"takeoff {i}"
-            add("takeoff-velocity-jump", "", p, np.linalg.norm(va - vg), t_to, t_to, t_to)
-            _components(add, warnings, p, va, vg, t_to, takeoff=True)
-        else:
-            warnings.append(f"takeoff {i}: fewer than 3 ground frames before it; not measured")
-        next_start = flights[i].takeoff_time if i < len(flights) else np.inf
-        ga = np.flatnonzero((frame_t >= t_ld - 1e-9) & (frame_t <= next_start + 1e-9))[:GROUND_FRAMES]
-        if ga.size >= 3:
-            vg, va = _ground_velocity(com, fps, ga, t_ld), v_air(t_ld)
-            p = f"landing {i}"
-            add("landing-velocity-jump", "", p, np.linalg.norm(va - vg), t_ld, t_ld, t_ld)
-            _components(add, warnings, p, va, vg, t_ld, takeoff=False)
-        else:
-            warnings.append(f"landing {i}: fewer than 3 ground frames after it; not measured")
-
-    # pose updates
-    frames, rate, _ = pose_updates(clip)
-    held = bool(np.isfinite(rate) and rate < 0.95 * fps)
-    add("pose-rate", "", "clip", rate if held else 0.0, 0.0, dur, 0.0)
+    add("pose-rate", "", "clip", 0.0, 0.0, dur, 0.0)
 
     _ground(add, warnings, clip, a, phases, fps)
     return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
+
+
+def _held(clip: Clip, frames: np.ndarray, rate: float, u0: float) -> Measurement:
+    """A clip whose poses are held over several frames: its distinct poses, at the
+    instants they appear, measured as a clip at ``rate`` poses per second (a
+    velocity differenced across a held pose would be zero, then a jump), plus
+    the pose-rate item."""
+    from dataclasses import replace
+    pc = Clip(clip.skeleton, rate, clip.root_pos[frames], clip.rotations[frames],
+              None if clip.joint_pos is None else clip.joint_pos[frames], dict(clip.meta))
+    m = measure(pc)
+    dur = (clip.num_frames - 1) / clip.fps
+    sh = lambda x: x + u0                                           # noqa: E731
+    items = tuple(replace(i, t0=sh(i.t0), t1=sh(i.t1), worst_t=sh(i.worst_t)) for i in m.items
+                  if i.kind != "pose-rate")
+    items += (Inconsistency("pose-rate", "", "clip", float(rate), UNITS["pose-rate"], 0.0, dur, 0.0),)
+    phases = tuple((p[0], p[1], sh(p[2]), sh(p[3])) for p in m.phases)
+    return Measurement(m.name, float(clip.fps), float(dur), phases, items,
+                       (f"poses held: {rate:.4g} new poses per second on {clip.fps:g} frames per "
+                        f"second; measured on the distinct poses",) + m.warnings)
 
 
 def _components(add, warnings, phase, va, vg, t, takeoff: bool):
