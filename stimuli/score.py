@@ -81,6 +81,11 @@ class ClipScore:
     warnings: tuple = ()               # the measurement's (e.g. a frame time gravity contradicts)
 
     @property
+    def n_unscored(self) -> int:
+        """Errors of non-zero size measured but not scored."""
+        return sum(not e.scored and e.size != 0 for e in self.errors)
+
+    @property
     def duration(self) -> float:
         return (self.frames - 1) / self.fps if self.fps else 0.0
 
@@ -122,11 +127,14 @@ class ScoreResult:
     def summary(self) -> str:
         if len(self.clips) == 1:
             return self.clips[0].summary() + f"\n(calibration: {self.calibration})"
-        rows = [f"{'clip':28s} {'P(any)':>7s} {'95 % interval':>15s}  worst moment"]
+        rows = [f"{'clip':28s} {'P(any)':>7s} {'95 % interval':>15s} {'unscored':>8s}  worst moment"]
         for c in self.clips:
             w = f"{c.worst.worst_t:.3f} s {c.worst.label()} ({_pct(c.worst.p)})" if c.worst else "-"
             rows.append(f"{c.name[:28]:28s} {_pct(c.p_any):>7s} "
-                        f"{'[' + _pct(c.p_any_low) + ', ' + _pct(c.p_any_high) + ']':>15s}  {w}")
+                        f"{'[' + _pct(c.p_any_low) + ', ' + _pct(c.p_any_high) + ']':>15s} "
+                        f"{c.n_unscored:8d}  {w}")
+        rows.append("unscored: errors of non-zero size the calibration has no function for "
+                    "(`flipstudy score CLIP` lists them)")
         return "\n".join(rows) + f"\n(calibration: {self.calibration})"
 
     def to_dict(self) -> dict:
