@@ -91,6 +91,10 @@ MIN_SPEED = 0.05
 #: 8 µm, a velocity changed at the instant by millimetres)
 ON_PATH = 3e-6
 EXTEND_S = 0.05
+#: the percentile of a point's heights in contact that is its contact level (the floor; the
+#: analyser's resting-level convention): a penetration lasting longer than this share of
+#: a point's contact time lowers its level and reads less deep
+LEVEL_PCT = 5
 #: a foot point is on the floor while within this (m, for a 1.7 m body) of its contact level
 SKATE_TOUCH = 0.02
 
@@ -448,10 +452,10 @@ def _ground(add, warnings, clip, a, phases, fps):
     P, names = effector_points(clip, a.body)                   # (F,E,3)
     contact = contact_mask(clip, a.body, v_thr=1.0 * size, margin=0.10 * size, touch=0.03 * size)
     h = P[..., 1]
-    # each point's contact level: the median of its heights where the analyser has it in contact
-    # (the 5th percentile of its still heights decides contact; the median is its resting level)
+    # each point's contact level: a low percentile of its heights where the analyser has it in
+    # contact (as the analyser's own resting level: a heel raised in contact is not the floor)
     with np.errstate(all="ignore"):
-        lev = np.nanmedian(np.where(contact, h, np.nan), axis=0)
+        lev = np.nanpercentile(np.where(contact, h, np.nan), LEVEL_PCT, axis=0)
     feet = np.array([n.startswith(("toe", "ankle")) for n in names])
     # only points that rest on the floor support the body (a hand hanging still is
     # "in contact" for the analyser's still rule, hundreds of mm up)
