@@ -91,6 +91,10 @@ MIN_SPEED = 0.05
 #: 8 µm, a velocity changed at the instant by millimetres)
 ON_PATH = 3e-6
 EXTEND_S = 0.05
+#: an instant within this many frames of the nearest frame on the parabola is at that
+#: frame (the frame is both sides'): where the two sides' positions meet is known to
+#: about a tenth of a frame for a velocity change of 0.3 m/s
+AT_FRAME = 0.25
 #: the percentile of a point's heights in contact that is its contact level (the floor; the
 #: analyser's resting-level convention): a penetration lasting longer than this share of
 #: a point's contact time lowers its level and reads less deep
@@ -368,7 +372,7 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
                     tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
                     gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
                     t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-                    if abs(t_c * fps - k[n_on - 1]) < 0.1:  # at a frame: it is both sides'
+                    if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
                         t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
                 warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
                                 f"ground phase the analyser finds; its velocity changes at "
