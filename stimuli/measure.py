@@ -91,6 +91,16 @@ MIN_SPEED = 0.05
 #: 8 µm, a velocity changed at the instant by millimetres)
 ON_PATH = 3e-6
 EXTEND_S = 0.05
+#: an instant within this many frames of the nearest frame on the parabola is at that
+#: frame (the frame is both sides'): where the two sides' positions meet is known to
+#: about a tenth of a frame for a velocity change of 0.3 m/s
+AT_FRAME = 0.25
+#: the percentile of a point's heights in contact that is its contact level (the floor; the
+#: analyser's resting-level convention): a penetration lasting longer than this share of
+#: a point's contact time lowers its level and reads less deep
+LEVEL_PCT = 5
+#: |L| below this (kg·m²/s for a 70 kg body) is too small for its % changes to mean much
+SMALL_L = 10.0
 #: a foot point is on the floor while within this (m, for a 1.7 m body) of its contact level
 SKATE_TOUCH = 0.02
 
@@ -362,7 +372,7 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
                     tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
                     gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
                     t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-                    if abs(t_c * fps - k[n_on - 1]) < 0.1:  # at a frame: it is both sides'
+                    if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
                         t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
                 warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
                                 f"ground phase the analyser finds; its velocity changes at "
@@ -385,7 +395,10 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
 
         # |L| over the flight, from the instants where the COM joins and leaves its parabola
         t0_, t1_ = inst.get(-1, t_to), inst.get(1, t_ld)
-        smooth, step, t_step, _ = split_trend_step(t - t0_, Ln[fr], t1_ - t0_)
+        smooth, step, t_step, L0 = split_trend_step(t - t0_, Ln[fr], t1_ - t0_)
+        if L0 < SMALL_L * clip_mass(a) / 70.0:
+            warnings.append(f"{ph}: |L| is {L0:.1f} kg·m²/s, small (a flip's is 25-50): its "
+                            f"changes in % are large for small absolute changes")
         add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
         add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
             t0_ + t_step if np.isfinite(t_step) else mid)
@@ -396,6 +409,10 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
 
     _ground(add, warnings, clip, a, phases, fps)
     return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
+
+
+def clip_mass(a: Analysis) -> float:
+    return float(a.body.mass.sum())
 
 
 def _held(clip: Clip, frames: np.ndarray, rate: float, u0: float) -> Measurement:
@@ -448,10 +465,9 @@ def _ground(add, warnings, clip, a, phases, fps):
     P, names = effector_points(clip, a.body)                   # (F,E,3)
     contact = contact_mask(clip, a.body, v_thr=1.0 * size, margin=0.10 * size, touch=0.03 * size)
     h = P[..., 1]
-    # each point's contact level: the median of its heights where the analyser has it in contact
-    # (the 5th percentile of its still heights decides contact; the median is its resting level)
-    with np.errstate(all="ignore"):
-        lev = np.nanmedian(np.where(contact, h, np.nan), axis=0)
+    # each point's contact level: a low percentile of its heights where the analyser has it in
+    # contact (as the analyser's own resting level: a heel raised in contact is not the floor)
+    lev = _column_percentile(h, contact, LEVEL_PCT)
     feet = np.array([n.startswith(("toe", "ankle")) for n in names])
     # only points that rest on the floor support the body (a hand hanging still is
     # "in contact" for the analyser's still rule, hundreds of mm up)
@@ -489,6 +505,25 @@ def _ground(add, warnings, clip, a, phases, fps):
         add("floating", "", name, 1000.0 * max(0.0, float(lo[k])), t0, t1, t[sel[k]])
         skate, ts = _skate(P[sel][..., [0, 2]], on[sel], t[sel])
         add("foot-skate", "", name, 1000.0 * skate, t0, t1, ts)
+
+
+def _column_percentile(x: np.ndarray, mask: np.ndarray, q: float) -> np.ndarray:
+    """(E,) the ``q``-th percentile (linear) of each column of ``x`` over its ``mask``ed
+    rows; NaN for a column without any (``np.nanpercentile`` without its per-column loop).
+
+    >>> x = np.arange(10.0)[:, None] * [1, 2]
+    >>> _column_percentile(x, x < 9, 50).tolist()
+    [4.0, 4.0]
+    """
+    n = mask.sum(0)
+    srt = np.sort(np.where(mask, x, np.inf), axis=0)
+    pos = np.maximum(n - 1, 0) * q / 100.0
+    lo = np.floor(pos).astype(int)
+    hi = np.minimum(lo + 1, np.maximum(n - 1, 0))
+    cols = np.arange(x.shape[1])
+    with np.errstate(invalid="ignore"):                   # inf - inf of an empty column
+        out = srt[lo, cols] + (pos - lo) * (srt[hi, cols] - srt[lo, cols])
+    return np.where(n > 0, out, np.nan)
 
 
 def _skate(xz: np.ndarray, on: np.ndarray, t: np.ndarray) -> tuple[float, float]:
