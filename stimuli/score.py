@@ -90,7 +90,8 @@ class ClipScore:
         return (self.frames - 1) / self.fps if self.fps else 0.0
 
     def summary(self, brief: bool = False) -> str:
-        """One line per error (``brief``: the scored ones, and the unscored counted)."""
+        """One line per error (``brief``: the scored ones; the unscored of size ≥ 1 in
+        their unit on one line)."""
         lines = [f"{self.name}: P(anything noticed) = {_pct(self.p_any)} "
                  f"[{_pct(self.p_any_low)}, {_pct(self.p_any_high)}]"
                  + (f"; worst moment {self.worst.worst_t:.3f} s ({self.worst.label()})"
@@ -103,8 +104,12 @@ class ClipScore:
             lines.append(f"  {e.label():33s} {e.phase:10s} {e.size:+9.2f} {e.unit:9s} "
                          f"{e.t0:6.3f}–{e.t1:6.3f} s  {p}" + (f"  ({e.note})" if e.note else ""))
         if brief:
-            n = sum(not e.scored for e in self.errors)
-            lines.append(f"  {n} more measured, not scored (no calibration): flipstudy score for all")
+            big = [e for e in self.errors if not e.scored and abs(e.size) >= 1]
+            if big:
+                lines.append("  not scored (no calibration), |size| ≥ 1: " + ", ".join(
+                    f"{e.label()} {e.phase} {e.size:+.1f} {e.unit}" for e in big))
+            lines.append(f"  ({sum(not e.scored for e in self.errors)} errors measured, not scored: "
+                         f"`flipstudy score` lists all)")
         elif self.note:
             lines.append(f"  note: {self.note}")
         lines += [f"  warning: {w}" for w in self.warnings]
