@@ -1,5 +1,7 @@
 """Calibrations from perception studies (``flipstudy calibrate``) and the shipped
-default made from FwP's Table 2 (:mod:`flipstudy.stimuli.calibration` has the schema).
+default made from FwP's Table 2, as plain JSON-ready dicts of the schema that
+:mod:`flipstudy.stimuli.calibration` reads (analysis imports no stimuli module; the
+study layer, :mod:`flipstudy.study.calibrate`, reads study folders and designs).
 
 Per error kind, variant (the angular-momentum profile), sign, task and character
 style, the answers are pooled over participants and fitted with the analysis's
@@ -22,24 +24,25 @@ detection rates we could transcribe with certainty, so no other kind is
 calibrated by default: those kinds are measured, not scored.
 
 >>> cal = fwp_calibration(n_samples=200)
->>> sorted({(f.kind, f.variant, f.sign) for f in cal.functions if not f.pooled})[:2]
+>>> sorted((f["kind"], f["variant"] or "", f["sign"]) for f in cal["functions"] if not f["pooled"])[:2]
 [('angular-momentum', 'abrupt', -1), ('angular-momentum', 'abrupt', 1)]
 """
 from __future__ import annotations
 
 import hashlib
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from flipstudy.errors import CalibrationError
-from flipstudy.stimuli.calibration import WIDTH_SCALE as _WS
-from flipstudy.stimuli.calibration import Calibration, PsychFunction, file_sha256, psychometric_curve
 
-from .io import load_responses, resolve_responses_path, select_participants
 from .simulate import PAPER_TABLE2
-from .stats import fit_psignifit, pooled_magnitudes
+from .stats import fit_psignifit, pooled_magnitudes, psychometric_curve
+from .units import magnitude_unit
+
+#: the file format :mod:`flipstudy.stimuli.calibration` reads
+FORMAT = "flipstudy-calibration/1"
+_PARAMS = ("threshold", "width", "gamma", "lambda")
 
 #: FwP Section 7: participants, and answers per cell (19 × 2 clips × 2 showings)
 FWP_PARTICIPANTS, FWP_N = 19, 76
@@ -64,20 +67,32 @@ def _stable_seed(seed: int, key) -> int:
     return (int(seed) * 1_000_003 + int.from_bytes(hashlib.sha256(repr(key).encode()).digest()[:4], "big")) % 2**32
 
 
+def _num(v):
+    return None if v is None or not np.isfinite(v) else round(float(v), 4)
+
+
 def fit_function(key: tuple, x, k, n, *, task="yes-no", n_real=0, n_simulated=0, source=0,
-                 pooled=False, seed=0, n_samples=400, unit="%") -> PsychFunction:
-    """One calibrated function: psignifit on pooled counts (x magnitudes, k detected of n)."""
+                 pooled=False, seed=0, n_samples=400, unit="%") -> dict:
+    """One calibrated function (a ``functions`` entry of the file): psignifit on pooled
+    counts (x magnitudes, k detected of n); ``key`` = (kind, variant, sign, style)."""
     kind, variant, sign, style = key
     fit = fit_psignifit(kind, np.asarray(x, float), np.asarray(k, float), np.asarray(n, float),
                         seed=_stable_seed(seed, key), n_samples=n_samples, task=task, unit=unit)
-    ps = fit.param_samples
-    samples = np.column_stack([ps[c] for c in ("threshold", "width", "gamma", "lambda")])
-    return PsychFunction(kind=kind, variant=variant, sign=int(sign), task=task, style=style,
-                         pooled=pooled, unit=unit, params=dict(fit.params), samples=samples,
-                         threshold=fit.threshold if fit.reached else None,
-                         threshold_ci=(fit.ci_low, fit.ci_high),
-                         data={"x": fit.x, "k": fit.k, "n": fit.n}, max_level=float(np.max(fit.x)),
-                         n_real=int(n_real), n_simulated=int(n_simulated), source=source)
+    return {"kind": kind, "variant": variant or None, "sign": int(sign), "task": task, "style": style,
+            "pooled": bool(pooled), "unit": unit,
+            "params": {a: round(float(v), 6) for a, v in fit.params.items()},
+            "samples": {a: [round(float(v), 5) for v in fit.param_samples[a]] for a in _PARAMS},
+            "threshold": _num(fit.threshold), "threshold_ci": [_num(fit.ci_low), _num(fit.ci_high)],
+            "data": {"x": [float(v) for v in fit.x], "k": [float(v) for v in fit.k],
+                     "n": [float(v) for v in fit.n]},
+            "max_level": float(np.max(fit.x)), "n_real": int(n_real), "n_simulated": int(n_simulated),
+            "source": int(source)}
+
+
+def calibration_dict(functions, sources, description, include_simulated=False) -> dict:
+    """The whole file."""
+    return {"format": FORMAT, "description": description, "include_simulated": bool(include_simulated),
+            "sources": list(sources), "functions": list(functions)}
 
 
 def fwp_counts(groups=None) -> pd.DataFrame:
@@ -95,7 +110,7 @@ def fwp_counts(groups=None) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["group", "level", "k", "n", "shared"])
 
 
-def fwp_calibration(groups=None, *, pooled: bool = True, seed=0, n_samples=400) -> Calibration:
+def fwp_calibration(groups=None, *, pooled: bool = True, seed=0, n_samples=400) -> dict:
     """The default calibration from FwP Table 2 (module doc); ``groups``: only these
     of its groups (e.g. three angular-momentum groups, to predict the fourth);
     ``pooled``: add an entry per kind pooled over its groups (the shared original
@@ -119,76 +134,34 @@ def fwp_calibration(groups=None, *, pooled: bool = True, seed=0, n_samples=400) 
     src = dict(FWP_SOURCE, groups=sorted(c["group"].unique()))
     desc = ("Default calibration: real human data only (FwP 2007 Table 2). Kinds not listed are "
             "measured but not scored.")
-    return Calibration(tuple(_named(fns, [src])), (src,), desc, False)
-
-
-def _named(fns, sources):
-    from dataclasses import replace
-    return [replace(f, source_name=sources[f.source].get("name", "")) for f in fns]
+    return calibration_dict(fns, [src], desc, False)
 
 
 # ---------------------------------------------------------------- from studies
 
-def _study_groups(study: Path) -> dict:
-    """group → (kind, variant, sign, task, style) from the study's design.toml."""
-    from flipstudy.stimuli.design import load_design
-    design = study / "design.toml"
-    if not design.is_file():
-        raise CalibrationError(f"{study}: no design.toml: calibrate needs the study's design to know "
-                               f"each group's kind, profile, sign, task and style")
-    d = load_design(design)
-    return {g.name: (g.kind, g.profile, int(g.sign), g.task, d.style_of(g)) for g in d.groups}
-
-
-def study_answers(study, *, include_simulated=False) -> tuple[pd.DataFrame, dict]:
-    """A study folder's checked answers with its groups' calibration keys (columns
-    kind_, variant, sign, task_, style_) and its provenance (file hashes, who)."""
-    study = Path(study)
-    csv = resolve_responses_path(study)
-    root = csv.parent
-    df = load_responses(csv)
-    df, who = select_participants(df, include_simulated=include_simulated)
-    meta = _study_groups(root)
-    unknown = sorted(set(df["group"]) - set(meta))
-    if unknown:
-        raise CalibrationError(f"{csv}: groups {unknown} are not in {root / 'design.toml'}")
-    keys = df["group"].map(meta)
-    df = df.assign(kind_=keys.str[0], variant=keys.str[1], sign=keys.str[2], task_=keys.str[3],
-                   style_=keys.str[4], study=str(root),
-                   simulated_=df["participant"].isin(set(who["simulated"])))
-    hashes = {f: file_sha256(root / f) for f in ("design.toml", "manifest.csv", "responses.csv")
-              if (root / f).is_file()}
-    src = {"name": root.name, "path": str(root.resolve()), "sha256": hashes,
-           "participants": len(who["real"]), "simulated": len(who["simulated"])}
-    return df, src
-
-
-def calibrate(studies, *, include_simulated: bool = False, seed: int = 0,
-              n_samples: int = 400) -> Calibration:
-    """A calibration from one or more study folders (module doc)."""
-    parts, sources = [], []
-    for i, s in enumerate(studies):
-        df, src = study_answers(s, include_simulated=include_simulated)
-        parts.append(df.assign(source=i, pid=str(i) + "/" + df["participant"].astype(str)))
-        sources.append(src)
-    df = pd.concat(parts, ignore_index=True)
+def calibrate_answers(df: pd.DataFrame, sources, *, seed: int = 0, n_samples: int = 400) -> dict:
+    """A calibration from checked answers (:func:`~.io.load_responses`, participants
+    already selected) with the columns ``kind_, variant, sign, task_, style_`` (each
+    group's key), ``source`` (index into ``sources``), ``pid`` (a participant id unique
+    over the sources) and ``simulated_``; ``sources``: one dict per study (name, path,
+    sha256 of its files, participants, simulated)."""
     if df.empty:
-        raise CalibrationError("no answers to calibrate on" + ("" if include_simulated else
-                               " (simulated participants are left out: --include-simulated)"))
+        raise CalibrationError("no answers to calibrate on (simulated participants are left out "
+                               "unless --include-simulated)")
     fns = []
-    df["detected_"] = np.where(df["task_"] == "2afc", df["detected"], df["incorrect"])
-    keycols = ["kind_", "variant", "sign", "task_", "style_"]
-    for key, sub in df.groupby(keycols, sort=False, dropna=False):
+    df = df.assign(detected_=np.where(df["task_"] == "2afc", df["detected"], df["incorrect"]))
+    for key, sub in df.groupby(["kind_", "variant", "sign", "task_", "style_"], sort=False, dropna=False):
         fns += _fit_rows(sub, key, pooled=False, seed=seed, n_samples=n_samples)
     for (kind, task, style), sub in df.groupby(["kind_", "task_", "style_"], sort=False, dropna=False):
         if sub.groupby(["variant", "sign"], dropna=False).ngroups > 1:
-            sub = sub[~sub.get("shared_copy", pd.Series(False, index=sub.index)).astype(bool)]
+            if "shared_copy" in sub.columns:          # a shared original counted once
+                sub = sub[~sub["shared_copy"].astype(bool)]
             fns += _fit_rows(sub, (kind, None, 0, task, style), pooled=True, seed=seed, n_samples=n_samples)
-    sim = any(s["simulated"] for s in sources)
+    sim = bool(df["simulated_"].any())
     desc = (f"Calibrated by flipstudy calibrate from {len(sources)} stud{'y' if len(sources) == 1 else 'ies'}"
             + ("; INCLUDES SIMULATED PARTICIPANTS (--include-simulated): it describes the observer "
                "model, not people" if sim else "; real participants only"))
-    return Calibration(tuple(_named(fns, sources)), tuple(sources), desc, bool(include_simulated and sim))
+    return calibration_dict(fns, sources, desc, sim)
 
 
 def _fit_rows(sub, key, *, pooled, seed, n_samples):
@@ -196,7 +169,6 @@ def _fit_rows(sub, key, *, pooled, seed, n_samples):
     x, k, n = pooled_magnitudes(sub.assign(incorrect=sub["detected_"]), kind)
     if len(x) < 2:
         return []
-    from .units import magnitude_unit
     sim = sub["simulated_"].to_numpy(bool)
     return [fit_function((kind, variant, int(sign), style), x, k, n, task=task,
                          n_real=sub.loc[~sim, "pid"].nunique(), n_simulated=sub.loc[sim, "pid"].nunique(),
@@ -209,11 +181,15 @@ def _fit_rows(sub, key, *, pooled, seed, n_samples):
 AM_GROUPS = ("smooth-increase", "smooth-decrease", "abrupt-increase", "abrupt-decrease")
 
 
-def predict_ratings(fn: PsychFunction, levels) -> pd.DataFrame:
+def _samples(fn: dict) -> np.ndarray:
+    return np.column_stack([np.asarray(fn["samples"][a], float) for a in _PARAMS])
+
+
+def predict_ratings(fn: dict, levels) -> pd.DataFrame:
     """Predicted mean rating (% judged correct) = 100 (1 − P(incorrect | x)) at each
-    level, the posterior median with its 95 % interval."""
+    level under a calibrated function, the posterior median with its 95 % interval."""
     x = np.abs(np.asarray(levels, float))
-    s = fn.samples
+    s = _samples(fn)
     P = psychometric_curve(x[None], s[:, 0:1], s[:, 1:2], s[:, 2:3], s[:, 3:4])
     med, lo, hi = np.quantile(100 * (1 - P), [0.5, 0.025, 0.975], axis=0)
     return pd.DataFrame({"level": x, "predicted": med, "pred_low": lo, "pred_high": hi})
@@ -229,9 +205,9 @@ def leave_one_out(seed: int = 0, n_samples: int = 400) -> pd.DataFrame:
     table = fwp_counts()
     for g in AM_GROUPS:
         cal = fwp_calibration([h for h in AM_GROUPS if h != g], seed=seed, n_samples=n_samples)
-        kind, variant, sign = FWP_GROUPS[g]
-        fn = cal.lookup(kind, variant, sign)
-        assert fn is not None and fn.pooled
+        # the held-out variant and sign have no entry: the score's lookup falls back to
+        # the kind's pooled entry (flipstudy.stimuli.calibration.Calibration.lookup)
+        fn = next(f for f in cal["functions"] if f["kind"] == "angular-momentum" and f["pooled"])
         obs = table[table["group"] == g]
         pred = predict_ratings(fn, obs["level"])
         rows.append(pred.assign(group=g, observed=[
@@ -261,7 +237,8 @@ def simulated_check(*, truth=(30.0, 25.0, 0.2, 0.02), levels=(0, 10, 20, 30, 40,
                       seed=seed)
     x = rng.uniform(0, 1.2 * lv.max(), n_test)
     answered = rng.random(n_test) < psychometric_curve(x, *truth)
-    pred = fn.p_incorrect(x)
+    m_, w_, g_, l_ = (fn["params"][a] for a in _PARAMS)
+    pred = psychometric_curve(x, m_, w_, g_, l_)
     edges = np.quantile(pred, np.linspace(0, 1, bins + 1))
     idx = np.clip(np.searchsorted(edges, pred, side="right") - 1, 0, bins - 1)
     rows = []
@@ -270,7 +247,7 @@ def simulated_check(*, truth=(30.0, 25.0, 0.2, 0.02), levels=(0, 10, 20, 30, 40,
         nb, kb = int(m.sum()), int(answered[m].sum())
         lo = beta.ppf(0.025, kb, nb - kb + 1) if kb > 0 else 0.0
         hi = beta.ppf(0.975, kb + 1, nb - kb) if kb < nb else 1.0
-        ps = fn.samples
+        ps = _samples(fn)
         pb = psychometric_curve(x[m][None], ps[:, 0:1], ps[:, 1:2], ps[:, 2:3], ps[:, 3:4]).mean(1)
         plo, phi = np.quantile(pb, [0.025, 0.975])
         rows.append((float(pred[m].mean()), float(plo), float(phi), kb / nb, nb, kb, float(lo), float(hi)))

@@ -52,9 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy.special import ndtri
-
-from flipstudy.stimuli.calibration import psychometric_curve  # noqa: F401 (one formula; re-exported)
+from scipy.special import ndtr, ndtri
 
 from .io import group_order, level_order
 from .units import group_kinds, magnitude_unit, magnitudes
@@ -150,6 +148,12 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
 
 
 # ------------------------------------------------------------- psychometric functions
+
+def psychometric_curve(x, threshold, width, gamma, lam):
+    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w)."""
+    s = np.asarray(width, float) / _WSCALE
+    return gamma + (1 - gamma - lam) * ndtr((np.asarray(x, float) - threshold) / s)
+
 
 def detection_threshold(threshold, width, gamma, lam):
     """``x*`` where P(incorrect) = (1 + γ)/2 (vectorised; +inf where never reached)."""

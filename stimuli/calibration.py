@@ -2,7 +2,8 @@
 measured physical error into the probability that a viewer notices it.
 
 A calibration file is JSON (``format`` = :data:`FORMAT`), written by
-``flipstudy calibrate`` (:func:`flipstudy.analysis.calibrate.calibrate`) or shipped with
+``flipstudy calibrate`` (:func:`flipstudy.study.calibrate.calibrate`, fitted by
+:mod:`flipstudy.analysis.calibrate`) or shipped with
 the package (:func:`default_calibration`, made from real human data only).  Schema::
 
     {"format": "flipstudy-calibration/1",
@@ -65,7 +66,8 @@ _PARAMS = ("threshold", "width", "gamma", "lambda")
 
 
 def psychometric_curve(x, threshold, width, gamma, lam):
-    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w), vectorised."""
+    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w), vectorised
+    (the function :mod:`flipstudy.analysis.stats` fits; stimuli cannot import analysis)."""
     s = np.asarray(width, float) / WIDTH_SCALE
     return gamma + (1 - gamma - lam) * ndtr((np.asarray(x, float) - threshold) / s)
 

@@ -48,7 +48,7 @@ def cmd_score(args) -> int:
 
 
 def cmd_calibrate(args) -> int:
-    from flipstudy.analysis.calibrate import calibrate
+    from flipstudy.study.calibrate import calibrate
     cal = calibrate(args.studies, include_simulated=args.include_simulated, seed=args.seed)
     cal.save(args.out)
     print(f"wrote {args.out}: {len(cal.functions)} psychometric functions ({cal.description})")
