@@ -186,8 +186,10 @@ def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, f
     step (abrupt) at the sample ``k`` that fits best (the two samples whose
     differencing stencil straddles the step are left out of that fit; the first
     and last sample, differenced one-sidedly, are always left out).  Returns the
-    smooth change over the flight in % of |L| at take-off, the step in % of |L|
-    just before it, the step's instant and |L| at take-off.
+    smooth change over the flight in % of |L| at take-off, the step in % of the
+    line at the step's instant (halfway between the samples either side), that
+    instant and |L| at take-off.  A step that explains less than half of what the
+    line alone leaves is 0.
 
     >>> tau = np.linspace(0, 0.6, 61)
     >>> L = 40 * np.where(tau < 0.3, 1.0, 1.2)
@@ -214,7 +216,11 @@ def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, f
     X0 = X[..., :2]
     _, rss0 = _batched_lstsq(X0, L[:, None], w)
     gain = rss0 - rss
-    j = int(np.argmax(gain))
+    # a step between samples fits equally with its border sample on either side (the
+    # straddling samples are left out): of the candidates whose residual is the least
+    # (within 1e-9 of the line's) the middle one
+    best = np.flatnonzero(rss <= rss.min() + 1e-9 * max(float(rss0.max()), 1e-300))
+    j = int(best[best.size // 2])
     c0, c1, c2 = coef[j, :, 0]
     k = ks[j]
     if gain[j] < 0.5 * rss0[j]:
@@ -222,8 +228,9 @@ def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, f
         # alone, over every inner sample, gives the trend)
         c1, c0 = np.polyfit(u[1:-1], L[1:-1], 1)
         return 100.0 * c1 / c0, 0.0, float(0.5 * (tau[k - 1] + tau[k])), float(c0)
-    before = c0 + c1 * u[k]
-    return (100.0 * c1 / c0, 100.0 * c2 / before, float(0.5 * (tau[k - 1] + tau[k])), float(c0))
+    t_step = 0.5 * (tau[k - 1] + tau[k])
+    before = c0 + c1 * t_step / T                     # the line at the step's instant
+    return 100.0 * c1 / c0, 100.0 * c2 / before, float(t_step), float(c0)
 
 
 def velocity_jolt(t: np.ndarray, com: np.ndarray) -> tuple[float, float]:

@@ -35,6 +35,17 @@ def test_wrong_header_frame_time_is_a_gravity_error(name, shared_path):
     assert not any("60 fps instead" in w for w in right.warnings)
 
 
+def test_retargeted_lengths_are_a_gravity_error(shared_path):
+    """MASS's retarget of 88_01 scales the trajectories to a bigger rig but not time
+    (SOURCES.md: g ≈ 14.5–15.4 m/s² at its true 60 Hz): +48 … +57 % of 9.81, and the
+    analyser's warning in the measurement says the lengths are scaled."""
+    path = shared_path("mocap/88_01_mass-retarget.bvh")
+    with pytest.warns(UserWarning, match="implausible for a hand"):
+        m = measure(load_bvh(path, fps=60))
+    assert 48.0 <= size(m, "gravity", "flight 1") <= 57.0
+    assert any("lengths are probably scaled" in w for w in m.warnings)
+
+
 def test_real_clips_measure_every_phase_without_nan(shared_path):
     m = measure(load_bvh(shared_path("mocap/90_11.bvh")))
     assert [p[1] for p in m.phases].count("flight") == 3          # its three flights
