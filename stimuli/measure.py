@@ -51,7 +51,8 @@ foot-skate               mm          largest horizontal extent a foot point cove
                                      while it stays within 2 cm of its contact level
 penetration              mm          deepest any point goes below its contact level
 floating                 mm          largest height of the lowest point above its
-                                     contact level (nothing supports the body)
+                                     contact level while the COM is held up (not
+                                     falling freely: a hop is not floating)
 =======================  ==========  ====================================================
 
 Items that are the same physical departure in another kind's unit carry
@@ -99,6 +100,8 @@ AT_FRAME = 0.25
 #: analyser's resting-level convention): a penetration lasting longer than this share of
 #: a point's contact time lowers its level and reads less deep
 LEVEL_PCT = 5
+#: half-width (s) of the COM's second difference that tells a held body from a falling one
+HOLD_S = 0.033
 #: |L| below this (kg·m²/s for a 70 kg body) is too small for its % changes to mean much
 SMALL_L = 10.0
 #: a foot point is on the floor while within this (m, for a 1.7 m body) of its contact level
@@ -186,8 +189,10 @@ def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, f
     step (abrupt) at the sample ``k`` that fits best (the two samples whose
     differencing stencil straddles the step are left out of that fit; the first
     and last sample, differenced one-sidedly, are always left out).  Returns the
-    smooth change over the flight in % of |L| at take-off, the step in % of |L|
-    just before it, the step's instant and |L| at take-off.
+    smooth change over the flight in % of |L| at take-off, the step in % of the
+    line at the step's instant (halfway between the samples either side), that
+    instant and |L| at take-off.  A step that explains less than half of what the
+    line alone leaves is 0.
 
     >>> tau = np.linspace(0, 0.6, 61)
     >>> L = 40 * np.where(tau < 0.3, 1.0, 1.2)
@@ -214,7 +219,11 @@ def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, f
     X0 = X[..., :2]
     _, rss0 = _batched_lstsq(X0, L[:, None], w)
     gain = rss0 - rss
-    j = int(np.argmax(gain))
+    # a step between samples fits equally with its border sample on either side (the
+    # straddling samples are left out): of the candidates whose residual is the least
+    # (within 1e-9 of the line's) the middle one
+    best = np.flatnonzero(rss <= rss.min() + 1e-9 * max(float(rss0.max()), 1e-300))
+    j = int(best[best.size // 2])
     c0, c1, c2 = coef[j, :, 0]
     k = ks[j]
     if gain[j] < 0.5 * rss0[j]:
@@ -222,8 +231,9 @@ def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, f
         # alone, over every inner sample, gives the trend)
         c1, c0 = np.polyfit(u[1:-1], L[1:-1], 1)
         return 100.0 * c1 / c0, 0.0, float(0.5 * (tau[k - 1] + tau[k])), float(c0)
-    before = c0 + c1 * u[k]
-    return (100.0 * c1 / c0, 100.0 * c2 / before, float(0.5 * (tau[k - 1] + tau[k])), float(c0))
+    t_step = 0.5 * (tau[k - 1] + tau[k])
+    before = c0 + c1 * t_step / T                     # the line at the step's instant
+    return 100.0 * c1 / c0, 100.0 * c2 / before, float(t_step), float(c0)
 
 
 def velocity_jolt(t: np.ndarray, com: np.ndarray) -> tuple[float, float]:
@@ -492,6 +502,15 @@ def _ground(add, warnings, clip, a, phases, fps):
         if k.any():
             foot_min[:, k] = dd[:, k].min(axis=1, keepdims=True)
     on = (dd < SKATE_TOUCH * size) & (dd <= foot_min + 0.002 * size) & feet[None]
+    # floating: only where something holds the body up (its COM is not falling freely:
+    # a second difference over ±HOLD_S seconds above −g/2, the analyser's own rule); a
+    # short hop the analyser does not call a flight is not floating
+    s_ = max(1, int(round(HOLD_S * fps)))
+    ay = np.full(F, np.inf)
+    if F > 2 * s_:
+        y = a.com[:, 1]
+        ay[s_:-s_] = (y[2 * s_:] - 2 * y[s_:-s_] + y[:-2 * s_]) * (fps / s_) ** 2
+    held = ay > -G0 / 2
     for name, kind, t0, t1 in phases:
         if kind != "ground":
             continue
@@ -501,8 +520,10 @@ def _ground(add, warnings, clip, a, phases, fps):
         lo = low[sel]
         k = int(np.argmin(lo))
         add("penetration", "", name, 1000.0 * max(0.0, -float(lo[k])), t0, t1, t[sel[k]])
-        k = int(np.argmax(lo))
-        add("floating", "", name, 1000.0 * max(0.0, float(lo[k])), t0, t1, t[sel[k]])
+        up = np.where(held[sel], lo, -np.inf)
+        k = int(np.argmax(up))
+        fl = float(up[k]) if np.isfinite(up[k]) else 0.0
+        add("floating", "", name, 1000.0 * max(0.0, fl), t0, t1, t[sel[k]])
         skate, ts = _skate(P[sel][..., [0, 2]], on[sel], t[sel])
         add("foot-skate", "", name, 1000.0 * skate, t0, t1, ts)
 
