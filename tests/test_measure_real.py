@@ -112,7 +112,7 @@ def test_the_two_flip_backflips_take_off_jump_is_measured():
     intervals either side; they sit half a frame from the instant, so within 0.2 m/s)."""
     from flipstudy import analyse
     from flipstudy.stimuli.edit.multiflip import multiflip
-    r = multiflip(builtin("backflip"), 2)
+    r = multiflip(builtin("backflip"), 2, k_ratio=0.7)        # the paper's k (k* is the default)
     clip = getattr(r, "clip", r)
     m = measure(clip)
     jump = size(m, "takeoff-velocity-jump", "takeoff 1")
