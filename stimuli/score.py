@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .calibration import Calibration, get_calibration
+from .measure import Inconsistency, measure
 
 RULE = ("P(anything noticed) = 1 − Π(1 − p_i) over the scored errors (independent detectors: each "
         "error is noticed or not, as the high-threshold reading of each calibrated function assumes; "
@@ -41,16 +42,9 @@ RULE = ("P(anything noticed) = 1 − Π(1 − p_i) over the scored errors (indep
 
 
 @dataclass(frozen=True)
-class ErrorScore:
-    """One measured inconsistency and, when calibrated, its probability of being noticed."""
-    kind: str
-    variant: str | None
-    phase: str
-    size: float
-    unit: str
-    t0: float
-    t1: float
-    worst_t: float
+class ErrorScore(Inconsistency):
+    """One measured inconsistency (the fields of :class:`~flipstudy.stimuli.measure.Inconsistency`)
+    and, when calibrated, its probability of being noticed."""
     p: float | None = None             # None: measured, not scored (no calibration for it)
     p_low: float | None = None
     p_high: float | None = None
@@ -177,8 +171,8 @@ def score_measurement(items, cal: Calibration, *, task="yes-no", style=None, rng
     for it in items:
         size, same = float(it.size), getattr(it, "same_as", "")
         f = cal.lookup(it.kind, it.variant, 1 if size >= 0 else -1, task, style)
-        base = dict(kind=it.kind, variant=it.variant or None, phase=str(it.phase), size=size, unit=str(it.unit),
-                    t0=float(it.t0), t1=float(it.t1), worst_t=float(it.worst_t))
+        base = dict(kind=it.kind, variant=it.variant or "", phase=str(it.phase), size=size, unit=str(it.unit),
+                    t0=float(it.t0), t1=float(it.t1), worst_t=float(it.worst_t), same_as=same)
         if f is None:
             errors.append(ErrorScore(**base))
             continue
@@ -207,7 +201,6 @@ def score(clips, calibration=None, *, task: str = "yes-no", style: str | None = 
     a calibration file, or None (the default, real human data only); ``task``:
     whose functions to use (``"yes-no"``: "is this motion correct?"); ``style``:
     the character style the viewer sees (None: any).  See the module doc."""
-    from .measure import measure
     cal = get_calibration(calibration)
     if not isinstance(clips, (list, tuple)):
         clips = [clips]
@@ -223,3 +216,19 @@ def score(clips, calibration=None, *, task: str = "yes-no", style: str | None = 
         out.append(ClipScore(m.name, float(clip.fps), int(clip.num_frames), _phases(m), errors,
                              p_any, lo, hi, worst, note, tuple(m.warnings)))
     return ScoreResult(tuple(out), cal.path or cal.description)
+
+
+def likelier_noticed(before: ClipScore, after: ClipScore, *, at=("takeoff", "landing"),
+                     tol: float = 0.02) -> list[str]:
+    """The errors at the contacts (phases starting with ``at``) that ``after`` (an
+    edit's output) makes likelier noticed than ``before`` (its source) by more than
+    ``tol``: scored in both, matched by kind, variant and phase.  Empty: no regression
+    the calibration can see (an unscored error is compared by no one)."""
+    was = {(e.kind, e.variant, e.phase): e for e in before.errors if e.scored}
+    out = []
+    for e in after.errors:
+        b = was.get((e.kind, e.variant, e.phase))
+        if e.scored and b is not None and e.phase.startswith(at) and e.p > b.p + tol:
+            out.append(f"{e.label()} at {e.phase}: p = {_pct(e.p)} (source {_pct(b.p)}), "
+                       f"{e.size:+.1f} {e.unit} (source {b.size:+.1f})")
+    return out

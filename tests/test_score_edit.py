@@ -7,7 +7,7 @@ import pytest
 from flipstudy.stimuli import analyse, builtin, load_bvh
 from flipstudy.stimuli.edit.pipeline import edit
 from flipstudy.stimuli.physics import center_of_mass
-from flipstudy.stimuli.score import score
+from flipstudy.stimuli.score import likelier_noticed, score
 from flipstudy.study.cli import main
 
 
@@ -45,14 +45,29 @@ def test_two_flip_backflip_takeoff_jump_is_gone_by_default(source):
     # the score measures the same: the take-off velocity mismatch and its vertical part
     s_src, s_d, s_p = (score(c).clips[0] for c in (source.clip, default.clip, paper.clip))
     c_src, c_d, c_p = _contacts(s_src), _contacts(s_d), _contacts(s_p)
-    key = ("takeoff-velocity-jump", None, "takeoff")
+    key = ("takeoff-velocity-jump", "", "takeoff")
     assert c_p[key].size > 2.5 and c_d[key].size < 0.3
-    assert abs(c_p[("vertical-velocity", None, "takeoff")].size) > 90
-    assert abs(c_d[("vertical-velocity", None, "takeoff")].size) < 5
+    assert abs(c_p[("vertical-velocity", "", "takeoff")].size) > 90
+    assert abs(c_d[("vertical-velocity", "", "takeoff")].size) < 5
     # where the default calibration scores a contact error, the edit is no likelier noticed
+    assert likelier_noticed(s_src, s_d) == []
+    n_checked = 0
     for k, e in c_d.items():
         if e.scored and k in c_src and c_src[k].scored:
             assert e.p <= c_src[k].p + 0.02, (k, e.p, c_src[k].p)
+            n_checked += 1
+    # (FwP tested take-off angle increases only: a decrease, or a vertical velocity
+    # change, has no function, so the sizes above are what the test holds to)
+    assert c_d[("takeoff-angle", "", "takeoff")].size < 0 or n_checked >= 1
+
+
+def test_a_regression_at_a_contact_is_named():
+    from flipstudy.stimuli.injection import inject_takeoff_angle
+    a = analyse(builtin("frontflip"))
+    worse = inject_takeoff_angle(a, 0.4).clip               # FwP's take-off error, +40 %
+    before, after = (score(c).clips[0] for c in (a.clip, worse))
+    msgs = likelier_noticed(before, after)
+    assert len(msgs) == 1 and msgs[0].startswith("takeoff-angle at takeoff 1")
 
 
 def test_edit_concat_jump_print_their_score(tmp_path, capsys):

@@ -189,7 +189,7 @@ def cmd_edit(args) -> int:
     save_bvh(out_clip, args.out)
     print(f"{args.clip} → {args.out}: {out_clip.num_frames} frames at {out_clip.fps:g} fps")
     from .score import score_lines
-    for ln in lines + score_lines(out_clip):
+    for ln in lines + score_lines(out_clip, res.analysis.clip):
         print("  " + ln)
     if args.plot:
         from flipstudy.render.plots import plot_compare, plot_repair

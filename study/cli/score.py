@@ -23,10 +23,15 @@ def _expand(specs) -> list[str]:
     return out
 
 
-def score_lines(clip, calibration=None) -> list[str]:
-    """An editor's output scored (:func:`flipstudy.stimuli.score.score`), as report lines."""
-    from flipstudy.stimuli.score import score
-    return ["score: " + ln for ln in score(clip, calibration).clips[0].summary(brief=True).splitlines()]
+def score_lines(clip, source=None, calibration=None) -> list[str]:
+    """An editor's output scored (:func:`flipstudy.stimuli.score.score`), as report lines;
+    with its ``source``: a warning for each contact error likelier noticed than the source's."""
+    from flipstudy.stimuli.score import likelier_noticed, score
+    res = score([clip] + ([source] if source is not None else []), calibration).clips
+    lines = ["score: " + ln for ln in res[0].summary(brief=True).splitlines()]
+    if source is not None:
+        lines += [f"warning: likelier noticed than in the source: {w}" for w in likelier_noticed(res[1], res[0])]
+    return lines
 
 
 def cmd_score(args) -> int:
