@@ -5,6 +5,10 @@ Run: python benchmarks/check_score_calibration.py [--png docs/img/score_calibrat
 1. Against people (FwP 2007, Table 2): each angular-momentum group predicted from
    a calibration made on the other three (:func:`flipstudy.analysis.calibrate.leave_one_out`);
    prints the error per level (predicted − observed rating, points) and its mean.
+   Then the same through the score itself: the held-out group's stimuli made from
+   the built-in backflip and frontflip (as the default design makes them), scored
+   with that calibration (measured sizes, every scored error combined), predicted
+   rating = 100 (1 − (γ + (1 − γ) P(anything noticed))), averaged over the 2 clips.
 2. Against simulated observers with a known psychometric function
    (:func:`~flipstudy.analysis.calibrate.simulated_check`, three seeds): predicted vs
    observed P(judged incorrect) per bin, with the prediction's posterior interval
@@ -15,6 +19,34 @@ from __future__ import annotations
 import argparse
 
 import numpy as np
+
+
+def score_leave_one_out(seed: int = 0):
+    """Each AM group's stimuli scored with a calibration made on the other three."""
+    import pandas as pd
+
+    from flipstudy.analysis.calibrate import AM_GROUPS, FWP_GROUPS, fwp_calibration
+    from flipstudy.analysis.simulate import PAPER_TABLE2
+    from flipstudy.stimuli import analyse, builtin
+    from flipstudy.stimuli.calibration import Calibration
+    from flipstudy.stimuli.injection import inject_angular_momentum
+    from flipstudy.stimuli.score import score
+    bases = [analyse(builtin(n)) for n in ("backflip", "frontflip")]
+    rows = []
+    for g in AM_GROUPS:
+        cal = Calibration.from_dict(fwp_calibration([h for h in AM_GROUPS if h != g], seed=seed))
+        kind, variant, sign = FWP_GROUPS[g]
+        gamma = cal.lookup(kind, variant, sign).params["gamma"]
+        for lv, r in zip(PAPER_TABLE2[g]["levels"], PAPER_TABLE2[g]["rating"]):
+            if r is None:
+                continue
+            clips = [inject_angular_momentum(a, sign * lv / 100, variant).clip if lv else a.clip
+                     for a in bases]
+            p_any = np.array([c.p_any for c in score(clips, cal).clips])
+            rows.append((g, float(lv), float(r), float(np.mean(100 * (1 - (gamma + (1 - gamma) * p_any))))))
+    t = pd.DataFrame(rows, columns=["group", "level", "observed", "predicted"])
+    t["error"] = t["predicted"] - t["observed"]
+    return t
 
 
 def main() -> None:
@@ -31,6 +63,12 @@ def main() -> None:
     print(loo.round(1).to_string(index=False))
     print("mean |error| per held-out group (points):")
     print(loo.assign(abs_error=loo["error"].abs()).groupby("group", sort=False)["abs_error"]
+          .mean().round(1).to_string())
+    via = score_leave_one_out()
+    print("the same through `score` on the held-out group's stimuli (backflip, frontflip):")
+    print(via.round(1).to_string(index=False))
+    print("mean |error| per held-out group (points):")
+    print(via.assign(abs_error=via["error"].abs()).groupby("group", sort=False)["abs_error"]
           .mean().round(1).to_string())
     sims = [simulated_check(seed=s) for s in range(3)]
     inside = sum(int(r["bins"]["inside"].sum()) for r in sims)
