@@ -3,6 +3,8 @@ get no number; the combination rule; a real CMU clip."""
 import json
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from flipstudy.stimuli import analyse, builtin, load_bvh, save_bvh
 from flipstudy.stimuli.calibration import default_calibration
@@ -79,3 +81,28 @@ def test_real_clip_wrong_frame_time_shows_as_gravity(capsys):
     g = [e for e in c["errors"] if e["kind"] == "gravity"]
     assert g and g[0]["size"] > 100 and g[0]["p"] is None      # measured, not scored
     assert any("--fps 60" in w for w in c["warnings"])
+
+
+def test_calibrate_needs_the_design_and_names_it(tmp_path, capsys):
+    study = tmp_path / "s"
+    study.mkdir()
+    (study / "responses.csv").write_text("participant,group,level,response\nP1,g,0,correct\n")
+    assert main(["calibrate", str(study), "--out", str(tmp_path / "c.json")]) == 1
+    err = capsys.readouterr().err
+    assert "design.toml" in err and "Traceback" not in err and not (tmp_path / "c.json").exists()
+
+
+@settings(max_examples=60, deadline=None)
+@given(i=st.integers(0, 5), x=st.floats(0, 150), dx=st.floats(0, 50),
+       sizes=st.lists(st.floats(-80, 80), min_size=1, max_size=4))
+def test_probabilities_are_monotone_bounded_and_combine_upwards(i, x, dx, sizes):
+    cal = default_calibration()
+    f = cal.functions[i]
+    p, lo, hi = f.p_noticed(x)
+    assert 0 <= lo <= p <= hi <= 1
+    assert f.p_noticed(x + dx)[0] >= p - 1e-12          # a larger error is never less noticed
+    items = [Inconsistency("angular-momentum", v, "flight 1", s, "%", 0.0, 1.0, 0.5)
+             for s, v in zip(sizes, ["smooth", "abrupt"] * 2)]
+    errs, (p_any, a_lo, a_hi) = score_measurement(items, cal)
+    assert 0 <= a_lo <= p_any <= a_hi <= 1
+    assert p_any >= max(e.p for e in errs) - 0.02       # medians: to a couple of points
