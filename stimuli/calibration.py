@@ -234,7 +234,8 @@ def default_calibration() -> Calibration:
     """The calibration shipped with the package: real human data only (FwP Table 2;
     see its ``sources``)."""
     text = resources.files("flipstudy.stimuli").joinpath("data", DEFAULT_FILE).read_text(encoding="utf-8")
-    return Calibration.from_dict(json.loads(text), f"flipstudy/stimuli/data/{DEFAULT_FILE}")
+    return Calibration.from_dict(json.loads(text), f"default (flipstudy/stimuli/data/{DEFAULT_FILE}: "
+                                                    f"FwP 2007 Table 2, real participants)")
 
 
 def get_calibration(calibration=None) -> Calibration:
