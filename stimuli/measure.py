@@ -164,6 +164,19 @@ class Measurement:
                 "phases": [{"name": p[0], "kind": p[1], "t0": p[2], "t1": p[3]} for p in self.phases],
                 "items": [asdict(i) for i in self.items], "warnings": list(self.warnings)}
 
+    @classmethod
+    def from_dict(cls, d: dict) -> "Measurement":
+        """The inverse of :meth:`to_dict` (a JSON file read back).
+
+        >>> from flipstudy import builtin
+        >>> m = measure(builtin("jump"))
+        >>> Measurement.from_dict(m.to_dict()) == m
+        True
+        """
+        return cls(str(d["name"]), float(d["fps"]), float(d["duration"]),
+                   tuple((p["name"], p["kind"], float(p["t0"]), float(p["t1"])) for p in d["phases"]),
+                   tuple(Inconsistency(**i) for i in d["items"]), tuple(d["warnings"]))
+
     def table(self):
         """The items as a pandas DataFrame (one row each)."""
         import pandas as pd

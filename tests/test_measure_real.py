@@ -124,3 +124,14 @@ def test_the_two_flip_backflips_take_off_jump_is_measured():
     assert jump == pytest.approx(fd, abs=0.2)
     assert size(m, "vertical-velocity", "takeoff 1") > 80.0     # 3 → 6 m/s upward
     assert abs(size(m, "gravity", "flight 1")) < 0.5             # the flight itself falls freely
+
+
+def test_measurement_json_round_trip(tmp_path):
+    """A measurement written as JSON and read back is the same measurement."""
+    c = builtin("frontflip")
+    m = measure(c)
+    p = tmp_path / "m.json"
+    p.write_text(json.dumps(m.to_dict(), allow_nan=False))
+    back = Measurement.from_dict(json.loads(p.read_text()))
+    assert back == m
+    assert back.table().equals(m.table())
