@@ -32,6 +32,7 @@ def test_wrong_header_frame_time_is_a_gravity_error(name, shared_path):
     assert abs(g60) < 25.0                               # a real capture's own departure
     assert (1 + g120 / 100) / (1 + g60 / 100) == pytest.approx(4.0, rel=0.01)
     assert any("60 fps" in w for w in header.warnings)
+    assert any("T-pose" in w for w in header.warnings)      # the raw CMU frame 1, dropped
     assert not any("60 fps instead" in w for w in right.warnings)
 
 
