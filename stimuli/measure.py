@@ -4,8 +4,8 @@ the number directly.
 
 ``measure(clip)`` needs nothing but the motion: the analyser
 (:func:`flipstudy.stimuli.analyse.analyse`, by default without the mass fit:
-a fit of the masses to the very flight being judged would absorb part of its
-errors) finds the ballistic phases and their contact instants; between them
+a fit of the masses to the very flight being judged could absorb part of its
+errors; on the built-ins' angular-momentum stimuli it changes no reading) finds the ballistic phases and their contact instants; between them
 lie the ground phases (``ground 0`` before the first flight, ``ground i`` after
 flight ``i``).  What is measured, and the sign of each size:
 
