@@ -32,6 +32,7 @@ def test_wrong_header_frame_time_is_a_gravity_error(name, shared_path):
     assert abs(g60) < 25.0                               # a real capture's own departure
     assert (1 + g120 / 100) / (1 + g60 / 100) == pytest.approx(4.0, rel=0.01)
     assert any("60 fps" in w for w in header.warnings)
+    assert any("T-pose" in w for w in header.warnings)      # the raw CMU frame 1, dropped
     assert not any("60 fps instead" in w for w in right.warnings)
 
 
@@ -124,3 +125,14 @@ def test_the_two_flip_backflips_take_off_jump_is_measured():
     assert jump == pytest.approx(fd, abs=0.2)
     assert size(m, "vertical-velocity", "takeoff 1") > 80.0     # 3 → 6 m/s upward
     assert abs(size(m, "gravity", "flight 1")) < 0.5             # the flight itself falls freely
+
+
+def test_measurement_json_round_trip(tmp_path):
+    """A measurement written as JSON and read back is the same measurement."""
+    c = builtin("frontflip")
+    m = measure(c)
+    p = tmp_path / "m.json"
+    p.write_text(json.dumps(m.to_dict(), allow_nan=False))
+    back = Measurement.from_dict(json.loads(p.read_text()))
+    assert back == m
+    assert back.table().equals(m.table())
