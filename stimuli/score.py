@@ -222,13 +222,17 @@ def likelier_noticed(before: ClipScore, after: ClipScore, *, at=("takeoff", "lan
                      tol: float = 0.02) -> list[str]:
     """The errors at the contacts (phases starting with ``at``) that ``after`` (an
     edit's output) makes likelier noticed than ``before`` (its source) by more than
-    ``tol``: scored in both, matched by kind, variant and phase.  Empty: no regression
-    the calibration can see (an unscored error is compared by no one)."""
-    was = {(e.kind, e.variant, e.phase): e for e in before.errors if e.scored}
+    ``tol``: matched by kind, variant and phase, scored in ``after`` (a source error
+    the calibration does not score, e.g. of the other sign, counts as p = 0: the
+    warning errs on the side of showing).  Empty: no regression the calibration can
+    see (an error it scores in neither is compared by no one)."""
+    was = {(e.kind, e.variant, e.phase): e for e in before.errors}
     out = []
     for e in after.errors:
         b = was.get((e.kind, e.variant, e.phase))
-        if e.scored and b is not None and e.phase.startswith(at) and e.p > b.p + tol:
-            out.append(f"{e.label()} at {e.phase}: p = {_pct(e.p)} (source {_pct(b.p)}), "
-                       f"{e.size:+.1f} {e.unit} (source {b.size:+.1f})")
+        bp = (b.p if b.scored else 0.0) if b is not None else None
+        if e.scored and bp is not None and e.phase.startswith(at) and e.p > bp + tol:
+            out.append(f"{e.label()} at {e.phase}: p = {_pct(e.p)} (source "
+                       f"{_pct(b.p) if b.scored else 'not scored'}), {e.size:+.1f} {e.unit} "
+                       f"(source {b.size:+.1f})")
     return out
