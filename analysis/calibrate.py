@@ -23,9 +23,13 @@ units (not FwP's percentages of the kinds measured here) and no table of
 detection rates we could transcribe with certainty, so no other kind is
 calibrated by default: those kinds are measured, not scored.
 
->>> cal = fwp_calibration(n_samples=200)
->>> sorted((f["kind"], f["variant"] or "", f["sign"]) for f in cal["functions"] if not f["pooled"])[:2]
-[('angular-momentum', 'abrupt', -1), ('angular-momentum', 'abrupt', 1)]
+>>> t = fwp_counts()                       # what the default is fitted on
+>>> t.head(2).to_dict("records")
+[{'group': 'smooth-increase', 'level': 0.0, 'k': 21, 'n': 76, 'shared': True}, {'group': 'smooth-increase', 'level': 17.0, 'k': 22, 'n': 76, 'shared': False}]
+>>> fn = fit_function(("angular-momentum", "abrupt", -1, None), [0, 17, 25, 37, 50],
+...                   [21, 13, 24, 51, 59], [76] * 5, n_real=19, n_samples=50)
+>>> fn["kind"], fn["n_real"], len(fn["samples"]["threshold"]), 25 < fn["threshold"] < 45
+('angular-momentum', 19, 50, True)
 """
 from __future__ import annotations
 
