@@ -60,6 +60,11 @@ class ManifestError(FlipstudyValueError):
     or changed); the message names the file, line and column."""
 
 
-__all__ = ["FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
+class CalibrationError(FlipstudyValueError):
+    """A calibration file (``flipstudy calibrate``, ``score --calibration``) that cannot be
+    read or used: the message names the file and the field."""
+
+
+__all__ = ["CalibrationError", "FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
            "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "StyleError",
            "ManifestError"]

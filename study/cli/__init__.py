@@ -11,6 +11,7 @@ options, calls one library function and prints what it did:
 * :mod:`.concat` — ``concat``;  :mod:`.jump` — ``jump``
 * :mod:`.web` — ``export-web``, ``import-web``
 * :mod:`.plan` — ``plan``
+* :mod:`.score` — ``score``, ``calibrate``
 
 Heavy libraries (pandas, pyvista, …) are imported by the command that needs them.
 """
@@ -22,7 +23,8 @@ import sys
 
 from .common import load_clip
 
-FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web", "plan")
+FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web", "plan",
+            "score")
 
 
 def build_parser() -> argparse.ArgumentParser:

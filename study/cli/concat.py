@@ -79,8 +79,10 @@ def cmd_concat(args) -> int:
         ghost_image(stage([res.clip], bodies=[body], camera=cam), args.ghost, span=(t0, t1),
                     interval=args.ghost_interval)
         out["ghost"] = str(args.ghost)
+    from flipstudy.stimuli.score import score
+    scored = score(res.clip).clips[0]
     if args.json:
-        print(json.dumps(out, indent=2, default=float))
+        print(json.dumps({**out, "score": scored.to_dict()}, indent=2, default=float))
         return 0
     pa, pb = r.phases_a, r.phases_b
     print(f"{args.a} + {args.b} → {args.out}: {res.clip.num_frames} frames "
@@ -120,6 +122,7 @@ def cmd_concat(args) -> int:
     for k in ("plot", "ghost"):
         if k in out:
             print(f"  {k:<22}{out[k]}")
+    print("\n".join("  score: " + ln for ln in scored.summary(brief=True).splitlines()))
     return 0
 
 

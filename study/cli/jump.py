@@ -76,8 +76,10 @@ def cmd_jump(args) -> int:
         print(f"flipstudy jump: error: {e}", file=sys.stderr)
         return 1
     r = res.report
+    from flipstudy.stimuli.score import score
+    scored = score(clip).clips[0]
     if args.json:
-        print(json.dumps({**r.to_dict(), "out": args.out, **figs}, indent=2))
+        print(json.dumps({**r.to_dict(), "out": args.out, **figs, "score": scored.to_dict()}, indent=2))
         return 0
     f3 = lambda v: "(" + ", ".join(f"{x:.3f}" for x in v) + ")"  # noqa: E731
     print(f"jump ({r.scene}): {f3(r.start)} → {f3(r.target)}, {clip.num_frames} frames at "
@@ -96,6 +98,7 @@ def cmd_jump(args) -> int:
     print(f"  springs    k = {', '.join(f'{v:g}' for v in r.k)} × strength {r.strength:g}")
     for k, v in figs.items():
         print(f"  {k:<10s} {v}")
+    print("\n".join("  score: " + ln for ln in scored.summary(brief=True).splitlines()))
     return 0
 
 

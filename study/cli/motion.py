@@ -189,7 +189,8 @@ def cmd_edit(args) -> int:
             f"COM residual {m.com_rms_mm:.2f} mm, gravity {m.apparent_gravity:.2f} m/s²"]
     save_bvh(out_clip, args.out)
     print(f"{args.clip} → {args.out}: {out_clip.num_frames} frames at {out_clip.fps:g} fps")
-    for ln in lines:
+    from .score import score_lines
+    for ln in lines + score_lines(out_clip, res.analysis.clip):
         print("  " + ln)
     if args.plot:
         from flipstudy.render.plots import plot_compare, plot_repair
@@ -256,8 +257,10 @@ def add_commands(subparsers) -> None:
                                    "|L| by non-uniform retiming (5.5). Prints what it did and measured.")
     add_clip_args(p)
     p.add_argument("--flips", type=int, default=None, metavar="N", help="number of flips of the result (1-6)")
-    p.add_argument("--k-ratio", type=float, default=0.7,
-                   help="retiming factor as a fraction of k* (default 0.7, the paper's; 1 = continuous momentum)")
+    p.add_argument("--k-ratio", type=float, default=1.0,
+                   help="retiming factor as a fraction of k* (default 1: linear momentum continuous at "
+                        "take-off and landing; 0.7, the paper's choice, jumps higher and rotates slower "
+                        "but leaves a velocity jump the score reports)")
     p.add_argument("--straighten", choices=["legs", "arms"], help="hold a joint group straight in flight")
     p.add_argument("--from", dest="t_from", type=float, default=None, metavar="T0",
                    help="edit start, seconds (default 0.1 s after take-off)")

@@ -75,12 +75,13 @@ def sample(clip: Clip, src: np.ndarray) -> Clip:
     return Clip(clip.skeleton, clip.fps, root, rot, jp, meta)
 
 
-def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 0.7, k: float | None = None,
+def multiflip(source: Clip | Analysis, flips: int = 2, *, k_ratio: float = 1.0, k: float | None = None,
               blend_s: float = 0.025, max_turn_error: float = 10.0, takeoff_height: float = 0.0,
               min_turn_deg: float = 45.0) -> MultiFlip:
     """Make a ``flips``-flip motion from a single flip (a clip or its analysis).
 
-    ``k_ratio``: retiming factor as a fraction of k* (the paper's 0.7 by default;
+    ``k_ratio``: retiming factor as a fraction of k* (1 by default, as the library's
+    multiflip since issue 30; the paper's 0.7 is an option;
     1 gives continuous momentum); ``k`` overrides it.  ``blend_s``: half-width of
     the slerp cross-fade at each join.  ``takeoff_height``: metres added to the
     take-off (everything before the flight is raised, Figure 4c), the landing
