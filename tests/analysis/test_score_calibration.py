@@ -18,7 +18,11 @@ from flipstudy.errors import CalibrationError
 from flipstudy.stimuli.calibration import Calibration, default_calibration, psychometric_curve
 from flipstudy.study.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
+
+# psignifit fits of every group (about 3 minutes): run by .ci/run after the default suite;
+# the default run scores with the shipped calibration in test_score_cli and test_score_edit
+pytestmark = pytest.mark.slow
 
 
 def test_default_calibration_is_fwp_table2_real_people_only():
