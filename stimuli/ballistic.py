@@ -146,7 +146,7 @@ def planned_flight(a: Analysis, kind: str, error: float, option: str | None = No
     t_to, t_ld, c0, c1, v0, g = _flight(a)
     T, dy, vy = t_ld - t_to, c1[1] - c0[1], float(v0[1])
     clip_s = (a.clip.num_frames - 1) / a.clip.fps
-    what = f"{kind} {error:+.4g}"
+    what = f"{kind} {rate:g} poses/s" if kind == "pose-rate" else f"{kind} {error:+.4g}"
     if kind == "gravity":
         gn = (1.0 + error) * g
         Tn = _landing_time(vy, gn, dy, what) if option == "takeoff-velocity" else \
@@ -428,8 +428,11 @@ def inject_kind(a: Analysis, kind: str, error: float, option: str | None = None,
     second for pose-rate), ``option`` the group's policy, axis or span.  A level
     whose flight would not land within :data:`MAX_FLIGHT_S` (see
     :func:`flight_problem`) raises :class:`StimulusError` before anything is built."""
-    if kind in BALLISTIC_KINDS and error > -1.0 and (kind != "pose-rate" or rate is not None
-                                                     and 0 < rate < a.clip.fps):
+    if kind == "pose-rate":                 # the level is the rate; ``error`` is not used
+        checkable = rate is not None and 0 < rate < a.clip.fps
+    else:
+        checkable = kind in BALLISTIC_KINDS and error is not None and error > -1.0
+    if checkable:
         problem = flight_problem(a, kind, error, option, rate)
         if problem:
             raise StimulusError(problem)
