@@ -68,3 +68,17 @@ class CalibrationError(FlipstudyValueError):
 __all__ = ["CalibrationError", "FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
            "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "StyleError",
            "ManifestError"]
+
+
+class SourceMismatchError(FlipstudyValueError):
+    """The ``[[sources]]`` of a comparison design do not hold the same items (a clip
+    missing in one folder, a folder without clips, an item twice); the message names
+    the folder and the item."""
+
+
+class ComparisonError(FlipstudyValueError):
+    """A comparison study's answers or strengths that cannot be analysed or simulated
+    as asked (a source never compared, an unknown source); the message says which."""
+
+
+__all__ += ["SourceMismatchError", "ComparisonError"]

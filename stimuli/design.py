@@ -129,7 +129,7 @@ OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as desi
 #: the character styles a design may choose (drawn by flipstudy.render.characters)
 CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
-SECTIONS = ("study", "session", "clips", "groups", "reference")
+SECTIONS = ("study", "session", "clips", "groups", "reference", "sources")
 ORIGINAL_MODES = ("shared", "per-group")   # [study] original
 GROUP_ORIGINAL = ("shared", "own")         # [[groups]] original
 #: the group name of the shared original in the manifest and the responses
@@ -215,6 +215,80 @@ class ClipSpec:
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in CLIP_FIELDS if getattr(self, k) is not None}
+
+
+#: what a ``[[sources]]`` entry may hold (see :class:`SourceSpec`)
+SOURCE_FIELDS = {
+    "name": (str, ..., None),          # checked by _name_ok
+    "folder": (str, ..., lambda v: None if 0 < len(v) <= 4096 else "expected a folder path"),
+    "scale": (float, None, _between(*SCALE_RANGE, " metres per file unit")),
+    "fps": (float, None, _between(*FPS_RANGE, " frames per second")),
+    "accept_unphysical": (bool, False, None),
+}
+#: the kind of a stimulus that is a source's clip as given (no error injected)
+GIVEN_KIND = "given"
+
+
+@dataclass(frozen=True)
+class SourceSpec:
+    """A ``[[sources]]`` entry of a comparison design: a named folder of clips (ground
+    truth, model A, ...), each clip read by the one loading rule of every CLIP
+    (:func:`flipstudy.stimuli.loading.load_clip`, with this entry's ``scale`` and
+    ``fps``); clips of different sources are the same item when their file stems
+    are equal.  ``folder`` is relative to the design file."""
+    name: str
+    folder: str
+    scale: float | None = None
+    fps: float | None = None
+    accept_unphysical: bool = False
+    where: InitVar[str | None] = None
+
+    def __post_init__(self, where):
+        w = where or "sources"
+        _field(self, "name", str, w, _name_ok)
+        for key, (typ, default, check) in SOURCE_FIELDS.items():
+            if key != "name":
+                _field(self, key, typ, w, check, optional=default is None)
+
+    @classmethod
+    def from_dict(cls, c: dict, where: str = "sources") -> "SourceSpec":
+        if not isinstance(c, dict):
+            raise DesignError(f"{where}: expected a table")
+        _check_keys(c, tuple(SOURCE_FIELDS), where + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
+        for key, (typ, default, check) in SOURCE_FIELDS.items():
+            if default is ... and key not in c:
+                raise DesignError(f"{where}: missing field '{key}'")
+        return cls(**c, where=where)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in SOURCE_FIELDS if getattr(self, k) is not None}
+
+
+@dataclass(frozen=True)
+class SourceGroup:
+    """The group of one source's clips in a comparison design (made by :class:`Design`
+    from ``[[sources]]``, never written): its stimuli are the source's clips as
+    given (kind :data:`GIVEN_KIND`, level 0).  With ``task = "2afc"`` each clip of a
+    source other than the first is shown beside the first source's clip of the same
+    item (its ``original``); the first source's clips are the comparisons, not
+    trials.  It answers what the session code asks of a :class:`Group`."""
+    name: str
+    task: str = "yes-no"
+    kind: str = GIVEN_KIND
+    profile: None = None
+    sign: int = 1
+    levels: tuple = (0.0,)
+    original: str = "own"
+    style: None = None
+    method: str = "constant"
+    quest: None = None
+    policy: None = None
+    axis: None = None
+    span: None = None
+    adaptive = False
+
+    def trial_levels(self) -> list[float]:
+        return [0.0]
 
 
 GROUP_FIELDS = {
@@ -422,6 +496,7 @@ class Design:
     session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
     style: str | None = None          # character style of every stimulus (None: the renderer's)
     task: str = "yes-no"              # [study] task: the groups' default task
+    sources: tuple[SourceSpec, ...] = ()   # [[sources]]: a comparison design (see _check_sources)
     where: InitVar[str | None] = None
 
     def __post_init__(self, where):
@@ -432,6 +507,9 @@ class Design:
         _field(self, "fps_given", bool, w)
         if not isinstance(self.session, SessionSettings):
             raise DesignError(f"{src}: [session]: expected SessionSettings, got {_show(self.session)}")
+        if self.sources:
+            self._check_sources(src)
+            return
         for key, typ in (("clips", ClipSpec), ("groups", Group)):
             items = getattr(self, key)
             if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__") \
@@ -492,6 +570,43 @@ class Design:
                               f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "
                               f"(fewer repetitions, clips, groups or levels)")
 
+    def _check_sources(self, src: str) -> None:
+        """A comparison design: ``[[sources]]`` (at least two, names and folders not
+        repeated), no ``[[clips]]`` (its items are the sources' clips, matched by file
+        stem when it is built) and no ``[reference]``; its groups are one
+        :class:`SourceGroup` per source, with the ``[study]`` task."""
+        srcs = self.sources
+        if isinstance(srcs, (str, bytes, dict)) or not hasattr(srcs, "__iter__") \
+                or not all(isinstance(x, SourceSpec) for x in srcs):
+            raise DesignError(f"{src}: [[sources]]: expected SourceSpec entries, got {_show(srcs)}")
+        object.__setattr__(self, "sources", tuple(srcs))
+        if len(self.sources) < 2:
+            raise DesignError(f"{src}: [[sources]]: a comparison needs at least two sources (e.g. the "
+                              f"ground truth and a model), got {len(self.sources)}")
+        for what in ("name", "folder"):
+            vals = [getattr(x, what) for x in self.sources]
+            if len(set(vals)) != len(vals):
+                raise DesignError(f"{src}: [[sources]]: duplicate source {what}s "
+                                  f"{sorted({v for v in vals if vals.count(v) > 1})}")
+        if self.clips:
+            raise DesignError(f"{src}: [[clips]] and [[sources]]: a comparison design takes its items "
+                              f"from the [[sources]] folders (clips matched by file name); remove [[clips]]")
+        if self.reference:
+            raise DesignError(f"{src}: [reference] and [[sources]]: a comparison design has no reference "
+                              f"clips; remove [reference]")
+        if self.groups and not all(isinstance(g, SourceGroup) for g in self.groups):
+            raise DesignError(f"{src}: [[groups]] and [[sources]]: error groups on top of given sources "
+                              f"are not supported yet; remove [[groups]] (or build the error study "
+                              f"from one source's clips as [[clips]])")
+        object.__setattr__(self, "clips", ())
+        object.__setattr__(self, "reference", ())
+        object.__setattr__(self, "groups", tuple(SourceGroup(s.name, self.task) for s in self.sources))
+
+    @property
+    def compares(self) -> bool:
+        """Is it a comparison design (``[[sources]]``: given clips, no injected errors)?"""
+        return bool(self.sources)
+
     # ------------------------------------------------------------ reading, writing
     @classmethod
     def from_dict(cls, d: dict, path: Path | str | None = None) -> "Design":
@@ -514,6 +629,8 @@ class Design:
         study = {k: _get(st, k, typ, w, default, _style_ok if k == "style" else check)
                  for k, (typ, default, check) in STUDY_FIELDS.items()}
         session = _parse_session(d, st, src)
+        if "sources" in d:
+            return cls._from_sources(d, study, session, st, path, src)
         clips = d.get("clips")
         if not isinstance(clips, list) or not clips:
             raise DesignError(f"{src}: [[clips]]: at least one base clip is needed")
@@ -531,6 +648,23 @@ class Design:
         p = Path(path) if path is not None and str(path) != "<design>" else None
         return cls(**study, clips=tuple(specs), groups=tuple(gs), reference=tuple(reference),
                    fps_given="fps" in st, path=p, session=session, where=src)
+
+    @classmethod
+    def _from_sources(cls, d, study, session, st, path, src) -> "Design":
+        for k, label, what in (("clips", "[[clips]]", "takes its items from the [[sources]] folders "
+                                "(clips matched by file name); remove [[clips]]"),
+                               ("groups", "[[groups]]", "of given sources has no error groups yet; "
+                                "remove [[groups]]"),
+                               ("reference", "[reference]", "has no reference clips; remove [reference]")):
+            if k in d:
+                raise DesignError(f"{src}: {label} and [[sources]]: a comparison design {what}")
+        sources = d["sources"]
+        if not isinstance(sources, list):
+            raise DesignError(f"{src}: [[sources]]: expected an array of tables, got {_show(sources)}")
+        specs = [SourceSpec.from_dict(c, f"{src}: sources[{i}]") for i, c in enumerate(sources)]
+        p = Path(path) if path is not None and str(path) != "<design>" else None
+        return cls(**study, clips=(), groups=(), sources=tuple(specs), fps_given="fps" in st, path=p,
+                   session=session, where=src)
 
     @classmethod
     def from_toml_text(cls, text: str, path: Path | str = "<design>") -> "Design":
@@ -566,9 +700,11 @@ class Design:
         (``[study] fps`` is written only when the design wrote it)."""
         study = {k: getattr(self, k) for k in STUDY_FIELDS
                  if getattr(self, k) is not None and (k != "fps" or self.fps_given)}
-        out = {"study": study, "session": self.session.to_dict(),
-               "clips": [c.to_dict() for c in self.clips],
-               "groups": [g.to_dict() for g in self.groups]}
+        out = {"study": study, "session": self.session.to_dict()}
+        if self.sources:
+            out["sources"] = [s.to_dict() for s in self.sources]
+            return out
+        out.update(clips=[c.to_dict() for c in self.clips], groups=[g.to_dict() for g in self.groups])
         if self.reference:
             out["reference"] = {"clips": list(self.reference)}
         return out

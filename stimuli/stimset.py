@@ -209,6 +209,8 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
 
 def _build(design: Design, out: Path, force: bool, progress: bool, replace_check,
            cluster=None) -> list[dict]:
+    if design.compares:
+        return _build_comparison(design, out, force, progress, replace_check)
     todo = plan(design)
     bar = Progress(len(todo), "stimuli", progress)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
@@ -241,6 +243,26 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
             shutil.rmtree(tmp, ignore_errors=True)
         if isinstance(e, StimulusError) and design.path is not None and str(design.path) not in str(e):
             raise StimulusError(f"{design.path}: {e}") from None       # name the design file
+        raise
+    finally:
+        bar.close()
+    return rows
+
+
+def _build_comparison(design: Design, out: Path, force: bool, progress: bool, replace_check) -> list[dict]:
+    """A comparison design's build (:mod:`flipstudy.stimuli.compare`): staged and
+    installed like every build."""
+    from .compare import build_comparison, plan_comparison
+    bar = Progress(len(plan_comparison(design)), "stimuli", progress)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
+    try:
+        rows = build_comparison(design, tmp, bar)
+        StimulusSet.from_rows(tmp, rows).write()
+        if design.path is not None:
+            shutil.copyfile(design.path, tmp / "design.toml")
+        _install(tmp, out, force, replace_check)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
         raise
     finally:
         bar.close()
