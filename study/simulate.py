@@ -302,9 +302,9 @@ def check_strengths(strengths: dict, study) -> dict:
     """``strengths`` (source → logit) for the comparison study ``study``: every source
     named, no other; floats."""
     from flipstudy.errors import ComparisonError
-    sources = study.manifest.sources() if hasattr(study.manifest, "sources") else []
+    sources = study.stimuli.sources()
     if not sources:
-        raise ComparisonError(f"{study.dir if hasattr(study, 'dir') else 'study'}: --strengths simulates "
+        raise ComparisonError(f"{study.dir}: --strengths simulates "
                               f"a comparison study (a design with [[sources]]); this one has none")
     unknown = sorted(set(strengths) - set(sources))
     missing = [x for x in sources if x not in strengths]

@@ -87,6 +87,9 @@ def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
     from flipstudy.analysis.io import NeedsExport, combine_responses, resolve_responses_path
     from flipstudy.analysis.pipeline import analyze
+    from .compare import analyze_comparison_cmd, wants_comparison
+    if wants_comparison(args):                 # a study with [[sources]]: the ranking of the sources
+        return analyze_comparison_cmd(args)
     try:
         src = resolve_responses_path(args.responses[0])
         from ..frozen import refuse_changed_design
