@@ -1,0 +1,188 @@
+"""Comparison studies ([[sources]]): the design, the build (items matched across
+source folders), the trials the local and web orders make of it, simulated
+observers with known source preferences, and `flipstudy analyze` of it."""
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from flipstudy import builtin, save_bvh
+from flipstudy.errors import SourceMismatchError
+from flipstudy.stimuli.contract import StimulusSet
+from flipstudy.stimuli.design import Design, DesignError
+from flipstudy.stimuli.motion.clip import Clip
+from flipstudy.stimuli.stimset import build_stimuli
+
+ITEMS = ("backflip", "jump")
+
+
+def _write_sources(root: Path, items=ITEMS) -> None:
+    """gt: the built-ins as they are; jitter: 1.5 cm of noise on the root every frame;
+    floaty: the root rising 0 → 8 cm over the clip."""
+    rng = np.random.default_rng(0)
+    for s in ("gt", "jitter", "floaty"):
+        (root / s).mkdir(parents=True, exist_ok=True)
+    for n in items:
+        c = builtin(n)
+        save_bvh(c, root / "gt" / f"{n}.bvh")
+        rp = c.root_pos + rng.normal(0, 0.015, c.root_pos.shape)
+        save_bvh(Clip(c.skeleton, c.fps, rp, c.rotations), root / "jitter" / f"{n}.bvh")
+        rp = c.root_pos.copy()
+        rp[:, 1] += np.linspace(0, 0.08, c.num_frames)
+        save_bvh(Clip(c.skeleton, c.fps, rp, c.rotations), root / "floaty" / f"{n}.bvh")
+
+
+def _design(root: Path, task="2afc", repetitions=1, extra="") -> Path:
+    p = root / "design.toml"
+    p.write_text(f"""[study]
+name = "compare-test"
+seed = 7
+task = "{task}"
+repetitions = {repetitions}
+style = "capsules"
+
+[[sources]]
+name = "gt"
+folder = "gt"
+
+[[sources]]
+name = "jitter"
+folder = "jitter"
+
+[[sources]]
+name = "floaty"
+folder = "floaty"
+{extra}""")
+    return p
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    root = tmp_path_factory.mktemp("cmp")
+    _write_sources(root)
+    design = Design.from_toml(_design(root, repetitions=2))
+    build_stimuli(design, root / "study", progress=False)
+    return root / "study"
+
+
+def test_a_comparison_design_round_trips_and_its_groups_are_its_sources(tmp_path):
+    d = Design.from_toml(_design(tmp_path))
+    assert [s.name for s in d.sources] == ["gt", "jitter", "floaty"] and d.compares
+    assert [(g.name, g.task, g.kind) for g in d.groups] == [(s, "2afc", "given") for s in ("gt", "jitter", "floaty")]
+    assert Design.from_toml_text(d.to_toml()) == d and Design.from_dict(d.to_dict()) == d
+    assert "[[groups]]" not in d.to_toml() and "[[clips]]" not in d.to_toml()
+
+
+@pytest.mark.parametrize("extra, message", [
+    ('\n[[clips]]\nname = "x"\nsource = "backflip"\n', r"\[\[clips\]\] and \[\[sources\]\]"),
+    ('\n[[groups]]\nname = "g"\nkind = "takeoff-angle"\nlevels = [0, 10]\n', r"\[\[groups\]\] and \[\[sources\]\]"),
+    ('\n[[sources]]\nname = "gt"\nfolder = "other"\n', r"duplicate source names \['gt'\]"),
+    ('\n[[sources]]\nname = "x"\nfoldr = "x"\n', r"sources\[3\] \(x\).*foldr.*did you mean 'folder'"),
+])
+def test_bad_comparison_designs_name_the_section(tmp_path, extra, message):
+    with pytest.raises(DesignError, match=message):
+        Design.from_toml(_design(tmp_path, extra=extra))
+
+
+def test_an_item_missing_in_one_source_names_the_folder_and_the_item(tmp_path):
+    _write_sources(tmp_path)
+    (tmp_path / "floaty" / "jump.bvh").unlink()
+    design = Design.from_toml(_design(tmp_path))
+    with pytest.raises(SourceMismatchError) as e:
+        build_stimuli(design, tmp_path / "study", progress=False)
+    msg = str(e.value)
+    assert str(tmp_path / "floaty") in msg and "'jump'" in msg and str(tmp_path / "gt" / "jump.bvh") in msg
+    assert not (tmp_path / "study").exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".study")]   # nothing half-written
+
+
+def test_a_missing_or_empty_source_folder_is_a_clear_error(tmp_path):
+    _write_sources(tmp_path)
+    for f in (tmp_path / "jitter").iterdir():
+        f.unlink()
+    with pytest.raises(SourceMismatchError, match=rf"sources 'jitter': folder {tmp_path / 'jitter'} holds no clip"):
+        build_stimuli(Design.from_toml(_design(tmp_path)), tmp_path / "study", progress=False)
+
+
+def test_the_manifest_holds_one_row_per_item_and_source_through_the_contract(built):
+    st = StimulusSet.read(built)
+    assert st.sourced and st.sources() == ["gt", "jitter", "floaty"]
+    assert st.names == [f"{i}_{s}" for i in ITEMS for s in ("gt", "jitter", "floaty")]
+    for s in st:
+        assert (s.group, s.kind, s.level, s.style) == (s.source, "given", 0.0, "capsules")
+        assert s.original == ("" if s.source == "gt" else f"{s.clip}_gt")
+    assert (built / "manifest.csv").read_text() == st.manifest_text()       # written byte for byte
+    # the given clips are what the sources hold: the gt copy has the built-in's flight
+    assert st["backflip_gt"].landing > st["backflip_gt"].takeoff > 0
+    assert st["backflip_gt"].sha256 != st["backflip_floaty"].sha256
+
+
+def test_local_and_web_orders_make_balanced_2afc_trials_against_the_first_source(built):
+    from flipstudy.study.order import trial_order
+    from flipstudy.study.web.order import order_groups, web_trial_order
+    st = StimulusSet.read(built)
+    for trials in (trial_order(st.design, st, "P01"),
+                   web_trial_order(order_groups(st.design, st), st.design.repetitions, st.design.seed, "P01")):
+        assert len(trials) == len(ITEMS) * 2 * 2                # items × challengers × repetitions
+        assert all(t.task == "2afc" for t in trials)
+        pairs = Counter((t.stimulus, t.original) for t in trials)
+        assert pairs == Counter({(f"{i}_{s}", f"{i}_gt"): 2 for i in ITEMS for s in ("jitter", "floaty")})
+        for g in ("jitter", "floaty"):                           # left/right balanced per source
+            firsts = Counter(t.first for t in trials if t.group == g)
+            assert firsts["original"] == firsts["modified"] == 2
+
+
+def test_a_yes_no_comparison_asks_about_every_clip(tmp_path):
+    from flipstudy.study.order import trial_order
+    _write_sources(tmp_path, items=("jump",))
+    build_stimuli(Design.from_toml(_design(tmp_path, task="yes-no")), tmp_path / "study", progress=False)
+    st = StimulusSet.read(tmp_path / "study")
+    trials = trial_order(st.design, st, "P01")
+    assert sorted(t.stimulus for t in trials) == sorted(["jump_gt", "jump_jitter", "jump_floaty"])
+    assert {t.task for t in trials} == {"yes-no"} and all(s.original == "" for s in st)
+
+
+def test_simulated_observers_answer_with_their_known_preferences_and_analyze_ranks_them(built, tmp_path):
+    """30 simulated participants (gt = 0, jitter = −1, floaty = −2.5 logits): the
+    exported answers record which clip came first; `flipstudy analyze STUDY` ranks
+    the sources in the known order with intervals that hold the truth."""
+    import shutil
+
+    from flipstudy.study.cli import main
+    from flipstudy.study.simulate import simulate
+    study = tmp_path / "study"
+    shutil.copytree(built, study)
+    truth = {"gt": 0.0, "jitter": -1.0, "floaty": -2.5}
+    simulate(study, 30, seed=3, strengths=truth)
+    assert main(["export", str(study), "--include-simulated"]) == 0
+    df = pd.read_csv(study / "responses.csv")
+    assert len(df) == 30 * 8 and set(df["first"]) == {"original", "modified"}
+    assert set(df.original_stimulus) == {f"{i}_gt" for i in ITEMS}
+    # P(the challenger chosen) = logistic(θ − 0), by source
+    chosen = (df.response == "first") == (df["first"] == "modified")
+    rate = chosen.groupby(df.group).mean()
+    assert rate["jitter"] == pytest.approx(1 / (1 + np.e), abs=0.1)
+    assert rate["floaty"] == pytest.approx(1 / (1 + np.exp(2.5)), abs=0.07)
+    assert main(["analyze", str(study), "--include-simulated", "--n-boot", "100"]) == 0
+    r = pd.read_csv(study / "analysis" / "ranking.csv").set_index("source")
+    assert list(r.strength.sort_values(ascending=False).index) == ["gt", "jitter", "floaty"]
+    for s, th in truth.items():
+        assert r.loc[s, "low"] - 1e-9 <= th <= r.loc[s, "high"] + 1e-9
+    a = pd.read_csv(study / "analysis" / "agreement.csv").set_index("metric")
+    assert set(a.index) == {"score_p_any", "foot-skate_mm", "floating_mm", "penetration_mm"}
+    assert (a.n == 240).all() and a.auc.between(0, 1).all()
+    w = pd.read_csv(study / "analysis" / "win_rates.csv")
+    assert set(w.item) == set(ITEMS) and (w.groupby("item").n.sum() == 2 * 120).all()
+
+
+def test_strengths_must_name_the_study_sources(built):
+    from flipstudy.errors import ComparisonError
+    from flipstudy.study.simulate import simulate
+    with pytest.raises(ComparisonError, match="missing floaty"):
+        simulate(built, 1, strengths={"gt": 0, "jitter": -1})
+    with pytest.raises(ComparisonError, match="unknown model"):
+        simulate(built, 1, strengths={"gt": 0, "jitter": -1, "floaty": 0, "model": 1})
