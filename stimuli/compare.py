@@ -19,7 +19,10 @@ source and recorded, as for every 2AFC group) and asks which moved in a
 physically possible way; the first source's rows are the comparisons, not
 trials.  With ``task = "yes-no"`` every row is a trial of its own.
 
-An item missing in one source's folder (or a folder without clips) is a
+The build (:func:`flipstudy.stimuli.stimset.build_stimuli`) reads each clip
+(:func:`flipstudy.stimuli.stimset.load_source_clip`) and writes it as a stimulus
+(:func:`flipstudy.stimuli.stimset.make_given_stimulus`), staged and installed like
+every build.  An item missing in one source's folder (or a folder without clips) is a
 :class:`SourceMismatchError` naming the folder and the item.
 
 >>> from flipstudy.stimuli.compare import stimulus_name
@@ -28,18 +31,12 @@ An item missing in one source's folder (or a folder without clips) is a
 """
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
-from types import SimpleNamespace
-
-import numpy as np
 
 from flipstudy.errors import SourceMismatchError
 
-from .analyse import analyse
-from .design import GIVEN_KIND, Design, DesignError, SourceSpec
+from .design import GIVEN_KIND, Design, SourceSpec
 from .exceptions import FlipstudyFileNotFoundError
-from .motion.bvh import bvh_text
 
 #: the file suffixes of a source folder read as clips: those the loading rule reads
 #: (BVH today; joint-position and AMASS readers add theirs to ``loading.CLIP_SUFFIXES``)
@@ -108,25 +105,6 @@ def match_items(design: Design) -> dict[str, dict[str, Path]]:
     return {i: {s.name: found[s.name][i] for s in design.sources} for i in items}
 
 
-def load_source_clip(design: Design, s: SourceSpec, item: str, path: Path):
-    """One given clip through the loading rule, resampled to ``[study] fps`` when the
-    design writes it, its analysis after the physics gate."""
-    from .loading import load_clip
-    from .stimset import physics_gate, resample
-    clip = load_clip(str(path), scale=s.scale, fps=s.fps)
-    if design.fps_given and abs(clip.fps - design.fps) > 1e-9 * design.fps:
-        clip = resample(clip, design.fps)
-    clip.meta["name"] = item
-    a = analyse(clip, total_mass=design.total_mass)
-    spec = SimpleNamespace(name=f"{item} of source {s.name}", source=str(path), scale=s.scale,
-                           accept_unphysical=s.accept_unphysical)
-    try:
-        physics_gate(spec, a, design)
-    except DesignError as e:
-        raise DesignError(str(e).replace("[[clips]] entry", f"[[sources]] entry '{s.name}'")) from None
-    return a
-
-
 def plan_comparison(design: Design) -> list[tuple]:
     """(stimulus, item, source, file, original) of every stimulus, in manifest order:
     item by item, sources in the design's order."""
@@ -139,41 +117,5 @@ def plan_comparison(design: Design) -> list[tuple]:
     return rows
 
 
-def make_given_stimulus(design: Design, a, item: tuple, folder) -> dict:
-    """Write one given clip (``item`` of :func:`plan_comparison`) as ``.bvh`` and
-    ``.npz`` into ``folder``; its manifest row (measured like a reference motion
-    when it has a flight; NaN measures when it has none)."""
-    from .stimset import clip_arrays, derived_seed, make_stimulus, npz_bytes
-    name, it, s, path, orig = item
-    spec = SimpleNamespace(name=it, accept_unphysical=s.accept_unphysical)
-    if a.flight is not None:
-        row = make_stimulus(design, a, (name, spec, None, 0.0), folder)
-    else:
-        data = bvh_text(a.clip, 1.0).encode()
-        (Path(folder) / f"{name}.bvh").write_bytes(data)
-        (Path(folder) / f"{name}.npz").write_bytes(npz_bytes(clip_arrays(a.clip, 0, 0)))
-        row = {"stimulus": name, "clip": it, "level": 0.0, "takeoff": 0, "landing": 0,
-               "seed": derived_seed(design.seed, name), "sha256": hashlib.sha256(data).hexdigest(),
-               "frames": a.clip.num_frames, "fps": a.clip.fps, "bvh": f"{name}.bvh", "npz": f"{name}.npz",
-               "accept_unphysical": bool(s.accept_unphysical),
-               **({"style": design.style or "ellipsoids"} if design.styled else {})}
-        row.update({k: np.nan for k in ("takeoff_angle_deg", "flight_s", "jump_height_m", "jump_length_m",
-                                        "takeoff_time", "landing_time")})
-    row.update(group=s.name, kind=GIVEN_KIND, profile="", original=orig, source=s.name)
-    return row
-
-
-def build_comparison(design: Design, tmp: Path, bar=None) -> list[dict]:
-    """The rows of a comparison design's stimuli, written into ``tmp`` (the build's
-    staging folder; :func:`flipstudy.stimuli.stimset.build_stimuli` installs it)."""
-    rows = []
-    for item in plan_comparison(design):
-        a = load_source_clip(design, item[2], item[1], item[3])
-        rows.append(make_given_stimulus(design, a, item, tmp))
-        if bar is not None:
-            bar.step(item[0])
-    return rows
-
-
-__all__ = ["SourceMismatchError", "match_items", "plan_comparison", "build_comparison", "stimulus_name",
+__all__ = ["SourceMismatchError", "match_items", "plan_comparison", "stimulus_name",
            "source_clips", "source_folder", "GIVEN_KIND"]

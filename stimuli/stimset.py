@@ -42,12 +42,13 @@ import tempfile
 import zipfile
 from contextlib import contextmanager
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 from ._progress import Progress
 from .analyse import analyse
-from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
+from .design import GIVEN_KIND, SHARED_ORIGINAL_GROUP, Design, DesignError, Group, SourceSpec
 from .injection import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
 from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
@@ -249,14 +250,72 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
     return rows
 
 
+def load_source_clip(design: Design, s: SourceSpec, item: str, path: Path):
+    """One given clip through the loading rule, resampled to ``[study] fps`` when the
+    design writes it, its analysis after the physics gate."""
+    from .loading import load_clip
+    clip = load_clip(str(path), scale=s.scale, fps=s.fps)
+    if design.fps_given and abs(clip.fps - design.fps) > 1e-9 * design.fps:
+        clip = resample(clip, design.fps)
+    clip.meta["name"] = item
+    a = analyse(clip, total_mass=design.total_mass)
+    spec = SimpleNamespace(name=f"{item} of source {s.name}", source=str(path), scale=s.scale,
+                           accept_unphysical=s.accept_unphysical)
+    try:
+        physics_gate(spec, a, design)
+    except DesignError as e:
+        raise DesignError(str(e).replace("[[clips]] entry", f"[[sources]] entry '{s.name}'")) from None
+    return a
+
+
+def make_given_stimulus(design: Design, a, item: tuple, folder) -> dict:
+    """Write one given clip (``item`` of :func:`plan_comparison`) as ``.bvh`` and
+    ``.npz`` into ``folder``; its manifest row (measured like a reference motion
+    when it has a flight; NaN measures when it has none)."""
+    name, it, s, path, orig = item
+    spec = SimpleNamespace(name=it, accept_unphysical=s.accept_unphysical)
+    if a.flight is not None:
+        row = make_stimulus(design, a, (name, spec, None, 0.0), folder)
+    else:
+        data = bvh_text(a.clip, 1.0).encode()
+        (Path(folder) / f"{name}.bvh").write_bytes(data)
+        (Path(folder) / f"{name}.npz").write_bytes(npz_bytes(clip_arrays(a.clip, 0, 0)))
+        row = {"stimulus": name, "clip": it, "level": 0.0, "takeoff": 0, "landing": 0,
+               "seed": derived_seed(design.seed, name), "sha256": hashlib.sha256(data).hexdigest(),
+               "frames": a.clip.num_frames, "fps": a.clip.fps, "bvh": f"{name}.bvh", "npz": f"{name}.npz",
+               "accept_unphysical": bool(s.accept_unphysical),
+               **({"style": design.style or "ellipsoids"} if design.styled else {})}
+        row.update({k: np.nan for k in ("takeoff_angle_deg", "flight_s", "jump_height_m", "jump_length_m",
+                                        "takeoff_time", "landing_time")})
+    row.update(group=s.name, kind=GIVEN_KIND, profile="", original=orig, source=s.name)
+    return row
+
+
+def build_comparison(design: Design, tmp: Path, bar=None) -> list[dict]:
+    """The rows of a comparison design's stimuli, written into ``tmp`` (the build's
+    staging folder; :func:`flipstudy.stimuli.stimset.build_stimuli` installs it)."""
+    rows = []
+    for item in plan_comparison(design):
+        a = load_source_clip(design, item[2], item[1], item[3])
+        rows.append(make_given_stimulus(design, a, item, tmp))
+        if bar is not None:
+            bar.step(item[0])
+    return rows
+
+
 def _build_comparison(design: Design, out: Path, force: bool, progress: bool, replace_check) -> list[dict]:
     """A comparison design's build (:mod:`flipstudy.stimuli.compare`): staged and
     installed like every build."""
-    from .compare import build_comparison, plan_comparison
-    bar = Progress(len(plan_comparison(design)), "stimuli", progress)
+    from .compare import plan_comparison
+    todo = plan_comparison(design)            # items matched across the sources, before any work
+    bar = Progress(len(todo), "stimuli", progress)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
     try:
-        rows = build_comparison(design, tmp, bar)
+        rows = []
+        for item in todo:
+            a = load_source_clip(design, item[2], item[1], item[3])
+            rows.append(make_given_stimulus(design, a, item, tmp))
+            bar.step(item[0])
         StimulusSet.from_rows(tmp, rows).write()
         if design.path is not None:
             shutil.copyfile(design.path, tmp / "design.toml")
