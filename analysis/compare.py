@@ -289,7 +289,7 @@ def comparison_figure(ranking: Ranking, wins: pd.DataFrame, path) -> Path:
     ax.set_title("ranking of the sources")
     piv = wins.pivot(index="item", columns="source", values="win_rate")
     piv = piv[[s for s in ranking.order() if s in piv.columns]]
-    piv.plot.bar(ax=bx, width=0.8)
+    piv.plot.bar(ax=bx, width=0.8, rot=0)
     bx.axhline(0.5, color="0.5", lw=0.8, ls="--")
     bx.set_ylim(0, 1)
     bx.set_ylabel("win rate (chosen as possible)")
