@@ -186,3 +186,23 @@ def test_strengths_must_name_the_study_sources(built):
         simulate(built, 1, strengths={"gt": 0, "jitter": -1})
     with pytest.raises(ComparisonError, match="unknown model"):
         simulate(built, 1, strengths={"gt": 0, "jitter": -1, "floaty": 0, "model": 1})
+
+
+@pytest.mark.skipif(__import__("shutil").which("node") is None, reason="needs node to run the site's JavaScript")
+def test_the_sites_javascript_serves_the_comparisons_as_its_python_twin(built):
+    """export-web's order (flipstudy-order.js under node) gives each participant the
+    same comparison trials, comparisons and left/right order as its Python twin."""
+    from test_web_order import _node
+
+    from flipstudy.study.session import load_study
+    from flipstudy.study.web.order import order_groups, web_trial_order
+    st = load_study(built)
+    groups = order_groups(st.design, st.manifest)
+    ids = ["P01", "sim002", "5f3c9a1b2d4e6f7081920a1b"]
+    got = _node(groups, st.design.repetitions, st.design.seed, ids,
+                fields="t.stimulus, t.group, t.task || 'yes-no', t.first || '', t.original || ''")
+    for pid, js in zip(ids, got):
+        py = web_trial_order(groups, st.design.repetitions, st.design.seed, pid)
+        assert js == [[t.stimulus, t.group, t.task, t.first, t.original] for t in py], pid
+        assert {(s, o) for s, _, _, _, o in js} == {(f"{i}_{g}", f"{i}_gt") for i in ITEMS
+                                                     for g in ("jitter", "floaty")}
