@@ -12,7 +12,9 @@ same physics gate as a design's base clips.
 The manifest holds one row per item and source: stimulus ``ITEM_SOURCE``,
 ``clip`` = the item (so the renderer fits one camera per item, over all its
 sources), ``group`` = ``source`` = the source's name, ``kind`` = ``given``,
-``level`` 0.  With ``[study] task = "2afc"`` a row of every source but the first
+``level`` 0.  Error ``[[groups]]`` are injected into every source's clip of every
+item (``ITEM_SOURCE_GROUP_LEVEL``, ``source`` the source's, ``original`` the
+source's clip as given: their level 0), judged with the study's task.  With ``[study] task = "2afc"`` a row of every source but the first
 has as its ``original`` the first source's row of the same item: the session
 shows the two side by side in time (which comes first balanced within each
 source and recorded, as for every 2AFC group) and asks which moved in a
@@ -97,23 +99,30 @@ def match_items(design: Design) -> dict[str, dict[str, Path]]:
                 f"{missing[0]!r} (found in '{other.name}': {found[other.name][missing[0]]})"
                 + (f" and {len(missing) - 1} more" if len(missing) > 1 else "")
                 + "; every source holds the same items, matched by file name")
-    names = [stimulus_name(i, s.name) for i in items for s in design.sources]
-    if len(set(names)) != len(names):
-        dup = sorted({n for n in names if names.count(n) > 1})
-        raise SourceMismatchError(f"{where}item and source names give the stimulus name {dup[0]!r} twice; "
-                                  f"rename a source")
     return {i: {s.name: found[s.name][i] for s in design.sources} for i in items}
 
 
 def plan_comparison(design: Design) -> list[tuple]:
-    """(stimulus, item, source, file, original) of every stimulus, in manifest order:
-    item by item, sources in the design's order."""
+    """(stimulus, item, source, file, original, group, level) of every stimulus, in
+    manifest order: item by item, sources in the design's order, each source's clip as
+    given (group None, level 0) followed by its error groups' levels other than 0
+    (``ITEM_SOURCE_GROUP_LEVEL``, their original the source's clip as given)."""
     first = design.sources[0].name
     rows = []
     for item, files in match_items(design).items():
         for s in design.sources:
+            given = stimulus_name(item, s.name)
             orig = stimulus_name(item, first) if design.task == "2afc" and s.name != first else ""
-            rows.append((stimulus_name(item, s.name), item, s, files[s.name], orig))
+            rows.append((given, item, s, files[s.name], orig, None, 0.0))
+            for g in design.error_groups:
+                rows += [(f"{given}_{g.name}_{lv:g}", item, s, files[s.name], given, g, lv)
+                         for lv in g.levels if lv != 0]
+    names = [r[0] for r in rows]
+    if len(set(names)) != len(names):
+        dup = sorted({n for n in names if names.count(n) > 1})
+        where = f"{design.path}: " if design.path is not None else ""
+        raise SourceMismatchError(f"{where}item, source and group names give the stimulus name {dup[0]!r} "
+                                  f"twice; rename a source or group")
     return rows
 
 

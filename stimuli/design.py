@@ -574,7 +574,9 @@ class Design:
         """A comparison design: ``[[sources]]`` (at least two, names and folders not
         repeated), no ``[[clips]]`` (its items are the sources' clips, matched by file
         stem when it is built) and no ``[reference]``; its groups are one
-        :class:`SourceGroup` per source, with the ``[study]`` task."""
+        :class:`SourceGroup` per source, with the ``[study]`` task, then the
+        ``[[groups]]`` of errors injected into every source's clips (constant, the
+        study's task; their level 0 is each source's clip as given)."""
         srcs = self.sources
         if isinstance(srcs, (str, bytes, dict)) or not hasattr(srcs, "__iter__") \
                 or not all(isinstance(x, SourceSpec) for x in srcs):
@@ -594,13 +596,35 @@ class Design:
         if self.reference:
             raise DesignError(f"{src}: [reference] and [[sources]]: a comparison design has no reference "
                               f"clips; remove [reference]")
-        if self.groups and not all(isinstance(g, SourceGroup) for g in self.groups):
-            raise DesignError(f"{src}: [[groups]] and [[sources]]: error groups on top of given sources "
-                              f"are not supported yet; remove [[groups]] (or build the error study "
-                              f"from one source's clips as [[clips]])")
+        groups = self.groups
+        if isinstance(groups, (str, bytes, dict)) or not hasattr(groups, "__iter__") \
+                or not all(isinstance(g, (Group, SourceGroup)) for g in groups):
+            raise DesignError(f"{src}: [[groups]]: expected Group entries, got {_show(groups)}")
+        errors = [g for g in groups if isinstance(g, Group)]
+        names = [x.name for x in self.sources] + [g.name for g in errors]
+        for i, g in enumerate(errors):
+            w = f"{src}: groups[{i}] ({g.name})"
+            if g.name in RESERVED_GROUP_NAMES or names.count(g.name) > 1:
+                raise DesignError(f"{w}.name: '{g.name}' is a source's, another group's or a reserved "
+                                  f"name; choose another")
+            if g.adaptive:
+                raise DesignError(f"{w}.method: a comparison design's error groups are constant "
+                                  f"(quest+ picks among a clip list, and its items come from folders)")
+            if g.task != self.task:
+                raise DesignError(f"{w}.task: {g.task!r}, the study's is {self.task!r}; an error group "
+                                  f"on given sources is judged like the sources (its level 0 is the "
+                                  f"source's clip as given)")
+            if g.style is not None and g.style != (self.style or "ellipsoids"):
+                raise DesignError(f"{w}.style: one style for the whole comparison study; remove it")
         object.__setattr__(self, "clips", ())
         object.__setattr__(self, "reference", ())
-        object.__setattr__(self, "groups", tuple(SourceGroup(s.name, self.task) for s in self.sources))
+        object.__setattr__(self, "groups", tuple(SourceGroup(x.name, self.task) for x in self.sources)
+                           + tuple(errors))
+
+    @property
+    def error_groups(self) -> tuple:
+        """The groups of injected errors (a comparison design's without its sources')."""
+        return tuple(g for g in self.groups if isinstance(g, Group))
 
     @property
     def compares(self) -> bool:
@@ -653,8 +677,6 @@ class Design:
     def _from_sources(cls, d, study, session, st, path, src) -> "Design":
         for k, label, what in (("clips", "[[clips]]", "takes its items from the [[sources]] folders "
                                 "(clips matched by file name); remove [[clips]]"),
-                               ("groups", "[[groups]]", "of given sources has no error groups yet; "
-                                "remove [[groups]]"),
                                ("reference", "[reference]", "has no reference clips; remove [reference]")):
             if k in d:
                 raise DesignError(f"{src}: {label} and [[sources]]: a comparison design {what}")
@@ -662,8 +684,13 @@ class Design:
         if not isinstance(sources, list):
             raise DesignError(f"{src}: [[sources]]: expected an array of tables, got {_show(sources)}")
         specs = [SourceSpec.from_dict(c, f"{src}: sources[{i}]") for i, c in enumerate(sources)]
+        groups = d.get("groups", [])
+        if not isinstance(groups, list):
+            raise DesignError(f"{src}: [[groups]]: expected an array of tables, got {_show(groups)}")
+        gs = [Group.from_dict(g, f"{src}: groups[{i}]", study["task"], "per-group")
+              for i, g in enumerate(groups)]
         p = Path(path) if path is not None and str(path) != "<design>" else None
-        return cls(**study, clips=(), groups=(), sources=tuple(specs), fps_given="fps" in st, path=p,
+        return cls(**study, clips=(), groups=tuple(gs), sources=tuple(specs), fps_given="fps" in st, path=p,
                    session=session, where=src)
 
     @classmethod
@@ -703,6 +730,8 @@ class Design:
         out = {"study": study, "session": self.session.to_dict()}
         if self.sources:
             out["sources"] = [s.to_dict() for s in self.sources]
+            if self.error_groups:
+                out["groups"] = [g.to_dict() for g in self.error_groups]
             return out
         out.update(clips=[c.to_dict() for c in self.clips], groups=[g.to_dict() for g in self.groups])
         if self.reference:

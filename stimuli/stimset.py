@@ -272,8 +272,15 @@ def make_given_stimulus(design: Design, a, item: tuple, folder) -> dict:
     """Write one given clip (``item`` of :func:`plan_comparison`) as ``.bvh`` and
     ``.npz`` into ``folder``; its manifest row (measured like a reference motion
     when it has a flight; NaN measures when it has none)."""
-    name, it, s, path, orig = item
+    name, it, s, path, orig, group, level = item
     spec = SimpleNamespace(name=it, accept_unphysical=s.accept_unphysical)
+    if group is not None:                       # an error injected into the source's clip
+        if a.flight is None:
+            raise StimulusError(f"item {it!r} of source '{s.name}' ({path}): the analyser finds no flight "
+                                f"phase, so it cannot carry group '{group.name}''s errors")
+        row = make_stimulus(design, a, (name, spec, group, level), folder)
+        row.update(original=orig, source=s.name)
+        return row
     if a.flight is not None:
         row = make_stimulus(design, a, (name, spec, None, 0.0), folder)
     else:
@@ -311,9 +318,10 @@ def _build_comparison(design: Design, out: Path, force: bool, progress: bool, re
     bar = Progress(len(todo), "stimuli", progress)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
     try:
-        rows = []
+        rows, a = [], None
         for item in todo:
-            a = load_source_clip(design, item[2], item[1], item[3])
+            if item[5] is None:                 # the source's clip as given, then its errors
+                a = load_source_clip(design, item[2], item[1], item[3])
             rows.append(make_given_stimulus(design, a, item, tmp))
             bar.step(item[0])
         StimulusSet.from_rows(tmp, rows).write()

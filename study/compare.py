@@ -15,6 +15,7 @@ import pandas as pd
 
 from flipstudy.errors import ComparisonError
 from flipstudy.stimuli.contract import StimulusSet
+from flipstudy.stimuli.design import GIVEN_KIND
 
 #: the plain measured kinds compared with the choices (largest |size| in the clip, mm)
 PLAIN_KINDS = ("foot-skate", "floating", "penetration")
@@ -43,7 +44,9 @@ def analyze_comparison(study_dir, out_dir=None, *, responses=None, include_simul
     """Analyse the comparison study in ``study_dir`` from its ``responses.csv`` (or
     ``responses``, a path): ranking, win rates, agreement of the clips' numbers with
     the choices; tables and figure into ``out_dir`` (default ``STUDY/analysis``).
-    Returns a :class:`flipstudy.analysis.compare.ComparisonAnalysis`."""
+    Only the comparisons between sources count (trials of injected error groups are
+    left to the error analysis).  Returns a
+    :class:`flipstudy.analysis.compare.ComparisonAnalysis`."""
     from flipstudy.analysis.compare import analyze_choices, choices
     from flipstudy.analysis.io import load_responses, select_participants
     d = Path(study_dir)
@@ -53,7 +56,9 @@ def analyze_comparison(study_dir, out_dir=None, *, responses=None, include_simul
                               f"design has no [[sources]])")
     df = load_responses(Path(responses) if responses is not None else d / "responses.csv")
     df, who = select_participants(df, include_simulated=include_simulated)
-    ch = choices(df, {s.stimulus: s.source for s in stimuli}, {s.stimulus: s.clip for s in stimuli})
+    given = [s for s in stimuli if s.kind == GIVEN_KIND]      # the error groups' trials are not comparisons
+    df = df[df["stimulus"].isin({s.stimulus for s in given})]
+    ch = choices(df, {s.stimulus: s.source for s in given}, {s.stimulus: s.clip for s in given})
     if not len(ch):
         raise ComparisonError(f"{d}: no 2AFC answers to analyse"
                               + (f" ({len(who['simulated_left_out'])} simulated participant(s) left "

@@ -79,7 +79,8 @@ def test_a_comparison_design_round_trips_and_its_groups_are_its_sources(tmp_path
 
 @pytest.mark.parametrize("extra, message", [
     ('\n[[clips]]\nname = "x"\nsource = "backflip"\n', r"\[\[clips\]\] and \[\[sources\]\]"),
-    ('\n[[groups]]\nname = "g"\nkind = "takeoff-angle"\nlevels = [0, 10]\n', r"\[\[groups\]\] and \[\[sources\]\]"),
+    ('\n[[groups]]\nname = "g"\nkind = "takeoff-angle"\nlevels = [0, 10]\nstyle = "stick"\n',
+     r"groups\[0\] \(g\).style: one style for the whole comparison study"),
     ('\n[[sources]]\nname = "gt"\nfolder = "other"\n', r"duplicate source names \['gt'\]"),
     ('\n[[sources]]\nname = "x"\nfoldr = "x"\n', r"sources\[3\] \(x\).*foldr.*did you mean 'folder'"),
 ])
@@ -146,6 +147,27 @@ def test_a_yes_no_comparison_asks_about_every_clip(tmp_path):
     assert {t.task for t in trials} == {"yes-no"} and all(s.original == "" for s in st)
 
 
+def test_a_small_simulated_panel_is_stored_exported_and_analysed(built, tmp_path):
+    """The fast twin of the slow test below: 4 participants' answers go through the
+    store and export (with the left/right order), `flipstudy analyze STUDY` writes
+    the comparison's tables with every choice counted."""
+    import shutil
+
+    from flipstudy.study.cli import main
+    from flipstudy.study.simulate import simulate
+    study = tmp_path / "study"
+    shutil.copytree(built, study)
+    simulate(study, 4, seed=1, strengths={"gt": 0.0, "jitter": -1.0, "floaty": -2.0})
+    assert main(["export", str(study), "--include-simulated"]) == 0
+    df = pd.read_csv(study / "responses.csv")
+    assert len(df) == 4 * 8 and set(df["first"]) <= {"original", "modified"} and df.simulated.all()
+    assert main(["analyze", str(study), "--include-simulated", "--n-boot", "20", "--no-figures"]) == 0
+    r = pd.read_csv(study / "analysis" / "ranking.csv")
+    assert r.source.tolist() == ["gt", "jitter", "floaty"] and r.n.sum() == 2 * 32
+    assert main(["analyze", str(study), "--n-boot", "20"]) == 1      # simulated only: left out, said so
+
+
+@pytest.mark.slow
 def test_simulated_observers_answer_with_their_known_preferences_and_analyze_ranks_them(built, tmp_path):
     """30 simulated participants (gt = 0, jitter = −1, floaty = −2.5 logits): the
     exported answers record which clip came first; `flipstudy analyze STUDY` ranks
@@ -206,3 +228,47 @@ def test_the_sites_javascript_serves_the_comparisons_as_its_python_twin(built):
         assert js == [[t.stimulus, t.group, t.task, t.first, t.original] for t in py], pid
         assert {(s, o) for s, _, _, _, o in js} == {(f"{i}_{g}", f"{i}_gt") for i in ITEMS
                                                      for g in ("jitter", "floaty")}
+
+
+GROUPS = """
+[[groups]]
+name = "takeoff"
+kind = "takeoff-angle"
+levels = [0, 20]
+"""
+
+
+def test_error_groups_on_top_of_every_source_round_trip_and_are_checked(tmp_path):
+    d = Design.from_toml(_design(tmp_path, extra=GROUPS))
+    assert [g.name for g in d.groups] == ["gt", "jitter", "floaty", "takeoff"]
+    assert [g.name for g in d.error_groups] == ["takeoff"]
+    assert Design.from_toml_text(d.to_toml()) == d
+    with pytest.raises(DesignError, match=r"groups\[0\] \(takeoff\).task: 'yes-no', the study's is '2afc'"):
+        Design.from_toml(_design(tmp_path, extra=GROUPS + 'task = "yes-no"\n'))
+    with pytest.raises(DesignError, match="'gt' is a source's"):
+        Design.from_toml(_design(tmp_path, extra=GROUPS.replace('"takeoff"', '"gt"', 1)))
+
+
+def test_errors_are_injected_into_each_sources_clip_and_shown_beside_it(tmp_path):
+    """A take-off angle +20 % group on top of the sources: per item and source one
+    modified clip whose 2AFC comparison is that source's clip as given; its flight's
+    horizontal COM speed (a line fitted to the written BVH's COM) is 1.2× the given's."""
+    from flipstudy import analyse, load_bvh
+    from flipstudy.study.order import trial_order
+    _write_sources(tmp_path, items=("backflip",))
+    build_stimuli(Design.from_toml(_design(tmp_path, extra=GROUPS)), tmp_path / "study", progress=False)
+    st = StimulusSet.read(tmp_path / "study")
+    for src in ("gt", "jitter", "floaty"):
+        s = st[f"backflip_{src}_takeoff_20"]
+        assert (s.group, s.kind, s.level, s.source, s.original) == ("takeoff", "takeoff-angle", 20.0, src,
+                                                                    f"backflip_{src}")
+        speeds = []
+        for name in (s.original, s.stimulus):
+            a = analyse(load_bvh(st.path(name), scale=1.0))
+            f = np.arange(a.takeoff, a.landing + 1)
+            vx = np.polyfit(f / a.clip.fps, a.com[f][:, [0, 2]], 1)[0]
+            speeds.append(np.hypot(*vx))
+        assert speeds[1] / speeds[0] == pytest.approx(1.2, abs=0.02), src
+    trials = trial_order(st.design, st, "P01")
+    assert Counter((t.stimulus, t.original) for t in trials if t.group == "takeoff") == \
+        Counter({(f"backflip_{s}_takeoff_20", f"backflip_{s}"): 1 for s in ("gt", "jitter", "floaty")})
