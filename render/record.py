@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import StaleRenderError, StudyRenderError
 
 #: What ``--what`` can ask for, and the file each writes (``{s}`` = stimulus).
 RENDER_KINDS = {
@@ -25,14 +25,6 @@ RENDER_KINDS = {
     "composite": "{s}_composite.png",
     "overlay": "{s}_overlay.png",     # the stimulus over its clip's reference (level 0)
 }
-
-
-class StudyRenderError(FlipstudyError, ValueError):
-    """A study that cannot be rendered as asked (its manifest, files or settings)."""
-
-
-class StaleRenderError(StudyRenderError):
-    """Rendered outputs that do not match the study (stale, missing, mixed settings)."""
 
 
 def file_sha256(path) -> str:

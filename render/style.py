@@ -14,7 +14,7 @@ RGB tuples in 0..1 or 0..255).
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 import dataclasses
 from dataclasses import dataclass

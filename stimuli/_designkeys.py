@@ -15,14 +15,7 @@ from __future__ import annotations
 import difflib
 import math
 
-from .exceptions import FlipstudyError
-
-
-class DesignError(FlipstudyError, ValueError):
-    """An invalid study design; the message names the file and field."""
-
-
-DesignError.__module__ = "flipstudy.stimuli.design"   # where users import it from
+from flipstudy.errors import DesignError
 
 
 def _typename(typ) -> str:

@@ -20,7 +20,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ._designkeys import DesignError, _check_keys, _get, _pct, _show
+from flipstudy.errors import DesignError
+from ._designkeys import _check_keys, _get, _pct, _show
 
 METHODS = ("constant", "quest+")
 TASKS = ("yes-no", "2afc")

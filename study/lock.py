@@ -30,13 +30,9 @@ import os
 import socket
 from pathlib import Path
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import ParticipantBusy
 
 LOCK_DIR = ".locks"
-
-
-class ParticipantBusy(FlipstudyError, ValueError):
-    """Another process serves this participant of this study."""
 
 
 def _utc_now() -> str:

@@ -58,9 +58,10 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from .session import Session, SessionError, load_study, open_session, submit_answer, submit_demographics
+from flipstudy.errors import RequestError, SessionError
+from .session import Session, load_study, open_session, submit_answer, submit_demographics
 from .timeline import build_timeline, is_default, trial_screen
-from .validate import MAX_BODY, RequestError, parse_json_object
+from .validate import MAX_BODY, parse_json_object
 
 STATIC_DIR = Path(__file__).resolve().parent / "static"
 STATIC_FILES = {"session.js": "text/javascript; charset=utf-8",
@@ -309,7 +310,8 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
                   allowed_hosts, out) -> int:
     import uvicorn
 
-    from flipstudy.render.record import StaleRenderError, check_rendered
+    from flipstudy.errors import StaleRenderError
+    from flipstudy.render.record import check_rendered
     open_session(study, participant, new_session=new_session, dry_run=True)   # refusals first
     missing = study.missing_videos()
     if missing:

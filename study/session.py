@@ -32,7 +32,7 @@ On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import RequestError, SessionError
 import hashlib
 import re
 import threading
@@ -42,14 +42,10 @@ from pathlib import Path
 
 from . import store
 from .order import Trial, participant_seed, reference_stimuli, trial_order
-from .validate import RequestError, check_participant, check_task_response, parse_answer, parse_demographics
+from .validate import check_participant, check_task_response, parse_answer, parse_demographics
 
 VIDEO_EXT = ".mp4"
 STIMULUS_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,200}")
-
-
-class SessionError(FlipstudyError, ValueError):
-    """A session that cannot be opened; the message tells the experimenter what to do."""
 
 
 @dataclass
@@ -306,7 +302,7 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
 def _check_quest_states(session: Session, conn) -> None:
     """A resumed session's stored QUEST+ states must belong to its groups' models
     now (the design's quest+ keys or levels unchanged)."""
-    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    from flipstudy.errors import FlipstudyValueError
     for g in sorted({t.group for t in session.trials if t.adaptive}):
         try:
             session.quest(g, conn)

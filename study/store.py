@@ -44,7 +44,7 @@ responses CHECK in place, so a migrated database takes no 2AFC answers
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyFileNotFoundError, FlipstudyStateError
+from flipstudy.errors import Conflict, FlipstudyFileNotFoundError, FlipstudyStateError
 
 import sqlite3
 from contextlib import contextmanager
@@ -141,10 +141,6 @@ MIGRATE_1_TO_2 = [
     "ALTER TABLE responses ADD COLUMN quest_ci_low REAL",
     "ALTER TABLE responses ADD COLUMN quest_ci_high REAL",
 ]
-
-
-class Conflict(Exception):
-    """A write that contradicts what is stored (HTTP 409)."""
 
 
 def utc_now() -> str:

@@ -286,7 +286,7 @@ def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  #
     f = tmp_path / key
     f.write_text(text)
     out = import_web(study, [f])
-    assert out["answers"] == 4 and out["incomplete"] == []
+    assert out.answers == 4 and out.incomplete == ()
     got = _csv(study / "web" / "responses.csv")
     assert [r["response"] for r in got] == RESP[:4] and {r["source"] for r in got} == {"web-pavlovia"}
     assert _csv(study / "web" / "participants.csv")[0]["age"] == "41"
@@ -464,7 +464,7 @@ def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  #
     assert lines[-1]["record"] == "end" and (lines[-1]["answered"], lines[-1]["repeats"]) == (8, 2)
 
     imp = import_web(study, [download])
-    assert imp["answers"] == 10 and imp["incomplete"] == [] and len(imp["repeats"]) == 2
+    assert imp.answers == 10 and imp.incomplete == () and len(imp.repeats) == 2
     rows = _csv(study / "web" / "responses.csv")
     assert [(int(r["trial"]), r["repeat"]) for r in rows] == sorted(
         [(i, "0") for i in range(1, 9)] + [(fast[0], "1"), (fast[1], "1")])

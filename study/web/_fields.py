@@ -12,11 +12,7 @@ from __future__ import annotations
 
 import math
 
-from flipstudy.stimuli.exceptions import FlipstudyError
-
-
-class WebImportError(FlipstudyError, ValueError):
-    """A results file that cannot be imported; the message names file and line or row."""
+from flipstudy.errors import WebImportError
 
 
 def _num(v, where, key, lo=0.0, hi=math.inf, *, integer=False, optional=False):

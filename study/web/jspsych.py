@@ -25,7 +25,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import JsPsychFetchError
 
 #: npm package -> pinned version
 PACKAGES = {
@@ -43,10 +43,6 @@ BUNDLES = {
     **{p: ("dist/index.browser.min.js", p.split("/")[1] + ".js") for p in PACKAGES if p != "jspsych"},
 }
 CSS = ("jspsych", "css/jspsych.css", "jspsych.css")
-
-
-class JsPsychFetchError(FlipstudyError, RuntimeError):
-    """jsPsych could not be fetched or the cached copy does not match the pins."""
 
 
 def _pins_key() -> str:

@@ -38,7 +38,7 @@ with :func:`web_trial_order` and refuses a row whose stimulus does not match.
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from ..order import Trial, balance_first, group_stimuli
 

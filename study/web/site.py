@@ -45,7 +45,7 @@ import tempfile
 from pathlib import Path
 from types import SimpleNamespace
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import SiteError
 
 from .. import timeline as local_timeline
 from ..session import STIMULUS_RE, load_study
@@ -61,10 +61,6 @@ OWN_FILES = ("flipstudy-order.js", "flipstudy-2afc.js", "flipstudy-web.js", "fli
 PARTICIPANT_PARAMS = ("PROLIFIC_PID", "participant", "PARTICIPANT_ID", "workerId", "id")
 SITE_RECORD = "flipstudy-site.json"
 PAVLOVIA_API = "https://pavlovia.org"
-
-
-class SiteError(FlipstudyError, ValueError):
-    """A site that cannot be written; the message says what to do."""
 
 
 def _sha256(path: Path) -> str:
@@ -199,7 +195,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     ``force``; the site is built in a hidden folder beside it and renamed into place.
     ``max_dropped_pct`` None takes the design's ``[session] max_dropped_pct``; a number
     overrides it (the site record says which)."""
-    from flipstudy.render.record import StaleRenderError, check_rendered
+    from flipstudy.errors import StaleRenderError
+    from flipstudy.render.record import check_rendered
     study = load_study(study_dir)
     refuse_adaptive(study.design)
     out = Path(out)
