@@ -594,8 +594,8 @@ def test_cli_render_and_figure(tmp_path, capsys):
                           "--jobs", "1", "--quiet"])
     assert args.func(args) == 0
     assert (tmp_path / "render" / "ref_strip.png").exists()
-    args = ap.parse_args(["render", str(tmp_path), "--what", "nonsense"])
-    assert args.func(args) == 1
+    from flipstudy.study.cli import main            # main() reports the user errors
+    assert main(["render", str(tmp_path), "--what", "nonsense"]) == 1
     assert "choose from" in capsys.readouterr().err
     out = tmp_path / "fig.png"
     args = ap.parse_args(["figure", str(tmp_path / "ref.bvh"), "--trail", "--out", str(out),
