@@ -3,8 +3,11 @@
 One server runs one participant's session.  Routes (nothing else answers; every
 error is a JSON object ``{"error": "..."}`` with a 4xx status):
 
-``GET  /``                  the page (``study/static/index.html``)
-``GET  /static/<file>``     ``session.js``, ``session.css`` (a fixed list, read at start)
+``GET  /``                  the page: the jsPsych site that ``export-web`` builds, in its
+                            ``local`` host mode (:func:`flipstudy.study.web.site.site_files`)
+``GET  /<file>``            the site's ``config.js``, scripts, CSS and ``lib/`` (jsPsych, from
+                            npm: :func:`flipstudy.study.web.jspsych.fetch`), a fixed set held
+                            in memory from the start
 ``GET  /api/session``       the timeline (:func:`flipstudy.study.timeline.build_timeline`)
 ``GET  /api/trial/<n>``     trial ``n``'s filled screen (:func:`flipstudy.study.timeline.trial_screen`
                             of ``session.resolve(n)``: an adaptive trial's level is chosen
@@ -49,7 +52,6 @@ import socket
 import sys
 import threading
 import webbrowser
-from pathlib import Path
 
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
@@ -61,13 +63,12 @@ from starlette.routing import Route
 from .session import Session, SessionError, load_study, open_session, submit_answer, submit_demographics
 from .timeline import build_timeline, is_default, trial_screen
 from .validate import MAX_BODY, RequestError, parse_json_object
+from .web import jspsych as jsp
+from .web.site import LOCAL, site_config, site_csp, site_files
 
-STATIC_DIR = Path(__file__).resolve().parent / "static"
-STATIC_FILES = {"session.js": "text/javascript; charset=utf-8",
-                "session.css": "text/css; charset=utf-8"}
-CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; connect-src 'self'; "
-       "media-src 'self' blob:; img-src 'self' data:; base-uri 'none'; form-action 'none'; "
-       "frame-ancestors 'none'")
+MEDIA_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
+               ".css": "text/css; charset=utf-8"}
+CSP = site_csp(LOCAL) + "; frame-ancestors 'none'"
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1", "[::1]")
 
 
@@ -163,26 +164,36 @@ async def _read_json(request: Request) -> dict:
     return parse_json_object(body)
 
 
+def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None) -> dict[str, bytes]:
+    """The files of the site ``export-web`` builds, in its ``local`` host mode, for
+    ``session``'s study: ``{relative path: bytes}``.  jsPsych comes from
+    ``jspsych_dir`` or npm's cache (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    folder, _ = jsp.fetch(jspsych_dir)
+    cfg = site_config(session.study, host=LOCAL, iti_ms=iti_ms, n_trials=session.n_trials)
+    return site_files(cfg, folder)
+
+
 def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
-               on_answer=None) -> Starlette:
+               on_answer=None, jspsych_dir=None) -> Starlette:
     """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
     Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
-    is called after every stored answer (the CLI prints progress)."""
+    is called after every stored answer (the CLI prints progress).  The page is
+    :func:`local_site` (``jspsych_dir``: where jsPsych's npm packages are)."""
     study = session.study
     render_dir = study.render_dir.resolve()
     videos = {f"{r['stimulus']}.mp4" for r in study.manifest}
-    assets = {name: (STATIC_DIR / name).read_bytes() for name in STATIC_FILES}
-    index = (STATIC_DIR / "index.html").read_bytes()
+    files = local_site(session, iti_ms=iti_ms, jspsych_dir=jspsych_dir)
 
     async def page(request: Request):
-        return Response(index, media_type="text/html; charset=utf-8",
+        return Response(files["index.html"], media_type=MEDIA_TYPES[".html"],
                         headers={"Content-Security-Policy": CSP, "Cache-Control": "no-store"})
 
     async def static(request: Request):
         name = request.path_params["name"]
-        if name not in STATIC_FILES:
+        if name not in files or name == "index.html":     # only the site's own files, by exact name
             return _error(404, "not found")
-        return Response(assets[name], media_type=STATIC_FILES[name], headers={"Cache-Control": "no-cache"})
+        return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
+                        headers={"Cache-Control": "no-cache"})
 
     async def api_session(request: Request):
         tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
@@ -247,13 +258,13 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
 
     app = Starlette(routes=[
         Route("/", page, methods=["GET"]),
-        Route("/static/{name}", static, methods=["GET"]),
         Route("/api/session", api_session, methods=["GET"]),
         Route("/api/trial/{n}", api_trial, methods=["GET"]),
         Route("/api/answer", api_answer, methods=["POST"]),
         Route("/api/demographics", api_demographics, methods=["POST"]),
         Route("/stimuli/{name:path}", stimulus, methods=["GET"]),
         Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
+        Route("/{name:path}", static, methods=["GET"]),
     ], exception_handlers={HTTPException: http_error, 500: server_error})
     app.router.redirect_slashes = False
     hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}

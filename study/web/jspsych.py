@@ -121,16 +121,3 @@ def fetch(jspsych_dir=None, *, npm: str = "npm") -> tuple[Path, dict]:
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
-
-
-def copy_bundles(folder: Path, lib: Path) -> list[str]:
-    """Copy the browser bundles and jsPsych's CSS into ``lib``; returns the file names
-    in the order the page loads the scripts (jsPsych first)."""
-    lib.mkdir(parents=True, exist_ok=True)
-    names = []
-    for pkg, (src, dst) in BUNDLES.items():
-        shutil.copyfile(folder / "node_modules" / pkg / src, lib / dst)
-        names.append(dst)
-    pkg, src, dst = CSS
-    shutil.copyfile(folder / "node_modules" / pkg / src, lib / dst)
-    return names
