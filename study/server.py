@@ -190,6 +190,8 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
 
     async def static(request: Request):
         name = request.path_params["name"]
+        if request.url.path.startswith("/lib/"):
+            name = f"lib/{name}"
         if name not in files or name == "index.html":     # only the site's own files, by exact name
             return _error(404, "not found")
         return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
@@ -264,7 +266,8 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         Route("/api/demographics", api_demographics, methods=["POST"]),
         Route("/stimuli/{name:path}", stimulus, methods=["GET"]),
         Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
-        Route("/{name:path}", static, methods=["GET"]),
+        Route("/lib/{name}", static, methods=["GET"]),
+        Route("/{name}", static, methods=["GET"]),
     ], exception_handlers={HTTPException: http_error, 500: server_error})
     app.router.redirect_slashes = False
     hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}

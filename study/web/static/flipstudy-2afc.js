@@ -12,7 +12,7 @@
 // counted and flagged against max_dropped_pct as for one motion.
 'use strict';
 (function (root) {
-  // env: {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, arrange, record, refresh, n, app};
+  // env: {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, arrange, loadNode, record, refresh, n, app};
   // record(rec) may return a Promise (the local runner: the trial ends once the server stored it).
   // `t` may be filled only when the trial starts (a QUEST+ trial of the local runner), so
   // its stimuli are read late.
@@ -89,8 +89,7 @@
     };
 
     return [
-      {type: jsPsychPreload, video: () => infos().map((x) => x.video), auto_preload: false, show_progress_bar: false,
-       message: fix, continue_after_error: false, on_start: () => setScreen(`load-${sid}`, 'loading')},
+      env.loadNode(() => infos().map((x) => x.video), fix, `load-${sid}`),
       {type: jsPsychHtmlKeyboardResponse, stimulus: fix, choices: 'NO_KEYS', trial_duration: C.iti_ms,
        on_load: () => setScreen(`iti-${sid}`, 'iti')},
       {timeline: [motion(0), gap, motion(1), choose],

@@ -297,7 +297,25 @@
 
   // ---- nodes shared by every host ------------------------------------------------------------
   // env: {jsPsych, n, refresh, record(rec) (may return a Promise: the trial ends once it
-  // resolves), skip(t) (optional: pass over a trial)}
+  // resolves), fetchVideos(urls) (optional, the local runner: load them into jsPsych's video
+  // buffers, retrying while the server is unreachable; without it jsPsych's preload plugin)}
+
+  // A screen that stays until work() resolves (its failure stops the page with the message).
+  function waitNode(env, message, screenId, work) {
+    return {type: jsPsychHtmlKeyboardResponse, stimulus: message, choices: 'NO_KEYS',
+      on_load: () => {
+        if (screenId) setScreen(screenId, 'loading');
+        work().then(() => env.jsPsych.finishTrial(), fatal);
+      }};
+  }
+
+  // load `videos` (a list, or a function giving it when the screen starts) completely
+  function loadNode(env, videos, message, screenId) {
+    const list = () => (typeof videos === 'function' ? videos() : videos);
+    if (env.fetchVideos) return waitNode(env, message, screenId, () => env.fetchVideos(list()));
+    return {type: jsPsychPreload, video: list, auto_preload: false, show_progress_bar: false, message,
+            continue_after_error: false, on_start: () => { if (screenId) setScreen(screenId, 'loading'); }};
+  }
 
   function instructionsNode(id, title, paragraphs, button) {
     if (id === 'instructions') {
@@ -332,12 +350,11 @@
   }
 
   // the examples of correct motions: `videos` (URLs), each loaded, played, watched again on request
-  function exampleNodes(videos) {
+  function exampleNodes(videos, env) {
     const tl = [];
     videos.forEach((video, i) => {
       const last = i === videos.length - 1;
-      tl.push({type: jsPsychPreload, video: [video], auto_preload: false, show_progress_bar: false,
-               message: '<p class="fs-muted">Loading…</p>', continue_after_error: false});
+      tl.push(loadNode(env, [video], '<p class="fs-muted">Loading…</p>', null));
       tl.push({timeline: [{type: jsPsychVideoButtonResponse, stimulus: [video],
         choices: ['Watch again', last ? C.texts.examples_button : 'Next example'],
         button_html: buttonHtml((c) => (c === 'Watch again' ? 'again' : 'next'), () => null),
@@ -375,6 +392,7 @@
     const jsPsych = env.jsPsych;
     if (t.task === '2afc') {
       return window.Flipstudy2afc.nodes(t, repeat, {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, arrange,
+                                                    loadNode: (videos, message, id) => loadNode(env, videos, message, id),
                                                     record: env.record, refresh: env.refresh, n: env.n, app});
     }
     const keys = C.keys;
@@ -384,8 +402,7 @@
     let watch = null, input = 'click', tEnabled = null, onKey = null, replays = 0;
     const fix = `<div class="fs-stage"><div class="fs-fixation">+</div></div>`;
     return [
-      {type: jsPsychPreload, video: () => [info().video], auto_preload: false, show_progress_bar: false,
-       message: fix, continue_after_error: false, on_start: () => setScreen(`load-${sid}`, 'loading')},
+      loadNode(env, () => [info().video], fix, `load-${sid}`),
       {type: jsPsychHtmlKeyboardResponse, stimulus: fix, choices: 'NO_KEYS', trial_duration: C.iti_ms,
        on_load: () => setScreen(`iti-${sid}`, 'iti')},
       {type: jsPsychVideoButtonResponse, stimulus: () => [info().video], choices: ['Correct', 'Incorrect'],
@@ -497,7 +514,7 @@
     if (answered === 0) {
       tl.push(instructionsNode('instructions', C.texts.instructions_title, C.texts.instructions));
       if (!cp.has('demographics')) tl.push(demographicsNode(C.texts.demographics_title, C.texts.demographics_text, env));
-      tl.push(...exampleNodes(C.references.map((ex) => ex.video)));
+      tl.push(...exampleNodes(C.references.map((ex) => ex.video), env));
     } else {
       const next = answered < n ? `The study continues with ${C.texts.noun || 'motion'} ${answered + 1} of ${n}.`
         : 'The study continues with the motions shown once more.';
@@ -568,12 +585,17 @@
     b.hidden = !text;
   }
 
-  async function request(url, options) {
+  async function request(url, options, as) {
     let wait = 250;
     for (;;) {
       let resp = null;
       try { resp = await fetch(url, Object.assign({cache: 'no-store'}, options)); } catch (e) { resp = null; }
-      if (resp && resp.ok) { banner(''); return resp.json(); }
+      if (resp && resp.ok) {
+        let body = null;
+        try { body = await (as === 'blob' ? resp.blob() : resp.json()); } catch (e) { body = null; }  // cut off
+        if (body !== null) { banner(''); return body; }
+        resp = null;
+      }
       let msg = null;
       if (resp) {
         msg = `the study program answered HTTP ${resp.status}`;
@@ -589,6 +611,33 @@
   const postJSON = (url, body) => request(url, {method: 'POST', headers: {'Content-Type': 'application/json'},
                                                 body: JSON.stringify(body)});
   const nameOf = (url) => url.replace(/^.*\//, '').replace(/\.mp4$/, '');
+  const siteVideo = (url) => C.videos[nameOf(url)].video;          // the server's URL as the site names it
+
+  // videos fetched whole (retried like every request) into jsPsych's video buffers, where the
+  // video plugin finds them; the next trials' videos are fetched ahead while one is answered
+  function videoLoader(jsPsych) {
+    const ahead = new Map();                                          // URL -> Promise<Blob>
+    const get = (url) => {
+      if (!ahead.has(url)) {
+        const p = request(url, {}, 'blob');
+        ahead.set(url, p);
+        p.catch(() => ahead.delete(url));
+      }
+      return ahead.get(url);
+    };
+    return {
+      async fetch(urls) {
+        const vb = jsPsych.pluginAPI.video_buffers;
+        for (const url of urls) {
+          if (vb[url]) continue;
+          const blob = await get(url);
+          ahead.delete(url);
+          vb[url] = URL.createObjectURL(blob);
+        }
+      },
+      prefetch(urls) { for (const url of urls) if (!jsPsych.pluginAPI.video_buffers[url]) get(url).catch(() => {}); },
+    };
+  }
 
   // the site's trial object of a server trial screen
   function trialOf(s) {
@@ -620,7 +669,13 @@
       state.stored += 1;
       app().dataset.stored = String(state.stored);                     // for tests (no eval under the CSP)
     };
-    const env = {jsPsych, n, refresh, record};
+    const loader = videoLoader(jsPsych);
+    // the videos of the two trials after trial k that are known before they are served
+    const upcoming = (k) => data.timeline.filter((x) => (x.type === 'trial' || x.type === 'trial-2afc') && x.trial > k
+      && x.stimulus).slice(0, 2).flatMap((x) => (x.videos || [x.video]).map(siteVideo));
+    let current = 0;
+    const fetchVideos = async (urls) => { await loader.fetch(urls); loader.prefetch(upcoming(current)); };
+    const env = {jsPsych, n, refresh, record, fetchVideos};
     // the server's next open trial: QUEST+ slots of a group that stopped early (stop_width)
     // are passed over, and so are breaks once nothing is left
     const passed = (trial) => state.next !== null && trial < state.next;
@@ -628,19 +683,18 @@
     for (const s of data.timeline.slice(data.start)) {
       if (s.type === 'instructions') tl.push(instructionsNode(s.id, s.title, s.paragraphs, s.button));
       else if (s.type === 'demographics') tl.push(demographicsNode(s.title, s.text, env));
-      else if (s.type === 'examples') tl.push(...exampleNodes(s.stimuli.map((x) => x.video)));
+      else if (s.type === 'examples') tl.push(...exampleNodes(s.stimuli.map((x) => siteVideo(x.video)), env));
       else if (s.type === 'break') {
         tl.push({timeline: [breakNode(s.id, s.title, s.text)], conditional_function: () => !(state.next > n)});
       } else if (s.type === 'trial' || s.type === 'trial-2afc') {
         const t = trialOf(s);
         const nodes = trialNodes(t, 0, env);
-        if (s.adaptive && !s.stimulus) {
-          // its level is chosen by the server when it is served, just before it is shown
-          nodes.unshift({type: jsPsychHtmlKeyboardResponse, choices: 'NO_KEYS', trial_duration: 0,
-            stimulus: '<div class="fs-stage"><div class="fs-fixation">+</div></div>',
-            on_load: () => setScreen(`serve-trial-${s.trial}`, 'loading'),
-            on_finish: async () => { Object.assign(t, trialOf(await request(`api/trial/${s.trial}`))); }});
-        }
+        // an adaptive trial's level is chosen by the server when it is served, just before it is shown
+        nodes.unshift(waitNode(env, '<div class="fs-stage"><div class="fs-fixation">+</div></div>', `serve-trial-${s.trial}`,
+          async () => {
+            current = s.trial;
+            if (s.adaptive && !s.stimulus) Object.assign(t, trialOf(await request(`api/trial/${s.trial}`)));
+          }));
         tl.push({timeline: nodes, conditional_function: () => !passed(s.trial)});
       } else if (s.type === 'end') {
         tl.push({type: jsPsychHtmlButtonResponse, choices: [], stimulus: card(s.title, s.paragraphs),
