@@ -319,7 +319,7 @@
 
   function instructionsNode(id, title, paragraphs, button) {
     if (id === 'instructions') {
-      return {type: jsPsychInstructions, pages: [card(title, paragraphs)], show_clickable_nav: true, allow_keys: false,
+      return {type: jsPsychInstructions, pages: [card(title, paragraphs)], show_clickable_nav: true, allow_keys: false, allow_backward: false,
               button_label_next: button || 'Continue', on_load: () => setScreen('instructions', 'instructions')};
     }
     return {type: jsPsychHtmlButtonResponse, choices: [button || 'Continue'], stimulus: card(title, paragraphs),
