@@ -7,13 +7,12 @@ with the server's message.  Neither ever moves on as if the answer were stored.
 Headless Chromium (Debian's, through Playwright).
 """
 import os
-import sqlite3
 
 import pytest
 from starlette.responses import JSONResponse
 
-from test_session_browser import (APP, CHROMIUM, answer_trial, do_intro, page, pw, screen,  # noqa: F401
-                                  tiny, tiny_template)
+from test_session_browser import (APP, CHROMIUM, answer_trial, answers_in_db, do_intro, page, pw,  # noqa: F401
+                                  screen, tiny, tiny_template)
 
 from flipstudy.study.server import ServerThread, create_app
 from flipstudy.study.session import load_study, open_session
@@ -38,14 +37,6 @@ class Refusing:
         return await self.app(scope, receive, send)
 
 
-def _stored(study_dir):
-    conn = sqlite3.connect(study_dir / "sessions.sqlite")
-    try:
-        return conn.execute("SELECT trial, response FROM responses ORDER BY trial").fetchall()
-    finally:
-        conn.close()
-
-
 def test_a_server_error_is_shown_and_the_page_never_moves_on(page, tiny):  # noqa: F811
     session = open_session(load_study(tiny), "E01")
     app = Refusing(create_app(session, iti_ms=30))
@@ -54,7 +45,7 @@ def test_a_server_error_is_shown_and_the_page_never_moves_on(page, tiny):  # noq
         do_intro(page)
         answer_trial(page, 1, "correct", "key")
         page.wait_for_selector(f'{APP}[data-stored="1"]')       # acknowledged by the server
-        assert _stored(tiny) == [(1, "correct")]
+        assert answers_in_db(tiny) == [(1, "correct")]
 
         # a 5xx: the message in the banner, the answer sent again until it is stored
         app.fail = (503, "the study folder changed under this server (design.toml)")
@@ -62,11 +53,11 @@ def test_a_server_error_is_shown_and_the_page_never_moves_on(page, tiny):  # noq
         page.wait_for_selector("#fs-banner:not([hidden])")
         assert "the study folder changed under this server" in page.inner_text("#fs-banner")
         assert page.get_attribute(APP, "data-screen-id") == "trial-2"
-        assert _stored(tiny) == [(1, "correct")]
+        assert answers_in_db(tiny) == [(1, "correct")]
         app.fail = None
         page.wait_for_selector(f'{APP}[data-stored="2"]')       # stored, then on
         page.wait_for_selector("#fs-banner[hidden]", state="attached")
-        assert _stored(tiny) == [(1, "correct"), (2, "incorrect")]
+        assert answers_in_db(tiny) == [(1, "correct"), (2, "incorrect")]
 
         # a 4xx: the page stops with the server's message; nothing more is stored
         app.fail = (409, "this session's study changed; ask the experimenter to restart flipstudy run")
@@ -74,6 +65,6 @@ def test_a_server_error_is_shown_and_the_page_never_moves_on(page, tiny):  # noq
         screen(page, "error")
         text = page.inner_text(APP)
         assert "ask the experimenter to restart flipstudy run" in text and "Your saved answers are safe" in text
-        assert app.refused >= 2 and _stored(tiny) == [(1, "correct"), (2, "incorrect")]
+        assert app.refused >= 2 and answers_in_db(tiny) == [(1, "correct"), (2, "incorrect")]
         assert page.query_selector("button.fs-correct") is None      # no trial 4 to answer
     session.close()
