@@ -60,11 +60,13 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
+from flipstudy.errors import FlipstudyError
+
 from .session import Session, SessionError, load_study, open_session, submit_answer, submit_demographics
 from .timeline import build_timeline, is_default, trial_screen
 from .validate import MAX_BODY, RequestError, parse_json_object
 from .web import jspsych as jsp
-from .web.site import LOCAL, site_config, site_csp, site_files
+from .web.site import LOCAL, lib_files, site_config, site_csp, site_files
 
 MEDIA_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
                ".css": "text/css; charset=utf-8"}
@@ -164,11 +166,12 @@ async def _read_json(request: Request) -> dict:
     return parse_json_object(body)
 
 
-def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None) -> dict[str, bytes]:
+def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None, lib: bool = True) -> dict[str, bytes]:
     """The files of the site ``export-web`` builds, in its ``local`` host mode, for
-    ``session``'s study: ``{relative path: bytes}``.  jsPsych comes from
-    ``jspsych_dir`` or npm's cache (:func:`flipstudy.study.web.jspsych.fetch`)."""
-    folder, _ = jsp.fetch(jspsych_dir)
+    ``session``'s study: ``{relative path: bytes}``.  jsPsych (``lib/``, left out
+    with ``lib=False``) comes from ``jspsych_dir`` or npm's cache
+    (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    folder = jsp.fetch(jspsych_dir)[0] if lib else None
     cfg = site_config(session.study, host=LOCAL, iti_ms=iti_ms, n_trials=session.n_trials)
     return site_files(cfg, folder)
 
@@ -178,11 +181,18 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
     """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
     Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
     is called after every stored answer (the CLI prints progress).  The page is
-    :func:`local_site` (``jspsych_dir``: where jsPsych's npm packages are)."""
+    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
+    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first)."""
     study = session.study
     render_dir = study.render_dir.resolve()
     videos = {f"{r['stimulus']}.mp4" for r in study.manifest}
-    files = local_site(session, iti_ms=iti_ms, jspsych_dir=jspsych_dir)
+    files = local_site(session, iti_ms=iti_ms, lib=False)
+    lib_lock = threading.Lock()
+
+    def load_lib():
+        with lib_lock:
+            if not any(name.startswith("lib/") for name in files):
+                files.update(lib_files(jsp.fetch(jspsych_dir)[0]))
 
     async def page(request: Request):
         return Response(files["index.html"], media_type=MEDIA_TYPES[".html"],
@@ -192,6 +202,10 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         name = request.path_params["name"]
         if request.url.path.startswith("/lib/"):
             name = f"lib/{name}"
+            try:
+                await run_in_threadpool(load_lib)
+            except FlipstudyError as e:
+                return _error(503, str(e))
         if name not in files or name == "index.html":     # only the site's own files, by exact name
             return _error(404, "not found")
         return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
@@ -337,6 +351,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
     if lock.previous and lock.previous.get("pid"):
         print(f"flipstudy run: note: took over the lock of a server that is gone "
               f"(pid {lock.previous['pid']}, since {lock.previous.get('since', '?')})", file=out)
+    jspsych_folder, _ = jsp.fetch()          # the page's jsPsych (npm's cache), before anyone waits
     session = open_session(study, participant, new_session=new_session)
     state = session.state()
     sock = bind(host, port)
@@ -366,7 +381,8 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
             msg += " — session finished; press Ctrl-C to stop the server"
         print(msg, file=out, flush=True)
 
-    app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress)
+    app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress,
+                     jspsych_dir=jspsych_folder)
     config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=False,
                             server_header=False, lifespan="off", timeout_graceful_shutdown=3)
     server = uvicorn.Server(config)

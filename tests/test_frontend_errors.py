@@ -11,8 +11,8 @@ import os
 import pytest
 from starlette.responses import JSONResponse
 
-from test_session_browser import (APP, CHROMIUM, answer_trial, answers_in_db, do_intro, page, pw,  # noqa: F401
-                                  screen, tiny, tiny_template)
+from test_session_browser import (APP, CHROMIUM, answer_trial, answers_in_db, do_intro,  # noqa: F401
+                                  jspsych_dir, page, pw, screen, tiny, tiny_template)
 
 from flipstudy.study.server import ServerThread, create_app
 from flipstudy.study.session import load_study, open_session

@@ -23,9 +23,9 @@ from urllib.parse import urlparse
 
 import pytest
 
-from test_session_browser import (CHROMIUM, Server, _free_port, answer_trial, do_intro, page, plan,  # noqa: F401
-                                  pw, screen)
-from test_web_browser import _Host, _answer, _intro, jspsych_dir  # noqa: F401 (fixtures)
+from test_session_browser import (CHROMIUM, Server, _free_port, answer_trial, do_intro, jspsych_dir,  # noqa: F401
+                                  page, plan, pw, screen)
+from test_web_browser import _Host, _answer, _intro
 
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.server import local_site

@@ -22,7 +22,7 @@ from urllib.parse import urlparse
 
 import pytest
 
-from test_session_browser import ARGS, CHROMIUM, TIMEOUT, pw  # noqa: F401 (fixtures)
+from test_session_browser import ARGS, CHROMIUM, TIMEOUT, jspsych_dir, pw  # noqa: F401 (fixtures)
 from _kinds import INTERVAL_COLOUR_JS, colour_of, design_text, make_study, nearest
 from _screenshots import screenshot
 
@@ -36,7 +36,7 @@ from flipstudy.study.session import load_study, open_session  # noqa: E402
 
 
 @pytest.fixture
-def page(pw, tmp_path):  # noqa: F811
+def page(pw, tmp_path, jspsych_dir):  # noqa: F811
     """A Chromium page that reaches 127.0.0.1 only (every other request is aborted and
     noted in ``page.blocked``)."""
     ctx = pw.chromium.launch_persistent_context(

@@ -44,6 +44,20 @@ BREAK_EVERY = 3
 TIMEOUT = 15_000          # ms, for any one screen
 
 
+@pytest.fixture(scope="session")
+def jspsych_dir():
+    """The pinned jsPsych packages (npm, cached): the page's lib/ (the local runner's too);
+    skips when npm cannot fetch them."""
+    from flipstudy.study.web import jspsych as jsp
+    if shutil.which("npm") is None and not jsp.cache_root().is_dir():
+        pytest.skip("needs npm to fetch jsPsych (apt-get install npm)")
+    try:
+        folder, _ = jsp.fetch()
+    except jsp.JsPsychFetchError as e:
+        pytest.skip(f"npm could not fetch jsPsych: {e}")
+    return folder
+
+
 @pytest.fixture(scope="module")
 def pw():
     with sync_api.sync_playwright() as p:
@@ -51,7 +65,7 @@ def pw():
 
 
 @pytest.fixture
-def page(pw, tmp_path):
+def page(pw, tmp_path, jspsych_dir):
     ctx = pw.chromium.launch_persistent_context(
         str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
         viewport={"width": 900, "height": 760})

@@ -74,11 +74,26 @@ def test_serves_the_page_assets_and_manifest_videos(served):
     assert h["x-content-type-options"] == "nosniff"
     # the site export-web builds, in its local host mode: jsPsych from lib/, flipstudy's own files
     for asset, ctype in (("flipstudy-web.js", "text/javascript"), ("flipstudy-2afc.js", "text/javascript"),
-                         ("flipstudy-web.css", "text/css"), ("config.js", "text/javascript"),
-                         ("lib/jspsych.js", "text/javascript"), ("lib/jspsych.css", "text/css")):
+                         ("flipstudy-web.css", "text/css"), ("config.js", "text/javascript")):
         st, h, data = request(srv, "GET", f"/{asset}")
         assert st == 200 and h["content-type"].startswith(ctype), asset
     assert b'"host": "local"' in request(srv, "GET", "/config.js")[2]
+
+
+def test_serves_jspsych_from_lib(served):
+    """jsPsych's bundles, read from npm's packages when first asked for (never a CDN)."""
+    from flipstudy.study.web import jspsych as jsp
+    try:
+        folder, _ = jsp.fetch()
+    except jsp.JsPsychFetchError as e:
+        pytest.skip(f"npm could not fetch jsPsych: {e}")
+    d, session, srv = served
+    for asset, ctype in (("lib/jspsych.js", "text/javascript"), ("lib/jspsych.css", "text/css")):
+        st, h, data = request(srv, "GET", f"/{asset}")
+        assert st == 200 and h["content-type"].startswith(ctype), asset
+    pkg, (src, _) = "jspsych", jsp.BUNDLES["jspsych"]
+    assert data == (folder / "node_modules" / pkg / "css" / "jspsych.css").read_bytes()
+    assert request(srv, "GET", "/lib/jspsych.js")[2] == (folder / "node_modules" / pkg / src).read_bytes()
     st, h, data = request(srv, "GET", "/stimuli/backflip_reference.mp4")
     assert st == 200 and h["content-type"] == "video/mp4"
     assert data == (d / "render" / "backflip_reference.mp4").read_bytes()

@@ -183,17 +183,23 @@ def site_csp(host: str) -> str:
             f"base-uri 'none'; form-action 'none'")
 
 
-def site_files(cfg: dict, jspsych_folder: Path) -> dict[str, bytes]:
-    """The site's code as ``{relative path: bytes}``: ``index.html``, ``config.js`` (``cfg``),
-    flipstudy's own scripts and CSS, and jsPsych's bundles under ``lib/`` (from
-    ``jspsych_folder``, see :func:`flipstudy.study.web.jspsych.fetch`).  ``export-web``
-    writes these files; the local runner serves the same bytes from memory."""
-    files, scripts = {}, []
-    for pkg, (src, dst) in jsp.BUNDLES.items():
-        files[f"lib/{dst}"] = (jspsych_folder / "node_modules" / pkg / src).read_bytes()
-        scripts.append(dst)
+def lib_files(jspsych_folder: Path) -> dict[str, bytes]:
+    """jsPsych's browser bundles and CSS as the site's ``lib/`` files, from the npm
+    packages in ``jspsych_folder`` (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    files = {f"lib/{dst}": (jspsych_folder / "node_modules" / pkg / src).read_bytes()
+             for pkg, (src, dst) in jsp.BUNDLES.items()}
     pkg, src, dst = jsp.CSS
     files[f"lib/{dst}"] = (jspsych_folder / "node_modules" / pkg / src).read_bytes()
+    return files
+
+
+def site_files(cfg: dict, jspsych_folder: Path | None) -> dict[str, bytes]:
+    """The site's code as ``{relative path: bytes}``: ``index.html``, ``config.js`` (``cfg``),
+    flipstudy's own scripts and CSS, and (unless ``jspsych_folder`` is None) jsPsych's
+    :func:`lib_files`.  ``export-web`` writes these files; the local runner serves the
+    same bytes from memory."""
+    files = lib_files(jspsych_folder) if jspsych_folder is not None else {}
+    scripts = [dst for _, dst in jsp.BUNDLES.values()]
     for f in OWN_FILES:
         files[f] = (STATIC / f).read_bytes()
     files["config.js"] = ("// written by flipstudy export-web; the study as data\n"
