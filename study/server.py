@@ -5,9 +5,10 @@ error is a JSON object ``{"error": "..."}`` with a 4xx status):
 
 ``GET  /``                  the page: the jsPsych site that ``export-web`` builds, in its
                             ``local`` host mode (:func:`flipstudy.study.web.site.site_files`)
-``GET  /<file>``            the site's ``config.js``, scripts, CSS and ``lib/`` (jsPsych, from
-                            npm: :func:`flipstudy.study.web.jspsych.fetch`), a fixed set held
-                            in memory from the start
+``GET  /<file>``            the site's ``config.js``, scripts and CSS, and ``lib/<file>``
+                            (jsPsych, from npm: :func:`flipstudy.study.web.jspsych.fetch`;
+                            a 503 naming the problem when it cannot be had): a fixed set
+                            held in memory, served by exact name
 ``GET  /api/session``       the timeline (:func:`flipstudy.study.timeline.build_timeline`)
 ``GET  /api/trial/<n>``     trial ``n``'s filled screen (:func:`flipstudy.study.timeline.trial_screen`
                             of ``session.resolve(n)``: an adaptive trial's level is chosen
