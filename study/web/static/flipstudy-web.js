@@ -652,7 +652,10 @@
   async function runLocal(jsPsych) {
     const data = await request('api/session');
     const n = data.n_trials;
-    const state = {participant: data.participant, session: data.session, next: null, stored: 0};
+    // next: the server's next open trial (the first trial screen from `start` on: a resumed
+    // session's, after the welcome back), then what each stored answer says
+    const first = data.timeline.slice(data.start).find((x) => x.trial);
+    const state = {participant: data.participant, session: data.session, next: first ? first.trial : null, stored: 0};
     window.flipstudyState = state;                                        // for tests and debugging
     const refresh = await measureRefresh(500);
     const record = async (rec) => {
