@@ -27,7 +27,6 @@ import functools
 import json
 import contextlib
 import os
-import shutil
 import threading
 import time
 import zipfile
@@ -39,7 +38,7 @@ from urllib.parse import urlparse
 
 import pytest
 
-from test_session_browser import ARGS, CHROMIUM, TIMEOUT, page, pw  # noqa: F401 (fixtures)
+from test_session_browser import ARGS, CHROMIUM, TIMEOUT, jspsych_dir, page, pw  # noqa: F401 (fixtures)
 
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study, write_demo_record, write_test_video
@@ -156,18 +155,6 @@ class _Host:
     def __exit__(self, *exc):
         self.srv.shutdown()
         self.srv.server_close()
-
-
-@pytest.fixture(scope="session")
-def jspsych_dir():
-    """The pinned jsPsych packages (npm, cached); skips when npm cannot fetch them."""
-    if shutil.which("npm") is None:
-        pytest.skip("needs npm to fetch jsPsych (apt-get install npm)")
-    try:
-        folder, _ = jsp.fetch()
-    except jsp.JsPsychFetchError as e:
-        pytest.skip(f"npm could not fetch jsPsych: {e}")
-    return folder
 
 
 @pytest.fixture
