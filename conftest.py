@@ -84,9 +84,15 @@ def pytest_collect_file(file_path: Path, parent):
             for c in collected]
 
 
-def pytest_collection_modifyitems(items):
+def pytest_collection_modifyitems(config, items):
     # the repository root's Package is made by a hook of its parent folder, which
     # this conftest does not reach: its packages are switched here, before setup
     for node in {n for item in items for n in item.listchain()}:
         if type(node) is pytest.Package and package_module_name(node.path / "__init__.py"):
             node.__class__ = InstalledPackage
+    # tests marked slow run only when asked for (-m slow, or any -m naming them)
+    if "slow" not in (config.getoption("markexpr", "") or ""):
+        skip = pytest.mark.skip(reason="slow: run with -m slow")
+        for item in items:
+            if item.get_closest_marker("slow"):
+                item.add_marker(skip)

@@ -59,6 +59,29 @@ class FlipstudyUsageError(FlipstudyError, ValueError):
 # ---- stimuli: motion in, stimuli out
 
 
+class StyleError(FlipstudyValueError):
+    """An invalid render style (:class:`flipstudy.render.style.Style`): the message
+    names the style file (when read from one), the key, the allowed values and the
+    value given; ``key`` is the field, ``detail`` the message without file and key."""
+
+    def __init__(self, message: str, key: str | None = None, detail: str | None = None):
+        super().__init__(message)
+        self.key = key
+        self.detail = detail if detail is not None else message.split(": ", 1)[-1]
+
+
+class ManifestError(FlipstudyValueError):
+    """A study's ``manifest.csv`` that is not what a build writes (a missing or
+    unknown column, a cell that is not a number, a file it names that is missing
+    or changed); the message names the file, line and column."""
+
+
+class CalibrationError(FlipstudyValueError):
+    """A calibration file (``flipstudy calibrate``, ``score --calibration``) that cannot be
+    read or used: the message names the file and the field."""
+
+
+
 class BVHError(FlipstudyError, ValueError):
     """A malformed BVH file: the message names the file, the line and what was expected."""
 
@@ -152,6 +175,12 @@ class SessionError(FlipstudyError, ValueError):
     """A session that cannot be opened; the message tells the experimenter what to do."""
 
 
+class StudyChanged(SessionError):
+    """The study folder a server serves was replaced or changed under it (its folder,
+    ``sessions.sqlite``, ``manifest.csv`` or ``design.toml``): the server stops taking
+    answers, since it could no longer store them in the study's own database."""
+
+
 class ParticipantBusy(FlipstudyError, ValueError):
     """Another process serves this participant of this study."""
 
@@ -184,6 +213,20 @@ class ReproduceError(FlipstudyError, RuntimeError):
     """The reproduce run cannot start or a stage failed (message names which)."""
 
 
+class OwnedPathError(FlipstudyError, FileExistsError):
+    """An output path is a file or folder that a study folder owns."""
+
+class StudyInUse(FlipstudyError, RuntimeError):
+    """A command would replace a study that a ``flipstudy run`` server has open, or a
+    server would open a study that a command is replacing right now."""
+
+class DesignFrozen(FlipstudyError, RuntimeError):
+    """The design of a study with answers would change, or has changed."""
+
+class CorruptDatabase(FlipstudyStateError):
+    """``sessions.sqlite`` is not a readable SQLite database (truncated, overwritten)."""
+
+
 class SiteError(FlipstudyError, ValueError):
     """A site that cannot be written; the message says what to do."""
 
@@ -204,6 +247,9 @@ __all__ = [
     "FlipstudyOSError",
     "FlipstudyStateError",
     "FlipstudyUsageError",
+    "StyleError",
+    "ManifestError",
+    "CalibrationError",
     "BVHError",
     "BodyMappingError",
     "DesignError",
@@ -221,6 +267,7 @@ __all__ = [
     "RequestError",
     "Conflict",
     "SessionError",
+    "StudyChanged",
     "ParticipantBusy",
     "ModelError",
     "StudyHasAnswers",
@@ -229,6 +276,10 @@ __all__ = [
     "VersionMismatch",
     "NoSharedFolder",
     "ReproduceError",
+    "OwnedPathError",
+    "StudyInUse",
+    "DesignFrozen",
+    "CorruptDatabase",
     "SiteError",
     "WebImportError",
     "JsPsychFetchError",

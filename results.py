@@ -243,6 +243,9 @@ class ImportResult(StepResult):
         for f in self.files:
             if f["status"] == "imported":
                 lines.append(f"{f['file']}: {f['records']} records, {f['new_answers']} new answers")
+            elif f["status"] == "nothing new":
+                lines.append(f"{f['file']}: {f['records']} records, every one already imported; the "
+                             f"file is not kept")
             else:
                 lines.append(f"{f['file']}: already imported (same content), nothing new")
         lines.append(f"{self.responses}: {self.answers} answers of {self.participants} web "

@@ -5,7 +5,7 @@
 over the same model (grid, prior, likelihood) as :class:`Quest`; it chooses the
 same next levels (the same expected-entropy code, on all rows in one matrix
 product) and multiplies the same likelihood rows, so its posteriors equal
-questplus's (tests/test_adaptive_sim.py checks both on answer sequences drawn by
+questplus's (tests/analysis/test_adaptive_sim.py checks both on answer sequences drawn by
 hypothesis).  It is what parameter recovery, ``flipstudy plan`` and the
 benchmark use: 200 observers × 40 trials take a second or two, where questplus
 updates one observer at a time through xarray.

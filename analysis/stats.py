@@ -182,6 +182,8 @@ class PsychometricFit:
     threshold_extrapolated: float    # x* of the point estimate, even beyond the range (inf: never)
     note: str = ""
     samples: np.ndarray = field(default=None, repr=False)
+    #: posterior samples of the parameters (threshold, width, gamma, lambda), for calibrations
+    param_samples: dict = field(default=None, repr=False)
     unit: str = "%"                  # of x and the thresholds: "%" or "ms" (pose-rate hold)
 
     @property
@@ -292,7 +294,11 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
     s = res.posterior_samples(n_samples, random_state=np.random.default_rng(seed))
     gam = s["gamma"] if "gamma" in s else np.full_like(s["threshold"], params["gamma"])
     xs = detection_threshold(s["threshold"], s["width"], gam, s["lambda"])
-    return _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note, unit)
+    fit = _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note, unit)
+    fit.param_samples = {"threshold": np.asarray(s["threshold"], float),
+                         "width": np.asarray(s["width"], float), "gamma": np.asarray(gam, float),
+                         "lambda": np.asarray(s["lambda"], float)}
+    return fit
 
 
 def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,

@@ -20,7 +20,7 @@ and the ratio QUEST+ / constant (the issue's target: at most 1/3).
 
 Speed: one ``Quest.next_level()`` (closed-form expected entropy, four matrix–vector
 products) against ``questplus.QuestPlus.next_stim`` (xarray) on the same posterior,
-which pick the same level (checked here, and in tests/test_adaptive.py).
+which pick the same level (checked here, and in tests/analysis/test_adaptive.py).
 """
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 Run: python benchmarks/bench_bvh_joints.py [--joints 30000 ...] [--frames 10] [--repeat 3]
 
-For each joint count, a generated file (tests/_bvh_gen.py: a root with 100 chains,
+For each joint count, a generated file (tests/_support/_bvh_gen.py: a root with 100 chains,
 ZXY rotations, root positions) is timed, best of N, as
 
 * ``load_bvh(path)``: the whole reader (hierarchy, numbers, bounds, quaternions, Clip);
@@ -24,7 +24,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "tests" / "_support"))
 
 from _common import best_s  # noqa: E402
 

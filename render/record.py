@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from flipstudy.errors import StaleRenderError, StudyRenderError
+from flipstudy.stimuli.contract import StimulusSet, file_sha256
 
 #: What ``--what`` can ask for, and the file each writes (``{s}`` = stimulus).
 RENDER_KINDS = {
@@ -27,14 +28,6 @@ RENDER_KINDS = {
 }
 
 
-def file_sha256(path) -> str:
-    """The sha256 (hex) of a file's bytes."""
-    import hashlib
-    h = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            h.update(block)
-    return h.hexdigest()
 
 
 def versions() -> dict:
@@ -63,25 +56,6 @@ def canonical_id(obj) -> str:
     """A short id (16 hex digits) of a JSON-serialisable value, independent of key order."""
     import hashlib
     return hashlib.sha256(json.dumps(obj, sort_keys=True).encode()).hexdigest()[:16]
-
-
-def stimulus_hashes(study_dir, rows) -> list[str]:
-    """The sha256 of each stimulus's BVH file, checked against the manifest's
-    ``sha256`` column where it has one (a stimulus edited after ``flipstudy
-    stimuli`` is an error: its manifest row no longer describes it)."""
-    study_dir = Path(study_dir)
-    out = []
-    for i, r in enumerate(rows, start=2):
-        p = study_dir / (r.get("bvh") or f"{r['stimulus']}.bvh")
-        h = file_sha256(p)
-        want = (r.get("sha256") or "").strip().lower()
-        if want and want != h:
-            raise StudyRenderError(
-                f"{study_dir / 'manifest.csv'} line {i}: stimulus {r['stimulus']!r}: {p.name} has "
-                f"sha256 {h[:12]}…, the manifest says {want[:12]}…; the file changed after "
-                f"`flipstudy stimuli` wrote it (make the stimuli again)")
-        out.append(h)
-    return out
 
 
 def read_record(out_dir) -> dict | None:
@@ -120,15 +94,16 @@ def write_record(out: Path, rec: dict) -> dict:
     return rec
 
 
-def check_rendered(study_dir, kind: str = "video", rows=None, hash_files: bool = True) -> dict:
-    """Check that every stimulus of the manifest has its ``kind`` output, made
-    from the stimulus as it is now, intact, and all with one settings record.
-    Returns that settings record; raises :class:`StaleRenderError` naming the
-    offending files and the fix."""
-    from flipstudy.stimuli.stimset import read_manifest
-    study_dir = Path(study_dir)
+def check_rendered(stimuli, kind: str = "video", hash_files: bool = True) -> dict:
+    """Check that every stimulus of a study (a :class:`~flipstudy.stimuli.contract.StimulusSet`,
+    or its folder) has its ``kind`` output, made from the stimulus as it is now,
+    intact, and all with one settings record.  Returns that settings record;
+    raises :class:`StaleRenderError` naming the offending files and the fix."""
+    if not isinstance(stimuli, StimulusSet):
+        stimuli = StimulusSet.read(stimuli, files=False, design=False)
+    study_dir = stimuli.folder
     out = study_dir / "render"
-    rows = read_manifest(study_dir) if rows is None else rows
+    rows = stimuli.stimuli
     fix = f"run `flipstudy render {study_dir}` to bring them up to date"
     rec = read_record(out)
     if rec is None or "outputs" not in rec:
@@ -139,7 +114,7 @@ def check_rendered(study_dir, kind: str = "video", rows=None, hash_files: bool =
     outputs = rec["outputs"]
     problems, by_settings = [], {}
     for i, r in enumerate(rows, start=2):
-        name = r["stimulus"]
+        name = r.stimulus
         fname = RENDER_KINDS[kind].format(s=name)
         o_ = outputs.get(fname)
         f = out / fname
@@ -150,9 +125,9 @@ def check_rendered(study_dir, kind: str = "video", rows=None, hash_files: bool =
             problems.append(f"{fname}: not recorded in render.json (made by something else, or "
                             f"by a render that was interrupted)")
             continue
-        want = (r.get("sha256") or "").strip().lower()
+        want = r.sha256.strip().lower()
         if not want:
-            p = study_dir / (r.get("bvh") or f"{name}.bvh")
+            p = stimuli.path(r)
             want = file_sha256(p) if p.is_file() else ""
         if o_.get("stimulus_sha256") != want:
             problems.append(f"{fname}: made from another version of stimulus {name!r} "
@@ -186,5 +161,5 @@ def check_rendered(study_dir, kind: str = "video", rows=None, hash_files: bool =
 
 
 __all__ = ["RENDER_KINDS", "StudyRenderError", "StaleRenderError", "file_sha256", "versions",
-           "canonical_id", "stimulus_hashes", "read_record", "write_record", "up_to_date",
+           "canonical_id", "read_record", "write_record", "up_to_date",
            "check_rendered"]

@@ -1,6 +1,7 @@
 """Rendering a whole stimulus set: one style, one camera, one take-off spot.
 
-:func:`render_study` reads ``STUDY_DIR/manifest.csv``, loads every stimulus
+:func:`render_study` takes a study's :class:`~flipstudy.stimuli.contract.StimulusSet`
+(or its folder, read and checked once), loads every stimulus
 (:func:`load_stimuli`: ``STUDY_DIR/<stimulus>.bvh``, metres, the header's frame
 rate), places all of them with :func:`flipstudy.render.staging.stage` (take-off COM
 at the origin, one ground, one view direction), fits one camera per base clip to
@@ -32,7 +33,9 @@ from flipstudy.stimuli._progress import Progress
 from flipstudy.errors import FlipstudyValueError, StudyRenderError
 from flipstudy.results import RenderResult
 
-from .record import (RENDER_KINDS, canonical_id, read_record, stimulus_hashes,
+from flipstudy.stimuli.contract import Stimulus, StimulusSet, file_sha256
+
+from .record import (RENDER_KINDS, canonical_id, read_record,
                      up_to_date, versions, write_record)
 from .workers import PARTIAL_PREFIX, clear_partials, publish, run_tasks
 
@@ -56,15 +59,6 @@ def parse_what(text) -> list[str]:
     return items
 
 
-def _int_or_none(v):
-    if v is None:
-        return None
-    v = str(v).strip()
-    if v in ("", "nan", "None", "none"):
-        return None
-    return int(float(v))
-
-
 def _skeleton_key(sk) -> tuple:
     return (tuple(sk.joint_names), np.round(sk.offsets, 9).tobytes(),
             tuple((p, np.round(o, 9).tobytes()) for p, o in sk.end_sites))
@@ -85,38 +79,30 @@ class _Bodies:
         return self._cache[k]
 
 
-def load_stimuli(study_dir) -> tuple[list[dict], list]:
-    """Manifest rows and their clips (BVH in metres, the header's frame rate)."""
+def load_stimuli(stimuli) -> tuple[StimulusSet, list]:
+    """A study's stimuli (a :class:`~flipstudy.stimuli.contract.StimulusSet`, or a
+    folder, read and checked once: every file present, every hash as the manifest
+    says) and their clips (BVH in metres, the header's frame rate)."""
     from flipstudy.stimuli import load_bvh
-    from flipstudy.stimuli.stimset import read_manifest
-    study_dir = Path(study_dir)
-    rows = read_manifest(study_dir)
-    if not rows:
-        raise StudyRenderError(f"{study_dir / 'manifest.csv'}: no stimuli")
-    for col in ("stimulus", "takeoff", "landing"):
-        if col not in rows[0]:
-            raise StudyRenderError(f"{study_dir / 'manifest.csv'}: no column {col!r} "
-                                   f"(columns: {', '.join(rows[0])})")
+    if not isinstance(stimuli, StimulusSet):
+        stimuli = StimulusSet.read(stimuli)
+    if not len(stimuli):
+        raise StudyRenderError(f"{stimuli.manifest_path}: no stimuli")
     clips = []
-    for i, r in enumerate(rows, start=2):
-        name = r["stimulus"]
-        p = study_dir / (r.get("bvh") or f"{name}.bvh")
-        if not p.exists():
-            raise StudyRenderError(f"{study_dir / 'manifest.csv'} line {i}: stimulus {name!r}: "
-                                   f"no file {p}")
-        clip = load_bvh(p, scale=1.0)
-        clip.meta["name"] = name
+    for s in stimuli:
+        clip = load_bvh(stimuli.path(s), scale=1.0)
+        clip.meta["name"] = s.stimulus
         clips.append(clip)
-    return rows, clips
+    return stimuli, clips
 
 
-def _character(row: dict, style, study_dir) -> str:
-    """The character style of a manifest row: its ``style`` column, else the
+def _character(row: Stimulus, style, study_dir) -> str:
+    """The character style of a stimulus: its ``style`` column, else the
     render style's."""
     from .characters import CHARACTER_STYLES
-    name = (row.get("style") or "").strip() or style.character
+    name = (row.style or "").strip() or style.character
     if name not in CHARACTER_STYLES:
-        raise StudyRenderError(f"{Path(study_dir) / 'manifest.csv'}: stimulus {row['stimulus']!r}: "
+        raise StudyRenderError(f"{Path(study_dir) / 'manifest.csv'}: stimulus {row.stimulus!r}: "
                                f"unknown style {name!r} (one of {', '.join(CHARACTER_STYLES)})")
     return name
 
@@ -125,7 +111,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
                  cluster=None) -> RenderResult:
-    """Render the stimuli of a study with one style, one take-off spot and one
+    """Render the stimuli of a study (``study_dir``: its folder or its
+    :class:`~flipstudy.stimuli.contract.StimulusSet`) with one style, one take-off spot and one
     camera per base clip (fitted to all its stimuli; ``cameras`` in the record,
     and each stimulus's ``camera``); writes the settings to ``render/render.json`` and returns a
     :class:`~flipstudy.results.RenderResult` (its ``record``).  With
@@ -178,7 +165,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     """
     from .staging import base_clip_groups, stage
     from .style import Style
-    study_dir = Path(study_dir)
+    stimuli = study_dir if isinstance(study_dir, StimulusSet) else None
+    study_dir = stimuli.folder if stimuli is not None else Path(study_dir)
     what = parse_what(what)
     size = (int(size[0]), int(size[1]))
     if "video" in what and (size[0] % 2 or size[1] % 2):
@@ -190,22 +178,22 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     out = Path(out) if out is not None else study_dir / "render"
     out.mkdir(parents=True, exist_ok=True)
     clear_partials(out)
-    rows, clips = load_stimuli(study_dir)
-    chosen = {(r.get("style") or "").strip() for r in rows}
+    rows, clips = load_stimuli(stimuli if stimuli is not None else study_dir)
+    chosen = {(r.style or "").strip() for r in rows}
     if len(chosen) == 1 and "" not in chosen:        # the design chose one style for all
-        style = style.with_character(_character(rows[0], style, study_dir))
-    shas = stimulus_hashes(study_dir, rows)
+        style = style.with_character(_character(rows.stimuli[0], style, study_dir))
+    shas = [r.sha256 or file_sha256(rows.path(r)) for r in rows]
     bodies = _Bodies()
     body_list = [bodies(c) for c in clips]
-    takeoffs = [_int_or_none(r.get("takeoff")) for r in rows]
-    landings = [_int_or_none(r.get("landing")) for r in rows]
+    takeoffs = [r.takeoff for r in rows]
+    landings = [r.landing for r in rows]
     st = stage(clips, takeoffs, landings, bodies=body_list, size=size, style=style, orient=orient)
     # one camera per base clip, fitted to the union of its stimuli over every frame
-    groups = base_clip_groups(st.clips, takeoffs, [r.get("clip") or "" for r in rows])
+    groups = base_clip_groups(st.clips, takeoffs, [r.clip for r in rows])
     cameras, camera_of = {}, [None] * len(rows)
     for key, ks in groups.items():
         cam = st.refit(*ks).camera.to_dict()
-        cameras[rows[ks[0]].get("clip") or rows[ks[0]]["stimulus"]] = cam
+        cameras[rows.stimuli[ks[0]].clip or rows.stimuli[ks[0]].stimulus] = cam
         for k in ks:
             camera_of[k] = cam
     vers = versions()
@@ -219,25 +207,20 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
                 "fps": float(fps), "ground_bounds": pixel["ground_bounds"],
                 "out": str(out), "partial": str(out / f"{PARTIAL_PREFIX}{os.getpid()}"),
                 "frames": bool(frames)}
-    bvh = [str(study_dir / (r.get("bvh") or f"{r['stimulus']}.bvh")) for r in rows]
-    sha_of = {r["stimulus"]: h for r, h in zip(rows, shas)}
+    bvh = [str(rows.path(r)) for r in rows]
+    sha_of = {r.stimulus: h for r, h in zip(rows, shas)}
     refs = {}                      # base clip -> its reference (level 0) stimulus, for overlays
     for r, o, p, y in zip(rows, st.offsets, bvh, st.yaws):
-        try:
-            level0 = float(r.get("level") or "nan") == 0.0
-        except ValueError:
-            level0 = False
-        if r.get("kind") == "reference" or level0:
-            refs.setdefault(r.get("clip", ""),
-                            {"bvh": p, "offset": o.tolist(), "yaw": y, "stimulus": r["stimulus"]})
+        if r.kind == "reference" or r.level == 0.0:
+            refs.setdefault(r.clip, {"bvh": p, "offset": o.tolist(), "yaw": y, "stimulus": r.stimulus})
     old = read_record(out) or {}
     outputs = {k: v for k, v in (old.get("outputs") or {}).items()
                if isinstance(v, dict) and (out / k).is_file()}
     tasks, n_kept, expected = [], 0, {}
     for r, o, p, y, t0, t1, body, cam in zip(rows, st.offsets, bvh, st.yaws, takeoffs, landings,
                                              body_list, camera_of):
-        name = r["stimulus"]
-        ref = refs.get(r.get("clip", ""))
+        name = r.stimulus
+        ref = refs.get(r.clip)
         if ref is not None and ref["stimulus"] == name:
             ref = None
         placement = json.loads(json.dumps({"offset": o.tolist(), "yaw_deg": float(y),
@@ -268,7 +251,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     settings_records = {k: v for k, v in (old.get("settings_records") or {}).items()
                         if any(o_.get("settings") == k for o_ in outputs.values())}
     settings_records[sid] = pixel
-    info = {r["stimulus"]: {"offset": [float(v) for v in o], "yaw_deg": float(y),
+    info = {r.stimulus: {"offset": [float(v) for v in o], "yaw_deg": float(y),
                             "takeoff": t0_, "landing": t1_, "style": _character(r, style, study_dir),
                             "camera": cam}
             for r, o, y, t0_, t1_, cam in zip(rows, st.offsets, st.yaws, takeoffs, landings,
@@ -311,7 +294,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         # moving the files into place and recording them is one step that Ctrl-C does not
         # cut (SIGINT waits until both are done): no output unrecorded, none recorded absent
         import signal
-        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        old_mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
         try:
             publish(res, out)
             for kind, f in res["files"].items():

@@ -14,9 +14,11 @@ RGB tuples in 0..1 or 0..255).
 """
 from __future__ import annotations
 
-from flipstudy.errors import FlipstudyValueError
+from flipstudy.errors import StyleError
 
 import dataclasses
+import functools
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -34,16 +36,26 @@ OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2",
 #: costs measured by ``benchmarks/bench_render_ceiling.py --aa`` at 640x480, per
 #: CPU-second): ``"fxaa"`` (VTK's FXAA filter, the default: a frame costs about
 #: 2.5x what it costs with ``"none"``; the error on the character's edges,
-#: against a supersampled reference, halves — ``tests/test_render.py``),
+#: against a supersampled reference, halves — ``tests/render/test_render.py``),
 #: ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos filter: about 7x,
 #: edges a little finer than FXAA's) and ``"none"``.  MSAA is not offered: under
 #: depth peeling it drops every translucent surface (ghosts).
 ANTI_ALIASING = ("fxaa", "ssaa", "none")
 
 
-@dataclass
+@dataclass(frozen=True)
 class Style:
-    """Colours, sizes, ground and lighting of the renders.
+    """Colours, sizes, ground and lighting of the renders; frozen and valid when it
+    exists: every field is checked on construction against :data:`STYLE_RANGES`
+    (numbers finite and in range, colours parsed, mesh resolutions and ground tiles
+    bounded so a render stays fast), else :class:`~flipstudy.errors.StyleError`
+    naming the field, the allowed values and the value given (and the file, when
+    read by :meth:`from_toml`).
+
+    >>> Style(trail_rate=0)
+    Traceback (most recent call last):
+    ...
+    flipstudy.errors.StyleError: Style.trail_rate: expected more than 0 and at most 240 (markers per second), got 0
 
     Example
     -------
@@ -117,40 +129,12 @@ class Style:
     lighting: str = "key-fill"                       # "key-fill" or "light kit"
 
     def __post_init__(self):
-        from flipstudy.stimuli.design import CHARACTER_STYLES
-        if self.character not in CHARACTER_STYLES:
-            import difflib
-            near = difflib.get_close_matches(str(self.character), CHARACTER_STYLES, n=1)
-            hint = f" (did you mean {near[0]!r}?)" if near else ""
-            raise FlipstudyValueError(f"Style.character: unknown style {self.character!r}{hint}; "
-                                      f"choose from {', '.join(CHARACTER_STYLES)}")
-        if self.side_colors is not None:
-            self.side_colors = tuple(self.side_colors)
-            if len(self.side_colors) != 3:
-                raise FlipstudyValueError("Style.side_colors: three colours (trunk, left, right)")
+        for name, value in _normalised(self).items():
+            object.__setattr__(self, name, value)
         if self.character == "point-light":              # Johansson: white dots on black
             for name, value in POINT_LIGHT_LOOK.items():
                 if getattr(self, name) == _DEFAULTS[name]:
-                    setattr(self, name, value)
-        for name in ("ground_colors", "ellipsoid_resolution", "overlay_colors",
-                     "trail_palette", "legend_size", "ghost_ramp"):
-            setattr(self, name, tuple(getattr(self, name)))
-        if self.anti_aliasing not in ANTI_ALIASING:
-            raise FlipstudyValueError(f"Style.anti_aliasing must be one of {', '.join(map(repr, ANTI_ALIASING))}, "
-                                      f"got {self.anti_aliasing!r}")
-        if self.lighting not in ("key-fill", "light kit"):
-            raise FlipstudyValueError(f"Style.lighting must be 'key-fill' or 'light kit', got {self.lighting!r}")
-        for name in ("ghost_opacity", "ghost_last_opacity", "layer_opacity", "overlay_opacity",
-                     "trail_body_opacity", "ghost_late_opacity"):
-            v = getattr(self, name)
-            if not 0.0 <= v <= 1.0:
-                raise FlipstudyValueError(f"Style.{name} must be in [0, 1], got {v!r}")
-        if not 0.0 <= self.frame_margin < 0.5:
-            raise FlipstudyValueError(f"Style.frame_margin must be in [0, 0.5), got {self.frame_margin!r}")
-        if len(self.ghost_ramp) < 2:
-            raise FlipstudyValueError("Style.ghost_ramp needs at least two colours (early, late)")
-        if len(self.trail_palette) == 0:
-            raise FlipstudyValueError("Style.trail_palette is empty")
+                    object.__setattr__(self, name, value)
 
     # ------------------------------------------------------------ conversions
     def to_dict(self) -> dict:
@@ -159,27 +143,47 @@ class Style:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in d.items()}
 
     @classmethod
-    def from_dict(cls, d: dict | None) -> "Style":
-        """A style from a dict; unknown keys raise ``ValueError`` naming them."""
+    def from_dict(cls, d: dict | None, source=None) -> "Style":
+        """A style from a dict; an unknown key (with a did-you-mean) or an invalid
+        value raises :class:`~flipstudy.errors.StyleError` naming ``source`` (the
+        style file, when given) and the key."""
+        import difflib
+        where = f"{source}: [style] " if source is not None else "Style."
+        if d is not None and not isinstance(d, dict):
+            raise StyleError(f"{source or 'style'}: expected a table of style keys, got "
+                             f"{type(d).__name__}")
         d = dict(d or {})
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(d) - names)
-        if unknown:
-            raise FlipstudyValueError(f"Style: unknown field(s) {unknown}; known fields: {sorted(names)}")
-        return cls(**d)
+        names = [f.name for f in dataclasses.fields(cls)]
+        for k in d:
+            if k not in names:
+                close = difflib.get_close_matches(str(k), names, n=1, cutoff=0.6)
+                hint = f"; did you mean {close[0]!r}?" if close else ""
+                raise StyleError(f"{where}{k}: unknown field{hint} (known fields: {', '.join(names)})",
+                                 key=str(k))
+        try:
+            return cls(**d)
+        except StyleError as e:
+            if source is None:
+                raise
+            raise StyleError(f"{where}{e.key}: {e.detail}", key=e.key, detail=e.detail) from None
 
     @classmethod
     def from_toml(cls, path_or_text) -> "Style":
         """A style from a TOML file (or TOML text): the ``[style]`` table if there
-        is one, else the top level."""
+        is one, else the top level.  Errors name the file and key."""
         import tomllib
         p = Path(path_or_text) if not (isinstance(path_or_text, str) and "\n" in path_or_text) else None
-        text = p.read_text() if p is not None and p.exists() else str(path_or_text)
+        src = p if p is not None else "style"
+        try:
+            text = p.read_text() if p is not None and p.exists() else str(path_or_text)
+        except (OSError, UnicodeDecodeError) as e:
+            raise StyleError(f"{p}: cannot read the style file: {getattr(e, 'strerror', None) or e}") \
+                from None
         try:
             data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as e:
-            raise FlipstudyValueError(f"{p or 'style'}: not valid TOML: {e}") from None
-        return cls.from_dict(data.get("style", data))
+        except (tomllib.TOMLDecodeError, RecursionError) as e:
+            raise StyleError(f"{src}: not valid TOML: {e}") from None
+        return cls.from_dict(data.get("style", data), source=src)
 
     def replace(self, **kw) -> "Style":
         return dataclasses.replace(self, **kw)
@@ -219,5 +223,159 @@ def rgb8(color) -> tuple:
 POINT_LIGHT_LOOK = {"background": "#000000", "ground": False, "body_color": "#ffffff",
                     "sided": False}
 _DEFAULTS = {f.name: f.default for f in dataclasses.fields(Style)}
+
+#: the allowed values of every style field: ("number", low, high, low excluded, unit),
+#: ("int", low, high, unit), ("bool",), ("colour",), ("colour?",) (or none),
+#: ("colours", n_min, n_max), ("colours?", n, n) (or none), ("choice", values),
+#: ("pair", low, high, unit) (two numbers, each in range), ("ints2", low, high, what).
+#: The bounds keep a render fast (mesh resolutions, marker rates, ground tiles) and
+#: its looks defined (fractions, opacities, VTK's lighting coefficients).
+STYLE_RANGES = {
+    "background": ("colour",), "ground": ("bool",),
+    "ground_colors": ("colours", 2, 2), "ground_tile": ("number", 0.01, 100.0, True, "metres"),
+    "ground_height": ("number", -100.0, 100.0, False, "metres"),
+    "ground_margin": ("number", 0.0, 100.0, False, "metres around the motion"),
+    "body_color": ("colour",),
+    "ellipsoid_resolution": ("ints2", 3, 100, "mesh points (around, along the bone)"),
+    "ambient": ("number", 0.0, 1.0, False, "VTK lighting coefficient"),
+    "diffuse": ("number", 0.0, 1.0, False, "VTK lighting coefficient"),
+    "specular": ("number", 0.0, 1.0, False, "VTK lighting coefficient"),
+    "specular_power": ("number", 0.0, 128.0, False, "VTK specular exponent"),
+    "ghost_color": ("colour?",), "ghost_opacity": ("number", 0.0, 1.0, False, "opacity"),
+    "ghost_last_opacity": ("number", 0.0, 1.0, False, "opacity"),
+    "layer_opacity": ("number", 0.0, 1.0, False, "opacity"),
+    "overlay_colors": ("colours", 2, 2), "overlay_opacity": ("number", 0.0, 1.0, False, "opacity"),
+    "trail_palette": ("colours", 1, 64),
+    "trail_rate": ("number", 0.0, 240.0, True, "markers per second"),
+    "marker_size": ("number", 0.0, 1.0, True, "metres, a sphere's radius"),
+    "trail_line": ("bool",), "trail_line_width": ("number", 0.0, 50.0, True, "pixels"),
+    "trail_com_color": ("colour",), "trail_body_color": ("colour",),
+    "trail_body_opacity": ("number", 0.0, 1.0, False, "opacity"),
+    "legend": ("bool",), "legend_size": ("pair", 0.0, 1.0, "fractions of the image (w, h)"),
+    "label_color": ("colour",),
+    "font_size": ("number", 0.0, 0.5, True, "fraction of the panel height"),
+    "com_color": ("colour",), "com_radius": ("number", 0.0, 1.0, True, "metres"),
+    "L_color": ("colour",), "L_scale": ("number", 0.0, 10.0, True, "metres per kg·m²/s"),
+    "v_color": ("colour",), "v_scale": ("number", 0.0, 10.0, True, "metres per m/s"),
+    "support_color": ("colour",),
+    "character": ("choice", None), "sided": ("bool",),
+    "side_lightness": ("number", 0.0, 50.0, False, "CIE L*"),
+    "side_colors": ("colours?", 3, 3),
+    "point_light_radius": ("number", 0.0, 0.5, True, "metres"),
+    "point_light_extra": ("bool",),
+    "frame_margin": ("number", 0.0, 0.5, False, "fraction of width/height; below 0.5"),
+    "ghost_ramp": ("colours", 2, 64),
+    "ghost_late_opacity": ("number", 0.0, 1.0, False, "opacity"),
+    "ghost_spread": ("number", 0.0, 10.0, False, "metres"),
+    "scale_bar": ("bool",), "anti_aliasing": ("choice", ANTI_ALIASING),
+    "depth_peels": ("int", 0, 100, "peels"), "lighting": ("choice", ("key-fill", "light kit")),
+}
+#: at most this many ground tiles from the motion to the ground's edge (ground_margin / ground_tile)
+MAX_MARGIN_TILES = 200
+
+
+def _show(v) -> str:
+    r = repr(v)
+    return r if len(r) <= 60 else r[:57] + "..."
+
+
+@functools.lru_cache(maxsize=512)
+def _colour_problem(v) -> str | None:
+    """None if :class:`pyvista.Color` reads ``v`` (what the renderer draws with)."""
+    from ._pv import pv
+    try:
+        pv.Color(v)
+    except Exception:          # pyvista raises ValueError, TypeError or KeyError
+        return "not a colour (a name such as 'white', '#rrggbb', or (r, g, b) in 0..1 or 0..255)"
+    return None
+
+
+def _colour(name: str, v):
+    if isinstance(v, list):
+        v = tuple(v)
+    if not isinstance(v, (str, tuple)) or isinstance(v, tuple) and not all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v):
+        raise StyleError(f"Style.{name}: expected a colour, got {_show(v)}", key=name)
+    try:
+        problem = _colour_problem(v)
+    except TypeError:
+        problem = "not a colour"
+    if problem:
+        raise StyleError(f"Style.{name}: {problem}, got {_show(v)}", key=name)
+    return v
+
+
+def _check_field(name: str, v, spec):
+    """The value of field ``name`` as the style holds it, or StyleError."""
+    kind = spec[0]
+
+    def bad(expected):
+        raise StyleError(f"Style.{name}: expected {expected}, got {_show(v)}", key=name)
+
+    def number(x, lo, hi, lo_excl, unit, typ=float):
+        if isinstance(x, bool) or not isinstance(x, (int, float)) or typ is int and not isinstance(x, int):
+            bad(f"{'a whole number' if typ is int else 'a number'} ({unit})")
+        if not (math.isfinite(x) and (lo < x if lo_excl else lo <= x) and x <= hi):
+            bad(f"{'more than' if lo_excl else 'from'} {lo:g} {'and at most' if lo_excl else 'to'} "
+                f"{hi:g} ({unit})")
+        return typ(x)
+
+    if kind == "bool":
+        return v if isinstance(v, bool) else bad("true or false")
+    if kind == "number":
+        return number(v, spec[1], spec[2], spec[3], spec[4])
+    if kind == "int":
+        return number(v, spec[1], spec[2], False, spec[3], int)
+    if kind == "choice":
+        values = spec[1] if spec[1] is not None else _character_styles()
+        if v in values and isinstance(v, str):
+            return v
+        import difflib
+        close = difflib.get_close_matches(str(v), values, n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
+        bad(f"one of {', '.join(map(repr, values))}{hint}")
+    if kind == "colour" or kind == "colour?" and v is not None:
+        return _colour(name, v)
+    if kind == "colour?":
+        return None
+    if kind in ("colours", "colours?") and not (kind == "colours?" and v is None):
+        lo, hi = spec[1], spec[2]
+        if not isinstance(v, (list, tuple)) or not lo <= len(v) <= hi:
+            bad(f"{lo if lo == hi else f'{lo} to {hi}'} colours in a list")
+        return tuple(_colour(f"{name}[{i}]", c) for i, c in enumerate(v))
+    if kind == "colours?":
+        return None
+    if kind in ("pair", "ints2"):
+        if not isinstance(v, (list, tuple)) or len(v) != 2:
+            bad(f"two numbers [{spec[1]:g}..{spec[2]:g}] ({spec[3]})")
+        if kind == "pair":
+            return tuple(number(x, spec[1], spec[2], True, spec[3]) for x in v)
+        return tuple(number(x, spec[1], spec[2], False, spec[3], int) for x in v)
+    raise AssertionError(kind)
+
+
+def _character_styles():
+    from flipstudy.stimuli.design import CHARACTER_STYLES
+    return CHARACTER_STYLES
+
+
+def _normalised(style: "Style") -> dict:
+    """Every field of ``style`` checked (:data:`STYLE_RANGES`), as the style holds it
+    (tuples for lists); a field equal to its default is known good and kept."""
+    out = {}
+    for f in dataclasses.fields(style):
+        v = getattr(style, f.name)
+        if isinstance(v, list):
+            v = tuple(v)
+        if f.name in _DEFAULTS and type(v) is type(_DEFAULTS[f.name]) and v == _DEFAULTS[f.name]:
+            out[f.name] = v
+            continue
+        out[f.name] = _check_field(f.name, v, STYLE_RANGES[f.name])
+    if out["ground_margin"] / out["ground_tile"] > MAX_MARGIN_TILES:
+        raise StyleError(f"Style.ground_margin: {out['ground_margin']:g} m is "
+                         f"{out['ground_margin'] / out['ground_tile']:.4g} tiles of ground_tile = "
+                         f"{out['ground_tile']:g} m; at most {MAX_MARGIN_TILES} tiles (a larger "
+                         f"ground_tile or a smaller margin)", key="ground_margin")
+    return out
 DEFAULT_STYLE = Style()
 __all__ = ["Style", "DEFAULT_STYLE", "ANTI_ALIASING", "TOL_MUTED", "OKABE_ITO", "rgb", "rgb8"]

@@ -15,7 +15,8 @@ from .loading import load_clip
 #: motion modules need scipy, and ``import flipstudy.stimuli`` (the CLI's parser)
 #: should not load it
 _WHERE = {**dict.fromkeys(("BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh"), ".motion"),
-          "Body": ".body", "Analysis": ".analyse", "analyse": ".analyse"}
+          "Body": ".body", "Analysis": ".analyse", "analyse": ".analyse",
+          "Stimulus": ".contract", "StimulusSet": ".contract"}
 
 
 class _Package(types.ModuleType):
@@ -64,4 +65,4 @@ def builtin(name: str, **params) -> "Clip":
 
 
 __all__ = ["FlipstudyError", "BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh", "Body", "Analysis",
-           "analyse", "builtin", "load_clip", "BUILTIN_NAMES"]
+           "analyse", "builtin", "load_clip", "BUILTIN_NAMES", "Stimulus", "StimulusSet"]

@@ -89,6 +89,13 @@ BALLISTIC_LEVEL_BOUNDS = {
 KIND_OPTIONS = {"gravity": ("policy", None, GRAVITY_POLICIES),
                 "acceleration": ("axis", None, AXES),
                 "time-scale": ("span", "flight", SPANS)}
+#: the longest flight a stimulus may have, seconds: human flights (jumps, flips,
+#: trampolines, ski jumps) last well under this; a level whose flight would be longer
+#: (a gravity or vertical acceleration that nearly cancels the fall) is refused before
+#: anything is built (its stimulus would hold minutes of frames)
+MAX_FLIGHT_S = 10.0
+#: the longest stimulus, seconds (a time-scale "whole" slows the whole clip down)
+MAX_CLIP_S = 120.0
 #: kinds this module makes, and the group option each one takes (None: none)
 BALLISTIC_KINDS = {"gravity": "policy", "horizontal-velocity": None, "vertical-velocity": None,
                    "acceleration": "axis", "time-scale": "span", "pose-rate": None}
@@ -122,6 +129,92 @@ def _landing_time(vy: float, g: float, dy: float, what: str) -> float:
                             f"(vertical take-off velocity {vy:.3f} m/s, gravity {g:.3f} m/s², landing "
                             f"{dy:+.3f} m from the take-off height)")
     return float((vy + np.sqrt(disc)) / g)
+
+
+def planned_flight(a: Analysis, kind: str, error: float, option: str | None = None,
+                   rate: float | None = None) -> tuple[float, float]:
+    """(flight seconds, stimulus seconds) of what :func:`inject_kind` makes, in closed
+    form from the original's take-off velocity, gravity and landing height (nothing
+    is built); raises :class:`StimulusError` when the COM would never come down.
+
+    >>> from flipstudy import analyse, builtin
+    >>> a = analyse(builtin("backflip"))
+    >>> Tn, _ = planned_flight(a, "acceleration", 0.9999, "vertical")   # g nearly cancelled
+    >>> Tn > 1000 * a.flight_s
+    True
+    """
+    t_to, t_ld, c0, c1, v0, g = _flight(a)
+    T, dy, vy = t_ld - t_to, c1[1] - c0[1], float(v0[1])
+    clip_s = (a.clip.num_frames - 1) / a.clip.fps
+    what = f"{kind} {rate:g} poses/s" if kind == "pose-rate" else f"{kind} {error:+.4g}"
+    if kind == "gravity":
+        gn = (1.0 + error) * g
+        Tn = _landing_time(vy, gn, dy, what) if option == "takeoff-velocity" else \
+            T / np.sqrt(1.0 + error) if option == "apex-height" else T
+    elif kind == "vertical-velocity":
+        Tn = _landing_time(vy * (1.0 + error), g, dy, what)
+    elif kind == "acceleration" and option == "vertical":
+        Tn = _landing_time(vy, g - error * G0, dy, what)
+    elif kind == "time-scale":
+        Tn = T / (1.0 + error)
+        if option == "whole":
+            return float(Tn), float(clip_s / (1.0 + error))
+    else:                          # horizontal velocity or acceleration, pose rate: T stays
+        Tn = T
+    return float(Tn), float(clip_s - T + Tn)
+
+
+def flight_problem(a: Analysis, kind: str, error: float, option: str | None = None,
+                   rate: float | None = None) -> str | None:
+    """Why the stimulus of this level cannot be made (its flight would not land within
+    :data:`MAX_FLIGHT_S`, the stimulus would last longer than :data:`MAX_CLIP_S`, no
+    pose of a pose rate falls inside the flight), or None."""
+    try:
+        Tn, total = planned_flight(a, kind, error, option, rate)
+    except StimulusError as e:
+        return str(e)
+    if kind == "pose-rate":
+        ts = held_times(a.clip.num_frames, a.clip.fps, rate)
+        if not np.any((ts > a.takeoff_time) & (ts < a.landing_time)):
+            return (f"at {rate:g} poses per second no pose is shown inside the "
+                    f"{a.flight_s:.3f} s flight (a pose every {1 / rate:.3g} s)")
+        return None
+    v0, g = a.takeoff_velocity, float(a.apparent_gravity)
+    if not Tn <= MAX_FLIGHT_S:
+        return (f"the flight would last {Tn:.4g} s (take-off velocity {v0[1]:.3f} m/s up, "
+                f"original flight {a.flight_s:.3f} s under {g:.3f} m/s²); a flight must land "
+                f"within {MAX_FLIGHT_S:g} s")
+    if not total <= MAX_CLIP_S:
+        return f"the stimulus would last {total:.4g} s; at most {MAX_CLIP_S:g} s"
+    return None
+
+
+def check_design_flights(design, analyses: dict) -> None:
+    """Refuse, before anything is built, a design level whose stimulus cannot be made
+    from a base clip (:func:`flight_problem`: e.g. a flight that would not land within
+    :data:`MAX_FLIGHT_S`): a :class:`~flipstudy.stimuli.design.DesignError` naming the
+    design file, group, level and clip.  ``analyses``: clip name → its Analysis."""
+    from ._designkeys import DesignError
+    src = design.path if design.path is not None else "<design>"
+    for i, g in enumerate(design.groups):
+        if g.kind not in BALLISTIC_KINDS:
+            continue
+        for name, a in analyses.items():
+            if a.flight is None:
+                continue
+            for level in g.levels:
+                if level == 0:
+                    continue
+                if g.kind == "pose-rate" and not level < a.clip.fps:
+                    problem = (f"a pose rate must be below the clip's {a.clip.fps:g} frames "
+                               f"per second")
+                else:
+                    problem = flight_problem(a, g.kind, g.sign * level / 100.0,
+                                             g.policy or g.axis or g.span, rate=level)
+                if problem:
+                    raise DesignError(f"{src}: groups[{i}] ({g.name}).levels: {level:g} "
+                                      f"{'poses per second' if g.kind == 'pose-rate' else '%'} "
+                                      f"on clip '{name}': {problem}")
 
 
 def _meta(clip: Clip, tag: str, gravity_changed: bool) -> dict:
@@ -332,7 +425,17 @@ def inject_pose_rate(a: Analysis, rate: float) -> Injected:
 def inject_kind(a: Analysis, kind: str, error: float, option: str | None = None,
                 rate: float | None = None) -> Injected:
     """One of :data:`BALLISTIC_KINDS`: ``error`` a fraction (``rate`` in poses per
-    second for pose-rate), ``option`` the group's policy, axis or span."""
+    second for pose-rate), ``option`` the group's policy, axis or span.  A level
+    whose flight would not land within :data:`MAX_FLIGHT_S` (see
+    :func:`flight_problem`) raises :class:`StimulusError` before anything is built."""
+    if kind == "pose-rate":                 # the level is the rate; ``error`` is not used
+        checkable = rate is not None and 0 < rate < a.clip.fps
+    else:
+        checkable = kind in BALLISTIC_KINDS and error is not None and error > -1.0
+    if checkable:
+        problem = flight_problem(a, kind, error, option, rate)
+        if problem:
+            raise StimulusError(problem)
     if kind == "gravity":
         return inject_gravity(a, error, option)
     if kind in ("horizontal-velocity", "vertical-velocity"):

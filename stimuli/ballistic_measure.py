@@ -25,10 +25,7 @@ from .physics import momentum
 
 #: the manifest's extra columns of a study that uses a ballistic kind (its rows of
 #: every kind have them; the default study's manifest does not)
-EXTRA_COLUMNS = ["policy", "axis", "span", "quantity", "unit", "nominal_value", "measured_value",
-                 "apparent_gravity", "takeoff_vh", "takeoff_vy", "air_acc_h", "air_acc_v",
-                 "flight_s_change_pct", "apex_change_pct", "landing_shift_m",
-                 "landing_height_change_mm", "playback_rate", "pose_rate"]
+from .contract import EXTRA_COLUMNS  # the ballistic columns are part of the contract
 
 #: per kind: what is changed (quantity, unit)
 QUANTITY = {"gravity": ("apparent gravity", "m/s²"),

@@ -223,7 +223,13 @@ class Body:
         F = clip.num_frames
         pick = np.unique(np.linspace(0, F - 1, min(F, max_frames)).round().astype(int))
         ref = (clip.joint_positions()[pick], clip.joint_rotations()[pick])
-        return cls.from_skeleton(clip.skeleton, total_mass, mapping, segment_masses, pose=ref)
+        try:
+            return cls.from_skeleton(clip.skeleton, total_mass, mapping, segment_masses, pose=ref)
+        except BodyMappingError as e:          # name the file the skeleton came from
+            src = clip.meta.get("path")
+            if src and not str(e).startswith(f"{src}: "):
+                raise BodyMappingError(f"{src}: {e}") from None
+            raise
 
     @classmethod
     def from_skeleton(cls, skeleton: Skeleton, total_mass: float = 70.0,

@@ -13,10 +13,14 @@ one original 72 % in all four angular-momentum groups and 63 % in the take-off
 group), the angular-momentum groups share one original per base clip
 (``original = "shared"``) and the take-off group has its own.
 
-Designs are strict: an unknown key (``repetitons``) is refused with a
-did-you-mean, every number is bounded, names, clips, references and levels are
-not repeated; every invalid field raises :class:`DesignError` naming the file,
-section and key and the value as written (levels in percent).
+Designs are strict and valid when they exist: :class:`Design`, :class:`ClipSpec`,
+:class:`Group` and :class:`SessionSettings` are frozen dataclasses that check every
+field on construction (the keys a section may hold are the types' fields: an
+unknown key such as ``repetitons`` is refused with a did-you-mean); every number
+is bounded, names, clips, references and levels are not repeated; every invalid
+field raises :class:`DesignError` naming the file, section and key and the value
+as written (levels in percent).  ``Design.from_toml``/``from_dict`` read a design,
+``to_dict``/``to_toml`` write it back to an equal one.
 
 A group's ``levels`` may be a dense grid ``{from, to, step}`` (at most 401 levels);
 ``method = "quest+"`` makes it adaptive (the session picks each level with
@@ -39,8 +43,10 @@ SessionSettings(replay=False, break_every=40, max_dropped_pct=10.0, repeat_dropp
 from __future__ import annotations
 
 import difflib
+import json
+import re
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 from pathlib import Path
 
 from flipstudy.errors import DesignError
@@ -52,130 +58,9 @@ except ModuleNotFoundError:  # Python 3.10
     import tomli as tomllib  # type: ignore[no-redef]
 
 from .groupkeys import (GRID_MAX, LEVELS_MAX, METHODS, QUEST_KEYS, TASKS, QuestSpec,  # noqa: F401
-                        parse_levels, parse_method_task, parse_quest)
+                        check_levels, check_quest, levels_table, quest_table, read_levels)
 from .ballistic import BALLISTIC_LEVEL_BOUNDS, KIND_OPTIONS
 from .injection import COM_POLICIES, KINDS, PROFILES
-
-
-@dataclass
-class ClipSpec:
-    name: str
-    source: str                 # built-in name or BVH path (relative to the design file)
-    scale: float | None = None  # metres per file unit (BVH); None: guess
-    fps: float | None = None    # override the file's frame rate (BVH)
-    flips: int | None = None    # turn the clip into an N-flip one first (flipstudy edit)
-    k_ratio: float = 0.7        # its retiming factor as a fraction of k*
-    accept_unphysical: bool = False  # build it although its gravity or height contradicts physics
-
-
-@dataclass
-class Group:
-    name: str
-    kind: str                   # "angular-momentum" | "takeoff-angle"
-    profile: str | None         # "smooth" | "abrupt" (angular momentum only)
-    sign: int                   # +1 increase, -1 decrease
-    levels: list[float]         # nominal error in percent (magnitude; 0 = original)
-    original: str = "own"       # "shared": its level 0 is the clip's shared original
-    style: str | None = None    # character style of its stimuli (None: the study's)
-    method: str = "constant"    # "constant" stimuli | "quest+" (adaptive over the levels)
-    task: str = "yes-no"        # "yes-no" | "2afc" (original and modified, which was correct?)
-    quest: QuestSpec | None = None   # a quest+ group's settings
-    policy: str | None = None   # gravity: what stays ("takeoff-velocity" | "apex-height" | "flight-time")
-    axis: str | None = None     # acceleration: "horizontal" | "vertical"
-    span: str | None = None     # time-scale: "flight" | "whole"
-
-    @property
-    def adaptive(self) -> bool:
-        """Does the session choose this group's levels (quest+)?"""
-        return self.method == "quest+"
-
-    def trial_levels(self) -> list[float]:
-        """The levels its trials show: level 0 is a 2AFC group's comparison, not a trial
-        level, and a shared original is shown as the group ``original``."""
-        return [v for v in self.levels
-                if v != 0 or (self.task == "yes-no" and (self.adaptive or self.original != "shared"))]
-
-
-@dataclass(frozen=True)
-class SessionSettings:
-    """How the sessions present a design's stimuli: the design file's ``[session]``
-    table.  None of these changes a stimulus; the session code in
-    :mod:`flipstudy.study` reads them from ``design.session``."""
-
-    replay: bool = False              # may a participant replay a motion before answering
-    break_every: int = 40             # trials between breaks
-    max_dropped_pct: float = 10.0     # web: flag a trial whose video dropped more % of its frames
-    repeat_dropped: bool = False      # web: show the flagged trials once more at the end
-
-
-@dataclass
-class Design:
-    name: str
-    seed: int
-    fps: float
-    repetitions: int
-    total_mass: float
-    clips: list[ClipSpec]
-    groups: list[Group]
-    reference: list[str] = field(default_factory=list)
-    com_policy: str = "angle"
-    tolerance_pct: float = 1.0        # refuse stimuli whose measured error misses by more
-    original: str = "shared"          # "shared": AM groups share one original per clip
-    fps_given: bool = True            # [study] fps written: BVH clips are resampled to it
-    path: Path | None = None
-    session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
-    style: str | None = None          # character style of every stimulus (None: the renderer's)
-    task: str = "yes-no"              # [study] task: the groups' default task
-
-    def style_of(self, group) -> str | None:
-        """The character style of a group's stimuli (None: nothing chosen)."""
-        return (getattr(group, "style", None) if group is not None else None) or self.style
-
-    @property
-    def styled(self) -> bool:
-        """Does the design choose a character style anywhere (the manifest then
-        has a ``style`` column)?"""
-        return self.style is not None or any(g.style for g in self.groups)
-
-    def clip(self, name: str) -> ClipSpec:
-        for c in self.clips:
-            if c.name == name:
-                return c
-        raise KeyError(name)
-
-    @property
-    def shares_original(self) -> bool:
-        """Do some groups show the clip's shared original as their level 0?"""
-        return any(g.original == "shared" and 0.0 in g.levels for g in self.groups)
-
-    def stimulus_names(self) -> list[str]:
-        """Every stimulus name, in manifest order (see :func:`flipstudy.stimuli.stimset.plan`)."""
-        out = [f"{r}_reference" for r in self.reference]
-        for c in self.clips:
-            if self.shares_original:
-                out.append(f"{c.name}_{SHARED_ORIGINAL_GROUP}")
-            for g in self.groups:
-                out += [f"{c.name}_{g.name}_{lv:g}" for lv in g.levels
-                        if not (lv == 0 and g.original == "shared")]
-        return out
-
-    def n_test_stimuli(self) -> int:
-        return len(self.stimulus_names()) - len(self.reference)
-
-    @property
-    def shows_shared_original(self) -> bool:
-        """Are the shared originals trials of their own (group ``original``)?  Only a
-        constant yes/no group that shares them asks about them on their own."""
-        return any(g.original == "shared" and 0.0 in g.levels and not g.adaptive
-                   and g.task == "yes-no" for g in self.groups)
-
-    def trials_per_participant(self) -> int:
-        """Test trials of one session: ``repetitions`` × clips × trial levels of each
-        constant group (and the shared originals), plus ``trials`` of each quest+ group."""
-        nc = len(self.clips)
-        n = sum(g.quest.trials if g.adaptive else self.repetitions * nc * len(g.trial_levels())
-                for g in self.groups)
-        return n + (self.repetitions * nc if self.shows_shared_original else 0)
 
 
 PAPER_DESIGN = """\
@@ -239,14 +124,8 @@ levels = [0, 10, 20, 30, 40]
 """
 
 
-#: the keys each section may hold (anything else is refused with a did-you-mean)
-STUDY_KEYS = ("name", "seed", "fps", "repetitions", "total_mass", "com_policy", "tolerance_pct",
-              "original", "style", "task")
-SESSION_KEYS = ("replay", "break_every", "max_dropped_pct", "repeat_dropped")
+
 OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as designs wrote them before
-CLIP_KEYS = ("name", "source", "scale", "fps", "flips", "k_ratio", "accept_unphysical")
-GROUP_KEYS = ("name", "kind", "profile", "sign", "levels", "original", "style", "method", "task",
-              "policy", "axis", "span", *QUEST_KEYS)
 #: the character styles a design may choose (drawn by flipstudy.render.characters)
 CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
@@ -267,7 +146,7 @@ BREAK_EVERY_MAX = 10000
 SCALE_RANGE = (1e-4, 100.0)           # metres per file unit (mm is 0.001, m is 1)
 TRIALS_MAX = 3000                     # test trials per participant (repetitions × stimuli, quest+ trials)
 #: level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
-LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the original
+LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, True),     # |L| below 6× the original
                 ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
                 ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
                 ("takeoff-angle", -1): (100.0, True),       # −100 % leaves no horizontal velocity
@@ -275,138 +154,135 @@ LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, False),    # |L| up to 6× the 
 MAX_DESIGN_BYTES = 1_000_000
 
 
-def _kind_options(g: dict, kind: str, sign: int, wg: str) -> dict:
-    """The group keys ``policy`` / ``axis`` / ``span`` of its kind (refused on the
-    other kinds), and the sign a pose-rate group must have."""
-    key = KIND_OPTIONS.get(kind, (None,))[0]
-    for other in ("policy", "axis", "span"):
-        if other in g and other != key:
-            owner = [k for k, v in KIND_OPTIONS.items() if v[0] == other][0]
-            raise DesignError(f"{wg}.{other}: only {owner} groups have a{'n' if other[0] in 'a' else ''} "
-                              f"{other}")
-    if kind == "pose-rate" and sign != 1:
-        raise DesignError(f"{wg}.sign: a pose-rate group's levels are poses per second; its sign is 1")
-    if key is None:
-        return {}
-    _, default, values = KIND_OPTIONS[kind]
-    return {key: _get(g, key, str, wg, ... if default is None else default,
-                      lambda v: None if v in values else f"must be one of {list(values)}")}
 
-
-def _style_ok(v: str):
-    """None if ``v`` is a character style, else what is wrong (with a did-you-mean)."""
-    if v in CHARACTER_STYLES:
+def _field(obj, key: str, typ, where: str, check=None, optional: bool = False):
+    """Check field ``key`` of a design type being made (type, finite, ``check``), store
+    it as read (an int where a number is expected becomes a float) and return it."""
+    v = getattr(obj, key)
+    if v is None and optional:
         return None
-    close = difflib.get_close_matches(v, CHARACTER_STYLES, n=1, cutoff=0.5)
-    hint = f" (did you mean '{close[0]}'?)" if close else ""
-    return f"unknown character style{hint}; expected one of {', '.join(CHARACTER_STYLES)}"
+    v = _get({key: v}, key, typ, where, check=check)
+    object.__setattr__(obj, key, v)
+    return v
 
 
-def parse_design(text: str, path: Path | str = "<design>") -> Design:
-    """Parse and validate a design (TOML text).
+def _one_of(values):
+    return lambda v: None if v in values else f"must be one of {list(values)}"
 
-    Every key must be one the section knows, every number lies in its bounds,
-    names, clips, references and levels are not repeated; anything else raises
-    :class:`DesignError` naming the file, section, key and the value as written."""
-    src = str(path)
-    try:
-        d = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise DesignError(f"{src}: not valid TOML: {e}") from None
-    except RecursionError:
-        raise DesignError(f"{src}: not a usable design: its arrays or tables are nested too deeply "
-                          f"to read (a design nests at most a few levels)") from None
-    for k in d:
-        if k not in SECTIONS:
-            close = difflib.get_close_matches(str(k), SECTIONS, n=1, cutoff=0.6)
-            hint = f"; did you mean [{close[0]}]?" if close else ""
-            raise DesignError(f"{src}: unknown section [{k}]{hint} (expected "
-                              f"{', '.join(SECTIONS)})")
-    st = d.get("study")
-    if not isinstance(st, dict):
-        raise DesignError(f"{src}: missing [study] section")
-    w = f"{src}: [study]"
-    _check_keys({k: v for k, v in st.items() if k not in OLD_SESSION_KEYS}, STUDY_KEYS, w)
-    design = Design(
-        name=_get(st, "name", str, w, check=lambda v: None if 0 < len(v) <= 200 else
-                  "expected 1 to 200 characters"),
-        seed=_get(st, "seed", int, w, check=_between(0, MAX_SEED)),
-        fps=_get(st, "fps", float, w, 120.0, _between(*FPS_RANGE, " frames per second")),
-        repetitions=_get(st, "repetitions", int, w, 2, _between(1, REPETITIONS_MAX,
-                                                                " presentations of each motion")),
-        total_mass=_get(st, "total_mass", float, w, 70.0, _between(*MASS_RANGE, " kg")),
-        clips=[], groups=[],
-        com_policy=_get(st, "com_policy", str, w, "angle",
-                        lambda v: None if v in COM_POLICIES else f"must be one of {list(COM_POLICIES)}"),
-        tolerance_pct=_get(st, "tolerance_pct", float, w, 1.0,
-                           lambda v: None if 0 < v <= TOLERANCE_MAX else
-                           f"expected more than 0 and at most {TOLERANCE_MAX:g} (percent)"),
-        original=_get(st, "original", str, w, "shared",
-                      lambda v: None if v in ORIGINAL_MODES else f"must be one of {list(ORIGINAL_MODES)}"),
-        fps_given="fps" in st,
-        path=Path(path) if str(path) != "<design>" else None,
-        session=_parse_session(d, st, src),
-        style=_get(st, "style", str, w, None, _style_ok),
-        task=_get(st, "task", str, w, "yes-no",
-                  lambda v: None if v in TASKS else f"must be one of {list(TASKS)}"),
-    )
-    clips = d.get("clips")
-    if not isinstance(clips, list) or not clips:
-        raise DesignError(f"{src}: [[clips]]: at least one base clip is needed")
-    seen_sources: dict[tuple, str] = {}
-    for i, c in enumerate(clips):
-        wc = f"{src}: clips[{i}]"
+
+#: what each type's fields may hold, by TOML key: (type, default, check); the
+#: default ``...`` means the key must be given, None that it may be left out
+CLIP_FIELDS = {
+    "name": (str, ..., None),          # checked by _name_ok (defined below)
+    "source": (str, ..., lambda v: None if 0 < len(v) <= 4096 else "expected a built-in name or a path"),
+    "scale": (float, None, _between(*SCALE_RANGE, " metres per file unit")),
+    "fps": (float, None, _between(*FPS_RANGE, " frames per second")),
+    "flips": (int, None, lambda v: None if 1 <= v <= 6 else "expected a whole number of flips from 1 to 6"),
+    "k_ratio": (float, 0.7, lambda v: None if 0.2 <= v <= 2 else "expected a fraction of k* from 0.2 to 2"),
+    "accept_unphysical": (bool, False, None),
+}
+
+
+@dataclass(frozen=True)
+class ClipSpec:
+    """A ``[[clips]]`` entry, valid when it exists (every field checked against
+    :data:`CLIP_FIELDS`; ``where`` names the file and entry in errors)."""
+    name: str
+    source: str                 # built-in name or BVH path (relative to the design file)
+    scale: float | None = None  # metres per file unit (BVH); None: guess
+    fps: float | None = None    # override the file's frame rate (BVH)
+    flips: int | None = None    # turn the clip into an N-flip one first (flipstudy edit)
+    k_ratio: float = 0.7        # its retiming factor as a fraction of k*
+    accept_unphysical: bool = False  # build it although its gravity or height contradicts physics
+    where: InitVar[str | None] = None
+
+    def __post_init__(self, where):
+        w = where or "clips"
+        _field(self, "name", str, w, _name_ok)
+        for key, (typ, default, check) in CLIP_FIELDS.items():
+            if key != "name":
+                _field(self, key, typ, w, check, optional=default is None)
+
+    @classmethod
+    def from_dict(cls, c: dict, where: str = "clips") -> "ClipSpec":
         if not isinstance(c, dict):
-            raise DesignError(f"{wc}: expected a table")
-        _check_keys(c, CLIP_KEYS, wc + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
-        spec = ClipSpec(
-            name=_get(c, "name", str, wc, check=_name_ok),
-            source=_get(c, "source", str, wc, check=lambda v: None if 0 < len(v) <= 4096 else
-                        "expected a built-in name or a path"),
-            scale=_get(c, "scale", float, wc, None,
-                       _between(*SCALE_RANGE, " metres per file unit")),
-            fps=_get(c, "fps", float, wc, None, _between(*FPS_RANGE, " frames per second")),
-            flips=_get(c, "flips", int, wc, None,
-                       lambda v: None if 1 <= v <= 6 else "expected a whole number of flips from 1 to 6"),
-            k_ratio=_get(c, "k_ratio", float, wc, 0.7,
-                         lambda v: None if 0.2 <= v <= 2 else "expected a fraction of k* from 0.2 to 2"),
-            accept_unphysical=_get(c, "accept_unphysical", bool, wc, False))
-        wc = f"{src}: clips[{i}] ({spec.name})"
-        key = (spec.source, spec.scale, spec.fps, spec.flips, spec.k_ratio if spec.flips else None)
-        if key in seen_sources:
-            raise DesignError(f"{wc}: the same source {spec.source!r} with the same options as clip "
-                              f"'{seen_sources[key]}'; each base clip is listed once")
-        seen_sources[key] = spec.name
-        design.clips.append(spec)
-    names = [c.name for c in design.clips]
-    if len(set(names)) != len(names):
-        raise DesignError(f"{src}: clips: duplicate clip names {sorted({n for n in names if names.count(n) > 1})}")
-    groups = d.get("groups")
-    if not isinstance(groups, list) or not groups:
-        raise DesignError(f"{src}: [[groups]]: at least one error group is needed")
-    for i, g in enumerate(groups):
-        wg = f"{src}: groups[{i}]"
-        if not isinstance(g, dict):
-            raise DesignError(f"{wg}: expected a table")
-        _check_keys(g, GROUP_KEYS, wg + (f" ({g['name']})" if isinstance(g.get("name"), str) else ""))
-        gname = _get(g, "name", str, wg, check=_name_ok)
-        if gname in RESERVED_GROUP_NAMES:
-            raise DesignError(f"{wg}.name: '{gname}' is reserved (the manifest's reference and "
-                              f"shared-original rows); choose another name")
-        wg = f"{src}: groups[{i}] ({gname})"
-        kind = _get(g, "kind", str, wg, check=lambda v: None if v in KINDS else f"must be one of {list(KINDS)}")
-        profile = None
+            raise DesignError(f"{where}: expected a table")
+        _check_keys(c, CLIP_KEYS, where + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
+        for key, (typ, default, check) in CLIP_FIELDS.items():
+            if default is ... and key not in c:
+                raise DesignError(f"{where}: missing field '{key}'")
+        return cls(**c, where=where)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in CLIP_FIELDS if getattr(self, k) is not None}
+
+
+GROUP_FIELDS = {
+    "name": (str, ..., None), "kind": (str, ..., _one_of(KINDS)),
+    "profile": (str, None, _one_of(PROFILES)), "sign": (int, 1, lambda v: None if v in (1, -1) else "must be 1 or -1"),
+    "levels": (list, ..., None), "original": (str, "own", _one_of(GROUP_ORIGINAL)),
+    "style": (str, None, None), "method": (str, "constant", _one_of(METHODS)),
+    "task": (str, "yes-no", _one_of(TASKS)),
+    "policy": (str, None, None), "axis": (str, None, None), "span": (str, None, None),
+}
+
+
+@dataclass(frozen=True)
+class Group:
+    """A ``[[groups]]`` entry, valid when it exists: kind, profile, sign, its kind's
+    option, levels in the kind's range (:data:`LEVEL_BOUNDS`), method, task and a
+    quest+ group's settings are checked on construction (``where`` names the file
+    and group in errors).  What depends on the whole design (a reserved or repeated
+    name, a shared original in another style) is checked by :class:`Design`."""
+    name: str
+    kind: str                   # "angular-momentum" | "takeoff-angle" | a ballistic kind
+    profile: str | None         # "smooth" | "abrupt" (angular momentum only)
+    sign: int                   # +1 increase, -1 decrease
+    levels: tuple[float, ...]   # nominal error in percent (magnitude; 0 = original), sorted
+    original: str = "own"       # "shared": its level 0 is the clip's shared original
+    style: str | None = None    # character style of its stimuli (None: the study's)
+    method: str = "constant"    # "constant" stimuli | "quest+" (adaptive over the levels)
+    task: str = "yes-no"        # "yes-no" | "2afc" (original and modified, which was correct?)
+    quest: QuestSpec | None = None   # a quest+ group's settings
+    policy: str | None = None   # gravity: what stays ("takeoff-velocity" | "apex-height" | "flight-time")
+    axis: str | None = None     # acceleration: "horizontal" | "vertical"
+    span: str | None = None     # time-scale: "flight" | "whole"
+    where: InitVar[str | None] = None
+
+    def __post_init__(self, where):
+        w0 = where or "groups"
+        name = _field(self, "name", str, w0, _name_ok)
+        wg = f"{w0} ({name})"
+        kind = _field(self, "kind", str, wg, _one_of(KINDS))
         if kind == "angular-momentum":
-            profile = _get(g, "profile", str, wg,
-                           check=lambda v: None if v in PROFILES else f"must be one of {list(PROFILES)}")
-        elif "profile" in g:
+            only_original = isinstance(self.levels, (list, tuple)) and list(self.levels) == [0]
+            if self.profile is None and not only_original:    # (the shared original has none)
+                raise DesignError(f"{wg}: missing field 'profile'")
+            _field(self, "profile", str, wg, _one_of(PROFILES), optional=only_original)
+        elif self.profile is not None:
             raise DesignError(f"{wg}.profile: only angular-momentum groups have a profile")
-        sign = _get(g, "sign", int, wg, 1, lambda v: None if v in (1, -1) else "must be 1 or -1")
-        options = _kind_options(g, kind, sign, wg)
+        sign = _field(self, "sign", int, wg, GROUP_FIELDS["sign"][2])
+        key = KIND_OPTIONS.get(kind, (None,))[0]
+        for other in ("policy", "axis", "span"):
+            if getattr(self, other) is not None and other != key:
+                owner = [k for k, v in KIND_OPTIONS.items() if v[0] == other][0]
+                raise DesignError(f"{wg}.{other}: only {owner} groups have a{'n' if other[0] in 'a' else ''} "
+                                  f"{other}")
+        if kind == "pose-rate" and sign != 1:
+            raise DesignError(f"{wg}.sign: a pose-rate group's levels are poses per second; its sign is 1")
+        if key is not None:
+            _, default, values = KIND_OPTIONS[kind]
+            if getattr(self, key) is None:
+                if default is None:
+                    raise DesignError(f"{wg}: missing field '{key}'")
+                object.__setattr__(self, key, default)
+            _field(self, key, str, wg, _one_of(values))
         top, excluded = LEVEL_BOUNDS[(kind, sign)]
-        lv = parse_levels(g, wg, kind, sign, top, excluded)
-        method, task = parse_method_task(g, wg, design.task)
-        quest = parse_quest(g, wg, method, task, lv)
+        lv = check_levels(self.levels, wg, kind, sign, top, excluded)
+        object.__setattr__(self, "levels", lv)
+        method = _field(self, "method", str, wg, _one_of(METHODS))
+        task = _field(self, "task", str, wg, _one_of(TASKS))
+        object.__setattr__(self, "quest", check_quest(self.quest, wg, method, task, lv))
         if method == "quest+" and kind == "pose-rate":
             raise DesignError(f"{wg}.method: QUEST+ assumes the error grows with the level, and a "
                               f"pose rate's error grows as the level (poses per second) falls; run "
@@ -414,50 +290,367 @@ def parse_design(text: str, path: Path | str = "<design>") -> Design:
         if task == "2afc" and (0.0 not in lv or len(lv) < 2):
             raise DesignError(f"{wg}.levels: a 2afc group shows each level beside the original, so "
                               f"its levels need 0 (the original) and at least one error level, got "
-                              f"{_show(g['levels'])}")
-        default_orig = "shared" if design.original == "shared" and kind == "angular-momentum" else "own"
-        orig = _get(g, "original", str, wg, default_orig,
-                    lambda v: None if v in GROUP_ORIGINAL else f"must be one of {list(GROUP_ORIGINAL)}")
+                              f"{_show(list(lv))}")
+        orig = _field(self, "original", str, wg, _one_of(GROUP_ORIGINAL))
         if orig == "shared" and kind != "angular-momentum":
             raise DesignError(f"{wg}.original: only angular-momentum groups share their original "
                               f"(the paper's take-off group had its own); use original = \"own\"")
-        gstyle = _get(g, "style", str, wg, None, _style_ok)
-        if orig == "shared" and gstyle is not None and gstyle != (design.style or "ellipsoids"):
-            raise DesignError(f"{wg}.style: a group drawn as {gstyle!r} cannot share the clip's "
-                              f"original (drawn in the study's style); use original = \"own\"")
-        design.groups.append(Group(gname, kind, profile, sign, lv, orig, gstyle, method, task, quest,
-                                   **options))
-    gnames = [g.name for g in design.groups]
-    if len(set(gnames)) != len(gnames):
-        raise DesignError(f"{src}: groups: duplicate group names "
-                          f"{sorted({n for n in gnames if gnames.count(n) > 1})}")
-    ref = d.get("reference", {})
-    if not isinstance(ref, dict):
-        raise DesignError(f"{src}: [reference]: expected a table with 'clips'")
-    _check_keys(ref, REFERENCE_KEYS, f"{src}: [reference]")
-    design.reference = _get(ref, "clips", list, f"{src}: [reference]", [])
-    for r in design.reference:
-        if r not in names:
-            raise DesignError(f"{src}: [reference].clips: {_show(r)} is not one of the clips {names}")
-    if len(set(design.reference)) != len(design.reference):
-        raise DesignError(f"{src}: [reference].clips: {sorted({r for r in design.reference if design.reference.count(r) > 1})} "
-                          f"listed more than once; each reference clip is shown once")
-    stimuli = design.stimulus_names()
-    if len(set(stimuli)) != len(stimuli):
-        dup = sorted({s for s in stimuli if stimuli.count(s) > 1})
-        raise DesignError(f"{src}: clip and group names give the same stimulus name twice ({dup[:3]}); "
-                          f"rename a clip or group")
-    n_trials = design.trials_per_participant()
-    if any(g.adaptive or g.task != "yes-no" for g in design.groups) and n_trials > TRIALS_MAX:
-        parts = [f"{g.name}: {g.quest.trials if g.adaptive else design.repetitions * len(design.clips) * len(g.trial_levels())}"
-                 for g in design.groups]
-        raise DesignError(f"{src}: {n_trials} test trials per participant ({', '.join(parts)}); "
-                          f"at most {TRIALS_MAX} (fewer repetitions, clips, levels or quest+ trials)")
-    if n_trials > TRIALS_MAX:
-        raise DesignError(f"{src}: [study].repetitions = {design.repetitions} × {design.n_test_stimuli()} "
-                          f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "
-                          f"(fewer repetitions, clips, groups or levels)")
-    return design
+        _field(self, "style", str, wg, _style_ok, optional=True)
+
+    @classmethod
+    def from_dict(cls, g: dict, where: str = "groups", study_task: str = "yes-no",
+                  study_original: str = "per-group") -> "Group":
+        """A group from its TOML table (``levels`` a list or a grid; the quest+ keys at
+        the top level); ``study_task`` and ``study_original`` give the defaults the
+        ``[study]`` table sets."""
+        if not isinstance(g, dict):
+            raise DesignError(f"{where}: expected a table")
+        _check_keys(g, GROUP_KEYS, where + (f" ({g['name']})" if isinstance(g.get("name"), str) else ""))
+        name = _get(g, "name", str, where, check=_name_ok)
+        wg = f"{where} ({name})"
+        kind = _get(g, "kind", str, wg, check=_one_of(KINDS))
+        if kind == "angular-momentum":
+            _get(g, "profile", str, wg, check=_one_of(PROFILES))
+        kw = {k: g[k] for k in GROUP_FIELDS if k in g and k != "levels"}
+        kw["levels"] = read_levels(g, wg)
+        kw.setdefault("profile", None)
+        kw.setdefault("sign", 1)
+        kw.setdefault("task", study_task)
+        kw.setdefault("original", "shared" if study_original == "shared" and kind == "angular-momentum"
+                      else "own")
+        return cls(**kw, quest=quest_table(g), where=where)
+
+    def to_dict(self) -> dict:
+        """The group's TOML table (what :meth:`from_dict` reads back to an equal group)."""
+        out = {"name": self.name, "kind": self.kind}
+        if self.profile is not None:
+            out["profile"] = self.profile
+        out.update(sign=self.sign, levels=levels_table(self.levels), original=self.original,
+                   method=self.method, task=self.task)
+        for k in ("style", "policy", "axis", "span"):
+            if getattr(self, k) is not None:
+                out[k] = getattr(self, k)
+        if self.quest is not None:
+            for k in QUEST_KEYS:
+                v = getattr(self.quest, k)
+                if v is not None:
+                    out[k] = list(v) if isinstance(v, tuple) else v
+        return out
+
+    @property
+    def adaptive(self) -> bool:
+        """Does the session choose this group's levels (quest+)?"""
+        return self.method == "quest+"
+
+    def trial_levels(self) -> list[float]:
+        """The levels its trials show: level 0 is a 2AFC group's comparison, not a trial
+        level, and a shared original is shown as the group ``original``."""
+        return [v for v in self.levels
+                if v != 0 or (self.task == "yes-no" and (self.adaptive or self.original != "shared"))]
+
+
+SESSION_FIELDS = {
+    "replay": (bool, False, None),
+    "break_every": (int, 40, _between(1, BREAK_EVERY_MAX, " trials")),
+    "max_dropped_pct": (float, 10.0, _between(0, 100, " percent of a video's frames")),
+    "repeat_dropped": (bool, False, None),
+}
+
+
+@dataclass(frozen=True)
+class SessionSettings:
+    """How the sessions present a design's stimuli: the design file's ``[session]``
+    table.  None of these changes a stimulus; the session code in
+    :mod:`flipstudy.study` reads them from ``design.session``."""
+
+    replay: bool = False              # may a participant replay a motion before answering
+    break_every: int = 40             # trials between breaks
+    max_dropped_pct: float = 10.0     # web: flag a trial whose video dropped more % of its frames
+    repeat_dropped: bool = False      # web: show the flagged trials once more at the end
+    where: InitVar[str | None] = None
+
+    def __post_init__(self, where):
+        for key, (typ, _, check) in SESSION_FIELDS.items():
+            _field(self, key, typ, where or "[session]", check)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in SESSION_FIELDS}
+
+
+STUDY_FIELDS = {
+    "name": (str, ..., lambda v: None if 0 < len(v) <= 200 else "expected 1 to 200 characters"),
+    "seed": (int, ..., _between(0, MAX_SEED)),
+    "fps": (float, 120.0, _between(*FPS_RANGE, " frames per second")),
+    "repetitions": (int, 2, _between(1, REPETITIONS_MAX, " presentations of each motion")),
+    "total_mass": (float, 70.0, _between(*MASS_RANGE, " kg")),
+    "com_policy": (str, "angle", _one_of(COM_POLICIES)),
+    "tolerance_pct": (float, 1.0, lambda v: None if 0 < v <= TOLERANCE_MAX else
+                      f"expected more than 0 and at most {TOLERANCE_MAX:g} (percent)"),
+    "original": (str, "shared", _one_of(ORIGINAL_MODES)),
+    "style": (str, None, None),                  # checked by _style_ok (defined below)
+    "task": (str, "yes-no", _one_of(TASKS)),
+}
+
+
+@dataclass(frozen=True)
+class Design:
+    """A study design, valid when it exists: every ``[study]`` field is checked
+    against :data:`STUDY_FIELDS`, its clips, groups and session settings are valid
+    types, and what spans them (names not repeated, references among the clips,
+    stimulus names unique, trials per participant bounded, a shared original in
+    the study's style) is checked on construction; errors name the file (``path``,
+    or ``where``), section and key.  :meth:`from_toml` / :meth:`from_dict` read it,
+    :meth:`to_dict` / :meth:`to_toml` write it back to an equal design.
+
+    >>> d = Design.from_toml_text(PAPER_DESIGN)
+    >>> Design.from_dict(d.to_dict()) == d, Design.from_toml_text(d.to_toml()) == d
+    (True, True)
+    """
+    name: str
+    seed: int
+    fps: float
+    repetitions: int
+    total_mass: float
+    clips: tuple[ClipSpec, ...]
+    groups: tuple[Group, ...]
+    reference: tuple[str, ...] = ()
+    com_policy: str = "angle"
+    tolerance_pct: float = 1.0        # refuse stimuli whose measured error misses by more
+    original: str = "shared"          # "shared": AM groups share one original per clip
+    fps_given: bool = True            # [study] fps written: BVH clips are resampled to it
+    path: Path | None = field(default=None, compare=False)   # where it was read from
+    session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
+    style: str | None = None          # character style of every stimulus (None: the renderer's)
+    task: str = "yes-no"              # [study] task: the groups' default task
+    where: InitVar[str | None] = None
+
+    def __post_init__(self, where):
+        src = where or (str(self.path) if self.path is not None else "<design>")
+        w = f"{src}: [study]"
+        for key, (typ, _, check) in STUDY_FIELDS.items():
+            _field(self, key, typ, w, _style_ok if key == "style" else check, optional=key == "style")
+        _field(self, "fps_given", bool, w)
+        if not isinstance(self.session, SessionSettings):
+            raise DesignError(f"{src}: [session]: expected SessionSettings, got {_show(self.session)}")
+        for key, typ in (("clips", ClipSpec), ("groups", Group)):
+            items = getattr(self, key)
+            if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__") \
+                    or not all(isinstance(x, typ) for x in items):
+                raise DesignError(f"{src}: [[{key}]]: expected {typ.__name__} entries, got {_show(items)}")
+            object.__setattr__(self, key, tuple(items))
+        if not self.clips:
+            raise DesignError(f"{src}: [[clips]]: at least one base clip is needed")
+        seen: dict[tuple, str] = {}
+        for i, c in enumerate(self.clips):
+            key = (c.source, c.scale, c.fps, c.flips, c.k_ratio if c.flips else None)
+            if key in seen:
+                raise DesignError(f"{src}: clips[{i}] ({c.name}): the same source {c.source!r} with the "
+                                  f"same options as clip '{seen[key]}'; each base clip is listed once")
+            seen[key] = c.name
+        names = [c.name for c in self.clips]
+        if len(set(names)) != len(names):
+            raise DesignError(f"{src}: clips: duplicate clip names "
+                              f"{sorted({n for n in names if names.count(n) > 1})}")
+        if not self.groups:
+            raise DesignError(f"{src}: [[groups]]: at least one error group is needed")
+        for i, g in enumerate(self.groups):
+            if g.name in RESERVED_GROUP_NAMES:
+                raise DesignError(f"{src}: groups[{i}].name: '{g.name}' is reserved (the manifest's "
+                                  f"reference and shared-original rows); choose another name")
+            if g.original == "shared" and g.style is not None and g.style != (self.style or "ellipsoids"):
+                raise DesignError(f"{src}: groups[{i}] ({g.name}).style: a group drawn as {g.style!r} "
+                                  f"cannot share the clip's original (drawn in the study's style); use "
+                                  f"original = \"own\"")
+        gnames = [g.name for g in self.groups]
+        if len(set(gnames)) != len(gnames):
+            raise DesignError(f"{src}: groups: duplicate group names "
+                              f"{sorted({n for n in gnames if gnames.count(n) > 1})}")
+        ref = self.reference
+        if isinstance(ref, (str, bytes)) or not isinstance(ref, (list, tuple)):
+            raise DesignError(f"{src}: [reference].clips: expected an array, got {_show(ref)}")
+        object.__setattr__(self, "reference", tuple(ref))
+        for r in self.reference:
+            if r not in names:
+                raise DesignError(f"{src}: [reference].clips: {_show(r)} is not one of the clips {names}")
+        if len(set(self.reference)) != len(self.reference):
+            raise DesignError(f"{src}: [reference].clips: "
+                              f"{sorted({r for r in self.reference if self.reference.count(r) > 1})} "
+                              f"listed more than once; each reference clip is shown once")
+        stimuli = self.stimulus_names()
+        if len(set(stimuli)) != len(stimuli):
+            dup = sorted({s for s in stimuli if stimuli.count(s) > 1})
+            raise DesignError(f"{src}: clip and group names give the same stimulus name twice "
+                              f"({dup[:3]}); rename a clip or group")
+        n_trials = self.trials_per_participant()
+        if any(g.adaptive or g.task != "yes-no" for g in self.groups) and n_trials > TRIALS_MAX:
+            parts = [f"{g.name}: {g.quest.trials if g.adaptive else self.repetitions * len(self.clips) * len(g.trial_levels())}"
+                     for g in self.groups]
+            raise DesignError(f"{src}: {n_trials} test trials per participant ({', '.join(parts)}); "
+                              f"at most {TRIALS_MAX} (fewer repetitions, clips, levels or quest+ trials)")
+        if n_trials > TRIALS_MAX:
+            raise DesignError(f"{src}: [study].repetitions = {self.repetitions} × {self.n_test_stimuli()} "
+                              f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "
+                              f"(fewer repetitions, clips, groups or levels)")
+
+    # ------------------------------------------------------------ reading, writing
+    @classmethod
+    def from_dict(cls, d: dict, path: Path | str | None = None) -> "Design":
+        """A design from its TOML tables (``study``, ``session``, ``clips``, ``groups``,
+        ``reference``); ``path`` names the file in errors (and resolves BVH sources)."""
+        src = str(path) if path is not None else "<design>"
+        if not isinstance(d, dict):
+            raise DesignError(f"{src}: expected the tables of a design, got {_show(d)}")
+        for k in d:
+            if k not in SECTIONS:
+                close = difflib.get_close_matches(str(k), SECTIONS, n=1, cutoff=0.6)
+                hint = f"; did you mean [{close[0]}]?" if close else ""
+                raise DesignError(f"{src}: unknown section [{k}]{hint} (expected "
+                                  f"{', '.join(SECTIONS)})")
+        st = d.get("study")
+        if not isinstance(st, dict):
+            raise DesignError(f"{src}: missing [study] section")
+        w = f"{src}: [study]"
+        _check_keys({k: v for k, v in st.items() if k not in OLD_SESSION_KEYS}, STUDY_KEYS, w)
+        study = {k: _get(st, k, typ, w, default, _style_ok if k == "style" else check)
+                 for k, (typ, default, check) in STUDY_FIELDS.items()}
+        session = _parse_session(d, st, src)
+        clips = d.get("clips")
+        if not isinstance(clips, list) or not clips:
+            raise DesignError(f"{src}: [[clips]]: at least one base clip is needed")
+        specs = [ClipSpec.from_dict(c, f"{src}: clips[{i}]") for i, c in enumerate(clips)]
+        groups = d.get("groups")
+        if not isinstance(groups, list) or not groups:
+            raise DesignError(f"{src}: [[groups]]: at least one error group is needed")
+        gs = [Group.from_dict(g, f"{src}: groups[{i}]", study["task"], study["original"])
+              for i, g in enumerate(groups)]
+        ref = d.get("reference", {})
+        if not isinstance(ref, dict):
+            raise DesignError(f"{src}: [reference]: expected a table with 'clips'")
+        _check_keys(ref, REFERENCE_KEYS, f"{src}: [reference]")
+        reference = _get(ref, "clips", list, f"{src}: [reference]", [])
+        p = Path(path) if path is not None and str(path) != "<design>" else None
+        return cls(**study, clips=tuple(specs), groups=tuple(gs), reference=tuple(reference),
+                   fps_given="fps" in st, path=p, session=session, where=src)
+
+    @classmethod
+    def from_toml_text(cls, text: str, path: Path | str = "<design>") -> "Design":
+        """A design from TOML text (``path`` names it in errors)."""
+        src = str(path)
+        try:
+            d = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise DesignError(f"{src}: not valid TOML: {e}") from None
+        except RecursionError:
+            raise DesignError(f"{src}: not a usable design: its arrays or tables are nested too "
+                              f"deeply to read (a design nests at most a few levels)") from None
+        return cls.from_dict(d, path)
+
+    @classmethod
+    def from_toml(cls, path) -> "Design":
+        """A design from a TOML file (at most :data:`MAX_DESIGN_BYTES`, UTF-8)."""
+        p = Path(path)
+        try:
+            size = p.stat().st_size
+            if size > MAX_DESIGN_BYTES:
+                raise DesignError(f"{p}: {size} bytes; a design is a short text file (at most "
+                                  f"{MAX_DESIGN_BYTES} bytes)")
+            text = p.read_text()
+        except OSError as e:
+            raise DesignError(f"{p}: cannot read design: {e.strerror}") from None
+        except UnicodeDecodeError:
+            raise DesignError(f"{p}: not a text file (a design is TOML, UTF-8)") from None
+        return cls.from_toml_text(text, p)
+
+    def to_dict(self) -> dict:
+        """The design's TOML tables; :meth:`from_dict` reads them back to an equal design
+        (``[study] fps`` is written only when the design wrote it)."""
+        study = {k: getattr(self, k) for k in STUDY_FIELDS
+                 if getattr(self, k) is not None and (k != "fps" or self.fps_given)}
+        out = {"study": study, "session": self.session.to_dict(),
+               "clips": [c.to_dict() for c in self.clips],
+               "groups": [g.to_dict() for g in self.groups]}
+        if self.reference:
+            out["reference"] = {"clips": list(self.reference)}
+        return out
+
+    def to_toml(self) -> str:
+        """The design as TOML text (:meth:`from_toml_text` reads it back to an equal design)."""
+        return _toml(self.to_dict())
+
+    def style_of(self, group) -> str | None:
+        """The character style of a group's stimuli (None: nothing chosen)."""
+        return (getattr(group, "style", None) if group is not None else None) or self.style
+
+    @property
+    def styled(self) -> bool:
+        """Does the design choose a character style anywhere (the manifest then
+        has a ``style`` column)?"""
+        return self.style is not None or any(g.style for g in self.groups)
+
+    def clip(self, name: str) -> ClipSpec:
+        for c in self.clips:
+            if c.name == name:
+                return c
+        raise KeyError(name)
+
+    @property
+    def shares_original(self) -> bool:
+        """Do some groups show the clip's shared original as their level 0?"""
+        return any(g.original == "shared" and 0.0 in g.levels for g in self.groups)
+
+    def stimulus_names(self) -> list[str]:
+        """Every stimulus name, in manifest order (see :func:`flipstudy.stimuli.stimset.plan`)."""
+        out = [f"{r}_reference" for r in self.reference]
+        for c in self.clips:
+            if self.shares_original:
+                out.append(f"{c.name}_{SHARED_ORIGINAL_GROUP}")
+            for g in self.groups:
+                out += [f"{c.name}_{g.name}_{lv:g}" for lv in g.levels
+                        if not (lv == 0 and g.original == "shared")]
+        return out
+
+    def n_test_stimuli(self) -> int:
+        return len(self.stimulus_names()) - len(self.reference)
+
+    @property
+    def shows_shared_original(self) -> bool:
+        """Are the shared originals trials of their own (group ``original``)?  Only a
+        constant yes/no group that shares them asks about them on their own."""
+        return any(g.original == "shared" and 0.0 in g.levels and not g.adaptive
+                   and g.task == "yes-no" for g in self.groups)
+
+    def trials_per_participant(self) -> int:
+        """Test trials of one session: ``repetitions`` × clips × trial levels of each
+        constant group (and the shared originals), plus ``trials`` of each quest+ group."""
+        nc = len(self.clips)
+        n = sum(g.quest.trials if g.adaptive else self.repetitions * nc * len(g.trial_levels())
+                for g in self.groups)
+        return n + (self.repetitions * nc if self.shows_shared_original else 0)
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    if isinstance(v, str):                  # JSON's escapes are TOML's; TOML also wants DEL escaped
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{" + ", ".join(f"{json.dumps(k)} = {_toml_value(x)}" for k, x in v.items()) + "}"
+    raise TypeError(f"no TOML for {v!r}")
+
+
+def _toml(d: dict) -> str:
+    """TOML text of a design's tables (tables and arrays of tables of plain values)."""
+    out = []
+    for section, body in d.items():
+        for table in (body if isinstance(body, list) else [body]):
+            out.append(f"[[{section}]]" if isinstance(body, list) else f"[{section}]")
+            out += [f"{k} = {_toml_value(v)}" for k, v in table.items()]
+            out.append("")
+    return "\n".join(out)
 
 
 def _parse_session(d: dict, st: dict, src: str) -> SessionSettings:
@@ -472,40 +665,48 @@ def _parse_session(d: dict, st: dict, src: str) -> SessionSettings:
         if k in se:
             raise DesignError(f"{src}: [study].{k} and [session].{k} are both given; {k} is a "
                               f"session setting: keep the one in [session]")
-
-    def get(key, typ, default, check=None):
+    values = {}
+    for key, (typ, default, check) in SESSION_FIELDS.items():
         table, where = (st, f"{src}: [study]") if key in st else (se, f"{src}: [session]")
-        return _get(table, key, typ, where, default, check)
-
-    settings = SessionSettings(replay=get("replay", bool, False),
-                               break_every=get("break_every", int, 40,
-                                               _between(1, BREAK_EVERY_MAX, " trials")),
-                               max_dropped_pct=get("max_dropped_pct", float, 10.0,
-                                                   _between(0, 100, " percent of a video's frames")),
-                               repeat_dropped=get("repeat_dropped", bool, False))
+        values[key] = _get(table, key, typ, where, default, check)
+    settings = SessionSettings(**values, where=f"{src}: [session]")
     if old:
         warnings.warn(f"{src}: [study] {', '.join(old)}: session settings go in a [session] table "
                       f"now; read as [session] {', '.join(old)} (move them there)",
-                      FutureWarning, stacklevel=3)
+                      FutureWarning, stacklevel=4)
     return settings
 
 
+def _style_ok(v: str):
+    """None if ``v`` is a character style, else what is wrong (with a did-you-mean)."""
+    if v in CHARACTER_STYLES:
+        return None
+    close = difflib.get_close_matches(v, CHARACTER_STYLES, n=1, cutoff=0.5)
+    hint = f" (did you mean '{close[0]}'?)" if close else ""
+    return f"unknown character style{hint}; expected one of {', '.join(CHARACTER_STYLES)}"
+
+
 def _name_ok(v: str):
-    import re
     return None if re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}", v) else \
         "must be 1-64 letters, digits, '_', '.', '-' (it names files)"
 
 
+#: the keys each section may hold (anything else is refused with a did-you-mean): the types' fields
+STUDY_KEYS = tuple(STUDY_FIELDS)
+SESSION_KEYS = tuple(SESSION_FIELDS)
+CLIP_KEYS = tuple(CLIP_FIELDS)
+GROUP_KEYS = (*GROUP_FIELDS, *QUEST_KEYS)
+
+
+def parse_design(text: str, path: Path | str = "<design>") -> Design:
+    """Parse and validate a design (TOML text): :meth:`Design.from_toml_text`.
+
+    Every key must be one the section knows, every number lies in its bounds,
+    names, clips, references and levels are not repeated; anything else raises
+    :class:`DesignError` naming the file, section, key and the value as written."""
+    return Design.from_toml_text(text, path)
+
+
 def load_design(path) -> Design:
-    p = Path(path)
-    try:
-        size = p.stat().st_size
-        if size > MAX_DESIGN_BYTES:
-            raise DesignError(f"{p}: {size} bytes; a design is a short text file (at most "
-                              f"{MAX_DESIGN_BYTES} bytes)")
-        text = p.read_text()
-    except OSError as e:
-        raise DesignError(f"{p}: cannot read design: {e.strerror}") from None
-    except UnicodeDecodeError:
-        raise DesignError(f"{p}: not a text file (a design is TOML, UTF-8)") from None
-    return parse_design(text, p)
+    """A design file: :meth:`Design.from_toml`."""
+    return Design.from_toml(path)

@@ -55,9 +55,11 @@ def grid_levels(t: dict, where: str) -> list[float]:
     hi = _get(t, "to", float, w, check=lambda v: None if v > lo else f"expected more than from = {lo:g}")
     step = _get(t, "step", float, w, check=lambda v: None if v > 0 else "expected more than 0 (percent)")
     span = (hi - lo) / step
-    if span + 1 > GRID_MAX + 1e-6:
-        raise DesignError(f"{w}: from {lo:g} to {hi:g} in steps of {step:g} is {math.floor(span + 1e-9) + 1} "
-                          f"levels; a grid has at most {GRID_MAX} (a larger step)")
+    if not span + 1 <= GRID_MAX + 1e-6:        # also a step so small the count overflows
+        count = f"{math.floor(span + 1e-9) + 1}" if span < 1e6 else "over a million"
+        raise DesignError(f"{w}.step: from {lo:g} to {hi:g} in steps of {step:g} is {count} "
+                          f"levels; a grid has at most {GRID_MAX} (a step of at least "
+                          f"{(hi - lo) / (GRID_MAX - 1):g})")
     n = round(span)
     if abs(n - span) > 1e-6 * max(1.0, span):
         last = round(lo + math.floor(span) * step, 9)
@@ -67,25 +69,51 @@ def grid_levels(t: dict, where: str) -> list[float]:
     return [round(lo + i * step, 9) for i in range(n + 1)]
 
 
-def parse_levels(g: dict, where: str, kind: str, sign: int, top: float, excluded: bool) -> list[float]:
-    """A group's ``levels``: a list (at most :data:`LEVELS_MAX`) or a grid table; each
-    in 0..``top`` percent (``top`` itself refused when ``excluded``); sorted."""
+def read_levels(g: dict, where: str) -> list:
+    """A group table's ``levels`` as written: a list (at most :data:`LEVELS_MAX`) or
+    a grid table (:func:`grid_levels`); the values are checked by :func:`check_levels`."""
     if "levels" not in g:
         raise DesignError(f"{where}: missing field 'levels'")
     levels = g["levels"]
     if isinstance(levels, dict):
-        values = grid_levels(levels, where)
-    elif isinstance(levels, list):
-        if not levels:
-            raise DesignError(f"{where}.levels: at least one level is needed")
+        return grid_levels(levels, where)
+    if isinstance(levels, list):
         if len(levels) > LEVELS_MAX:
             raise DesignError(f"{where}.levels: {len(levels)} levels; at most {LEVELS_MAX} per group "
                               f"as a list (a dense grid is written levels = {{from = 0, to = 60, "
                               f"step = 1}}, at most {GRID_MAX} levels)")
-        values = levels
-    else:
+        return levels
+    raise DesignError(f"{where}.levels: expected an array of levels or a grid table "
+                      f"{{from, to, step}}, got {_show(levels)}")
+
+
+def levels_table(levels) -> list | dict:
+    """``levels`` as a design writes them: a list, or (more than :data:`LEVELS_MAX`) the
+    grid table :func:`grid_levels` reads back to the same levels."""
+    if len(levels) <= LEVELS_MAX:
+        return list(levels)
+    lo, hi, n = levels[0], levels[-1], len(levels) - 1
+    for step in (round((hi - lo) / n, 9), (hi - lo) / n):
+        t = {"from": lo, "to": hi, "step": step}
+        try:
+            if grid_levels(t, "") == list(levels):
+                return t
+        except DesignError:
+            pass
+    raise DesignError(f"levels: {len(levels)} levels that are not a grid; at most {LEVELS_MAX} as a list")
+
+
+def check_levels(values, where: str, kind: str, sign: int, top: float, excluded: bool) -> tuple:
+    """A group's levels checked: at least one, at most :data:`GRID_MAX`, each in
+    0..``top`` percent (``top`` itself refused when ``excluded``), no two alike or
+    naming the same stimulus; returned sorted, as a tuple of floats."""
+    if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__len__"):
         raise DesignError(f"{where}.levels: expected an array of levels or a grid table "
-                          f"{{from, to, step}}, got {_show(levels)}")
+                          f"{{from, to, step}}, got {_show(values)}")
+    if not len(values):
+        raise DesignError(f"{where}.levels: at least one level is needed")
+    if len(values) > GRID_MAX:
+        raise DesignError(f"{where}.levels: {len(values)} levels; a group has at most {GRID_MAX}")
     what = f"{'an increase' if sign > 0 else 'a decrease'} of the {kind.replace('-', ' ')}"
     lv = []
     for v in values:
@@ -103,28 +131,19 @@ def parse_levels(g: dict, where: str, kind: str, sign: int, top: float, excluded
                               f"{limit}{why}")
         lv.append(float(v))
     if len(set(lv)) != len(lv):
-        raise DesignError(f"{where}.levels: duplicate levels in {_show(levels)}")
+        raise DesignError(f"{where}.levels: duplicate levels in {_show(list(values))}")
     names: dict[str, float] = {}
     for v in lv:                      # the level names its stimulus (f"{level:g}")
         if f"{v:g}" in names:
             raise DesignError(f"{where}.levels: {names[f'{v:g}']!r} and {v!r} % give the same "
                               f"stimulus name ({v:g}); levels differ in their first 6 digits")
         names[f"{v:g}"] = v
-    return sorted(lv)
-
-
-def parse_method_task(g: dict, where: str, study_task: str) -> tuple[str, str]:
-    """A group's ``method`` (default ``"constant"``) and ``task`` (default the study's)."""
-    method = _get(g, "method", str, where, "constant",
-                  lambda v: None if v in METHODS else f"must be one of {list(METHODS)}")
-    task = _get(g, "task", str, where, study_task,
-                lambda v: None if v in TASKS else f"must be one of {list(TASKS)}")
-    return method, task
+    return tuple(sorted(lv))
 
 
 def _pair(t: dict, key: str, where: str, lo: float, hi: float, unit: str):
     v = t[key]
-    if (not isinstance(v, list) or len(v) != 2
+    if (not isinstance(v, (list, tuple)) or len(v) != 2
             or any(isinstance(x, bool) or not isinstance(x, (int, float)) for x in v)):
         raise DesignError(f"{where}.{key}: expected two numbers [low, high] ({unit}), got {_show(v)}")
     a, b = float(v[0]), float(v[1])
@@ -134,29 +153,38 @@ def _pair(t: dict, key: str, where: str, lo: float, hi: float, unit: str):
     return a, b
 
 
-def parse_quest(g: dict, where: str, method: str, task: str, levels: list[float]) -> QuestSpec | None:
-    """A quest+ group's :class:`QuestSpec` (None for a constant group, which may not
-    write these keys)."""
-    given = [k for k in QUEST_KEYS if k in g]
+def quest_table(g: dict) -> QuestSpec | None:
+    """The quest+ keys a group table writes, as a :class:`QuestSpec` (unchecked; None
+    when it writes none)."""
+    given = {k: g[k] for k in QUEST_KEYS if k in g}
+    return QuestSpec(**given) if given else None
+
+
+def check_quest(q: QuestSpec | None, where: str, method: str, task: str, levels) -> QuestSpec | None:
+    """A group's quest+ settings checked (a constant group has none; a quest+ group
+    without them gets the defaults)."""
     if method != "quest+":
-        if given:
+        if q is not None:
+            given = [k for k in QUEST_KEYS if getattr(q, k) != getattr(QuestSpec, k)] or ["trials"]
             raise DesignError(f"{where}.{given[0]}: only quest+ groups have {', '.join(QUEST_KEYS)}; "
                               f"add method = \"quest+\" or remove it")
         return None
+    q = q if q is not None else QuestSpec()
     grid = [v for v in levels if not (task == "2afc" and v == 0)]
     if len(grid) < 3:
         raise DesignError(f"{where}.levels: a quest+ group needs at least 3 levels to choose from"
                           f"{' besides 0 (the 2AFC comparison)' if task == '2afc' else ''}, got "
                           f"{len(grid)}; write a grid such as levels = {{from = 0, to = 60, step = 1}}")
     lo, hi = min(grid), max(grid)
-    trials = _get(g, "trials", int, where, 40,
-                  lambda v: None if 1 <= v <= QUEST_TRIALS_MAX else f"expected 1 to {QUEST_TRIALS_MAX} trials")
-    stop = _get(g, "stop_width", float, where, None,
-                lambda v: None if 0 < v <= 1000 else "expected more than 0 and at most 1000 (percent)")
-    tprior = _pair(g, "threshold_prior", where, lo, hi,
-                   f"percent, within the grid {lo:g} to {hi:g}") if "threshold_prior" in g else None
-    wprior = _pair(g, "width_prior", where, *WIDTH_PRIOR_RANGE, "percent") \
-        if "width_prior" in g else QuestSpec.width_prior
-    lapse = _get(g, "lapse", float, where, QuestSpec.lapse,
-                 lambda v: None if 0 <= v < LAPSE_MAX else f"expected 0 or more and below {LAPSE_MAX:g}")
+    t = {k: getattr(q, k) for k in QUEST_KEYS}
+    trials = _get(t, "trials", int, where,
+                  check=lambda v: None if 1 <= v <= QUEST_TRIALS_MAX else f"expected 1 to {QUEST_TRIALS_MAX} trials")
+    stop = None if q.stop_width is None else _get(
+        t, "stop_width", float, where,
+        check=lambda v: None if 0 < v <= 1000 else "expected more than 0 and at most 1000 (percent)")
+    tprior = None if q.threshold_prior is None else _pair(
+        t, "threshold_prior", where, lo, hi, f"percent, within the grid {lo:g} to {hi:g}")
+    wprior = _pair(t, "width_prior", where, *WIDTH_PRIOR_RANGE, "percent")
+    lapse = _get(t, "lapse", float, where,
+                 check=lambda v: None if 0 <= v < LAPSE_MAX else f"expected 0 or more and below {LAPSE_MAX:g}")
     return QuestSpec(trials, stop, tprior, wprior, lapse)

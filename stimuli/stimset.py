@@ -33,7 +33,6 @@ from flipstudy.errors import (DesignError, FlipstudyFileExistsError, FlipstudyFi
                               StimulusError, StudyFolderError, StudyLocked)
 from flipstudy.results import BuildResult
 
-import csv
 import ctypes
 import errno
 import hashlib
@@ -52,21 +51,13 @@ from ._progress import Progress
 from .analyse import analyse
 from .design import SHARED_ORIGINAL_GROUP, Design, Group
 from .injection import Injected, check, inject_angular_momentum, inject_takeoff_angle, measure
-from .ballistic import BALLISTIC_KINDS, inject_kind
+from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
+from .contract import MANIFEST_COLUMNS, StimulusSet  # noqa: F401  (MANIFEST_COLUMNS: re-exported)
+from flipstudy.errors import ManifestError
 from .motion.bvh import bvh_text, load_bvh
 from .motion.clip import Clip
 
-MANIFEST_COLUMNS = [
-    "stimulus", "clip", "group", "kind", "profile", "level", "nominal_error_pct",
-    "measured_error_pct", "takeoff_angle_deg", "takeoff_angle_change_deg", "takeoff", "landing",
-    "seed", "sha256",
-    "L_ratio_window", "L_change_pct", "flight_s", "jump_height_m", "jump_length_m",
-    "dp_takeoff", "dp_landing", "frames", "fps", "bvh", "npz",
-    "original", "accept_unphysical",
-    "takeoff_time", "landing_time", "air_acc_dev", "air_acc_dev_original", "dv_takeoff",
-    "dv_landing", "L_error_touchdown_pct", "below_floor_mm",
-]
 
 
 def load_base_clip(spec, design: Design) -> Clip:
@@ -78,6 +69,7 @@ def load_base_clip(spec, design: Design) -> Clip:
     it was read at.  With ``flips``, the base clip passes the physics gate
     (:func:`physics_gate`) before it is made an N-flip one."""
     from . import BUILTIN_NAMES, builtin
+    where = f"{design.path}: " if design.path is not None else ""
     if spec.source in BUILTIN_NAMES:
         clip = builtin(spec.source, fps=spec.fps or design.fps, total_mass=design.total_mass)
     else:
@@ -85,7 +77,7 @@ def load_base_clip(spec, design: Design) -> Clip:
         if not p.is_absolute() and design.path is not None:
             p = design.path.parent / p
         if not p.exists():
-            raise DesignError(f"clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
+            raise DesignError(f"{where}clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
                               f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
         clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
         if getattr(design, "fps_given", False) and abs(clip.fps - design.fps) > 1e-9 * design.fps:
@@ -98,7 +90,7 @@ def load_base_clip(spec, design: Design) -> Clip:
         try:
             clip = multiflip(a, spec.flips, k_ratio=spec.k_ratio).clip
         except FlipEditError as e:
-            raise DesignError(f"clips '{spec.name}': flips = {spec.flips}: {e}") from None
+            raise DesignError(f"{where}clips '{spec.name}': flips = {spec.flips}: {e}") from None
         clip.meta["name"] = spec.name
     return clip
 
@@ -228,6 +220,7 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 raise StimulusError(f"clips '{c.name}' ({c.source}): the analyser finds no flight "
                                     f"phase, so it cannot carry the study's errors")
             base[c.name] = a
+        check_design_flights(design, base)       # a level that cannot land: refused before any work
         items = [(it, base[it[1].name]) for it in todo]
         if cluster is None:
             rows = []
@@ -236,13 +229,15 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
                 bar.step(it[0])
         else:                             # one task per stimulus; rows back in plan order
             rows = cluster.map_stimuli(make_stimulus, design, items, tmp, bar)
-        write_manifest(tmp / "manifest.csv", rows)
+        StimulusSet.from_rows(tmp, rows).write()
         if design.path is not None:
             shutil.copyfile(design.path, tmp / "design.toml")
         _install(tmp, out, force, replace_check)
-    except BaseException:
+    except BaseException as e:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(e, StimulusError) and design.path is not None and str(design.path) not in str(e):
+            raise StimulusError(f"{design.path}: {e}") from None       # name the design file
         raise
     finally:
         bar.close()
@@ -327,7 +322,7 @@ def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
         "dp_landing": m["dp_landing"], "frames": inj.clip.num_frames, "fps": inj.clip.fps,
         "bvh": f"{name}.bvh", "npz": f"{name}.npz",
         "original": original_of(design, spec.name, group),
-        "accept_unphysical": "true" if spec.accept_unphysical else "false",
+        "accept_unphysical": bool(spec.accept_unphysical),
         "takeoff_time": inj.takeoff_time, "landing_time": inj.landing_time,
         **{k: m[k] for k in ("air_acc_dev", "air_acc_dev_original", "dv_takeoff",
                              "dv_landing", "L_error_touchdown_pct", "below_floor_mm")},
@@ -336,27 +331,12 @@ def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
     }
 
 
-def _fmt(v) -> str:
-    if isinstance(v, (float, np.floating)):
-        if not np.isfinite(v):
-            return "nan"
-        s = f"{float(v):.6f}"
-        return "0.000000" if s == "-0.000000" else s
-    return str(v)
-
-
 def write_manifest(path: Path, rows: list[dict]) -> None:
-    """The manifest; a ``style`` column (the character style) is added when the
-    rows have one (a design that chooses a style), then the ballistic kinds'
-    columns when they have those."""
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    cols = MANIFEST_COLUMNS + (["style"] if rows and "style" in rows[0] else []) + \
-        (EXTRA_COLUMNS if rows and "quantity" in rows[0] else [])
-    w.writerow(cols)
-    for r in rows:
-        w.writerow([_fmt(r[c]) for c in cols])
-    path.write_text(buf.getvalue())
+    """The manifest of a build's ``rows`` (mappings of column → value) at ``path``
+    (see :meth:`flipstudy.stimuli.contract.StimulusSet.write`): a ``style``
+    column when the rows have one, then the ballistic kinds' columns when they
+    have those."""
+    Path(path).write_text(StimulusSet.from_rows(Path(path).parent, rows).manifest_text())
 
 
 # --- the study folder: lock, atomic swap, recovery ---------------------------------------
@@ -436,10 +416,11 @@ def foreign_files(folder) -> list[str]:
     folder = Path(folder)
     ours = set(BUILD_FILES)
     try:
-        for r in read_manifest(folder):
-            ours.update(r.get(k) or "" for k in ("bvh", "npz"))
-    except (OSError, ValueError, csv.Error):
+        for r in StimulusSet.read(folder, files=False, design=False):
+            ours.update((str(r.bvh), str(r.npz)))
+    except (OSError, ManifestError):
         ours = set()                      # no readable manifest: nothing here is known to be ours
+    ours.add(".locks")                    # who serves or replaces the study: no data of it
     return sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir() if p.name not in ours)
 
 
@@ -496,12 +477,3 @@ def _recover_and_clean(out: Path) -> None:
         os.rename(olds.pop(), out)
     for p in olds + list(parent.glob(f".{out.name}.tmp-*")):
         shutil.rmtree(p, ignore_errors=True)
-
-
-def read_manifest(study_dir) -> list[dict]:
-    """The rows of a study's ``manifest.csv`` (strings)."""
-    p = Path(study_dir) / "manifest.csv"
-    if not p.exists():
-        raise FlipstudyFileNotFoundError(f"{p}: no manifest; make the stimuli first (flipstudy stimuli DESIGN.toml --out DIR)")
-    with p.open(newline="") as f:
-        return list(csv.DictReader(f))

@@ -16,8 +16,11 @@ Example
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Iterable
 
 import numpy as np
+
+from flipstudy.stimuli.contract import Stimulus, StimulusSet
 
 DEMO_GROUPS = (("smooth-increase", "angular-momentum", "smooth", 1),
                ("abrupt-decrease", "angular-momentum", "abrupt", -1))
@@ -67,29 +70,28 @@ def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_
 
 
 def write_placeholder_study(out, text: str, *, frames: int, fps: float,
-                            sha256=lambda i: "0" * 64) -> list[dict]:
+                            sha256=lambda i: "0" * 64) -> StimulusSet:
     """Write ``out/design.toml`` (``text``) and a ``manifest.csv`` naming every
     stimulus the design plans (placeholder numbers, no motion files: sessions read
-    only the manifest); return the manifest rows.  ``sha256(i)`` gives row i's hash."""
+    only the manifest); return the stimulus set.  ``sha256(i)`` gives row i's hash."""
     from flipstudy.stimuli.design import parse_design
-    from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, original_of, plan, write_manifest
+    from flipstudy.stimuli.stimset import original_of, plan
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "design.toml").write_text(text)
     d = parse_design(text, out / "design.toml")
     rows = []
     for name, spec, group, level in plan(d):
-        r = {c: 0.0 for c in MANIFEST_COLUMNS}
-        r.update(stimulus=name, clip=spec.name, group=group.name if group else "reference",
-                 kind=group.kind if group else "reference",
-                 profile=(group.profile or "") if group else "", level=level,
-                 nominal_error_pct=(group.sign * level) if group else 0.0, takeoff=10, landing=20,
-                 seed=0, sha256=sha256(len(rows)), frames=frames, fps=fps,
-                 bvh=f"{name}.bvh", npz=f"{name}.npz",
-                 original=original_of(d, spec.name, group), accept_unphysical="false")
-        rows.append(r)
-    write_manifest(out / "manifest.csv", rows)
-    return rows
+        rows.append(Stimulus(
+            name, spec.name, group.name if group else "reference", group.kind if group else "reference",
+            (group.profile or "") if group else "", level,
+            nominal_error_pct=(group.sign * level) if group else 0.0, takeoff_angle_deg=0.0,
+            takeoff=10, landing=20, seed=0, sha256=sha256(len(rows)), L_ratio_window=0.0,
+            flight_s=0.0, jump_height_m=0.0, jump_length_m=0.0, frames=frames, fps=fps,
+            original=original_of(d, spec.name, group), takeoff_time=0.0, landing_time=0.0))
+    stimuli = StimulusSet(out, rows, d)
+    stimuli.write()
+    return stimuli
 
 
 def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, size=(64, 48),
@@ -102,13 +104,13 @@ def make_demo_study(out, *, video_frames: int = 30, video_fps: float = 30.0, siz
     if videos:
         palette = [(230, 180, 40), (80, 170, 230), (220, 90, 90), (120, 200, 120), (200, 120, 220)]
         for i, r in enumerate(rows):
-            write_test_video(out / "render" / f"{r['stimulus']}.mp4", size=size, frames=video_frames,
+            write_test_video(out / "render" / f"{r.stimulus}.mp4", size=size, frames=video_frames,
                              fps=video_fps, color=palette[i % len(palette)])
         write_demo_record(out, rows, size=size, fps=video_fps)
     return out
 
 
-def write_demo_record(out, rows, *, size=(64, 48), fps: float = 30.0) -> None:
+def write_demo_record(out, rows: Iterable[Stimulus], *, size=(64, 48), fps: float = 30.0) -> None:
     """``render/render.json`` for placeholder videos, in the form `flipstudy render`
     writes (one settings record, each video made from its manifest row's sha256),
     so ``flipstudy run`` serves them."""
@@ -119,9 +121,9 @@ def write_demo_record(out, rows, *, size=(64, 48), fps: float = 30.0) -> None:
     settings = {"size": list(size), "fps": float(fps), "placeholder": "flipstudy.study.demo moving square"}
     outputs = {}
     for r in rows:
-        f = render / f"{r['stimulus']}.mp4"
-        outputs[f.name] = {"stimulus": r["stimulus"], "kind": "video",
-                           "stimulus_sha256": str(r.get("sha256", "")), "settings": "demo",
+        f = render / f"{r.stimulus}.mp4"
+        outputs[f.name] = {"stimulus": r.stimulus, "kind": "video",
+                           "stimulus_sha256": r.sha256, "settings": "demo",
                            "bytes": f.stat().st_size, "sha256": file_sha256(f)}
     rec = {"what": ["video"], "size": list(size), "fps": float(fps), "settings_id": "demo",
            "settings_records": {"demo": settings}, "outputs": outputs}

@@ -50,6 +50,7 @@ import csv
 import io
 from pathlib import Path
 
+from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli._io import atomic_write_text
 
 from . import store
@@ -117,17 +118,23 @@ def truth_table(rows: list[dict]) -> list[dict]:
     return out
 
 
-def _manifest_styles(study_dir: Path) -> dict | None:
-    """Stimulus → character style from ``manifest.csv``, or None when the
-    manifest (or its ``style`` column) is absent."""
-    p = study_dir / "manifest.csv"
-    if not p.is_file():
+def study_stimuli(study) -> StimulusSet | None:
+    """A study's :class:`~flipstudy.stimuli.contract.StimulusSet`: ``study`` itself
+    when it is one, else read from the folder ``study`` (checked once; the motion
+    files are not needed to export answers); None when the folder has no manifest."""
+    if isinstance(study, StimulusSet):
+        return study
+    if not (Path(study) / "manifest.csv").is_file():
         return None
-    with p.open(newline="", encoding="utf-8") as f:
-        reader = csv.DictReader(f)
-        if "style" not in (reader.fieldnames or ()):
-            return None
-        return {r["stimulus"]: (r.get("style") or "").strip() for r in reader}
+    return StimulusSet.read(study, files=False, design=False)
+
+
+def _manifest_styles(stimuli: StimulusSet | None) -> dict | None:
+    """Stimulus → character style, or None when there are no stimuli or the
+    manifest has no ``style`` column."""
+    if stimuli is None or not stimuli.styled:
+        return None
+    return {s.stimulus: s.style.strip() for s in stimuli}
 
 
 def response_columns(styled: bool) -> list[str]:
@@ -147,17 +154,35 @@ def response_columns(styled: bool) -> list[str]:
 
 def export_responses(study_dir, out=None, *, participants_out=None,
                      include_simulated: bool = False) -> ExportResult:
-    """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``) and
+    """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``; ``study_dir``: the
+    study folder or its :class:`~flipstudy.stimuli.contract.StimulusSet`) and
     ``participants.csv`` beside it (and ``simulated_truth.csv`` when simulated
     sessions with known observers are included).  Returns an
     :class:`~flipstudy.results.ExportResult`: the paths (``truth`` None when not
     written), ``rows``, ``sessions``, the ``real`` and ``simulated`` IDs written,
     ``simulated_left_out`` and ``incomplete`` (``"P07/1 (6/18)"``, ...)."""
-    study_dir = Path(study_dir)
+    from .owned import EXPORT_FILES, refuse_owned
+    stimuli = study_stimuli(study_dir)
+    study_dir = stimuli.folder if stimuli is not None else Path(study_dir)
     out = Path(out) if out is not None else study_dir / "responses.csv"
     pout = Path(participants_out) if participants_out is not None else out.parent / "participants.csv"
     if pout.resolve() == out.resolve():
         raise FlipstudyValueError(f"{out}: the responses and participants tables need different files")
+    for path, flag in ((out, "--out"), (pout, "--participants-out"),
+                       (out.parent / TRUTH_FILE, "--out (its simulated_truth.csv)")):
+        refuse_owned(path, f"export {flag}", study=study_dir, allow=tuple(EXPORT_FILES))
+    if out.name != "responses.csv":
+        # a table under another name must not replace the default export's tables beside it
+        from .owned import OwnedPathError, owner
+        for path, what in (((pout, "--participants-out FILE") if participants_out is None else (None, "")),
+                           (out.parent / TRUTH_FILE, "another --out folder")):
+            if path is not None and path.exists() and owner(path) is not None:
+                raise OwnedPathError(
+                    f"--out {out} would also write {path}, the table of the study's default export "
+                    f"(that goes with {out.parent / 'responses.csv'}); pass {what}, or export to "
+                    f"{out.parent / 'responses.csv'} or a folder outside the study")
+    from .frozen import refuse_changed_design
+    refuse_changed_design(study_dir, "export")
     conn = store.connect(study_dir, create=False)
     try:
         rows = [_fmt_response(r) for r in store.response_rows(conn, include_simulated=include_simulated)]
@@ -166,7 +191,7 @@ def export_responses(study_dir, out=None, *, participants_out=None,
         truth = truth_table(store.truth_rows(conn)) if include_simulated else []
     finally:
         conn.close()
-    styles = _manifest_styles(study_dir)
+    styles = _manifest_styles(stimuli)
     columns = response_columns(styles is not None) + (ADAPTIVE_COLUMNS if adaptive else [])
     if styles is not None:
         for r in rows:
@@ -182,7 +207,7 @@ def export_responses(study_dir, out=None, *, participants_out=None,
         tout = out.parent / TRUTH_FILE
         atomic_write_text(tout, _csv(TRUTH_COLUMNS, truth))
     from .psychds import write_dataset_description      # Psych-DS metadata beside them
-    write_dataset_description(out.parent, study_dir, columns, source="local sessions")
+    write_dataset_description(out.parent, study_dir, columns, source="local sessions", stimuli=stimuli)
     return ExportResult(
         responses=out, participants=pout, truth=tout, rows=len(rows), sessions=len(written),
         real=tuple(sorted({p["participant"] for p in written if p["simulated"] == "false"})),

@@ -128,6 +128,10 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None, range_a=
     for k in ("plot", "ghost"):
         if k in out:
             lines.append(f"  {k:<22}{out[k]}")
+    from flipstudy.stimuli.score import score
+    scored = score(res.clip).clips[0]
+    lines += ["  score: " + ln for ln in scored.summary(brief=True).splitlines()]
+    out["score"] = scored.to_dict()
     return MotionResult(command="concat", out=Path(out_path),
                         report=json.loads(json.dumps(out, default=float)), lines=tuple(lines))
 
@@ -192,7 +196,7 @@ def inspect(clip_spec: str, *, scale=None, fps=None, mass: float = 70.0, compare
                         lines=tuple(lines))
 
 
-def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: float = 0.7,
+def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: float = 1.0,
          straighten=None, t_from=None, t_to=None, midpoint: bool = False, join_spec=None,
          mass: float = 70.0, plot=None) -> MotionResult:
     """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit with
@@ -250,7 +254,8 @@ def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: floa
     save_bvh(out_clip, out)
     lines = []
     lines.append(f"{clip_spec} → {out}: {out_clip.num_frames} frames at {out_clip.fps:g} fps")
-    lines += ["  " + ln for ln in notes]
+    from flipstudy.stimuli.score import score_lines
+    lines += ["  " + ln for ln in notes + score_lines(out_clip, res.analysis.clip)]
     if plot:
         from flipstudy.render.plots import plot_compare, plot_repair
         if steps.repair is not None and flips is None:
@@ -303,7 +308,10 @@ def jump(to, out, *, scene="forward", air=None, windup=None, k="global-normal", 
     lines.append(f"  springs    k = {', '.join(f'{v:g}' for v in r.k)} × strength {r.strength:g}")
     for k, v in figs.items():
         lines.append(f"  {k:<10s} {v}")
-    report = json.loads(json.dumps({**r.to_dict(), "out": out, **figs}))
+    from flipstudy.stimuli.score import score
+    scored = score(clip).clips[0]
+    lines += ["  score: " + ln for ln in scored.summary(brief=True).splitlines()]
+    report = json.loads(json.dumps({**r.to_dict(), "out": out, **figs, "score": scored.to_dict()}))
     return MotionResult(command="jump", out=Path(out), report=report, lines=tuple(lines))
 
 

@@ -41,15 +41,14 @@ Example
 A tiny study's design and manifest (two groups of two levels, shown twice):
 
 >>> import tempfile, pathlib
->>> from flipstudy.stimuli.design import load_design
->>> from flipstudy.stimuli.stimset import read_manifest
+>>> from flipstudy.stimuli.contract import StimulusSet
 >>> from flipstudy.study.demo import make_demo_study
 >>> tmp = tempfile.TemporaryDirectory()
->>> study = make_demo_study(pathlib.Path(tmp.name) / "study", videos=False)
->>> trials = trial_order(load_design(study / "design.toml"), read_manifest(study), "P01")
+>>> study = StimulusSet.read(make_demo_study(pathlib.Path(tmp.name) / "study", videos=False), files=False)
+>>> trials = trial_order(study.design, study, "P01")
 >>> len(trials), trials[0].trial, trials[0].stimulus, trials[0].repetition
 (8, 1, 'backflip_smooth-increase_0', 1)
->>> trials == trial_order(load_design(study / "design.toml"), read_manifest(study), "P01")
+>>> trials == trial_order(study.design, study, "P01")
 True
 >>> tmp.cleanup()
 """
@@ -61,8 +60,9 @@ import hashlib
 import math
 import random
 from dataclasses import asdict, dataclass, replace
+from typing import Iterable
 
-REFERENCE_GROUP = "reference"
+from flipstudy.stimuli.contract import REFERENCE_GROUP, Stimulus
 
 
 METHODS = ("constant", "quest+")
@@ -126,29 +126,21 @@ def participant_seed(design_seed: int, participant: str, session: int = 1) -> in
     return int.from_bytes(hashlib.sha256(key.encode()).digest()[:8], "big")
 
 
-def _level(row: dict) -> float:
-    try:
-        return float(row["level"])
-    except (KeyError, ValueError) as e:
-        raise FlipstudyValueError(f"manifest.csv: stimulus {row.get('stimulus')!r}: bad level "
-                         f"{row.get('level')!r}") from e
-
-
-def group_stimuli(manifest: list[dict], design=None) -> dict[str, list[dict]]:
-    """Non-reference manifest rows grouped by error group, groups in the design's
+def group_stimuli(manifest: Iterable[Stimulus], design=None) -> dict[str, list[Stimulus]]:
+    """Non-reference stimuli grouped by error group, groups in the design's
     order (then any others in manifest order), rows in manifest order.
 
     With a ``design``, only the rows that are constant trials: no quest+ group
     (the session picks its stimuli), no level 0 of a 2AFC group (its comparison),
     and the shared originals only while a constant yes/no group shares them."""
-    groups: dict[str, list[dict]] = {}
+    groups: dict[str, list[Stimulus]] = {}
     keep = None
     if design is not None:
         for g in design.groups:
             groups[g.name] = []
         keep = _constant_row_rule(design)
     for row in manifest:
-        g = row.get("group", "")
+        g = row.group
         if g == REFERENCE_GROUP or (keep is not None and not keep(row)):
             continue
         groups.setdefault(g, []).append(row)
@@ -160,24 +152,26 @@ def _constant_row_rule(design):
     by = {g.name: g for g in design.groups}
     shared = getattr(design, "shows_shared_original", True)
 
-    def keep(row: dict) -> bool:
-        g = by.get(row.get("group", ""))
+    def keep(row: Stimulus) -> bool:
+        g = by.get(row.group)
         if g is None:
-            return shared or row.get("group") != SHARED_ORIGINAL_GROUP
+            return shared or row.group != SHARED_ORIGINAL_GROUP
         return (not getattr(g, "adaptive", False)
-                and (getattr(g, "task", "yes-no") == "yes-no" or _level(row) != 0))
+                and (getattr(g, "task", "yes-no") == "yes-no" or row.level != 0))
     return keep
 
 
-def reference_stimuli(manifest: list[dict]) -> list[dict]:
-    """The manifest's reference rows (the correct example motions), in manifest order."""
-    return [r for r in manifest if r.get("group") == REFERENCE_GROUP]
+def reference_stimuli(manifest: Iterable[Stimulus]) -> list[Stimulus]:
+    """The reference stimuli (the correct example motions), in manifest order."""
+    return [r for r in manifest if r.is_reference]
 
 
-def trial_order(design, manifest: list[dict], participant: str, session: int = 1) -> list[Trial]:
+def trial_order(design, manifest: Iterable[Stimulus], participant: str, session: int = 1) -> list[Trial]:
     """The participant's trials: ``design.repetitions`` blocks, random within each
     group, groups interleaved, quest+ slots spread among them, 2AFC order balanced
-    (see the module docstring)."""
+    (see the module docstring).  ``manifest``: a
+    :class:`~flipstudy.stimuli.contract.StimulusSet` or its stimuli."""
+    manifest = list(manifest)
     groups = group_stimuli(manifest, design)
     adaptive = [g for g in design.groups if getattr(g, "adaptive", False)]
     if not groups and not adaptive:
@@ -190,13 +184,12 @@ def trial_order(design, manifest: list[dict], participant: str, session: int = 1
         for _ in range(100):
             block = _block(groups, rng)
             # never the same motion twice in a row across a block boundary
-            if not trials or n_stimuli == 1 or block[0][0]["stimulus"] != trials[-1].stimulus:
+            if not trials or n_stimuli == 1 or block[0][0].stimulus != trials[-1].stimulus:
                 break
         for row, g in block:
             task = getattr(by.get(g), "task", "yes-no")
-            trials.append(Trial(len(trials) + 1, row["stimulus"], row.get("clip", ""), g,
-                                row.get("kind", ""), _level(row), rep, "constant", task, "",
-                                row.get("original", "") if task == "2afc" else ""))
+            trials.append(Trial(len(trials) + 1, row.stimulus, row.clip, g, row.kind, row.level, rep,
+                                "constant", task, "", row.original if task == "2afc" else ""))
     if adaptive:
         trials = _interleave(trials, [_slots(design, g, manifest, rng) for g in adaptive], rng)
     if any(t.task == "2afc" for t in trials):
@@ -204,7 +197,7 @@ def trial_order(design, manifest: list[dict], participant: str, session: int = 1
     return [replace(t, trial=i) for i, t in enumerate(trials, start=1)]
 
 
-def _slots(design, group, manifest: list[dict], rng: random.Random) -> list[Trial]:
+def _slots(design, group, manifest: list[Stimulus], rng: random.Random) -> list[Trial]:
     """A quest+ group's ``trials`` slots: its clips in equal shares (the remainder
     drawn), shuffled."""
     clips = [c.name for c in design.clips]
@@ -214,8 +207,8 @@ def _slots(design, group, manifest: list[dict], rng: random.Random) -> list[Tria
     originals = {}
     if group.task == "2afc":
         for r in manifest:
-            if r.get("group") == group.name and r.get("original"):
-                originals.setdefault(r.get("clip", ""), r["original"])
+            if r.group == group.name and r.original:
+                originals.setdefault(r.clip, r.original)
         missing = sorted(set(clips) - set(originals))
         if missing:
             raise FlipstudyValueError(f"manifest.csv: the 2afc group {group.name!r} has no original "
@@ -261,7 +254,7 @@ def balance_first(trials: list[Trial], shuffle, random01) -> list[Trial]:
     return out
 
 
-def _block(groups: dict[str, list[dict]], rng: random.Random) -> list[tuple[dict, str]]:
+def _block(groups: dict[str, list[Stimulus]], rng: random.Random) -> list[tuple[Stimulus, str]]:
     """One repetition: each group's rows shuffled, then one row of each group per
     round, the groups' order shuffled in every round.  A group with fewer rows
     than the largest (the shared originals: one per clip) takes part in rounds

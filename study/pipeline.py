@@ -55,7 +55,8 @@ def build(design, out, *, force: bool = False, progress: bool = True, cluster: s
         replaced["answers"] = refuse_real_answers(folder, foreign, shown=Path(out))
         replaced["foreign"] = foreign
 
-    with open_cluster(cluster) as c:
+    from .lock import study_closed
+    with study_closed(out, "stimuli --force"), open_cluster(cluster) as c:
         res = build_stimuli(design, out, force=force, progress=progress, replace_check=replace_check,
                             cluster=c)
     if replaced:
@@ -70,8 +71,13 @@ def render(study_dir, *, cluster: str | None = None, **options) -> RenderResult:
     its keywords), on the Dask cluster at ``cluster`` when given."""
     from flipstudy.render.study import render_study
 
+    import contextlib
+
     from .cluster import open_cluster
-    with open_cluster(cluster) as c:
+    from .lock import study_closed
+    # --force replaces videos a `run` server may be showing
+    held = study_closed(study_dir, "render --force") if options.get("force") else contextlib.nullcontext()
+    with held, open_cluster(cluster) as c:
         return render_study(study_dir, cluster=c, **options)
 
 
@@ -120,6 +126,9 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     from flipstudy.stimuli.design import load_design
     responses = list(responses) if isinstance(responses, (list, tuple)) else [responses]
     src = resolve_responses_path(responses[0])
+    from .frozen import refuse_changed_design
+    for r in responses:                    # a study whose design changed after its answers
+        refuse_changed_design(resolve_responses_path(r).parent, "analyze")
     out = Path(out) if out else src.parent / "analysis"
     design = src.parent / "design.toml"
     specs = quest_specs(load_design(design)) if design.is_file() else None

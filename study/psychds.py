@@ -106,10 +106,12 @@ def _software() -> list[dict]:
     return out
 
 
-def write_dataset_description(folder, study_dir, columns, *, source: str, extra_software=()) -> Path:
+def write_dataset_description(folder, study_dir, columns, *, source: str, extra_software=(),
+                              stimuli=None) -> Path:
     """Write ``folder/dataset_description.json`` for the response tables of
     ``study_dir`` with these ``columns`` (``source``: "local sessions", "web
-    sessions", …); returns its path."""
+    sessions", …; ``stimuli``: the study's :class:`~flipstudy.stimuli.contract.StimulusSet`
+    when the caller has read it, else it is read here); returns its path."""
     folder, study_dir = Path(folder), Path(study_dir)
     name = study_dir.name
     based = []
@@ -125,7 +127,9 @@ def write_dataset_description(folder, study_dir, columns, *, source: str, extra_
     stimuli = []
     if manifest.is_file():
         based.append({"@type": "MediaObject", "name": "manifest.csv", "sha256": _sha256(manifest)})
-        from flipstudy.stimuli.stimset import read_manifest
+        from flipstudy.stimuli.contract import StimulusSet
+        if stimuli is None:
+            stimuli = StimulusSet.read(study_dir, files=False, design=False)
         videos = {}
         rec = study_dir / "render" / "render.json"
         if rec.is_file():
@@ -135,10 +139,10 @@ def write_dataset_description(folder, study_dir, columns, *, source: str, extra_
                           if isinstance(v, dict) and v.get("kind") == "video"}
             except ValueError:
                 videos = {}
-        for r in read_manifest(study_dir):
-            s = {"@type": "MediaObject", "name": r["stimulus"], "sha256": r.get("sha256", "")}
-            if videos.get(r["stimulus"]):
-                s["video_sha256"] = videos[r["stimulus"]]
+        for r in stimuli:
+            s = {"@type": "MediaObject", "name": r.stimulus, "sha256": r.sha256}
+            if videos.get(r.stimulus):
+                s["video_sha256"] = videos[r.stimulus]
             stimuli.append(s)
     desc = {
         "@context": "https://schema.org/",

@@ -24,6 +24,8 @@ comes out should resemble the paper's, within the noise of 19 participants.
 """
 from __future__ import annotations
 
+import contextlib
+
 from flipstudy.errors import ReproduceError
 from flipstudy.results import ReproduceResult
 
@@ -35,6 +37,7 @@ import time
 from pathlib import Path
 
 from flipstudy.stimuli._progress import Progress
+from flipstudy.stimuli.contract import Stimulus, StimulusSet
 
 #: the original and its strongest error shown beside the curves on the sheet
 SHEET_ORIGINAL = "backflip_reference"
@@ -46,21 +49,21 @@ SIZE = (640, 480)
 STYLE: dict = {}
 
 
-def sheet_label(row: dict) -> str:
+def sheet_label(row: Stimulus) -> str:
     r"""A sheet panel's title: the stimulus and its error (kind, profile, signed
-    nominal level) from its manifest row.
+    nominal level).
 
-    >>> sheet_label({"stimulus": "backflip_abrupt-decrease_50", "kind": "angular-momentum",
-    ...              "profile": "abrupt", "nominal_error_pct": "-50.000000"})
+    >>> sheet_label(Stimulus("backflip_abrupt-decrease_50", "backflip", "abrupt-decrease",
+    ...                      "angular-momentum", "abrupt", 50.0, nominal_error_pct=-50.0))
     'backflip_abrupt-decrease_50\nangular momentum, abrupt, −50 %'
-    >>> sheet_label({"stimulus": "backflip_reference", "kind": "reference", "profile": ""})
+    >>> sheet_label(Stimulus("backflip_reference", "backflip", "reference", "reference"))
     'backflip_reference\noriginal (no error)'
     """
-    name, kind = row["stimulus"], row.get("kind", "")
-    if kind == "reference" or not float(row.get("nominal_error_pct") or 0.0):
+    name, kind = row.stimulus, row.kind
+    if kind == "reference" or not row.nominal_error_pct:
         return f"{name}\noriginal (no error)"
-    level = float(row["nominal_error_pct"])
-    parts = [kind.replace("-", " ")] + ([row["profile"]] if row.get("profile") else [])
+    level = row.nominal_error_pct
+    parts = [kind.replace("-", " ")] + ([row.profile] if row.profile else [])
     return f"{name}\n" + ", ".join(parts) + f", {'+' if level > 0 else '−'}{abs(level):g} %"
 
 
@@ -77,7 +80,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     Example
     -------
     Not run with the doctests: the whole pipeline (52 stimuli rendered) takes
-    about two minutes; ``tests/test_reproduce.py`` runs it.
+    about two minutes; ``tests/study/test_reproduce.py`` runs it.
 
     >>> r = reproduce("paper/")                  # doctest: +SKIP
     >>> sorted(r.files)[:3]                      # doctest: +SKIP
@@ -94,15 +97,22 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     from .simulate import simulate
 
     from .archive import refuse_real_answers
+    from .lock import study_closed
 
     shown, out = str(out), Path(out)
     if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
         raise ReproduceError(f"{out} exists and is not empty; choose another --out or pass --force "
                              f"to replace it")
 
-    def guard():                   # --force never replaces real participants' answers
-        if out.is_dir():
-            for d in [out, *sorted(p for p in out.iterdir() if p.is_dir())]:
+    def guard(stack=None):         # --force never replaces real participants' answers,
+        if out.is_dir():           # nor a study a `flipstudy run` server has open
+            for d in [out, *sorted(p for p in out.iterdir() if p.is_dir() and p.name != ".locks")]:
+                hold = study_closed(d, "reproduce --force")
+                if stack is None:
+                    with hold:
+                        pass
+                else:
+                    stack.enter_context(hold)
                 refuse_real_answers(d, shown=d, command="reproduce --force")
     guard()
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -124,15 +134,15 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
         t = stage(2, "stimuli: inject and measure every error")
         study = work / "study"
-        rows = build_stimuli(design, study, progress=not quiet, cluster=cluster).rows
-        worst = max(abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"]))
-                    for r in rows if r["kind"] != "reference")
+        build_stimuli(design, study, progress=not quiet, cluster=cluster)
+        stimuli = StimulusSet.read(study)             # read and checked once, then handed on
+        worst = max(abs(r.measured_error_pct - r.nominal_error_pct) for r in stimuli.tests)
         seconds["stimuli"] = time.perf_counter() - t
 
         aa = Style.from_dict(STYLE).anti_aliasing
         t = stage(3, f"render: videos, ghost and trail composites at {size[0]}x{size[1]} "
                      f"({aa.upper() if aa != 'none' else 'no'} anti-aliasing)")
-        rec = render_study(study, what=("video", "ghost", "trail"), size=size, jobs=jobs,
+        rec = render_study(stimuli, what=("video", "ghost", "trail"), size=size, jobs=jobs,
                            style=STYLE, progress=not quiet, cluster=cluster)
         seconds["render"] = time.perf_counter() - t
 
@@ -140,30 +150,30 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
                      f"Table 2), exported")
         bar = Progress(participants, "participants", not quiet)
         try:
-            simulate(study, participants, seed=seed, progress=lambda pid, session: bar.step(pid))
+            simulate(stimuli, participants, seed=seed, progress=lambda pid, session: bar.step(pid))
         finally:
             bar.close()
-        exp = export_responses(study, include_simulated=True)      # marked simulated=true
+        exp = export_responses(stimuli, include_simulated=True)    # marked simulated=true
         seconds["sessions"] = time.perf_counter() - t
 
         t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
         render_dir = study / "render"
-        by_name = {r["stimulus"]: r for r in rows}
-        images = {f"{what}s: {sheet_label(by_name[name])}": render_dir / f"{name}_{what}.png"
+        images = {f"{what}s: {sheet_label(stimuli[name])}": render_dir / f"{name}_{what}.png"
                   for what in ("ghost", "trail") for name in (SHEET_ORIGINAL, SHEET_ERROR)}
         result = analyze(exp.responses, work / "analysis", images=images, seed=seed,
                          include_simulated=True)
         seconds["analysis"] = time.perf_counter() - t
 
         # move into place: nothing half-written is ever at OUT
-        guard()                    # answers may have arrived while the run went on
-        if out.exists():
-            old = out.with_name(f".{out.name}.old-{os.getpid()}")
-            out.rename(old)
-            work.rename(out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            work.rename(out)
+        with contextlib.ExitStack() as held:
+            guard(held)            # answers may have arrived while the run went on
+            if out.exists():
+                old = out.with_name(f".{out.name}.old-{os.getpid()}")
+                out.rename(old)
+                work.rename(out)
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                work.rename(out)
     except BaseException:
         shutil.rmtree(work, ignore_errors=True)
         raise
@@ -194,7 +204,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
     return ReproduceResult(
         out=str(shown).rstrip("/"), files={k: str(v) for k, v in files.items()},
-        seconds=dict(seconds), n_stimuli=len(rows), worst_gap_pct=worst,
+        seconds=dict(seconds), n_stimuli=len(stimuli), worst_gap_pct=worst,
         n_videos=sum(1 for s in rec.record["stimuli"].values() if "video" in s["files"]),
         n_responses=exp.rows, n_simulated=len(exp.simulated), table_md=to_markdown(result.table),
         thresholds=tuple(result.to_dict()["thresholds"]))

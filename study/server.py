@@ -3,8 +3,12 @@
 One server runs one participant's session.  Routes (nothing else answers; every
 error is a JSON object ``{"error": "..."}`` with a 4xx status):
 
-``GET  /``                  the page (``study/static/index.html``)
-``GET  /static/<file>``     ``session.js``, ``session.css`` (a fixed list, read at start)
+``GET  /``                  the page: the jsPsych site that ``export-web`` builds, in its
+                            ``local`` host mode (:func:`flipstudy.study.web.site.site_files`)
+``GET  /<file>``            the site's ``config.js``, scripts and CSS, and ``lib/<file>``
+                            (jsPsych, from npm: :func:`flipstudy.study.web.jspsych.fetch`;
+                            a 503 naming the problem when it cannot be had): a fixed set
+                            held in memory, served by exact name
 ``GET  /api/session``       the timeline (:func:`flipstudy.study.timeline.build_timeline`)
 ``GET  /api/trial/<n>``     trial ``n``'s filled screen (:func:`flipstudy.study.timeline.trial_screen`
                             of ``session.resolve(n)``: an adaptive trial's level is chosen
@@ -58,17 +62,17 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from flipstudy.errors import RequestError, SessionError
+from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChanged
+
 from .session import Session, load_study, open_session, submit_answer, submit_demographics
 from .timeline import build_timeline, is_default, trial_screen
 from .validate import MAX_BODY, parse_json_object
+from .web import jspsych as jsp
+from .web.site import LOCAL, lib_files, site_config, site_csp, site_files
 
-STATIC_DIR = Path(__file__).resolve().parent / "static"
-STATIC_FILES = {"session.js": "text/javascript; charset=utf-8",
-                "session.css": "text/css; charset=utf-8"}
-CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; connect-src 'self'; "
-       "media-src 'self' blob:; img-src 'self' data:; base-uri 'none'; form-action 'none'; "
-       "frame-ancestors 'none'")
+MEDIA_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
+               ".css": "text/css; charset=utf-8"}
+CSP = site_csp(LOCAL) + "; frame-ancestors 'none'"
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1", "[::1]")
 
 
@@ -164,28 +168,82 @@ async def _read_json(request: Request) -> dict:
     return parse_json_object(body)
 
 
+#: HTTP status of every request once the study changed under the server (the page shows the message)
+CHANGED_STATUS = 410
+
+
+def _changed_message(e: StudyChanged, stored_elsewhere: bool) -> str:
+    return ("This session cannot record answers any more: the study was changed on the "
+            "experimenter's computer" + (", so your last answer was NOT recorded" if stored_elsewhere
+                                          else "") +
+            ". Please tell the experimenter. (" + str(e) + ")")
+
+
+def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None, lib: bool = True) -> dict[str, bytes]:
+    """The files of the site ``export-web`` builds, in its ``local`` host mode, for
+    ``session``'s study: ``{relative path: bytes}``.  jsPsych (``lib/``, left out
+    with ``lib=False``) comes from ``jspsych_dir`` or npm's cache
+    (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    folder = jsp.fetch(jspsych_dir)[0] if lib else None
+    cfg = site_config(session.study, host=LOCAL, iti_ms=iti_ms, n_trials=session.n_trials)
+    return site_files(cfg, folder)
+
+
 def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
-               on_answer=None) -> Starlette:
+               on_answer=None, on_changed=None, jspsych_dir=None) -> Starlette:
     """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
     Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
-    is called after every stored answer (the CLI prints progress)."""
+    is called after every stored answer (the CLI prints progress).  The page is
+    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
+    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first).
+
+    A pinned session (:meth:`Session.pin`) is checked before and after every
+    answer: once its study folder, database, manifest or design changed, every
+    API request is refused with status :data:`CHANGED_STATUS` and a message the
+    page shows, and an answer committed to a database that is no longer the
+    study's is never acknowledged as stored.  ``on_changed(message)`` is called
+    the first time (the CLI prints it)."""
+    told = []
+
+    def changed(e: StudyChanged, stored_elsewhere: bool = False) -> JSONResponse:
+        if not told:
+            told.append(True)
+            if on_changed is not None:
+                on_changed(str(e))
+        return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
     study = session.study
     render_dir = study.render_dir.resolve()
-    videos = {f"{r['stimulus']}.mp4" for r in study.manifest}
-    assets = {name: (STATIC_DIR / name).read_bytes() for name in STATIC_FILES}
-    index = (STATIC_DIR / "index.html").read_bytes()
+    videos = {f"{r.stimulus}.mp4" for r in study.manifest}
+    files = local_site(session, iti_ms=iti_ms, lib=False)
+    lib_lock = threading.Lock()
+
+    def load_lib():
+        with lib_lock:
+            if not any(name.startswith("lib/") for name in files):
+                files.update(lib_files(jsp.fetch(jspsych_dir)[0]))
 
     async def page(request: Request):
-        return Response(index, media_type="text/html; charset=utf-8",
+        return Response(files["index.html"], media_type=MEDIA_TYPES[".html"],
                         headers={"Content-Security-Policy": CSP, "Cache-Control": "no-store"})
 
     async def static(request: Request):
         name = request.path_params["name"]
-        if name not in STATIC_FILES:
+        if request.url.path.startswith("/lib/"):
+            name = f"lib/{name}"
+            try:
+                await run_in_threadpool(load_lib)
+            except JsPsychFetchError as e:
+                return _error(503, str(e))
+        if name not in files or name == "index.html":     # only the site's own files, by exact name
             return _error(404, "not found")
-        return Response(assets[name], media_type=STATIC_FILES[name], headers={"Cache-Control": "no-cache"})
+        return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
+                        headers={"Cache-Control": "no-cache"})
 
     async def api_session(request: Request):
+        try:
+            session.check_intact()
+        except StudyChanged as e:
+            return changed(e)
         tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
 
@@ -205,18 +263,33 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         if not raw.isdigit() or not 1 <= int(raw) <= session.n_trials:
             return _error(404, f"no trial {raw[:20]!r} in this session (1 to {session.n_trials})")
         try:
+            session.check_intact()
             screen = await run_in_threadpool(current_trial, int(raw))
         except RequestError as e:
             return _error(e.status, e.message)
+        except StudyChanged as e:
+            return changed(e)
         return JSONResponse(screen, headers={"Cache-Control": "no-store"})
 
     async def _submit(request: Request, submit):
         """(result, None) of ``submit(session, JSON body)``, or (None, the error response)."""
+        def checked(obj):
+            session.check_intact()                   # not into a database that is not the study's
+            result = submit(session, obj)
+            try:
+                session.check_intact()               # committed into the study's own file?
+            except StudyChanged as e:
+                e.stored_elsewhere = True
+                raise
+            return result
+
         try:
             obj = await _read_json(request)
-            return await run_in_threadpool(submit, session, obj), None
+            return await run_in_threadpool(checked, obj), None
         except RequestError as e:
             return None, _error(e.status, e.message)
+        except StudyChanged as e:
+            return None, changed(e, getattr(e, "stored_elsewhere", False))
 
     async def api_answer(request: Request):
         result, err = await _submit(request, submit_answer)
@@ -248,13 +321,14 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
 
     app = Starlette(routes=[
         Route("/", page, methods=["GET"]),
-        Route("/static/{name}", static, methods=["GET"]),
         Route("/api/session", api_session, methods=["GET"]),
         Route("/api/trial/{n}", api_trial, methods=["GET"]),
         Route("/api/answer", api_answer, methods=["POST"]),
         Route("/api/demographics", api_demographics, methods=["POST"]),
         Route("/stimuli/{name:path}", stimulus, methods=["GET"]),
         Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
+        Route("/lib/{name}", static, methods=["GET"]),
+        Route("/{name}", static, methods=["GET"]),
     ], exception_handlers={HTTPException: http_error, 500: server_error})
     app.router.redirect_slashes = False
     hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}
@@ -295,15 +369,23 @@ def serve(study_dir, participant: str, *, host: str = "127.0.0.1", port: int = 0
         check_participant(participant)
     except RequestError as e:
         raise SessionError(e.message) from None
-    study = load_study(study_dir)
-    from .lock import ParticipantLock
-    lock = ParticipantLock(study.dir, participant).acquire(host_arg=host)
+    from .lock import ParticipantLock, StudyOpen
+    if Path(study_dir).is_dir():
+        held = StudyOpen(study_dir).acquire()     # no command replaces the study while it serves
+    else:
+        held = None
     try:
-        return _serve_locked(study, participant, lock, host=host, port=port,
-                             open_browser=open_browser, new_session=new_session, iti_ms=iti_ms,
-                             allowed_hosts=allowed_hosts, out=out)
+        study = load_study(study_dir)
+        lock = ParticipantLock(study.dir, participant).acquire(host_arg=host)
+        try:
+            return _serve_locked(study, participant, lock, host=host, port=port,
+                                 open_browser=open_browser, new_session=new_session, iti_ms=iti_ms,
+                                 allowed_hosts=allowed_hosts, out=out)
+        finally:
+            lock.release()
     finally:
-        lock.release()
+        if held is not None:
+            held.release()
 
 
 def _serve_locked(study, participant, lock, *, host, port, open_browser, new_session, iti_ms,
@@ -319,13 +401,15 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
                            f"{study.render_dir} (e.g. {missing[0]}.mp4); render them first: "
                            f"flipstudy render {study.dir}")
     try:       # every video made from the stimulus as it is now, all with one settings record
-        check_rendered(study.dir, "video", rows=study.manifest)
+        check_rendered(study.stimuli, "video")
     except StaleRenderError as e:
         raise SessionError(str(e)) from None
     if lock.previous and lock.previous.get("pid"):
         print(f"flipstudy run: note: took over the lock of a server that is gone "
               f"(pid {lock.previous['pid']}, since {lock.previous.get('since', '?')})", file=out)
+    jspsych_folder, _ = jsp.fetch()          # the page's jsPsych (npm's cache), before anyone waits
     session = open_session(study, participant, new_session=new_session)
+    session.pin()                    # answers go into this folder's database, or are refused
     state = session.state()
     sock = bind(host, port)
     port = sock.getsockname()[1]
@@ -354,7 +438,12 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
             msg += " — session finished; press Ctrl-C to stop the server"
         print(msg, file=out, flush=True)
 
-    app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress)
+    def changed(message):
+        print(f"flipstudy run: error: {message}; no more answers are taken: stop this server "
+              f"(Ctrl-C) and start it again on the study as it is now", file=out, flush=True)
+
+    app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress,
+                     on_changed=changed, jspsych_dir=jspsych_folder)
     config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=False,
                             server_header=False, lifespan="off", timeout_graceful_shutdown=3)
     server = uvicorn.Server(config)

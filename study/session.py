@@ -32,30 +32,66 @@ On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
 """
 from __future__ import annotations
 
-from flipstudy.errors import RequestError, SessionError
+from flipstudy.errors import RequestError, SessionError, StudyChanged
 import hashlib
-import re
 import threading
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+
+from flipstudy.stimuli.contract import STIMULUS_RE, Stimulus, StimulusSet  # noqa: F401  (STIMULUS_RE re-exported)
 
 from . import store
 from .order import Trial, participant_seed, reference_stimuli, trial_order
 from .validate import check_participant, check_task_response, parse_answer, parse_demographics
 
 VIDEO_EXT = ".mp4"
-STIMULUS_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,200}")
+
+
+def study_fingerprint(study_dir) -> dict:
+    """What identifies a study folder as the one a server opened: the identity
+    (device, inode) of the folder and of ``sessions.sqlite`` (None: absent), and
+    the SHA-256 of ``manifest.csv`` and ``design.toml`` (None: absent)."""
+    d = Path(study_dir)
+
+    def ident(p):
+        try:
+            st = p.stat()
+        except OSError:
+            return None
+        return (st.st_dev, st.st_ino)
+
+    def digest(p):
+        try:
+            return hashlib.sha256(p.read_bytes()).hexdigest()
+        except OSError:
+            return None
+    return {"folder": ident(d), "sessions.sqlite": ident(store.db_path(d)),
+            "manifest.csv": digest(d / "manifest.csv"), "design.toml": digest(d / "design.toml")}
 
 
 @dataclass
 class Study:
-    """A study folder: its design, manifest and rendered videos."""
+    """A study folder: its design, stimuli (:class:`~flipstudy.stimuli.contract.StimulusSet`,
+    read and checked once) and rendered videos."""
     dir: Path
     design: object
-    manifest: list[dict]
-    manifest_sha256: str
-    by_name: dict = field(default_factory=dict)
+    stimuli: StimulusSet
+
+    @property
+    def manifest(self) -> tuple[Stimulus, ...]:
+        """The stimuli in manifest order."""
+        return self.stimuli.stimuli
+
+    @property
+    def manifest_sha256(self) -> str:
+        return self.stimuli.manifest_sha256
+
+    @property
+    def by_name(self) -> StimulusSet:
+        """Stimulus name → :class:`~flipstudy.stimuli.contract.Stimulus` (``name in``, ``[name]``)."""
+        return self.stimuli
+    design_text: str = ""          # design.toml as read (recorded with the first answer)
 
     @property
     def render_dir(self) -> Path:
@@ -65,11 +101,11 @@ class Study:
         return self.render_dir / f"{stimulus}{VIDEO_EXT}"
 
     @property
-    def references(self) -> list[dict]:
+    def references(self) -> list[Stimulus]:
         return reference_stimuli(self.manifest)
 
     def missing_videos(self) -> list[str]:
-        return [r["stimulus"] for r in self.manifest if not self.video_path(r["stimulus"]).is_file()]
+        return [r.stimulus for r in self.manifest if not self.video_path(r.stimulus).is_file()]
 
     def group(self, name: str):
         """The design's group ``name`` (None for the shared originals' pseudo-group)."""
@@ -89,7 +125,7 @@ class Study:
     def stimulus_at(self, group: str, clip: str, level: float) -> str:
         """The stimulus of ``group`` × ``clip`` × ``level`` (level 0 of a group that
         shares the original: the clip's shared original)."""
-        key = (group, clip, round(float(level), 6))
+        key = (group, clip, round(level, 6))
         if key not in self._levels:
             raise SessionError(f"{self.dir / 'manifest.csv'}: no stimulus of group {group!r}, clip "
                                f"{clip!r} at level {level:g} %; rebuild the stimuli")
@@ -101,40 +137,40 @@ class Study:
         if idx is None:
             idx = {}
             for r in self.manifest:
-                if r.get("group") in ("reference", None):
+                if r.is_reference:
                     continue
-                idx[(r["group"], r.get("clip", ""), round(float(r["level"]), 6))] = r["stimulus"]
-                if r.get("original"):
-                    idx.setdefault((r["group"], r.get("clip", ""), 0.0), r["original"])
+                idx[(r.group, r.clip, round(r.level, 6))] = r.stimulus
+                if r.original:
+                    idx.setdefault((r.group, r.clip, 0.0), r.original)
             self.__dict__["_level_index"] = idx
         return idx
 
 
 def load_study(study_dir) -> Study:
-    """Read ``STUDY_DIR/design.toml`` and ``STUDY_DIR/manifest.csv``."""
-    from flipstudy.stimuli.design import load_design
-    from flipstudy.stimuli.stimset import read_manifest
-    d = Path(study_dir)
-    if not d.is_dir():
-        raise SessionError(f"{d}: no such study folder (make one with `flipstudy stimuli DESIGN.toml "
-                           f"--out {d}`)")
+    """The study in ``study_dir`` (a folder, or a :class:`~flipstudy.stimuli.contract.StimulusSet`
+    already read): its ``design.toml`` and its ``manifest.csv``, read and checked once
+    (:meth:`StimulusSet.read <flipstudy.stimuli.contract.StimulusSet.read>`; the
+    motion files are not needed by a session, the videos are checked by
+    :func:`flipstudy.render.record.check_rendered`), and the session's limits."""
+    from flipstudy.stimuli.design import TRIALS_MAX
+    if isinstance(study_dir, StimulusSet):
+        stimuli, d = study_dir, study_dir.folder
+    else:
+        d = Path(study_dir)
+        if not d.is_dir():
+            raise SessionError(f"{d}: no such study folder (make one with `flipstudy stimuli DESIGN.toml "
+                               f"--out {d}`)")
+        stimuli = None
     if not (d / "design.toml").is_file():
         raise SessionError(f"{d / 'design.toml'}: missing; a study folder made by `flipstudy stimuli` "
                            f"holds a copy of its design")
-    design = load_design(d / "design.toml")
-    manifest = read_manifest(d)
-    for i, r in enumerate(manifest, start=2):
-        name = r.get("stimulus", "")
-        if not STIMULUS_RE.fullmatch(name or ""):
-            raise SessionError(f"{d / 'manifest.csv'}: line {i}: stimulus name {name!r} is not a "
-                               f"plain file name")
-    from flipstudy.stimuli.design import TRIALS_MAX
-    names = [r.get("stimulus", "") for r in manifest]
-    if len(set(names)) != len(names):
-        dup = sorted({n for n in names if names.count(n) > 1})
-        raise SessionError(f"{d / 'manifest.csv'}: stimulus {dup[0]!r} is listed more than once; "
-                           f"rebuild the stimuli with `flipstudy stimuli`")
-    n_tests = sum(1 for r in manifest if r.get("group") != "reference")
+    if stimuli is None:
+        stimuli = StimulusSet.read(d, files=False)
+    design = stimuli.design
+    if design is None:
+        from flipstudy.stimuli.design import load_design
+        design = load_design(d / "design.toml")
+    n_tests = len(stimuli.tests)
     if any(g.adaptive or g.task != "yes-no" for g in design.groups):
         n = design.trials_per_participant()
         if n > TRIALS_MAX:
@@ -143,8 +179,7 @@ def load_study(study_dir) -> Study:
         raise SessionError(f"{d / 'manifest.csv'}: {n_tests} test stimuli × repetitions = "
                            f"{design.repetitions} is {n_tests * design.repetitions} trials per "
                            f"participant; at most {TRIALS_MAX}")
-    sha = hashlib.sha256((d / "manifest.csv").read_bytes()).hexdigest()
-    return Study(d, design, manifest, sha, {r["stimulus"]: r for r in manifest})
+    return Study(d, design, stimuli, (d / "design.toml").read_bytes().decode("utf-8", errors="replace"))
 
 
 @dataclass
@@ -158,6 +193,38 @@ class Session:
     resumed: bool = False
     _conn: object = field(default=None, repr=False)
     _lock: object = field(default_factory=threading.Lock, repr=False)
+    _pinned: dict | None = field(default=None, repr=False)
+    _changed: str | None = field(default=None, repr=False)
+
+    def pin(self) -> None:
+        """Remember which study folder this session stores into (:func:`study_fingerprint`),
+        with the database connection open on it; :meth:`check_intact` then refuses
+        once anything of it was replaced or changed.  The server pins its session."""
+        before = study_fingerprint(self.study.dir)
+        with self.db():
+            pass
+        after = study_fingerprint(self.study.dir)
+        if before != after or after["sessions.sqlite"] is None:
+            raise StudyChanged(f"{self.study.dir} changed while the session was being opened; "
+                               f"start it again")
+        self._pinned = after
+
+    def check_intact(self) -> None:
+        """Raise :class:`StudyChanged` when the pinned study folder was replaced or
+        its database, manifest or design changed (once changed, always refused)."""
+        if self._pinned is None:
+            return
+        if self._changed is None:
+            now = study_fingerprint(self.study.dir)
+            diff = [k for k in self._pinned if now[k] != self._pinned[k]]
+            if diff:
+                what = ("the folder was replaced or moved" if "folder" in diff else
+                        ", ".join(f"{k} {'is gone' if now[k] is None else 'was replaced' if k == 'sessions.sqlite' else 'changed'}"
+                                  for k in diff))
+                self._changed = (f"{self.study.dir}: {what} while this server was serving "
+                                 f"participant {self.participant}")
+        if self._changed is not None:
+            raise StudyChanged(self._changed)
 
     @property
     def n_trials(self) -> int:
@@ -245,6 +312,8 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         check_participant(participant)
     except RequestError as e:
         raise SessionError(e.message) from None
+    from .frozen import refuse_changed_design
+    refuse_changed_design(study.dir, "run" if source == "browser" else "simulate")
     conn = store.connect(study.dir)
     try:
         last = store.latest_session(conn, participant)
@@ -274,6 +343,11 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
             resumed = Session(study, participant, s, source, trials, resumed=True)
             _check_quest_states(resumed, conn)
             return resumed
+        if last is None and participant in web_participants(study.dir):
+            raise SessionError(
+                f"participant {participant} has answers imported from the web site "
+                f"({study.dir / 'web' / 'participants.csv'}); one study has one participant-ID "
+                f"namespace across local, simulated and web sessions: choose another ID")
         s = 1 if last is None else last["session"] + 1
         if any(g.task == "2afc" for g in study.design.groups) and not store.accepts_2afc(conn):
             raise SessionError(f"{store.db_path(study.dir)} was made by an older flipstudy (schema "
@@ -297,6 +371,21 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
         return Session(study, participant, s, source, trials, resumed=False)
     finally:
         conn.close()
+
+
+def web_participants(study_dir) -> set[str]:
+    """The participant IDs of the study's imported web results (``web/participants.csv``,
+    rebuilt by every ``import-web``)."""
+    import csv
+    p = Path(study_dir) / "web" / "participants.csv"
+    if not p.is_file():
+        return set()
+    try:
+        with p.open(newline="", encoding="utf-8", errors="replace") as f:
+            return {r.get("participant") or "" for r in csv.DictReader(f)} - {""}
+    except (OSError, csv.Error) as e:
+        raise SessionError(f"{p}: cannot be read ({e}); it lists the web participants, whose IDs "
+                           f"a local session may not take") from None
 
 
 def _check_quest_states(session: Session, conn) -> None:
@@ -349,7 +438,8 @@ def submit_answer(session: Session, payload: dict, *, timestamp: str | None = No
     with session.db() as conn:
         try:
             status = store.insert_answer(conn, session.participant, session.session,
-                                         session.n_trials, ans, timestamp, adaptive=adaptive)
+                                         session.n_trials, ans, timestamp, adaptive=adaptive,
+                                         design_text=session.study.design_text or None)
         except store.Conflict as e:
             raise RequestError(409, str(e)) from None
         nxt = store.next_open_trial(conn, session.participant, session.session)

@@ -200,14 +200,14 @@ def load_model(path) -> ObserverModel:
     return parse_model(text, str(p))
 
 
-def _with_shared_original(model: ObserverModel, manifest: list[dict]) -> ObserverModel:
+def _with_shared_original(model: ObserverModel, manifest) -> ObserverModel:
     """``model`` with an ``original`` group when the manifest has shared originals
     and the model lacks one: the mean level-0 probability of the sharing groups."""
     from flipstudy.stimuli.design import SHARED_ORIGINAL_GROUP as SO
-    if SO in model.groups or not any(r.get("group") == SO for r in manifest):
+    if SO in model.groups or not any(r.group == SO for r in manifest):
         return model
-    sharing = sorted({r["group"] for r in manifest
-                      if r.get("group") not in (SO, "reference") and r.get("original", "").endswith(f"_{SO}")})
+    sharing = sorted({r.group for r in manifest
+                      if r.group not in (SO, "reference") and r.original.endswith(f"_{SO}")})
     if not sharing:
         raise ModelError(f"observer model ({model.source}) has no group {SO!r} for the shared "
                          f"originals; add [groups.{SO}] levels = [0] p_correct = [...]")
@@ -307,11 +307,11 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
     rows = study.by_name
     if not observers:
         model = _with_shared_original(model, study.manifest)
-        groups = {r["group"] for r in study.manifest if r["group"] != "reference"}
+        groups = {r.group for r in study.manifest if not r.is_reference}
         for g in sorted(groups):                   # fail before anything is stored
             for r in study.manifest:
-                if r["group"] == g:
-                    model.p_correct(g, float(r["level"]))
+                if r.group == g:
+                    model.p_correct(g, r.level)
     ids = sim_ids(n)
     for pid in ids:
         try:
@@ -353,10 +353,7 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
             else:
                 response = "correct" if ui < model.probability(t.group, t.level, shift) else "incorrect"
             row = rows[t.stimulus]
-            try:
-                dur = 1000.0 * float(row.get("frames", "nan")) / float(row.get("fps", "nan"))
-            except ValueError:
-                dur = float("nan")
+            dur = 1000.0 * row.frames / row.fps if row.fps > 0 else math.nan
             if not math.isfinite(dur) or dur <= 0:
                 dur = 2000.0
             nxt = _post(submit_answer, session, {

@@ -44,7 +44,7 @@ responses CHECK in place, so a migrated database takes no 2AFC answers
 """
 from __future__ import annotations
 
-from flipstudy.errors import Conflict, FlipstudyFileNotFoundError, FlipstudyStateError
+from flipstudy.errors import Conflict, CorruptDatabase, FlipstudyFileNotFoundError, FlipstudyStateError
 
 import sqlite3
 from contextlib import contextmanager
@@ -159,8 +159,11 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     path = db_path(study_dir)
     if not create and not path.exists():
         raise FlipstudyFileNotFoundError(f"{path}: no sessions yet (run `flipstudy run` or `flipstudy simulate`)")
+    existed = path.exists() and path.stat().st_size > 0
     conn = sqlite3.connect(path, timeout=30.0, isolation_level=None, check_same_thread=False)
     try:
+        if existed:
+            _check_readable(conn, path)
         conn.row_factory = sqlite3.Row
         _set_wal(conn)
         conn.execute("PRAGMA synchronous=FULL")
@@ -190,6 +193,31 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
         conn.close()
         raise
     return conn
+
+
+def corrupt(path, e: Exception) -> CorruptDatabase:
+    """The error for a damaged database: names the file, says what to do, touches nothing."""
+    why = " ".join(str(e).split())[:200]
+    return CorruptDatabase(
+        f"{path}: not a readable SQLite database ({why}); it was left exactly as it is. It may "
+        f"have been truncated or overwritten: restore it from a backup or from the study's "
+        f"archive (`flipstudy archive` keeps everything), or move the study aside with "
+        f"`flipstudy archive` and ask for help recovering it (sqlite3 {path.name} '.recover')")
+
+
+def _check_readable(conn: sqlite3.Connection, path: Path) -> None:
+    """Before anything is written: the file is a database whose pages read
+    (``PRAGMA quick_check``); :class:`CorruptDatabase` otherwise."""
+    try:
+        row = conn.execute("PRAGMA quick_check(1)").fetchone()
+    except sqlite3.OperationalError as e:
+        if "locked" in str(e) or "busy" in str(e):
+            return                           # a writer holds it: checked by the next opener
+        raise corrupt(path, e) from None
+    except sqlite3.DatabaseError as e:
+        raise corrupt(path, e) from None
+    if row is None or row[0] != "ok":
+        raise corrupt(path, row[0] if row else "quick_check answered nothing")
 
 
 def _set_wal(conn: sqlite3.Connection, wait: float = 30.0) -> None:
@@ -339,7 +367,7 @@ def count_answers(conn, participant: str, session: int) -> int:
 # --- answers --------------------------------------------------------------------------------
 
 def insert_answer(conn, participant: str, session: int, n_trials: int, answer: dict,
-                  timestamp: str | None = None, adaptive=None) -> str:
+                  timestamp: str | None = None, adaptive=None, design_text: str | None = None) -> str:
     """Store one checked answer (see :func:`flipstudy.study.validate.parse_answer`).
 
     Returns ``"stored"``, or ``"duplicate"`` when the same response to the same
@@ -353,6 +381,11 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
     ``quest_ci_high`` and ``skip`` (trial numbers of the group's slots to leave
     out) or raises :class:`Conflict`; everything is written in the one
     transaction.  The session is marked finished with its last open trial.
+
+    ``design_text``: the study's ``design.toml``; the first answer records it and its
+    SHA-256 in ``meta`` (``design_toml``, ``design_sha256``), in the same
+    transaction; a different design with a recorded one is a :class:`Conflict`
+    (:mod:`flipstudy.study.frozen`).
     """
     trial = answer["trial"]
     with transaction(conn):
@@ -396,6 +429,8 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
                     f"an older flipstudy (schema 1) and accepts only correct/incorrect; run a 2AFC "
                     f"study in a new study folder") from None
             raise
+        if design_text is not None:
+            record_design(conn, design_text)
         skip = [int(t) for t in extra.get("skip", ())]
         if skip:
             conn.executemany("UPDATE trials SET skipped=1 WHERE participant=? AND session=? AND "
@@ -406,6 +441,20 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
             conn.execute("UPDATE sessions SET finished=? WHERE participant=? AND session=?",
                          (ts, participant, session))
     return "stored"
+
+
+def record_design(conn, design_text: str) -> None:
+    """Inside a write transaction: record the design with the first answer; refuse
+    (:class:`Conflict`) an answer given under another design than the recorded one."""
+    import hashlib
+    sha = hashlib.sha256(design_text.encode()).hexdigest()
+    old = conn.execute("SELECT value FROM meta WHERE key='design_sha256'").fetchone()
+    if old is None:
+        conn.executemany("INSERT INTO meta VALUES (?, ?)",
+                         [("design_sha256", sha), ("design_toml", design_text)])
+    elif old[0] != sha:
+        raise Conflict("the study's design.toml changed since its first answer; this answer was "
+                       "not stored (the design of a study with answers is frozen)")
 
 
 def insert_demographics(conn, participant: str, session: int, values: dict) -> str:

@@ -6,9 +6,9 @@
      "keys": {"correct": "f", "incorrect": "j"},
      "timeline": [screen, screen, ...]}
 
-Each screen is an object with a ``type`` and an ``id``; the page
-(``study/static/session.js``) has one renderer ("plugin") per type and runs the
-screens in order from ``start``.  Types:
+Each screen is an object with a ``type`` and an ``id``; the page (the jsPsych site of
+``export-web`` in its ``local`` host mode, ``study/web/static/flipstudy-web.js``) builds
+jsPsych trials for each type and runs the screens in order from ``start``.  Types:
 
 ``instructions``  ``title``, ``paragraphs`` (list of str), ``button``
 ``demographics``  ``title``, ``text``, ``fields`` (see
@@ -209,7 +209,7 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
             "type": "examples", "id": "examples", "title": "Examples of correct motions",
             "text": "These motions are physically correct. Watch each one; you can watch "
                     "them again before you start.",
-            "stimuli": [{"video": video_url.format(name=r["stimulus"]),
+            "stimuli": [{"video": video_url.format(name=r.stimulus),
                          "label": f"Correct motion {i + 1} of {len(refs)}"}
                         for i, r in enumerate(refs)],
             "button": "Start the test"})

@@ -12,9 +12,16 @@ skip with a reason naming the missing path when it is absent:
 """
 from __future__ import annotations
 
+import signal
 from pathlib import Path
 
 import pytest
+
+# A suite started with SIGINT ignored (a background job of a non-interactive shell,
+# `nohup`) would hand that on to the commands the tests stop with ctrl-c (they would
+# run on); a handled signal is reset to the default in a child, so handle it here.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 SHARED_DIR = Path(__file__).resolve().parents[2] / "shared"
 BVH_FOLDERS = ("mocap", "peer-bvh")
@@ -69,3 +76,9 @@ def pytest_generate_tests(metafunc):
         else:
             metafunc.parametrize("shared_bvh", [pytest.param(
                 None, marks=pytest.mark.skip(reason=missing_reason()))], ids=["no-shared-data"])
+
+
+# tests/_support holds the tests' shared builders (on the path, see pyproject.toml), not
+# tests: not collected (--doctest-modules would import them, and _mujoco_model.py needs
+# the optional mujoco, which the one test using it skips without)
+collect_ignore = ["_support"]

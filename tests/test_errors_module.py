@@ -15,8 +15,10 @@ from flipstudy.study.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PARTS = ("stimuli", "render", "study", "analysis")
+# every built-in exception but KeyboardInterrupt: the CLI's SIGTERM (``Terminated``) is a
+# signal raised where Ctrl-C is, not an error
 BUILTIN_EXCEPTIONS = {n for n, v in vars(builtins).items()
-                      if isinstance(v, type) and issubclass(v, BaseException)}
+                      if isinstance(v, type) and issubclass(v, BaseException)} - {"KeyboardInterrupt"}
 
 
 def package_sources():

@@ -1,7 +1,7 @@
 """The energy assignment problem (Ooi 2016, 3.6.2) solved directly:
 :func:`assign_energy` solves the problem the sampling of :mod:`.windup`
 approximates with ``scipy.optimize`` (SLSQP over the pelvis position, the same
-constraints), for comparison with the sampled answer (``tests/test_control.py``:
+constraints), for comparison with the sampled answer (``tests/stimuli/test_control.py``:
 the two crouches are millimetres apart).
 """
 from __future__ import annotations

@@ -50,7 +50,7 @@ def unwrapped_turn(clip: Clip, u: np.ndarray) -> np.ndarray:
     unwrapped: its angular velocity along ``u`` integrated (trapezoid).  Written out
     rather than ``scipy.integrate.cumulative_trapezoid``: that rounds differently
     (~1e-17), enough to move the multi-flip's discrete choices (its test against
-    ``tests/_multiflip_reference.py`` then differs by 6e-5)."""
+    ``tests/_support/_multiflip_reference.py`` then differs by 6e-5)."""
     w = clip.angular_velocities()[:, 0] @ u
     return np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) / clip.fps)])
 

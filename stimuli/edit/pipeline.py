@@ -58,14 +58,15 @@ class EditResult(Result[EditReport]):
     steps: EditSteps
 
 
-def edit(clip: Clip | Analysis, *, flips: int | None = None, k_ratio: float = 0.7,
+def edit(clip: Clip | Analysis, *, flips: int | None = None, k_ratio: float = 1.0,
          straighten: str | None = None, t_from: float | None = None, t_to: float | None = None,
          midpoint: bool = False, join: Clip | Analysis | None = None,
          total_mass: float = 70.0) -> EditResult:
     """Edit ``clip``: join its take-off and early flight to the late flight and
     landing of ``join`` (alone), or straighten the ``"legs"`` or ``"arms"`` from
     ``t_from`` to ``t_to`` seconds and repair |L| by retiming (``midpoint``: the
-    second-order rule), then make ``flips`` flips (``k_ratio`` × k*) of the result,
+    second-order rule), then make ``flips`` flips (``k_ratio`` × k*; default k*, momentum
+    continuous) of the result,
     re-analysed with the original's body.  ``clip`` is analysed with
     ``total_mass`` kg (a given :class:`Analysis` is used as it is).
 

@@ -42,6 +42,7 @@ def parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
     index_of: dict[str, int] = {}  # name -> joint: uniqueness checked in O(1)
     offset_lines: list[int] = []   # 1-based line of each joint's OFFSET
     end_lines: list[int] = []      # 1-based line of each End Site's OFFSET
+    channel_lines: dict[int, int] = {}   # joint → 1-based line of its CHANNELS
     parents: list[int] = []
     offsets: list[list[float]] = []
     channels: list[tuple[str, ...]] = []
@@ -139,14 +140,24 @@ def parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
                 raise BVHError(path, ln, f"OFFSET needs 3 finite numbers, found {len(vals)}: "
                                          f"{' '.join(parts[1:])!r}")
             if stack[-1] == -2:
+                if cur_end[1] is not None:  # type: ignore[index]
+                    raise BVHError(path, ln, f"a second OFFSET in one End Site (the first at line "
+                                             f"{cur_end[2]}); a block has exactly one")  # type: ignore[index]
                 cur_end[1] = np.array(vals)  # type: ignore[index]
                 cur_end[2] = ln  # type: ignore[index]
             else:
+                if offsets[stack[-1]] is not None:
+                    raise BVHError(path, ln, f"a second OFFSET for joint {names[stack[-1]]!r} (the first "
+                                             f"at line {offset_lines[stack[-1]]}); a joint has exactly one")
                 offsets[stack[-1]] = vals
                 offset_lines[stack[-1]] = ln
         elif key == "CHANNELS":
             if not stack or stack[-1] < 0:
                 raise BVHError(path, ln, "CHANNELS outside a joint block")
+            if stack[-1] in channel_lines:
+                raise BVHError(path, ln, f"a second CHANNELS for joint {names[stack[-1]]!r} (the first "
+                                         f"at line {channel_lines[stack[-1]]}); a joint has at most one")
+            channel_lines[stack[-1]] = ln
             try:
                 count = int(parts[1])
             except (IndexError, ValueError, OverflowError):

@@ -62,7 +62,7 @@ def _euler_to_quat(values: np.ndarray, orders: list[str], col_of: list[list[int]
     in as an (F, Jg, 3) array, not flattened to (F*Jg, 3): scipy (1.17+, N-d
     rotations) hands N-dimensional input to its vectorised numpy backend, several times
     faster than its Cython loop over 2-D input, with the same quaternions
-    (``tests/test_fast_paths.py`` checks both against each other on the shared files)."""
+    (``tests/stimuli/test_fast_paths.py`` checks both against each other on the shared files)."""
     F = values.shape[0]
     J = len(orders)
     groups: dict[str, list[int]] = {}

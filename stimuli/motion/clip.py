@@ -133,7 +133,7 @@ class Clip:
         each of the nine matrix entries, so every multiply-add is one contiguous numpy
         operation over the frames of a whole level (a stack of (3,3) ``matmul``/
         ``einsum`` calls costs several times more); the results are transposed back
-        once.  ``tests/test_fast_paths.py`` checks them against the plain stacked
+        once.  ``tests/stimuli/test_fast_paths.py`` checks them against the plain stacked
         products on the shared files."""
         if "fk" in self._cache:
             return self._cache["fk"]

@@ -11,6 +11,7 @@ options, calls one library function and prints what it did:
 * :mod:`.concat` — ``concat``;  :mod:`.jump` — ``jump``
 * :mod:`.web` — ``export-web``, ``import-web``
 * :mod:`.plan` — ``plan``
+* :mod:`.score` — ``score``, ``calibrate``
 
 Heavy libraries (pandas, pyvista, …) are imported by the command that needs them.
 """
@@ -22,7 +23,8 @@ import sys
 
 from .common import load_clip
 
-FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web", "plan")
+FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web", "plan",
+            "score")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -42,6 +44,27 @@ def _interrupted(command) -> int:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     print(f"flipstudy{' ' + command if command else ''}: interrupted", file=sys.stderr)
     return 130
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill PID``, a scheduler's stop), raised where Ctrl-C raises
+    :class:`KeyboardInterrupt`: every clean-up that Ctrl-C runs (workers stopped,
+    locks released, staging folders removed) runs for it too."""
+
+
+def _on_sigterm(signum, frame):
+    import signal
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)      # a second SIGTERM while cleaning up: ignored
+    raise Terminated()
+
+
+def _terminated(command) -> int:
+    """SIGTERM: one line and the shell's 128 + SIGTERM = 143 (what a shell reports for a
+    process killed by SIGTERM, so scripts and schedulers see the cause as before)."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    print(f"flipstudy{' ' + command if command else ''}: terminated", file=sys.stderr)
+    return 143
 
 
 #: Exit status of an internal error (a bug): EX_SOFTWARE of BSD's sysexits.h.
@@ -66,8 +89,16 @@ def main(argv: list[str] | None = None) -> int:
         ap.print_help()
         return 2
     from flipstudy.errors import FlipstudyError
+    import signal
+    import threading
+    if args.command != "run" and threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _on_sigterm)  # handled like Ctrl-C (`run`: uvicorn's own)
     try:
+        from ..owned import check_outputs
+        check_outputs(args.command, args)           # no output path is a study's own file
         return args.func(args)
+    except Terminated:                              # SIGTERM: one line, 128 + SIGTERM
+        return _terminated(args.command)
     except KeyboardInterrupt:                       # Ctrl-C: one line, the shell's 128 + SIGINT
         return _interrupted(args.command)
     except FlipstudyError as e:                     # a user error: one line, no traceback

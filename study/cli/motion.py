@@ -29,7 +29,7 @@ def cmd_inspect(args) -> int:
 def cmd_init(args) -> int:
     from flipstudy.stimuli.design import parse_design
     from flipstudy.stimuli.presets import PRESETS
-    from flipstudy.stimuli._io import atomic_write_text
+    from flipstudy.study.frozen import write_design
     out = Path(args.design)
     if out.exists() and not args.force:
         print(f"flipstudy init: {out} exists; pass --force to overwrite", file=sys.stderr)
@@ -37,7 +37,7 @@ def cmd_init(args) -> int:
     preset = args.preset or "flipping-with-physics-2007"
     text = PRESETS[preset]
     d = parse_design(text)              # the template must always be valid
-    atomic_write_text(out, text)
+    write_design(out, text, force=args.force)   # never the design of a study with answers
     if args.preset is None:
         print(f"wrote {out}: the design of Majkowska & Faloutsos 2007, Section 7 "
               f"(backflip and frontflip; 5 error groups × 5 levels; each motion shown twice)")
@@ -129,8 +129,10 @@ def add_commands(subparsers) -> None:
                                    "|L| by non-uniform retiming (5.5). Prints what it did and measured.")
     add_clip_args(p)
     p.add_argument("--flips", type=int, default=None, metavar="N", help="number of flips of the result (1-6)")
-    p.add_argument("--k-ratio", type=float, default=0.7,
-                   help="retiming factor as a fraction of k* (default 0.7, the paper's; 1 = continuous momentum)")
+    p.add_argument("--k-ratio", type=float, default=1.0,
+                   help="retiming factor as a fraction of k* (default 1: linear momentum continuous at "
+                        "take-off and landing; 0.7, the paper's choice, jumps higher and rotates slower "
+                        "but leaves a velocity jump the score reports)")
     p.add_argument("--straighten", choices=["legs", "arms"], help="hold a joint group straight in flight")
     p.add_argument("--from", dest="t_from", type=float, default=None, metavar="T0",
                    help="edit start, seconds (default 0.1 s after take-off)")

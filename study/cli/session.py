@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 
 from .common import add_json, add_study_dir
 
@@ -49,6 +50,10 @@ def cmd_export(args) -> int:
 def cmd_status(args) -> int:
     from ..pipeline import status
     res = status(args.study_dir)
+    from ..frozen import design_change
+    changed = design_change(args.study_dir)
+    if changed:                     # flagged on every call; run, export and analyze refuse
+        print(f"flipstudy status: WARNING: {changed}", file=sys.stderr)
     print(json.dumps(list(res.sessions), indent=2) if args.json else res.summary())
     return 0
 

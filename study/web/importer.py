@@ -11,7 +11,10 @@ The files a researcher gets back, each read by its content:
   line), also a JSON array of records.
 
 Every record is checked before anything is written: its format, the study's
-manifest hash (a site of other stimuli is refused), each field's type and range,
+name (the design's) and manifest hash (a site of other stimuli is refused), its
+site id (one of the sites ``export-web`` exported from this study, listed in
+``STUDY/web/sites.json``; a study without that list, exported by an older
+flipstudy, checks the name and manifest only), each field's type and range,
 and each answer's stimulus, group, level and repetition against the
 participant's trial order recomputed with :func:`flipstudy.study.web.order.web_trial_order`.
 A bad record refuses the whole import, naming the file and the line or row.
@@ -23,7 +26,8 @@ lists them in the order they were imported, with when and what they added), and
 ``dataset_description.json``) is rebuilt from all kept files: the same record
 read twice (a file imported again, a JATOS export and the participant's
 download of the same run, a record resent after a reload) is one row; a file
-already imported is skipped and reported; two different answers to one trial
+already imported is skipped and reported, and a file whose every record is
+already kept is read but not kept (nor re-read by later imports); two different answers to one trial
 of one run refuse the import.  Web participants are kept apart from local ones:
 an ID that also has sessions in ``sessions.sqlite`` is refused.  Each browser
 run of a participant is a session, numbered by the run's start time.
@@ -64,6 +68,7 @@ from flipstudy.errors import WebImportError
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
 from .order import order_groups, web_trial_order
+from .sites import SITES, read_sites as _sites
 from .site import FORMAT, HOSTS
 
 WEB_DIR = "web"
@@ -97,24 +102,29 @@ MAX_FILE = 256 * 1024 * 1024
 
 # --- reading ---------------------------------------------------------------------------------
 
+def _loads(text: str, where: str, what: str = "valid JSON"):
+    """``json.loads`` whose every failure (bad JSON, nesting too deep for the parser) is
+    a :class:`WebImportError` naming ``where``."""
+    try:
+        return json.loads(text, parse_constant=lambda c: math.nan)
+    except ValueError as e:
+        raise WebImportError(f"{where}: not {what} ({e})") from None
+    except RecursionError:
+        raise WebImportError(f"{where}: JSON nested too deeply to be a flipstudy record") from None
+
+
 def _ndjson(text: str, where: str):
     for i, line in enumerate(text.splitlines(), start=1):
         if not line.strip():
             continue
-        try:
-            obj = json.loads(line, parse_constant=lambda c: math.nan)
-        except ValueError as e:
-            raise WebImportError(f"{where}: line {i}: not a JSON record ({e})") from None
+        obj = _loads(line, f"{where}: line {i}", "a JSON record")
         if not isinstance(obj, dict):
             raise WebImportError(f"{where}: line {i}: expected a JSON object, got {type(obj).__name__}")
         yield f"{where}: line {i}", obj
 
 
 def _json_array(text: str, where: str):
-    try:
-        arr = json.loads(text)
-    except ValueError as e:
-        raise WebImportError(f"{where}: not valid JSON ({e})") from None
+    arr = _loads(text, where)
     if not isinstance(arr, list):
         raise WebImportError(f"{where}: expected a JSON array of records")
     for i, obj in enumerate(arr, start=1):
@@ -153,11 +163,7 @@ def read_records(path) -> list[tuple[str, dict]]:
     """``[(where, record), ...]`` of one results file (JATOS data or archive,
     Pavlovia CSV, download), unchecked; ``where`` names file and line."""
     path = Path(path)
-    if not path.is_file():
-        raise WebImportError(f"{path}: no such file")
-    if path.stat().st_size > MAX_FILE:
-        raise WebImportError(f"{path}: larger than {MAX_FILE >> 20} MiB; not a results file")
-    data = path.read_bytes()
+    data = read_results_file(path)
     if data[:4] == b"PK\x03\x04":
         out = []
         try:
@@ -175,6 +181,30 @@ def read_records(path) -> list[tuple[str, dict]]:
     return list(_text_records(data, str(path)))
 
 
+def read_results_file(path: Path) -> bytes:
+    """The bytes of a results file; a folder, a FIFO or device, a missing or too large
+    file is a :class:`WebImportError` saying which."""
+    import stat as st_
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise WebImportError(f"{path}: no such file") from None
+    except OSError as e:
+        raise WebImportError(f"{path}: cannot be read ({e.strerror})") from None
+    if st_.S_ISDIR(st.st_mode):
+        raise WebImportError(f"{path}: a folder; import-web takes the results files themselves "
+                             f"(e.g. {path}/*.jsonl, a JATOS .zip or a Pavlovia .csv)")
+    if not st_.S_ISREG(st.st_mode):
+        raise WebImportError(f"{path}: not a regular file (a FIFO, socket or device); save the "
+                             f"results to a file first")
+    if st.st_size > MAX_FILE:
+        raise WebImportError(f"{path}: larger than {MAX_FILE >> 20} MiB; not a results file")
+    try:
+        return path.read_bytes()
+    except OSError as e:
+        raise WebImportError(f"{path}: cannot be read ({e.strerror})") from None
+
+
 # --- checking --------------------------------------------------------------------------------
 
 COMMON = ("format", "record", "site_id", "study", "manifest_sha256", "host", "participant", "run_id",
@@ -189,6 +219,9 @@ class _Checker:
         self.study = study
         self.groups = order_groups(study.design, study.manifest)
         self.orders = {}
+        #: the site ids exported from this study (None: exported before they were recorded)
+        self.sites = _sites(study.dir / WEB_DIR / SITES)
+        self.design_sha256 = hashlib.sha256(study.design_text.encode()).hexdigest()
 
     def order(self, pid):
         if pid not in self.orders:
@@ -201,11 +234,28 @@ class _Checker:
         if rec["format"] != FORMAT:
             raise WebImportError(f"{where}: format {rec['format']!r}: this flipstudy reads {FORMAT}")
         kind = _str(rec["record"], where, "record", KINDS)
+        name = self.study.design.name
+        if rec["study"] != name:
+            raise WebImportError(
+                f"{where}: study {str(rec['study'])[:60]!r}, but this is the study {name!r} "
+                f"({self.study.dir / 'design.toml'}); import it into the study it was exported from")
+        if self.sites is not None and rec["site_id"] not in self.sites:
+            raise WebImportError(
+                f"{where}: site {str(rec['site_id'])[:40]!r} was not exported from this study "
+                f"({self.study.dir / WEB_DIR / SITES} lists {', '.join(sorted(self.sites)) or 'none'}); "
+                f"import it into the study it was exported from")
         if rec["manifest_sha256"] != self.study.manifest_sha256:
             raise WebImportError(
                 f"{where}: the site was exported from other stimuli (manifest sha256 "
                 f"{str(rec['manifest_sha256'])[:12]}…, this study's is {self.study.manifest_sha256[:12]}…); "
                 f"import it into the study it was exported from")
+        if self.sites is not None and self.sites[rec["site_id"]].get("design_sha256") not in \
+                (None, self.design_sha256):
+            raise WebImportError(
+                f"{where}: site {rec['site_id']} was exported when {self.study.dir / 'design.toml'} "
+                f"was another design (its SHA-256 then: "
+                f"{self.sites[rec['site_id']]['design_sha256'][:12]}…); a study's design is frozen "
+                f"once it has answers: restore the design the site was exported with")
         pid = rec["participant"]
         if not isinstance(pid, str) or not PARTICIPANT_RE.fullmatch(pid):
             raise WebImportError(f"{where}: participant {pid!r} is not a valid participant ID")
@@ -417,7 +467,8 @@ def import_web(study_dir, files) -> ImportResult:
     """Import results files into ``STUDY_DIR/web/`` (see the module docstring).
 
     Returns an :class:`~flipstudy.results.ImportResult`: ``files`` (per file: "file",
-    "status" ("imported" | "already imported"), "records", "new_answers"), ``answers``,
+    "status" ("imported" | "already imported" | "nothing new": every record already kept,
+    so the file is not kept), "records", "new_answers"), ``answers``,
     ``participants``, ``sessions``, ``incomplete``, ``flagged``, ``repeats``,
     ``duplicates`` and the tables written (``responses``, ``participants_csv``,
     ``description``)."""
@@ -427,6 +478,10 @@ def import_web(study_dir, files) -> ImportResult:
     checker = _Checker(study)
     n_trials = len(checker.order("x")) if checker.groups else 0
     kept_sha = {p.name.split("-", 1)[0]: p for p in _kept(d)}
+    # files read before that added nothing (not kept): known by their hash in the ledger
+    read_not_kept = {e.get("sha256") for e in (json.loads((d / LEDGER).read_text())
+                                                if (d / LEDGER).is_file() else [])
+                     if e.get("kept") is False}
     items = []
     for p in kept_sha.values():
         for where, rec in read_records(p):
@@ -437,11 +492,9 @@ def import_web(study_dir, files) -> ImportResult:
     seen = set()
     for f in files:
         f = Path(f)
-        data = f.read_bytes() if f.is_file() else None
-        if data is None:
-            raise WebImportError(f"{f}: no such file")
+        data = read_results_file(f)
         sha = hashlib.sha256(data).hexdigest()[:16]
-        if sha in kept_sha or sha in seen:
+        if sha in kept_sha or sha in seen or sha in read_not_kept:
             report.append({"file": str(f), "status": "already imported", "records": 0, "new_answers": 0})
             continue
         seen.add(sha)
@@ -458,7 +511,11 @@ def import_web(study_dir, files) -> ImportResult:
         if r["status"] == "imported":
             r["new_answers"] = sum(1 for k, (_rec, _w, fn) in merged.items()
                                    if k[1] == "answer" and fn == r["stored"] and k not in before)
-    styles = _manifest_styles(study.dir)
+            if not any(fn == r["stored"] and k not in before for k, (_rec, _w, fn) in merged.items()):
+                # every record of it is already kept: the file is not kept (nor re-read later)
+                r["status"], r["records_read"] = "nothing new", r["records"]
+                new_files = [(s, b) for s, b in new_files if s != r["stored"]]
+    styles = _manifest_styles(study.stimuli)
     columns = web_columns(any(g.task == "2afc" for g in study.design.groups), styles is not None)
     rows, parts = _tables(merged, n_trials, columns)
     if styles is not None:                      # the stimulus's character style, as `export` has it
@@ -476,13 +533,16 @@ def import_web(study_dir, files) -> ImportResult:
     names = {e["stored"] for e in ledger}
     ledger += [{"stored": p.name, "imported": None} for p in _kept(d) if p.name not in names
                and p.name not in {s for s, _ in new_files}]
+    ledger += [{"stored": None, "kept": False, "sha256": r["stored"].split("-", 1)[0], "file": r["file"],
+                "imported": utc_now(), "records": r["records"], "new_answers": 0}
+               for r in report if r["status"] == "nothing new"]
     ledger += [{"stored": r["stored"], "file": r["file"], "imported": utc_now(), "records": r["records"],
                 "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
     atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
     out = d / "responses.csv"
     atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
-    desc = write_dataset_description(d, study.dir, columns, source="web sessions")
+    desc = write_dataset_description(d, study.dir, columns, source="web sessions", stimuli=study.stimuli)
     return ImportResult(
         files=tuple({k: str(v) if isinstance(v, Path) else v for k, v in r.items()} for r in report),
         answers=len(rows), participants=len({p["participant"] for p in parts}), sessions=len(parts),

@@ -38,7 +38,10 @@ with :func:`web_trial_order` and refuses a row whose stimulus does not match.
 """
 from __future__ import annotations
 
+from typing import Iterable
+
 from flipstudy.errors import FlipstudyValueError
+from flipstudy.stimuli.contract import Stimulus
 
 from ..order import Trial, balance_first, group_stimuli
 
@@ -106,7 +109,7 @@ class Sfc32:
         return pool[:k]
 
 
-def order_groups(design, manifest: list[dict]) -> list[list]:
+def order_groups(design, manifest: Iterable[Stimulus]) -> list[list]:
     """The groups as the site's config holds them: ``[[group, [{stimulus, clip,
     kind, level}, ...]], ...]`` in the design's order, rows in manifest order (the
     constant trials' rows of :func:`flipstudy.study.order.group_stimuli`); a 2AFC
@@ -117,10 +120,9 @@ def order_groups(design, manifest: list[dict]) -> list[list]:
     tasks = {g.name: getattr(g, "task", "yes-no") for g in design.groups}
 
     def row(r, g):
-        out = {"stimulus": r["stimulus"], "clip": r.get("clip", ""), "kind": r.get("kind", ""),
-               "level": float(r["level"])}
+        out = {"stimulus": r.stimulus, "clip": r.clip, "kind": r.kind, "level": r.level}
         if tasks.get(g) == "2afc":
-            out.update(task="2afc", original=r.get("original", ""))
+            out.update(task="2afc", original=r.original)
         return out
     return [[g, [row(r, g) for r in rows]] for g, rows in groups.items()]
 

@@ -48,13 +48,16 @@ from types import SimpleNamespace
 from flipstudy.errors import SiteError
 
 from .. import timeline as local_timeline
-from ..session import STIMULUS_RE, load_study
+from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS
 from . import jspsych as jsp
 from .order import RULE, order_groups
 
 FORMAT = "flipstudy-web/1"
 HOSTS = ("static", "jatos", "pavlovia")
+#: the local runner (``flipstudy run``): the same site, served by :mod:`flipstudy.study.server`,
+#: with that server as its data endpoint (never written by export-web)
+LOCAL = "local"
 STATIC = Path(__file__).resolve().parent / "static"
 OWN_FILES = ("flipstudy-order.js", "flipstudy-2afc.js", "flipstudy-web.js", "flipstudy-web.css")
 #: URL query parameters read as the participant ID, first found wins (Prolific's first)
@@ -124,23 +127,28 @@ def refuse_adaptive(design) -> None:
 
 
 def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_pct: float | None = None,
-                video_width: int = 640, videos: dict | None = None) -> dict:
+                video_width: int = 640, videos: dict | None = None, n_trials: int | None = None) -> dict:
     """The ``window.FLIPSTUDY`` object of ``config.js`` (``videos``: stimulus →
     :func:`probe_video`; without it the manifest's frames and fps stand in;
-    ``max_dropped_pct`` None: the design's ``[session]`` threshold)."""
-    if host not in HOSTS:
+    ``max_dropped_pct`` None: the design's ``[session]`` threshold).  With
+    ``host="local"`` (the local runner) the trials, their order and every QUEST+ level
+    come from the server, so adaptive groups are allowed, ``groups`` is empty and
+    ``n_trials`` is the session's."""
+    if host not in HOSTS + (LOCAL,):
         raise SiteError(f"host {host!r}: choose one of {', '.join(HOSTS)}")
     design = study.design
-    refuse_adaptive(design)
+    if host == LOCAL:
+        groups, n = [], int(n_trials or 0)
+    else:
+        refuse_adaptive(design)
+        groups = order_groups(design, study.manifest)
+        n = sum(len(rows) for _, rows in groups) * int(design.repetitions)
     if max_dropped_pct is None:
         max_dropped_pct = design.session.max_dropped_pct
-    groups = order_groups(design, study.manifest)
-    n = sum(len(rows) for _, rows in groups) * int(design.repetitions)
     vids = {}
     for r in study.manifest:
-        name = r["stimulus"]
-        v = (videos or {}).get(name) or {"frames": int(float(r.get("frames") or 0)),
-                                         "fps": float(r.get("fps") or 0),
+        name = r.stimulus
+        v = (videos or {}).get(name) or {"frames": r.frames, "fps": r.fps if r.fps > 0 else 0.0,
                                          "duration_s": 0.0}
         vids[name] = dict(v, video=f"stimuli/{name}.mp4")
     cfg = {
@@ -151,7 +159,7 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
         "max_dropped_pct": float(max_dropped_pct), "repeat_dropped": bool(design.session.repeat_dropped),
         "video_width": int(video_width),
         "participant_params": list(PARTICIPANT_PARAMS),
-        "references": [{"stimulus": r["stimulus"], "video": f"stimuli/{r['stimulus']}.mp4"}
+        "references": [{"stimulus": r.stimulus, "video": f"stimuli/{r.stimulus}.mp4"}
                        for r in study.references],
         "videos": vids, "demographic_fields": DEMOGRAPHIC_FIELDS, "texts": _texts(study, n),
         "jspsych_version": jsp.PACKAGES["jspsych"],
@@ -162,11 +170,41 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
     return cfg
 
 
-def _index_html(host: str, scripts: list[str]) -> str:
+def site_csp(host: str) -> str:
+    """The page's Content-Security-Policy: its own origin only (and, for Pavlovia, its API)."""
     connect = "'self'" + (f" {PAVLOVIA_API}" if host == "pavlovia" else "")
-    csp = (f"default-src 'none'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
-           f"connect-src {connect}; media-src 'self' blob:; img-src 'self' data: blob:; font-src data:; "
-           f"base-uri 'none'; form-action 'none'")
+    return (f"default-src 'none'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
+            f"connect-src {connect}; media-src 'self' blob:; img-src 'self' data: blob:; font-src data:; "
+            f"base-uri 'none'; form-action 'none'")
+
+
+def lib_files(jspsych_folder: Path) -> dict[str, bytes]:
+    """jsPsych's browser bundles and CSS as the site's ``lib/`` files, from the npm
+    packages in ``jspsych_folder`` (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    files = {f"lib/{dst}": (jspsych_folder / "node_modules" / pkg / src).read_bytes()
+             for pkg, (src, dst) in jsp.BUNDLES.items()}
+    pkg, src, dst = jsp.CSS
+    files[f"lib/{dst}"] = (jspsych_folder / "node_modules" / pkg / src).read_bytes()
+    return files
+
+
+def site_files(cfg: dict, jspsych_folder: Path | None) -> dict[str, bytes]:
+    """The site's code as ``{relative path: bytes}``: ``index.html``, ``config.js`` (``cfg``),
+    flipstudy's own scripts and CSS, and (unless ``jspsych_folder`` is None) jsPsych's
+    :func:`lib_files`.  ``export-web`` writes these files; the local runner serves the
+    same bytes from memory."""
+    files = lib_files(jspsych_folder) if jspsych_folder is not None else {}
+    scripts = [dst for _, dst in jsp.BUNDLES.values()]
+    for f in OWN_FILES:
+        files[f] = (STATIC / f).read_bytes()
+    files["config.js"] = ("// written by flipstudy export-web; the study as data\n"
+                          "window.FLIPSTUDY = " + json.dumps(cfg, indent=1) + ";\n").encode()
+    files["index.html"] = _index_html(cfg["host"], scripts).encode()
+    return files
+
+
+def _index_html(host: str, scripts: list[str]) -> str:
+    csp = site_csp(host)
     tags = ([f'<script src="jatos.js"></script>'] if host == "jatos" else [])
     tags += [f'<script src="lib/{s}"></script>' for s in scripts]
     tags += ['<script src="config.js"></script>', '<script src="flipstudy-order.js"></script>',
@@ -215,13 +253,10 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
         raise SiteError(f"{study.render_dir}: no video of {len(missing)} stimuli (e.g. {missing[0]}.mp4); "
                         f"render them first: flipstudy render {study.dir}")
     try:
-        check_rendered(study.dir, "video", rows=study.manifest)
+        check_rendered(study.stimuli, "video")
     except StaleRenderError as e:
         raise SiteError(str(e)) from None
-    for r in study.manifest:
-        if not STIMULUS_RE.fullmatch(r["stimulus"]):
-            raise SiteError(f"stimulus name {r['stimulus']!r} is not a plain file name")
-    videos = {r["stimulus"]: probe_video(study.video_path(r["stimulus"])) for r in study.manifest}
+    videos = {r.stimulus: probe_video(study.video_path(r.stimulus)) for r in study.manifest}
     cfg = site_config(study, host=host, iti_ms=iti_ms, max_dropped_pct=max_dropped_pct,
                       video_width=video_width, videos=videos)
     folder, packages = jsp.fetch(jspsych_dir)
@@ -229,15 +264,12 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
-        scripts = jsp.copy_bundles(folder, tmp / "lib")
+        for rel, data in site_files(cfg, folder).items():
+            (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+            (tmp / rel).write_bytes(data)
         (tmp / "stimuli").mkdir()
         for r in study.manifest:
-            shutil.copyfile(study.video_path(r["stimulus"]), tmp / "stimuli" / f"{r['stimulus']}.mp4")
-        for f in OWN_FILES:
-            shutil.copyfile(STATIC / f, tmp / f)
-        (tmp / "config.js").write_text("// written by flipstudy export-web; the study as data\n"
-                                       "window.FLIPSTUDY = " + json.dumps(cfg, indent=1) + ";\n")
-        (tmp / "index.html").write_text(_index_html(host, scripts))
+            shutil.copyfile(study.video_path(r.stimulus), tmp / "stimuli" / f"{r.stimulus}.mp4")
         from flipstudy import __version__ as fs_version
         files = {p.relative_to(tmp).as_posix(): _sha256(p) for p in sorted(tmp.rglob("*")) if p.is_file()}
         design_path = study.dir / "design.toml"
@@ -265,6 +297,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+    from .sites import remember_site           # import-web takes results of this study's sites only
+    remember_site(study.dir, cfg["site_id"], host, out)
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     return {"out": out, "host": host, "site_id": cfg["site_id"], "n_trials": cfg["n_trials"],
             "videos": len(videos), "jspsych": jsp.PACKAGES["jspsych"], "bytes": size,

@@ -1,0 +1,247 @@
+"""Calibrations: psychometric functions, fitted to perception studies, that turn a
+measured physical error into the probability that a viewer notices it.
+
+A calibration file is JSON (``format`` = :data:`FORMAT`), written by
+``flipstudy calibrate`` (:func:`flipstudy.study.calibrate.calibrate`, fitted by
+:mod:`flipstudy.analysis.calibrate`) or shipped with
+the package (:func:`default_calibration`, made from real human data only).  Schema::
+
+    {"format": "flipstudy-calibration/1",
+     "description": "...",                  # what it was made from
+     "include_simulated": false,            # true only with --include-simulated
+     "sources": [{"name", "citation" | "path", "sha256": {file: hash}, ...}],
+     "functions": [{
+        "kind": "angular-momentum",         # a study kind (stimuli.injection.KINDS) or a
+                                            # measured kind (stimuli.measure)
+        "variant": "smooth" | null,         # e.g. the angular-momentum profile
+        "sign": 1 | -1 | 0,                 # 0: fitted on both signs pooled
+        "task": "yes-no" | "2afc",
+        "style": "ellipsoids" | null,       # character style; null: not recorded
+        "pooled": false,                    # true: variants and signs pooled (a fallback)
+        "unit": "%",                        # of the error magnitude x = |size|
+        "params": {"threshold", "width", "gamma", "lambda", "eta"},   # psignifit MAP
+        "samples": {"threshold": [...], "width": [...], "gamma": [...], "lambda": [...]},
+        "threshold": x*, "threshold_ci": [lo, hi],    # P(x*) = (1 + γ)/2; null: not reached
+        "data": {"x": [...], "k": [...], "n": [...]},
+        "max_level": 50, "n_real": 19, "n_simulated": 0, "source": 0}]}
+
+The function is the analysis's (:mod:`flipstudy.analysis.stats`):
+``P(judged incorrect | x) = γ + (1 − γ − λ) Φ((x − m)/s)``, ``w = s·3.29``.  The
+probability that the error is *noticed* is its part above the base rate,
+``p(x) = (P(x) − γ)/(1 − γ)`` (high-threshold correction: a viewer who notices
+says "incorrect"; one who does not says so at the base rate γ), 0 for no error;
+p and its 95 % interval are the median and quantiles over the posterior ``samples``.
+
+>>> cal = default_calibration()
+>>> f = cal.lookup("angular-momentum", "abrupt", -1)
+>>> f.source_name
+'Majkowska & Faloutsos 2007, Table 2'
+>>> p, lo, hi = f.p_noticed(50.0)
+>>> bool(lo < p < hi), bool(p > f.p_noticed(17.0)[0])
+(True, True)
+>>> cal.lookup("foot-skate", None, 1) is None            # measured, not calibrated
+True
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+from scipy.special import ndtr, ndtri
+
+from flipstudy.errors import CalibrationError
+
+FORMAT = "flipstudy-calibration/1"
+TASKS = ("yes-no", "2afc")
+#: psignifit's width convention: w = s (Φ⁻¹(.95) − Φ⁻¹(.05))
+WIDTH_SCALE = float(ndtri(0.95) - ndtri(0.05))
+#: the shipped default calibration (package data)
+DEFAULT_FILE = "default_calibration.json"
+_PARAMS = ("threshold", "width", "gamma", "lambda")
+
+
+def psychometric_curve(x, threshold, width, gamma, lam):
+    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w), vectorised
+    (the function :mod:`flipstudy.analysis.stats` fits; stimuli cannot import analysis)."""
+    s = np.asarray(width, float) / WIDTH_SCALE
+    return gamma + (1 - gamma - lam) * ndtr((np.asarray(x, float) - threshold) / s)
+
+
+def file_sha256(path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class PsychFunction:
+    """One calibrated psychometric function (one entry of ``functions``)."""
+    kind: str
+    variant: str | None
+    sign: int
+    task: str
+    style: str | None
+    pooled: bool
+    unit: str
+    params: dict
+    samples: np.ndarray          # (S, 4): threshold, width, gamma, lambda
+    threshold: float | None
+    threshold_ci: tuple
+    data: dict
+    max_level: float
+    n_real: int
+    n_simulated: int
+    source: int
+    source_name: str = ""
+
+    def p_incorrect(self, x):
+        """P(judged incorrect | magnitude x) at the point estimate."""
+        p = self.params
+        return psychometric_curve(x, p["threshold"], p["width"], p["gamma"], p["lambda"])
+
+    def p_noticed_samples(self, x) -> np.ndarray:
+        """(S, …) p(x) = (P(x) − γ)/(1 − γ) under every posterior sample."""
+        x = np.asarray(x, float)
+        m, w, g, l = (self.samples[:, i].reshape((-1,) + (1,) * x.ndim) for i in range(4))
+        return np.clip((1 - g - l) / (1 - g) * ndtr((x - m) / (w / WIDTH_SCALE)), 0.0, 1.0)
+
+    def p_noticed(self, x):
+        """(p, low, high): the probability of noticing magnitude ``x``: the posterior
+        median and its 95 % equal-tailed interval (so p lies inside its interval)."""
+        est, lo, hi = np.quantile(self.p_noticed_samples(x), [0.5, 0.025, 0.975], axis=0)
+        return est[()], lo[()], hi[()]
+
+    def describe(self) -> str:
+        v = f" {self.variant}" if self.variant else ""
+        s = {1: " +", -1: " −", 0: " ±"}[self.sign]
+        st = f", {self.style}" if self.style else ""
+        return (f"{self.kind}{v}{s} ({self.task}{st}{', pooled over variants and signs' if self.pooled else ''}; "
+                f"{self.source_name or 'source ' + str(self.source)}, N = {self.n_real} real"
+                + (f" + {self.n_simulated} simulated" if self.n_simulated else "") + ")")
+
+    def to_dict(self) -> dict:
+        return {"kind": self.kind, "variant": self.variant, "sign": self.sign, "task": self.task,
+                "style": self.style, "pooled": self.pooled, "unit": self.unit,
+                "params": {k: round(float(v), 6) for k, v in self.params.items()},
+                "samples": {k: [round(float(v), 5) for v in self.samples[:, i]]
+                            for i, k in enumerate(_PARAMS)},
+                "threshold": _num(self.threshold),
+                "threshold_ci": [_num(v) for v in self.threshold_ci],
+                "data": {k: [float(v) for v in self.data[k]] for k in ("x", "k", "n")},
+                "max_level": float(self.max_level), "n_real": int(self.n_real),
+                "n_simulated": int(self.n_simulated), "source": int(self.source)}
+
+
+def _num(v):
+    return None if v is None or not np.isfinite(v) else round(float(v), 4)
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """A calibration file: its functions, sources and provenance."""
+    functions: tuple
+    sources: tuple
+    description: str = ""
+    include_simulated: bool = False
+    path: str | None = None
+
+    def lookup(self, kind: str, variant: str | None, sign: int, task: str = "yes-no",
+               style: str | None = None) -> PsychFunction | None:
+        """The function for an error of ``kind``/``variant`` and ``sign``: the exact
+        entry first, then an entry pooled over variants and signs (``pooled``); a
+        ``style`` given must match (an entry without a style matches any); among
+        several, the one with most real participants.  None: not calibrated."""
+        sign, variant = int(np.sign(sign)), variant or None
+        cands = [f for f in self.functions if f.kind == kind and f.task == task
+                 and (style is None or f.style in (None, style))]
+        for tier in (lambda f: not f.pooled and f.variant == variant and f.sign == sign,
+                     lambda f: f.pooled):
+            hit = [f for f in cands if tier(f)]
+            if hit:
+                return max(hit, key=lambda f: (f.style == style, f.n_real))
+        return None
+
+    def kinds(self) -> list[str]:
+        return sorted({f.kind for f in self.functions})
+
+    def to_dict(self) -> dict:
+        return {"format": FORMAT, "description": self.description,
+                "include_simulated": bool(self.include_simulated),
+                "sources": list(self.sources), "functions": [f.to_dict() for f in self.functions]}
+
+    def save(self, path) -> Path:
+        """Write the JSON file (through a temporary file: nothing half-written)."""
+        path = Path(path)
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_text(json.dumps(self.to_dict(), indent=1, ensure_ascii=False) + "\n", encoding="utf-8")
+        tmp.replace(path)
+        return path
+
+    @classmethod
+    def from_dict(cls, d: dict, where: str = "calibration") -> "Calibration":
+        if not isinstance(d, dict) or d.get("format") != FORMAT:
+            got = d.get("format") if isinstance(d, dict) else type(d).__name__
+            raise CalibrationError(f"{where}: format: expected {FORMAT!r}, got {got!r}")
+        sources = d.get("sources", [])
+        fns = []
+        for i, f in enumerate(d.get("functions") or []):
+            w = f"{where}: functions[{i}]"
+            try:
+                samples = np.column_stack([np.asarray(f["samples"][k], float) for k in _PARAMS])
+                params = {k: float(v) for k, v in f["params"].items()}
+                src = int(f.get("source", 0))
+                fn = PsychFunction(
+                    kind=str(f["kind"]), variant=f.get("variant"), sign=int(f["sign"]),
+                    task=str(f.get("task", "yes-no")), style=f.get("style"),
+                    pooled=bool(f.get("pooled", False)), unit=str(f.get("unit", "%")),
+                    params=params, samples=samples,
+                    threshold=f.get("threshold"), threshold_ci=tuple(f.get("threshold_ci") or (None, None)),
+                    data={k: np.asarray(f["data"][k], float) for k in ("x", "k", "n")},
+                    max_level=float(f["max_level"]), n_real=int(f["n_real"]),
+                    n_simulated=int(f.get("n_simulated", 0)), source=src,
+                    source_name=str(sources[src].get("name", "")) if 0 <= src < len(sources) else "")
+            except (KeyError, TypeError, ValueError) as e:
+                raise CalibrationError(f"{w}: {type(e).__name__}: {e} (see flipstudy.stimuli.calibration "
+                                       f"for the schema)") from None
+            if fn.task not in TASKS or fn.sign not in (-1, 0, 1):
+                raise CalibrationError(f"{w}: task must be one of {TASKS} and sign 1, -1 or 0")
+            missing = [k for k in _PARAMS if k not in params]
+            if missing or samples.ndim != 2 or len(samples) < 10:
+                raise CalibrationError(f"{w}: params need {list(_PARAMS)} and at least 10 posterior samples")
+            fns.append(fn)
+        if not fns:
+            raise CalibrationError(f"{where}: functions: no calibrated function")
+        return cls(tuple(fns), tuple(sources), str(d.get("description", "")),
+                   bool(d.get("include_simulated", False)), where)
+
+    @classmethod
+    def load(cls, path) -> "Calibration":
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise CalibrationError(f"{path}: no such calibration file") from None
+        except json.JSONDecodeError as e:
+            raise CalibrationError(f"{path}: line {e.lineno}: not JSON ({e.msg})") from None
+        return cls.from_dict(d, str(path))
+
+
+@lru_cache(maxsize=1)
+def default_calibration() -> Calibration:
+    """The calibration shipped with the package: real human data only (FwP Table 2;
+    see its ``sources``)."""
+    text = resources.files("flipstudy.stimuli").joinpath("data", DEFAULT_FILE).read_text(encoding="utf-8")
+    return Calibration.from_dict(json.loads(text), f"default (flipstudy/stimuli/data/{DEFAULT_FILE}: "
+                                                    f"FwP 2007 Table 2, real participants)")
+
+
+def get_calibration(calibration=None) -> Calibration:
+    """A :class:`Calibration`, a path to one, or None (the default)."""
+    if calibration is None:
+        return default_calibration()
+    if isinstance(calibration, Calibration):
+        return calibration
+    return Calibration.load(calibration)

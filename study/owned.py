@@ -1,0 +1,155 @@
+"""Which files a study folder owns, and the one check every command makes before
+it writes an output: no output path may be a file or folder of a study.
+
+A *study folder* is a folder with ``manifest.csv`` and ``design.toml`` (what
+``flipstudy stimuli`` writes) or with ``sessions.sqlite``.  It owns:
+
+* ``sessions.sqlite`` (and its ``-wal``, ``-shm``, ``-journal``), ``manifest.csv``,
+  ``design.toml`` and the stimulus files (``*.bvh``, ``*.npz``) at its top;
+* everything under ``render/`` (videos, ``render.json``), ``web/`` (imported
+  results, ``web/responses.csv``, ``web/participants.csv``) and ``.locks/``;
+* the tables ``flipstudy export`` writes there (``responses.csv``,
+  ``participants.csv``, ``simulated_truth.csv``, ``dataset_description.json``):
+  only ``export`` of that study may write them;
+* the folder itself (an output folder may not be a study, hold one, or be one of
+  the owned folders above).
+
+``analysis/`` and any other name are the user's: ``analyze`` and ``figure`` write
+there freely.
+
+Example
+-------
+>>> import tempfile, pathlib
+>>> from flipstudy.study.demo import make_demo_study
+>>> tmp = tempfile.TemporaryDirectory()
+>>> st = make_demo_study(pathlib.Path(tmp.name) / "st")
+>>> owner(st / "sessions.sqlite")[1]
+'the answer database'
+>>> owner(st / "analysis" / "table.csv") is None
+True
+>>> refuse_owned(st / "manifest.csv", "export --out")
+Traceback (most recent call last):
+    ...
+flipstudy.study.owned.OwnedPathError: .../st/manifest.csv is the stimulus list of the study .../st; `flipstudy export --out` does not write over a study's own files: choose a path outside it (or under .../st/analysis/)
+>>> tmp.cleanup()
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+from flipstudy.errors import OwnedPathError
+
+#: top-level files of a study folder and what they are
+STUDY_FILES = {
+    "sessions.sqlite": "the answer database",
+    "sessions.sqlite-wal": "the answer database's write-ahead log",
+    "sessions.sqlite-shm": "the answer database's shared memory",
+    "sessions.sqlite-journal": "the answer database's journal",
+    "manifest.csv": "the stimulus list",
+    "design.toml": "the design",
+}
+#: what ``flipstudy export`` writes into the study it exports (only it may)
+EXPORT_FILES = {
+    "responses.csv": "the exported answers",
+    "participants.csv": "the exported participants",
+    "simulated_truth.csv": "the simulated observers' parameters",
+    "dataset_description.json": "the exported tables' description",
+}
+#: folders of a study folder whose every file it owns
+STUDY_DIRS = {"render": "the rendered videos", "web": "the web results",
+              ".locks": "the server locks"}
+
+
+def is_study(folder) -> bool:
+    """Is ``folder`` a study folder (``manifest.csv`` with ``design.toml``, or ``sessions.sqlite``)?"""
+    f = Path(folder)
+    try:
+        return ((f / "manifest.csv").is_file() and (f / "design.toml").is_file()) or \
+            (f / "sessions.sqlite").exists()
+    except OSError:
+        return False
+
+
+def _resolved(path) -> Path:
+    p = Path(path).expanduser()
+    try:
+        return p.resolve()
+    except (OSError, RuntimeError):
+        return p.absolute()
+
+
+def owner(path) -> tuple[Path, str, str] | None:
+    """``(study folder, what the path is to it, relative name)`` when ``path`` is a
+    file or folder that a study owns (module docstring), else None.  Symbolic links
+    are followed: a link into a study is the study's file."""
+    p = _resolved(path)
+    if p.is_dir() and is_study(p):
+        return p, "the study folder itself", "."
+    for parent in p.parents:
+        if not is_study(parent):
+            continue
+        rel = p.relative_to(parent)
+        top = rel.parts[0]
+        if len(rel.parts) == 1:
+            if top in STUDY_FILES:
+                return parent, STUDY_FILES[top], top
+            if top in EXPORT_FILES:
+                return parent, EXPORT_FILES[top], top
+            if top in STUDY_DIRS:
+                return parent, STUDY_DIRS[top], top
+            if top.endswith((".bvh", ".npz")):
+                return parent, "a stimulus file", top
+        elif top in STUDY_DIRS:
+            return parent, f"one of {STUDY_DIRS[top]} ({top}/)", str(rel)
+        return None                       # inside a study, but the user's (analysis/, ...)
+    if p.is_dir():                        # a folder holding a study one level down
+        try:
+            for child in p.iterdir():
+                if child.is_dir() and is_study(child):
+                    return child, "inside the output folder", "."
+        except OSError:
+            pass
+    return None
+
+
+def refuse_owned(path, command: str, *, study=None, allow=()) -> None:
+    """Raise :class:`OwnedPathError`, naming the path, when ``path`` is owned by a
+    study (:func:`owner`); ``allow``: names (relative to the study) that ``command``
+    may write, but only in ``study`` (``export``: its own tables)."""
+    got = owner(path)
+    if got is None:
+        return
+    folder, what, rel = got
+    if study is not None and rel in allow and folder == _resolved(study):
+        return
+    if what == "inside the output folder":
+        msg = f"{path} holds the study {folder}"
+    elif rel == ".":
+        msg = f"{path} is the study folder {folder}"
+    else:
+        msg = f"{path} is {what} of the study {folder}"
+    raise OwnedPathError(f"{msg}; `flipstudy {command}` does not write over a study's own files: "
+                         f"choose a path outside it (or under {folder}/analysis/)")
+
+
+#: the options whose values are paths a command writes (checked before every command runs)
+OUTPUT_OPTIONS = ("out", "participants_out", "plot", "ghost", "strip")
+#: commands whose ``--out`` is a study they build themselves (they guard it their own way)
+BUILDS_STUDY = ("stimuli", "reproduce")
+
+
+def check_outputs(command: str, args) -> None:
+    """Refuse (:func:`refuse_owned`) every output path of a parsed command line that
+    a study owns; ``export`` may write its own tables into the study it exports."""
+    for opt in OUTPUT_OPTIONS:
+        if opt == "out" and command in BUILDS_STUDY:
+            continue
+        value = getattr(args, opt, None)
+        if not isinstance(value, (str, Path)) or not str(value):
+            continue
+        flag = "--" + opt.replace("_", "-")
+        if command == "export":
+            refuse_owned(value, f"{command} {flag}", study=getattr(args, "study_dir", None),
+                         allow=tuple(EXPORT_FILES))
+        else:
+            refuse_owned(value, f"{command} {flag}")
