@@ -8,7 +8,7 @@ as written (shared by :mod:`flipstudy.stimuli.design` and
 >>> _get({"fps": "fast"}, "fps", float, "d.toml: [study]")
 Traceback (most recent call last):
 ...
-flipstudy.stimuli.design.DesignError: d.toml: [study].fps: expected a number, got 'fast'
+flipstudy.errors.DesignError: d.toml: [study].fps: expected a number, got 'fast'
 """
 from __future__ import annotations
 

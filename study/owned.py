@@ -30,7 +30,7 @@ True
 >>> refuse_owned(st / "manifest.csv", "export --out")
 Traceback (most recent call last):
     ...
-flipstudy.study.owned.OwnedPathError: .../st/manifest.csv is the stimulus list of the study .../st; `flipstudy export --out` does not write over a study's own files: choose a path outside it (or under .../st/analysis/)
+flipstudy.errors.OwnedPathError: .../st/manifest.csv is the stimulus list of the study .../st; `flipstudy export --out` does not write over a study's own files: choose a path outside it (or under .../st/analysis/)
 >>> tmp.cleanup()
 """
 from __future__ import annotations

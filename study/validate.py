@@ -151,7 +151,7 @@ def check_task_response(task: str, response: str) -> str:
     >>> check_task_response("yes-no", "first")
     Traceback (most recent call last):
     ...
-    flipstudy.study.validate.RequestError: response: a yes-no trial is answered correct or incorrect, not 'first'
+    flipstudy.errors.RequestError: response: a yes-no trial is answered correct or incorrect, not 'first'
     """
     ok = TASK_RESPONSES.get(task, TASK_RESPONSES["yes-no"])
     if response not in ok:

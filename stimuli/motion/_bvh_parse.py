@@ -17,7 +17,7 @@ block into one (F, C) array of numbers, every malformed line refused with a
 >>> parse_motion(lines[:-1], at, 6, "tiny.bvh")
 Traceback (most recent call last):
 ...
-flipstudy.stimuli.motion._bvh_parse.BVHError: tiny.bvh, line 15: truncated MOTION block: 'Frames: 2' but the file ends after 1 frame line(s)
+flipstudy.errors.BVHError: tiny.bvh, line 15: truncated MOTION block: 'Frames: 2' but the file ends after 1 frame line(s)
 """
 from __future__ import annotations
 

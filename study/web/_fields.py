@@ -6,7 +6,7 @@ raises :class:`WebImportError` naming where the record came from and the field.
 >>> _str("maybe", "f: line 3", "response", ("first", "second"))
 Traceback (most recent call last):
 ...
-flipstudy.study.web._fields.WebImportError: f: line 3: response: must be one of first, second, got 'maybe'
+flipstudy.errors.WebImportError: f: line 3: response: must be one of first, second, got 'maybe'
 """
 from __future__ import annotations
 
