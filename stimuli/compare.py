@@ -35,10 +35,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from flipstudy.errors import SourceMismatchError
+from flipstudy.errors import FlipstudyFileNotFoundError, SourceMismatchError
 
 from .design import GIVEN_KIND, Design, SourceSpec
-from .exceptions import FlipstudyFileNotFoundError
 
 #: the file suffixes of a source folder read as clips: those the loading rule reads
 #: (BVH today; joint-position and AMASS readers add theirs to ``loading.CLIP_SUFFIXES``)

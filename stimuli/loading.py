@@ -3,20 +3,21 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .exceptions import FlipstudyFileNotFoundError
+from flipstudy.errors import FlipstudyFileNotFoundError
 
 
 def load_clip(spec: str, scale: float | None = None, fps: float | None = None):
     """A clip by name: a built-in name (backflip, frontflip, jump) or a BVH path.
     The same loading rules for every command: ``scale`` (metres per file unit;
     default guessed) and ``fps`` (default: the header's) override the file.  A name
-    that is neither raises :class:`~flipstudy.stimuli.exceptions.FlipstudyFileNotFoundError`.
+    that is neither raises :class:`~flipstudy.errors.FlipstudyFileNotFoundError`.
 
     >>> from flipstudy.stimuli import load_clip
     >>> load_clip("backflip", fps=60).fps
     60.0
     """
-    from flipstudy.stimuli import BUILTIN_NAMES, builtin, load_bvh
+    from .motion import load_bvh          # the modules, not this package's __init__ (which imports us)
+    from .synth import BUILTIN_NAMES, builtin
     if spec in BUILTIN_NAMES:
         clip = builtin(spec, **({"fps": fps} if fps else {}))
         if scale not in (None, 1.0):
