@@ -224,24 +224,14 @@ class ComparisonAnalysis:
     notes: tuple = ()
 
     def summary(self) -> str:
-        lines = [f"comparison study: {self.participants} participant(s)", self.ranking.summary()]
-        if len(self.agreement):
-            lines.append("agreement with people's choices (smaller number predicted chosen; "
-                         "bootstrap over participants):")
-            for r in self.agreement.itertuples():
-                if r.n:
-                    lines.append(f"  {r.metric:22s} accuracy {r.accuracy:.2f} [{r.accuracy_low:.2f}, "
-                                 f"{r.accuracy_high:.2f}]  AUC {r.auc:.2f} [{r.auc_low:.2f}, "
-                                 f"{r.auc_high:.2f}]  ({r.n} trials)")
-                else:
-                    lines.append(f"  {r.metric:22s} not measured on these clips")
-        lines += [f"note: {n}" for n in self.notes]
-        lines += [f"wrote {p}" for p in self.files.values()]
-        return "\n".join(lines)
+        """What ``flipstudy analyze`` prints (:class:`flipstudy.results.CompareResult`)."""
+        from flipstudy.results import CompareResult
+        return CompareResult(Path(self.files.get("json", ".")).parent, self.to_dict()).summary()
 
     def to_dict(self) -> dict:
-        return {"participants": self.participants, "ranking": self.ranking.table.to_dict("records"),
-                "reference": self.ranking.reference, "method": self.ranking.method,
+        return {"participants": self.participants, "choices": self.ranking.n_choices,
+                "ranking": json.loads(self.ranking.table.to_json(orient="records")),
+                "reference": self.ranking.reference, "ci": self.ranking.ci, "method": self.ranking.method,
                 "agreement": json.loads(self.agreement.to_json(orient="records")),
                 "files": {k: str(v) for k, v in self.files.items()}, "notes": list(self.notes)}
 

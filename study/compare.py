@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from flipstudy.errors import ComparisonError
+from flipstudy.results import CompareResult
 from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli.design import GIVEN_KIND
 
@@ -65,8 +66,10 @@ def analyze_comparison(study_dir, out_dir=None, *, responses=None, include_simul
                                  f"out: --include-simulated)" if who.get("simulated_left_out") else ""))
     used = set(ch["stimulus"]) | set(ch["original"])
     metrics = clip_metrics(StimulusSet(stimuli.folder, [s for s in stimuli if s.stimulus in used]))
-    return analyze_choices(ch, stimuli.sources(), metrics, out_dir if out_dir is not None else d / "analysis",
-                           n_boot=n_boot, ci=ci, seed=seed, figures=figures)
+    out = Path(out_dir) if out_dir is not None else d / "analysis"
+    res = analyze_choices(ch, stimuli.sources(), metrics, out, n_boot=n_boot, ci=ci, seed=seed,
+                          figures=figures)
+    return CompareResult(out=out, report=res.to_dict())
 
 
 def is_comparison_study(path) -> bool:

@@ -165,6 +165,12 @@ def test_a_small_simulated_panel_is_stored_exported_and_analysed(built, tmp_path
     r = pd.read_csv(study / "analysis" / "ranking.csv")
     assert r.source.tolist() == ["gt", "jitter", "floaty"] and r.n.sum() == 2 * 32
     assert main(["analyze", str(study), "--n-boot", "20"]) == 1      # simulated only: left out, said so
+    from flipstudy.results import CompareResult
+    from flipstudy.study.compare import analyze_comparison
+    res = analyze_comparison(study, tmp_path / "again", include_simulated=True, n_boot=20, figures=False)
+    assert CompareResult.load_json(res.save_json(tmp_path / "compare.json")) == res
+    pd.testing.assert_frame_equal(pd.DataFrame(res.report["ranking"]), r, atol=1e-6)   # the CSV's six decimals
+    assert "Bradley–Terry ranking (32 choices" in res.summary()
 
 
 @pytest.mark.slow
