@@ -183,8 +183,38 @@ CLIP_FIELDS = {
 }
 
 
+class _TableSpec:
+    """An entry of an array of tables (``[[clips]]``, ``[[sources]]``) whose keys are
+    its ``FIELDS`` (TOML key → (type, default, check); ``...``: required, None: may
+    be left out): checked on construction, read by :meth:`from_dict`, written by
+    :meth:`to_dict`.  ``SECTION`` names the array in errors."""
+    FIELDS: dict = {}
+    SECTION = ""
+
+    def __post_init__(self, where):
+        w = where or self.SECTION
+        _field(self, "name", str, w, _name_ok)
+        for key, (typ, default, check) in self.FIELDS.items():
+            if key != "name":
+                _field(self, key, typ, w, check, optional=default is None)
+
+    @classmethod
+    def from_dict(cls, c: dict, where: str | None = None):
+        where = where or cls.SECTION
+        if not isinstance(c, dict):
+            raise DesignError(f"{where}: expected a table")
+        _check_keys(c, tuple(cls.FIELDS), where + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
+        for key, (typ, default, check) in cls.FIELDS.items():
+            if default is ... and key not in c:
+                raise DesignError(f"{where}: missing field '{key}'")
+        return cls(**c, where=where)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.FIELDS if getattr(self, k) is not None}
+
+
 @dataclass(frozen=True)
-class ClipSpec:
+class ClipSpec(_TableSpec):
     """A ``[[clips]]`` entry, valid when it exists (every field checked against
     :data:`CLIP_FIELDS`; ``where`` names the file and entry in errors)."""
     name: str
@@ -195,26 +225,8 @@ class ClipSpec:
     k_ratio: float = 0.7        # its retiming factor as a fraction of k*
     accept_unphysical: bool = False  # build it although its gravity or height contradicts physics
     where: InitVar[str | None] = None
-
-    def __post_init__(self, where):
-        w = where or "clips"
-        _field(self, "name", str, w, _name_ok)
-        for key, (typ, default, check) in CLIP_FIELDS.items():
-            if key != "name":
-                _field(self, key, typ, w, check, optional=default is None)
-
-    @classmethod
-    def from_dict(cls, c: dict, where: str = "clips") -> "ClipSpec":
-        if not isinstance(c, dict):
-            raise DesignError(f"{where}: expected a table")
-        _check_keys(c, CLIP_KEYS, where + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
-        for key, (typ, default, check) in CLIP_FIELDS.items():
-            if default is ... and key not in c:
-                raise DesignError(f"{where}: missing field '{key}'")
-        return cls(**c, where=where)
-
-    def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in CLIP_FIELDS if getattr(self, k) is not None}
+    FIELDS = CLIP_FIELDS
+    SECTION = "clips"
 
 
 #: what a ``[[sources]]`` entry may hold (see :class:`SourceSpec`)
@@ -230,7 +242,7 @@ GIVEN_KIND = "given"
 
 
 @dataclass(frozen=True)
-class SourceSpec:
+class SourceSpec(_TableSpec):
     """A ``[[sources]]`` entry of a comparison design: a named folder of clips (ground
     truth, model A, ...), each clip read by the one loading rule of every CLIP
     (:func:`flipstudy.stimuli.loading.load_clip`, with this entry's ``scale`` and
@@ -242,26 +254,8 @@ class SourceSpec:
     fps: float | None = None
     accept_unphysical: bool = False
     where: InitVar[str | None] = None
-
-    def __post_init__(self, where):
-        w = where or "sources"
-        _field(self, "name", str, w, _name_ok)
-        for key, (typ, default, check) in SOURCE_FIELDS.items():
-            if key != "name":
-                _field(self, key, typ, w, check, optional=default is None)
-
-    @classmethod
-    def from_dict(cls, c: dict, where: str = "sources") -> "SourceSpec":
-        if not isinstance(c, dict):
-            raise DesignError(f"{where}: expected a table")
-        _check_keys(c, tuple(SOURCE_FIELDS), where + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
-        for key, (typ, default, check) in SOURCE_FIELDS.items():
-            if default is ... and key not in c:
-                raise DesignError(f"{where}: missing field '{key}'")
-        return cls(**c, where=where)
-
-    def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in SOURCE_FIELDS if getattr(self, k) is not None}
+    FIELDS = SOURCE_FIELDS
+    SECTION = "sources"
 
 
 @dataclass(frozen=True)
