@@ -73,11 +73,14 @@ def analyze_comparison(study_dir, out_dir=None, *, responses=None, include_simul
 
 
 def is_comparison_study(path) -> bool:
-    """Is ``path`` a study folder whose manifest has a ``source`` column?"""
+    """Is ``path`` the folder of a 2AFC comparison study (a ``source`` column, task
+    ``2afc``)?  A yes/no comparison study's answers are ratings per source (its
+    groups), which the ordinary analysis tables."""
     p = Path(path)
-    if not (p / "manifest.csv").is_file():
+    if not (p / "manifest.csv").is_file() or not (p / "design.toml").is_file():
         return False
-    return StimulusSet.read(p, files=False, design=False).sourced
+    st = StimulusSet.read(p, files=False)
+    return st.sourced and st.design is not None and st.design.task == "2afc"
 
 
 def parse_strengths(text: str) -> dict:

@@ -145,6 +145,16 @@ def test_a_yes_no_comparison_asks_about_every_clip(tmp_path):
     trials = trial_order(st.design, st, "P01")
     assert sorted(t.stimulus for t in trials) == sorted(["jump_gt", "jump_jitter", "jump_floaty"])
     assert {t.task for t in trials} == {"yes-no"} and all(s.original == "" for s in st)
+    # its answers are ratings per source: `analyze STUDY` tables them as groups at level 0
+    from flipstudy.study.cli import main
+    from flipstudy.study.simulate import simulate
+    simulate(tmp_path / "study", 10, seed=2, strengths={"gt": 3.0, "jitter": 0.0, "floaty": -3.0})
+    assert main(["export", str(tmp_path / "study"), "--include-simulated"]) == 0
+    assert main(["analyze", str(tmp_path / "study"), "--include-simulated", "--psychometric", "none",
+                 "--no-gee", "--no-figures", "--n-boot", "50"]) == 0
+    t = pd.read_csv(tmp_path / "study" / "analysis" / "table.csv").set_index("group")
+    assert set(t.index) >= {"gt", "jitter", "floaty"} and (t.loc[["gt", "jitter", "floaty"], "n"] == 10).all()
+    assert t.loc["gt", "rating_pct"] > t.loc["floaty", "rating_pct"]     # P(correct) 95 % against 5 %
 
 
 def test_a_small_simulated_panel_is_stored_exported_and_analysed(built, tmp_path):
