@@ -39,9 +39,9 @@ from flipstudy.errors import FlipstudyFileNotFoundError, SourceMismatchError
 
 from .design import GIVEN_KIND, Design, SourceSpec
 
-#: the file suffixes of a source folder read as clips: those the loading rule reads
-#: (BVH today; joint-position and AMASS readers add theirs to ``loading.CLIP_SUFFIXES``)
-DEFAULT_SUFFIXES = (".bvh",)
+#: the file suffixes of a source folder read as clips: BVH, joint-position arrays and AMASS
+#: ``.npz`` (each read by the loading rule; ``loading.CLIP_SUFFIXES`` replaces these when defined)
+DEFAULT_SUFFIXES = (".bvh", ".npy", ".npz")
 
 
 def clip_suffixes() -> tuple[str, ...]:
