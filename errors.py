@@ -68,3 +68,12 @@ class CalibrationError(FlipstudyValueError):
 __all__ = ["CalibrationError", "FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
            "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "StyleError",
            "ManifestError"]
+
+
+class MotionFileError(FlipstudyValueError):
+    """A joint-position array, an AMASS/SMPL ``.npz``, a layout file or a body-model
+    file that is not what its reader expects (shape, NaN frames, unknown layout, a
+    missing ``--body-model``): the message names the file and what was expected."""
+
+
+__all__ += ["MotionFileError"]

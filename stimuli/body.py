@@ -69,7 +69,7 @@ SEGMENTS = ["head", "trunk",
 _PART_NAMES = {
     "hip": ["upleg", "thigh", "upperleg", "hip"],
     "knee": ["leg", "calf", "knee", "shin", "lowerleg"],
-    "ankle": ["foot", "ankle"],
+    "ankle": ["ankle", "foot"],          # SMPL has both: its "foot" is the toe joint
     "shoulder": ["arm", "upperarm", "shoulder"],
     "elbow": ["forearm", "lowerarm", "elbow"],
     "wrist": ["hand", "wrist"],
