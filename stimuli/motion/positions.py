@@ -430,5 +430,25 @@ def load_positions(path, scale: float | None = None, fps: float | None = None, l
     return clip_from_positions(X * s, lay, fps, meta)
 
 
-__all__ = ["load_positions", "POSITION_KEYS", "Layout", "LAYOUTS", "SMPL22_NAMES", "SMPL22_PARENTS", "read_layout", "check_positions",
+def depth_first(clip: Clip) -> Clip:
+    """The same clip with its joints in depth-first order (children in their order),
+    as BVH writes them; a clip already in that order is returned as it is."""
+    sk = clip.skeleton
+    order: list[int] = []
+    stack = [0]
+    while stack:
+        j = stack.pop()
+        order.append(j)
+        stack.extend(np.flatnonzero(sk.parents == j)[::-1].tolist())
+    if order == list(range(sk.num_joints)):
+        return clip
+    new = {j: i for i, j in enumerate(order)}
+    parents = [-1] + [new[int(sk.parents[j])] for j in order[1:]]
+    skel = Skeleton([sk.joint_names[j] for j in order], parents, sk.offsets[order],
+                    [sk.channels[j] for j in order], [(new[p], o) for p, o in sk.end_sites])
+    jp = None if clip.joint_pos is None else clip.joint_pos[:, order]
+    return Clip(skel, clip.fps, clip.root_pos, clip.rotations[:, order], jp, clip.meta)
+
+
+__all__ = ["depth_first", "load_positions", "POSITION_KEYS", "Layout", "LAYOUTS", "SMPL22_NAMES", "SMPL22_PARENTS", "read_layout", "check_positions",
            "clip_from_positions", "positions_of", "rest_frame", "z_up_to_y_up"]

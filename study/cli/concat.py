@@ -8,7 +8,7 @@ import json
 import sys
 from pathlib import Path
 
-from .common import add_json, add_mass, add_out, add_units
+from .common import add_json, add_mass, add_out, add_units, reader_options
 
 
 def _range(text: str) -> tuple[int, int]:
@@ -38,8 +38,8 @@ def cmd_concat(args) -> int:
     from flipstudy.stimuli.edit.concat import ConcatError, concatenate, mirror, motion_graph_join
     from .common import load_clip
     try:
-        a = _pick(load_clip(args.a, args.scale, args.fps), args.range_a, "a", args.a)
-        b = _pick(load_clip(args.b, args.scale, args.fps), args.range_b, "b", args.b)
+        a = _pick(load_clip(args.a, args.scale, args.fps, **reader_options(args)), args.range_a, "a", args.a)
+        b = _pick(load_clip(args.b, args.scale, args.fps, **reader_options(args)), args.range_b, "b", args.b)
         if args.mirror_b:
             b = mirror(b)
         body = analyse(a, total_mass=args.mass).body

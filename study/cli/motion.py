@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 
-from .common import add_clip_args, add_cluster, add_json, add_mass, add_out, add_study_dir, load_clip
+from .common import add_clip_args, add_cluster, add_json, add_mass, add_out, add_study_dir, load_clip, reader_options
 
 #: the names of flipstudy.stimuli.presets.PRESETS (written out: building the parser
 #: imports no numpy; a test checks they agree)
@@ -18,10 +18,10 @@ PRESET_NAMES = ("flipping-with-physics-2007", "reitsma-pollard-2003", "reitsma-a
 
 def cmd_inspect(args) -> int:
     from flipstudy.stimuli import analyse
-    clip = load_clip(args.clip, args.scale, args.fps)
+    clip = load_clip(args.clip, args.scale, args.fps, **reader_options(args))
     original = None
     if args.compare:
-        original = analyse(load_clip(args.compare, args.scale, args.fps), total_mass=args.mass,
+        original = analyse(load_clip(args.compare, args.scale, args.fps, **reader_options(args)), total_mass=args.mass,
                            estimate=not args.prior_masses)
         # measure the stimulus with the original's body (same masses)
         a = analyse(clip, body=original.body, estimate=False)
@@ -143,8 +143,8 @@ def cmd_edit(args) -> int:
         print("flipstudy edit: error: nothing to do: give --flips N, --straighten legs|arms or --join OTHER",
               file=sys.stderr)
         return 2
-    clip = load_clip(args.clip, args.scale, args.fps)
-    other = load_clip(args.join, args.scale, args.fps) if args.join else None
+    clip = load_clip(args.clip, args.scale, args.fps, **reader_options(args))
+    other = load_clip(args.join, args.scale, args.fps, **reader_options(args)) if args.join else None
     try:
         res = edit(clip, flips=args.flips, k_ratio=args.k_ratio, straighten=args.straighten,
                    t_from=args.t_from, t_to=args.t_to, midpoint=args.midpoint, join=other,

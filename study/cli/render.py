@@ -23,7 +23,7 @@ from flipstudy.stimuli.exceptions import FlipstudyError
 import argparse
 import sys
 
-from .common import add_clip, add_cluster, add_out, add_study_dir, add_units
+from .common import add_clip, add_cluster, add_out, add_study_dir, add_units, reader_options
 
 
 def _size(text: str):
@@ -105,9 +105,9 @@ def cmd_figure(args) -> int:
     from flipstudy.render import figures as fg
     from flipstudy.render.staging import stage
     try:
-        clips = [load_clip(args.clip, args.scale, args.fps)]
+        clips = [load_clip(args.clip, args.scale, args.fps, **reader_options(args))]
         if args.overlay:
-            clips.append(load_clip(args.overlay, args.scale, args.fps))
+            clips.append(load_clip(args.overlay, args.scale, args.fps, **reader_options(args)))
         st = stage(clips, size=args.size, style=_style(args.style))
         debug = ("com", "path", "L", "v", "support") if args.debug else ()
         interval = args.interval
