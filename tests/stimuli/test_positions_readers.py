@@ -1,0 +1,241 @@
+"""The joint-position and AMASS/SMPL readers behind the one loading rule
+(``load_clip``, every command's CLIP), their physics gate, ``convert``, and bad inputs.
+
+Tolerances, measured on the CMU takes made into HumanML3D arrays (22 SMPL joints,
+20 fps, resampled with the project's slerp sampler) against the BVH read at 60 fps:
+the contact instants within 0.035 s (asserted: one frame of the array, 0.05 s),
+apparent gravity within 3.7 % (asserted 5 %; the 22-joint body has no fingers and
+a stub head, so its COM is not the BVH body's).  The AMASS file is made here from
+a synthetic body model of the documented format, so every joint has a closed form.
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from _positions import cmu_humanml3d, synthetic_body_model
+from _shared import shared_file
+from flipstudy import analyse, load_bvh
+from flipstudy.errors import FlipstudyError, MotionFileError
+from flipstudy.stimuli import load_clip
+from flipstudy.stimuli.convert import convert
+from flipstudy.stimuli.motion.positions import SMPL22_NAMES, positions_of
+from flipstudy.study.cli import main
+
+G = 9.81
+
+
+@pytest.fixture(scope="module")
+def cmu88():
+    return load_bvh(shared_file("88_01.bvh"), fps=60)       # SOURCES.md: subject 88 is 60 Hz
+
+
+@pytest.mark.parametrize("name", ["88_01.bvh", "87_03.bvh", "88_05.bvh", "90_11.bvh"])
+def test_a_humanml3d_array_from_a_cmu_clip_measures_the_bvh_flight_and_gravity(name, tmp_path):
+    bvh = load_bvh(shared_file(name), fps=60)
+    path = tmp_path / "motion.npy"
+    np.save(path, cmu_humanml3d(bvh))                        # (F, 22, 3) float32, 20 fps, Y up, m
+    clip = load_clip(str(path))                              # layout humanml3d-22 and 20 fps by default
+    assert clip.fps == 20.0 and clip.skeleton.joint_names == list(SMPL22_NAMES)
+    assert clip.meta["scale"] == 1.0 and clip.meta["fit_mm"] < 0.01
+    a, b = analyse(clip), analyse(bvh)
+    assert abs(a.takeoff_time - b.takeoff_time) <= 0.05 + 1e-9
+    assert abs(a.landing_time - b.landing_time) <= 0.05 + 1e-9
+    assert a.apparent_gravity == pytest.approx(b.apparent_gravity, rel=0.05)
+    assert sum(a.body.segment_masses().values()) == pytest.approx(70.0)
+
+
+def test_npz_layout_files_up_axis_and_units(cmu88, tmp_path):
+    """The CMU clip with all its joints through a layout file (JSON, parents by name;
+    TOML, by index), written Z up in centimetres: the same motion comes back."""
+    X, layout = positions_of(cmu88)
+    (tmp_path / "cmu.json").write_text(json.dumps({
+        "joints": list(layout.joints), "fps": 60,
+        "parents": [layout.joints[p] if p >= 0 else None for p in layout.parents]}))
+    (tmp_path / "cmu.toml").write_text(
+        "joints = [" + ", ".join(f'"{n}"' for n in layout.joints) + "]\n"
+        f"parents = {list(layout.parents)}\nup = \"z\"\nscale = 0.01\nfps = 60\n")
+    np.savez(tmp_path / "y.npz", joints=X, fps=60.0)
+    zup_cm = np.stack([X[..., 0], -X[..., 2], X[..., 1]], axis=-1) * 100.0
+    np.save(tmp_path / "z.npy", zup_cm)
+    a = load_clip(str(tmp_path / "y.npz"), layout=str(tmp_path / "cmu.json"))
+    b = load_clip(str(tmp_path / "z.npy"), layout=str(tmp_path / "cmu.toml"))
+    c = load_clip(str(tmp_path / "z.npy"), layout=str(tmp_path / "cmu.json"), up="z", fps=60)
+    assert c.meta["scale_source"] == "guess: cm"
+    for clip in (a, b, c):
+        assert clip.fps == 60.0
+        assert np.abs(clip.joint_positions() - X).max() < 1e-6
+    assert analyse(a).apparent_gravity == pytest.approx(analyse(cmu88).apparent_gravity, rel=0.01)
+
+
+@pytest.mark.filterwarnings("ignore:segment foot")      # the 100x body's feet, reported before the refusal
+def test_the_physics_gate_names_the_fix(cmu88, tmp_path):
+    path = tmp_path / "m.npy"
+    np.save(path, cmu_humanml3d(cmu88))
+    with pytest.raises(MotionFileError, match=r"m\.npy: apparent gravity .* --fps 20"):
+        load_clip(str(path), fps=40)
+    np.save(path, cmu_humanml3d(cmu88) * 100.0)                  # centimetres read as metres
+    with pytest.raises(MotionFileError, match=r"m\.npy: the body is .* tall .* --scale 0\.01"):
+        load_clip(str(path))
+    X = cmu_humanml3d(cmu88)
+    np.save(path, np.stack([X[..., 0], -X[..., 2], X[..., 1]], axis=-1))   # Z up, read as Y up
+    with pytest.raises(MotionFileError, match=r"m\.npy: .* lies down.* --up z"):
+        load_clip(str(path))
+    assert load_clip(str(path), up="z").num_frames == len(X)
+
+
+@pytest.mark.parametrize("array,layout,expect", [
+    (np.zeros((30, 22)), None, r"expected joint positions of shape \(frames >= 2, joints, 3\), got .* \(30, 22\)"),
+    (np.zeros((30, 22, 4)), None, r"shape \(frames >= 2, joints, 3\), got .* \(30, 22, 4\)"),
+    (np.zeros((30, 263)), None, r"HumanML3D's motion features, not joint positions"),
+    (np.zeros((30, 31, 3)), None, r"31 joints per frame and no layout; pass --layout"),
+    (np.zeros((30, 22, 3)), "smpl-24", r"layout 'smpl-24': neither a known layout \(humanml3d-22\)"),
+    (np.zeros((30, 24, 3)), "humanml3d-22", r"24 joints per frame, but the layout names 22"),
+    (np.array([["a"] * 3] * 22 * 3).reshape(3, 22, 3), None, r"expected numbers"),
+])
+def test_bad_position_arrays_name_the_file_and_what_was_expected(tmp_path, array, layout, expect):
+    path = tmp_path / "bad.npy"
+    np.save(path, array)
+    with pytest.raises(MotionFileError, match=expect) as e:
+        load_clip(str(path), layout=layout)
+    assert str(path) in str(e.value) or "layout" in str(e.value)
+
+
+def test_nan_frames_are_listed(cmu88, tmp_path):
+    X = cmu_humanml3d(cmu88)
+    X[[5, 17], 3, 1] = np.nan
+    np.save(tmp_path / "nan.npy", X)
+    with pytest.raises(MotionFileError, match=r"nan\.npy: 2 frame\(s\) hold NaN .*frames 5, 17\)"):
+        load_clip(str(tmp_path / "nan.npy"))
+
+
+def test_bad_files_and_layout_files(tmp_path):
+    (tmp_path / "pickled.npy").write_bytes(b"")
+    np.save(tmp_path / "obj.npy", np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    np.savez(tmp_path / "two.npz", a=np.zeros((3, 22, 3)), b=np.zeros(3))
+    for name, expect in (("pickled.npy", "not a readable .npy/.npz"), ("obj.npy", "unpickling"),
+                         ("two.npz", r"expected joint positions under one of")):
+        with pytest.raises(MotionFileError, match=expect):
+            load_clip(str(tmp_path / name))
+    np.save(tmp_path / "m.npy", np.zeros((5, 3, 3)))
+    for text, expect in (('{"joints": ["a", "b", "c"]}', "needs 'joints'"),
+                         ('{"joints": ["a", "b", "c"], "parents": [-1, 0, 7]}', r"parents\[2\] .*'c'.* = 7"),
+                         ('{"joints": ["a", "b", "c"], "parents": [-1, 2, 0]}', "every joint after its parent"),
+                         ('{"joints": ["a", "b", "c"], "parents": [-1, 0, 0], "up": "x"}', "up = 'x'"),
+                         ('not json', "not a readable layout file")):
+        (tmp_path / "l.json").write_text(text)
+        with pytest.raises(MotionFileError, match=expect) as e:
+            load_clip(str(tmp_path / "m.npy"), layout=str(tmp_path / "l.json"))
+        assert "l.json" in str(e.value)
+    (tmp_path / "l.json").write_text('{"joints": ["a", "b", "c"], "parents": [-1, 0, 0]}')
+    with pytest.raises(MotionFileError, match=r"m\.npy: neither the file nor layout 'l' gives a frame rate; pass --fps"):
+        load_clip(str(tmp_path / "m.npy"), layout=str(tmp_path / "l.json"))
+
+
+# ------------------------------------------------------------------ AMASS / SMPL
+def amass_jump(tmp_path, betas=None, fps=60.0):
+    """An AMASS file (Z up) of the synthetic body standing in a T-pose, jumping
+    0.5 s ballistically (g = 9.81) and standing again, and the body-model file."""
+    model, rest = synthetic_body_model()
+    np.savez(tmp_path / "model.npz", **model)
+    n_stand, T = int(0.5 * fps), 0.5
+    t = np.arange(int(T * fps) + 1) / fps
+    hop = 0.5 * G * t * (T - t)                                   # 0 at both contacts
+    z = np.concatenate([np.zeros(n_stand), hop, np.zeros(n_stand)])
+    F = len(z)
+    trans = np.zeros((F, 3))
+    trans[:, 1] = np.linspace(0.0, 0.6, F)                        # walking along AMASS's Y
+    trans[:, 2] = z
+    poses = np.zeros((F, 156))                                    # SMPL-H: 52 joints
+    poses[:, :3] = [np.pi / 2, 0.0, 0.0]                          # the model's Y up stood on Z
+    poses[n_stand:-n_stand, 18 * 3 + 2] = np.linspace(0.0, 1.2, F - 2 * n_stand)   # left elbow bends
+    b = np.zeros(16) if betas is None else np.asarray(betas, float)
+    np.savez(tmp_path / "jump_poses.npz", poses=poses, trans=trans, betas=b,
+             mocap_framerate=np.float64(fps), gender=np.array("neutral"))
+    return tmp_path / "jump_poses.npz", tmp_path / "model.npz", rest, poses, trans
+
+
+def test_an_amass_file_loads_through_the_body_model(tmp_path):
+    path, model, rest, poses, trans = amass_jump(tmp_path)
+    clip = load_clip(str(path), body_model=str(model))
+    P = clip.joint_positions()
+    # closed form: the rest joints stood up (root at the model's pelvis) plus trans, in Y up
+    Rz = Rotation.from_rotvec([np.pi / 2, 0, 0]).as_matrix()
+    world_z = (rest - rest[0]) @ Rz.T + rest[0]
+    expect = world_z[None] + trans[:, None]                       # AMASS world (Z up)
+    expect_y = np.stack([expect[..., 0], expect[..., 2], -expect[..., 1]], axis=-1)
+    still = [j for j in range(22) if j not in (20,)]              # the bending elbow moves the left wrist
+    assert np.abs(P[:, still] - expect_y[:, still]).max() < 1e-9
+    # the left wrist turns about the elbow by the pose's angle (a rotation about the model's z)
+    k = len(P) // 2
+    fore = rest[20] - rest[18]
+    bent = Rotation.from_rotvec([np.pi / 2, 0, 0]).apply(Rotation.from_rotvec([0, 0, poses[k, 56]]).apply(fore))
+    want = expect[k, 18] + bent
+    assert np.abs(P[k, 20] - [want[0], want[2], -want[1]]).max() < 1e-9
+    a = analyse(clip)
+    assert a.apparent_gravity == pytest.approx(G, rel=0.02)
+    assert a.flight_s == pytest.approx(0.5, abs=1.5 / clip.fps)
+    assert clip.fps == 60.0 and clip.meta["up"] == "z"
+
+
+def test_betas_move_the_joints_by_shapedirs(tmp_path):
+    path, model, rest, _, trans = amass_jump(tmp_path, betas=[1.0] + [0.0] * 15)
+    P = load_clip(str(path), body_model=str(model)).joint_positions()
+    # beta 0 grows every joint's distance from the template's centroid by 5 %
+    m = dict(np.load(model))
+    centroid = m["v_template"].mean(axis=0)
+    rest_b = centroid + 1.05 * (rest - centroid)
+    Rz = Rotation.from_rotvec([np.pi / 2, 0, 0]).as_matrix()
+    e = (rest_b - rest_b[0]) @ Rz.T + rest_b[0] + trans[0]
+    assert np.abs(P[0] - np.stack([e[:, 0], e[:, 2], -e[:, 1]], axis=-1)).max() < 1e-9
+
+
+def test_amass_without_or_with_a_bad_body_model_says_what_to_do(tmp_path):
+    path, model, *_ = amass_jump(tmp_path)
+    with pytest.raises(MotionFileError, match=r"jump_poses\.npz: an AMASS/SMPL motion .* pass --body-model PATH"):
+        load_clip(str(path))
+    with pytest.raises(MotionFileError, match=r"--body-model .*nope\.npz: no such file"):
+        load_clip(str(path), body_model=str(tmp_path / "nope.npz"))
+    m = dict(np.load(model))
+    np.savez(tmp_path / "partial.npz", **{k: v for k, v in m.items() if k != "J_regressor"})
+    with pytest.raises(MotionFileError, match=r"partial\.npz: not an SMPL-family body model: no array J_regressor"):
+        load_clip(str(path), body_model=str(tmp_path / "partial.npz"))
+    kt = m["kintree_table"].copy()
+    kt[0, 4] = 2
+    np.savez(tmp_path / "tree.npz", **{**m, "kintree_table": kt})
+    with pytest.raises(MotionFileError, match=r"tree\.npz: the first 22 joints of kintree_table"):
+        load_clip(str(path), body_model=str(tmp_path / "tree.npz"))
+    d = dict(np.load(path))
+    np.savez(tmp_path / "short.npz", **{**d, "poses": d["poses"][:, :30]})
+    with pytest.raises(MotionFileError, match=r"short\.npz: poses has shape \(\d+, 30\)"):
+        load_clip(str(tmp_path / "short.npz"), body_model=str(model))
+
+
+def test_cli_inspect_and_convert(tmp_path, capsys, cmu88):
+    path, model, *_ = amass_jump(tmp_path)
+    assert main(["inspect", str(path)]) == 1
+    assert "--body-model" in capsys.readouterr().err
+    assert main(["inspect", str(path), "--body-model", str(model), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["apparent_gravity"] == pytest.approx(G, rel=0.02) and d["fps"] == 60.0
+    # convert: positions → BVH → the same joints, read back by the BVH reader
+    X = cmu_humanml3d(cmu88)
+    np.save(tmp_path / "m.npy", X)
+    out = tmp_path / "m.bvh"
+    assert main(["convert", str(tmp_path / "m.npy"), "--out", str(out)]) == 0
+    assert "22 joints" in capsys.readouterr().out
+    back = load_bvh(out, scale=1.0)
+    idx = [back.skeleton.index(n) for n in SMPL22_NAMES]
+    assert back.fps == 20.0
+    assert np.abs(back.joint_positions()[:, idx] - X).max() < 1e-5
+    assert main(["convert", str(tmp_path / "m.npy"), "--out", str(out)]) == 1       # exists: refused
+    assert "exists" in capsys.readouterr().err
+    r = convert(str(path), tmp_path / "amass.bvh", body_model=str(model))
+    assert r.frames == len(np.load(path)["poses"]) and r.joints == 22
+
+
+def test_every_reader_error_is_a_flipstudy_error():
+    assert issubclass(MotionFileError, FlipstudyError) and issubclass(MotionFileError, ValueError)
