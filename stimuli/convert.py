@@ -42,12 +42,10 @@ def convert(spec: str, out, force: bool = False, **load_options) -> Converted:
     ``scale``, ``fps``, ``layout``, ``up``, ``body_model``; the physics gate runs) and
     write it as BVH in metres to ``out`` (refused when it exists, unless ``force``)."""
     from .motion import save_bvh
-    from .motion.positions import depth_first
     out = Path(out)
     if out.exists() and not force:
         raise FlipstudyFileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
     clip = load_clip(spec, **load_options)
-    clip = depth_first(clip)
     save_bvh(clip, out)
     return Converted(str(spec), out, clip.num_frames, clip.fps, clip.skeleton.num_joints,
                      clip.meta.get("fit_mm"), tuple(clip.meta.get("warnings", [])))

@@ -377,7 +377,9 @@ def load_positions(path, scale: float | None = None, fps: float | None = None, l
     size); ``fps``: default the file's, else the layout's; ``up``: ``"y"`` or ``"z"``
     (default the layout's; ``"z"`` for AMASS).  ``layout``: a name of :data:`LAYOUTS` or
     a layout file; default ``humanml3d-22`` for 22 joints.  Every bad input raises
-    :class:`MotionFileError` naming the file and what was expected."""
+    :class:`MotionFileError` naming the file and what was expected.  The clip's joints
+    are in depth-first order (as BVH lists them), not necessarily the file's: find
+    them by name."""
     from .smpl import read_amass
     from ._bvh_units import check_fps, guess_scale
     path = Path(path)
@@ -427,7 +429,8 @@ def load_positions(path, scale: float | None = None, fps: float | None = None, l
         meta["scale_source"] = f"guess: {unit}"
     meta["scale"] = s
     meta["layout"] = lay.name
-    return clip_from_positions(X * s, lay, fps, meta)
+    # joints in depth-first order, as BVH writes them (stimuli, edit, convert); find them by name
+    return depth_first(clip_from_positions(X * s, lay, fps, meta))
 
 
 def depth_first(clip: Clip) -> Clip:

@@ -29,6 +29,12 @@ from flipstudy.study.cli import main
 G = 9.81
 
 
+def in_order(clip, names=SMPL22_NAMES):
+    """(F, J, 3) joint positions of a clip in the order of ``names`` (a position clip's
+    joints are in depth-first order, as BVH lists them)."""
+    return clip.joint_positions()[:, [clip.skeleton.index(n) for n in names]]
+
+
 @pytest.fixture(scope="module")
 def cmu88():
     return load_bvh(shared_file("88_01.bvh"), fps=60)       # SOURCES.md: subject 88 is 60 Hz
@@ -40,7 +46,7 @@ def test_a_humanml3d_array_from_a_cmu_clip_measures_the_bvh_flight_and_gravity(n
     path = tmp_path / "motion.npy"
     np.save(path, cmu_humanml3d(bvh))                        # (F, 22, 3) float32, 20 fps, Y up, m
     clip = load_clip(str(path))                              # layout humanml3d-22 and 20 fps by default
-    assert clip.fps == 20.0 and clip.skeleton.joint_names == list(SMPL22_NAMES)
+    assert clip.fps == 20.0 and sorted(clip.skeleton.joint_names) == sorted(SMPL22_NAMES)
     assert clip.meta["scale"] == 1.0 and clip.meta["fit_mm"] < 0.01
     a, b = analyse(clip), analyse(bvh)
     assert abs(a.takeoff_time - b.takeoff_time) <= 0.05 + 1e-9
@@ -68,7 +74,7 @@ def test_npz_layout_files_up_axis_and_units(cmu88, tmp_path):
     assert c.meta["scale_source"] == "guess: cm"
     for clip in (a, b, c):
         assert clip.fps == 60.0
-        assert np.abs(clip.joint_positions() - X).max() < 1e-6
+        assert np.abs(in_order(clip, layout.joints) - X).max() < 1e-6
     assert analyse(a).apparent_gravity == pytest.approx(analyse(cmu88).apparent_gravity, rel=0.01)
 
 
@@ -162,7 +168,7 @@ def amass_jump(tmp_path, betas=None, fps=60.0):
 def test_an_amass_file_loads_through_the_body_model(tmp_path):
     path, model, rest, poses, trans = amass_jump(tmp_path)
     clip = load_clip(str(path), body_model=str(model))
-    P = clip.joint_positions()
+    P = in_order(clip)
     # closed form: the rest joints stood up (root at the model's pelvis) plus trans, in Y up
     Rz = Rotation.from_rotvec([np.pi / 2, 0, 0]).as_matrix()
     world_z = (rest - rest[0]) @ Rz.T + rest[0]
@@ -184,7 +190,7 @@ def test_an_amass_file_loads_through_the_body_model(tmp_path):
 
 def test_betas_move_the_joints_by_shapedirs(tmp_path):
     path, model, rest, _, trans = amass_jump(tmp_path, betas=[1.0] + [0.0] * 15)
-    P = load_clip(str(path), body_model=str(model)).joint_positions()
+    P = in_order(load_clip(str(path), body_model=str(model)))
     # beta 0 grows every joint's distance from the template's centroid by 5 %
     m = dict(np.load(model))
     centroid = m["v_template"].mean(axis=0)
@@ -240,3 +246,23 @@ def test_cli_inspect_and_convert(tmp_path, capsys, cmu88):
 
 def test_every_reader_error_is_a_flipstudy_error():
     assert issubclass(MotionFileError, FlipstudyError) and issubclass(MotionFileError, ValueError)
+
+
+def test_a_design_builds_stimuli_from_a_position_array(cmu88, tmp_path):
+    """``flipstudy stimuli``: a [[clips]] source may be a 22-joint array; the study's
+    BVH files carry its joints, and each stimulus' error is measured as for a BVH."""
+    from flipstudy.stimuli.contract import StimulusSet
+    from flipstudy.stimuli.design import load_design
+    from flipstudy.stimuli.stimset import build_stimuli
+    np.save(tmp_path / "flip.npy", cmu_humanml3d(cmu88, fps=60))
+    (tmp_path / "d.toml").write_text(
+        '[study]\nname = "positions"\nseed = 1\nfps = 60\ntolerance_pct = 2.0\n\n'
+        '[[clips]]\nname = "flip"\nsource = "flip.npy"\nfps = 60\n\n'
+        '[[groups]]\nname = "smooth-increase"\nkind = "angular-momentum"\nprofile = "smooth"\n'
+        'sign = 1\nlevels = [0, 25]\n')
+    build_stimuli(load_design(tmp_path / "d.toml"), tmp_path / "study", progress=False)
+    rows = StimulusSet.read(tmp_path / "study", files=False, design=False).rows()
+    r = next(r for r in rows if float(r["level"]) == 25)
+    assert abs(float(r["measured_error_pct"]) - 25.0) <= 2.0
+    back = load_bvh(tmp_path / "study" / r["bvh"], scale=1.0)
+    assert sorted(back.skeleton.joint_names) == sorted(SMPL22_NAMES)
