@@ -57,14 +57,7 @@ from scipy.spatial.transform import Rotation
 from flipstudy.errors import MotionFileError
 from .clip import Clip
 from .skeleton import POSITION_CHANNELS, Skeleton
-
-#: The SMPL body's first 22 joints, in SMPL order (HumanML3D's ``new_joints``).
-SMPL22_NAMES = ("pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
-                "left_ankle", "right_ankle", "spine3", "left_foot", "right_foot", "neck",
-                "left_collar", "right_collar", "head", "left_shoulder", "right_shoulder",
-                "left_elbow", "right_elbow", "left_wrist", "right_wrist")
-#: Their parents (SMPL's ``kintree_table`` row 0 for the first 22 joints).
-SMPL22_PARENTS = (-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19)
+from .smpl import SMPL22_NAMES, SMPL22_PARENTS, read_amass
 
 #: A bone shorter than this (m) is a helper joint at its parent's place (CMU's hip joints).
 _COINCIDENT = 1e-3
@@ -380,7 +373,6 @@ def load_positions(path, scale: float | None = None, fps: float | None = None, l
     :class:`MotionFileError` naming the file and what was expected.  The clip's joints
     are in depth-first order (as BVH lists them), not necessarily the file's: find
     them by name."""
-    from .smpl import read_amass
     from ._bvh_units import check_fps, guess_scale
     path = Path(path)
     arr, file_fps = _read_array(path)

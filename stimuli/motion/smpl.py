@@ -25,7 +25,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from flipstudy.errors import MotionFileError
-from .positions import SMPL22_PARENTS
+
+#: The SMPL body's first 22 joints, in SMPL order (HumanML3D's ``new_joints``).
+SMPL22_NAMES = ("pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
+                "left_ankle", "right_ankle", "spine3", "left_foot", "right_foot", "neck",
+                "left_collar", "right_collar", "head", "left_shoulder", "right_shoulder",
+                "left_elbow", "right_elbow", "left_wrist", "right_wrist")
+#: Their parents (SMPL's ``kintree_table`` row 0 for the first 22 joints).
+SMPL22_PARENTS = (-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19)
+
 
 #: The arrays a body-model file must hold (``posedirs`` and ``weights`` are not needed for joints).
 MODEL_KEYS = ("v_template", "shapedirs", "J_regressor", "kintree_table")
@@ -130,4 +138,4 @@ def read_amass(path, body_model) -> tuple[np.ndarray, float | None]:
     return smpl_joints(model, poses.astype(np.float64), trans, betas), fps
 
 
-__all__ = ["MODEL_KEYS", "load_body_model", "smpl_joints", "read_amass"]
+__all__ = ["SMPL22_NAMES", "SMPL22_PARENTS", "MODEL_KEYS", "load_body_model", "smpl_joints", "read_amass"]
