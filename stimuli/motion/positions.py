@@ -8,7 +8,10 @@ J joints per frame, with a *layout* naming the joints and their parents:
   ``new_joints`` arrays of motion-generation models), 20 fps, Y up, metres;
 * a layout file (JSON or TOML) for any other: ``joints`` (names), ``parents``
   (index or name of each joint's parent, -1 / "" for the root), and optionally
-  ``fps``, ``up`` (``"y"`` or ``"z"``) and ``scale`` (metres per file unit).
+  ``fps``, ``up`` (``"y"`` or ``"z"``), ``scale`` (metres per file unit) and
+  ``landmarks`` (body landmark → joint name, for names the body model does not
+  recognise: ``hip_l``, ``knee_l``, ``ankle_l``, ``shoulder_l``, ``elbow_l``,
+  ``wrist_l``, the same with ``_r``, ``neck``, ``head``).
 
 :func:`clip_from_positions` turns positions into a :class:`Clip` (the body from
 joint positions): the rest pose is one of the clip's own frames (the one with the
@@ -75,6 +78,9 @@ class Layout:
     fps: float | None = None
     up: str = "y"
     scale: float | None = None
+    #: body landmark → joint name, for joints whose names the body model does not
+    #: recognise (see :func:`flipstudy.stimuli.body.auto_landmarks`)
+    landmarks: dict | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "joints", tuple(self.joints))
@@ -139,8 +145,18 @@ def read_layout(spec) -> Layout:
     for key, v in (("fps", fps), ("scale", scale)):
         if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0):
             raise MotionFileError(f"{p}: {key} = {v!r}: expected a positive number")
+    lm = d.get("landmarks")
+    if lm is not None:
+        from ..body import LANDMARKS
+        if not isinstance(lm, dict):
+            raise MotionFileError(f"{p}: landmarks must be a table of landmark = joint name")
+        for k, v in lm.items():
+            if k not in LANDMARKS:
+                raise MotionFileError(f"{p}: landmarks.{k}: unknown landmark; expected one of {', '.join(LANDMARKS)}")
+            if v not in index:
+                raise MotionFileError(f"{p}: landmarks.{k} = {v!r}: not one of the layout's joints")
     return Layout(p.stem, joints, par, None if fps is None else float(fps), up,
-                  None if scale is None else float(scale))
+                  None if scale is None else float(scale), lm)
 
 
 def z_up_to_y_up(X: np.ndarray) -> np.ndarray:
@@ -421,6 +437,8 @@ def load_positions(path, scale: float | None = None, fps: float | None = None, l
         meta["scale_source"] = f"guess: {unit}"
     meta["scale"] = s
     meta["layout"] = lay.name
+    if lay.landmarks:
+        meta["body_mapping"] = dict(lay.landmarks)
     # joints in depth-first order, as BVH writes them (stimuli, edit, convert); find them by name
     return depth_first(clip_from_positions(X * s, lay, fps, meta))
 

@@ -23,7 +23,7 @@ from flipstudy import analyse, load_bvh
 from flipstudy.errors import FlipstudyError, MotionFileError
 from flipstudy.stimuli import load_clip
 from flipstudy.stimuli.convert import convert
-from flipstudy.stimuli.motion.positions import SMPL22_NAMES, positions_of
+from flipstudy.stimuli.motion.positions import SMPL22_NAMES, SMPL22_PARENTS as SMPL_PARENTS, positions_of
 from flipstudy.study.cli import main
 
 G = 9.81
@@ -266,3 +266,30 @@ def test_a_design_builds_stimuli_from_a_position_array(cmu88, tmp_path):
     assert abs(float(r["measured_error_pct"]) - 25.0) <= 2.0
     back = load_bvh(tmp_path / "study" / r["bvh"], scale=1.0)
     assert sorted(back.skeleton.joint_names) == sorted(SMPL22_NAMES)
+
+
+def test_a_layout_file_names_the_landmarks_of_joints_the_body_cannot_guess(cmu88, tmp_path):
+    """Joints called j0 … jN: without landmarks the body cannot be built (the error
+    names the file and the table to add); with them it is the named skeleton's body."""
+    from flipstudy.stimuli.body import Body, BodyMappingError
+    X = cmu_humanml3d(cmu88)
+    np.save(tmp_path / "m.npy", X)
+    anon = [f"j{i}" for i in range(22)]
+    layout = {"joints": anon, "parents": list(SMPL_PARENTS), "fps": 20}
+    (tmp_path / "bare.json").write_text(json.dumps(layout))
+    with pytest.raises(BodyMappingError, match=r"m\.npy: cannot map the skeleton .* 'landmarks' table"):
+        load_clip(str(tmp_path / "m.npy"), layout=str(tmp_path / "bare.json"))
+    by_name = dict(zip(SMPL22_NAMES, anon))
+    lm = {f"{part}_{s[0]}": by_name[f"{s}_{joint}"] for s in ("left", "right")
+          for part, joint in (("hip", "hip"), ("knee", "knee"), ("ankle", "ankle"),
+                              ("shoulder", "shoulder"), ("elbow", "elbow"), ("wrist", "wrist"))}
+    lm.update(neck=by_name["neck"], head=by_name["head"])
+    (tmp_path / "named.json").write_text(json.dumps({**layout, "landmarks": lm}))
+    a = load_clip(str(tmp_path / "m.npy"), layout=str(tmp_path / "named.json"))
+    b = load_clip(str(tmp_path / "m.npy"))
+    ba, bb = Body.from_clip(a), Body.from_clip(b)
+    assert sorted(ba.segment_masses().values()) == pytest.approx(sorted(bb.segment_masses().values()))
+    assert analyse(a).apparent_gravity == pytest.approx(analyse(b).apparent_gravity, rel=1e-9)
+    (tmp_path / "bad.json").write_text(json.dumps({**layout, "landmarks": {"elbow": "j3"}}))
+    with pytest.raises(MotionFileError, match=r"bad\.json: landmarks\.elbow: unknown landmark"):
+        load_clip(str(tmp_path / "m.npy"), layout=str(tmp_path / "bad.json"))
