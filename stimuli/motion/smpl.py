@@ -40,13 +40,20 @@ MODEL_KEYS = ("v_template", "shapedirs", "J_regressor", "kintree_table")
 NUM_BODY_JOINTS = len(SMPL22_PARENTS)
 
 
-def _load_npz(path: Path, what: str) -> dict:
+def _load_npz(path: Path, what: str, keys) -> dict:
+    """The arrays ``keys`` of an ``.npz`` (those present; others, such as AMASS's
+    ``gender`` or a model's ``f``, are not read)."""
+    k = None
     try:
         with np.load(path, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
+            out = {}
+            for k in keys:
+                if k in z.files:
+                    out[k] = z[k]
+            return out
     except ValueError as e:
-        raise MotionFileError(f"{path}: cannot read the {what} without unpickling Python objects "
-                              f"({e}); expected an .npz of plain numeric arrays") from None
+        raise MotionFileError(f"{path}: cannot read the {what}'s array {k!r} without unpickling Python "
+                              f"objects ({e}); expected an .npz of plain numeric arrays") from None
     except (OSError, EOFError) as e:
         raise MotionFileError(f"{path}: not a readable .npz {what} ({e})") from None
 
@@ -60,7 +67,7 @@ def load_body_model(path) -> dict:
         raise MotionFileError(f"--body-model {path}: no such file; expected your licensed SMPL, SMPL-H "
                               f"or SMPL-X model as an .npz (v_template, shapedirs, J_regressor, "
                               f"kintree_table)")
-    m = _load_npz(path, "body model")
+    m = _load_npz(path, "body model", MODEL_KEYS)
     missing = [k for k in MODEL_KEYS if k not in m]
     if missing:
         raise MotionFileError(f"{path}: not an SMPL-family body model: no array {', '.join(missing)} "
@@ -112,7 +119,7 @@ def read_amass(path, body_model) -> tuple[np.ndarray, float | None]:
     file's frame rate (None when it has none) of an AMASS-style ``.npz``.
     ``body_model`` None: :class:`MotionFileError` naming ``--body-model``."""
     path = Path(path)
-    d = _load_npz(path, "motion")
+    d = _load_npz(path, "motion", ("poses", "trans", "betas", "mocap_framerate", "mocap_frame_rate", "fps"))
     if body_model is None:
         raise MotionFileError(f"{path}: an AMASS/SMPL motion (poses, trans, betas) needs the body model "
                               f"to place its joints; pass --body-model PATH to your licensed SMPL, SMPL-H "

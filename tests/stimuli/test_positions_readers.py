@@ -293,3 +293,16 @@ def test_a_layout_file_names_the_landmarks_of_joints_the_body_cannot_guess(cmu88
     (tmp_path / "bad.json").write_text(json.dumps({**layout, "landmarks": {"elbow": "j3"}}))
     with pytest.raises(MotionFileError, match=r"bad\.json: landmarks\.elbow: unknown landmark"):
         load_clip(str(tmp_path / "m.npy"), layout=str(tmp_path / "bad.json"))
+
+
+def test_amass_files_with_extra_arrays_read_only_what_they_need(tmp_path):
+    """AMASS files carry more (``gender``, ``dmpls``, …; some pickled): only
+    ``poses``, ``trans``, ``betas`` and the rate are read; a pickled one of those is refused."""
+    path, model, *_ = amass_jump(tmp_path)
+    d = dict(np.load(path))
+    np.savez(tmp_path / "extra.npz", **d, dmpls=np.zeros((len(d["poses"]), 8)),
+             note=np.array([{"x": 1}], dtype=object))
+    assert load_clip(str(tmp_path / "extra.npz"), body_model=str(model)).num_frames == len(d["poses"])
+    np.savez(tmp_path / "pickled.npz", **{**d, "betas": np.array([None] * 16, dtype=object)})
+    with pytest.raises(MotionFileError, match=r"pickled\.npz: cannot read the motion's array 'betas'"):
+        load_clip(str(tmp_path / "pickled.npz"), body_model=str(model))
