@@ -27,7 +27,7 @@ def package_module_name(path: Path) -> str | None:
     rel = path.resolve().relative_to(ROOT) if path.resolve().is_relative_to(ROOT) else None
     if rel is None or rel.suffix != ".py" or (len(rel.parts) > 1 and rel.parts[0] not in PARTS):
         return None
-    if len(rel.parts) == 1 and rel.name not in ("__init__.py", "errors.py"):
+    if len(rel.parts) == 1 and rel.name not in ("__init__.py", "errors.py", "results.py"):
         return None
     parts = list(rel.with_suffix("").parts)
     if parts[-1] == "__init__":

@@ -3,8 +3,10 @@ design field, a refused edit) is a :class:`FlipstudyError`, whose message names
 the file and line, or the field, and what was expected.  The CLI prints these in
 one line; any other exception is a bug and is shown with its traceback.
 
-The concrete classes keep ``ValueError`` as a second base so code written
-against the older classes (``except ValueError``) still catches them.
+Every user-error class of the four parts is defined here (grouped by the part
+that raises it), so no part imports another only for its errors.  The concrete
+classes keep a built-in second base (``ValueError``, ``OSError``, …) so code
+written against the older classes (``except ValueError``) still catches them.
 """
 from __future__ import annotations
 
@@ -21,6 +23,10 @@ class FlipstudyError(Exception):
     ...     print(type(e).__name__, "|", e)
     BVHError | no-such-file.bvh: cannot read file: ...
     """
+
+    #: how ``flipstudy``'s ``main()`` reports it: exit status and the word before the message
+    exit_status: int = 1
+    label: str = "error: "
 
 
 class FlipstudyValueError(FlipstudyError, ValueError):
@@ -41,6 +47,16 @@ class FlipstudyOSError(FlipstudyError, OSError):
 
 class FlipstudyStateError(FlipstudyError, RuntimeError):
     """A file is in a state this flipstudy cannot use (e.g. a newer schema version)."""
+
+
+class FlipstudyUsageError(FlipstudyError, ValueError):
+    """Options that together ask for nothing or for a contradiction: a usage error,
+    exit status 2 as argparse's."""
+
+    exit_status = 2
+
+
+# ---- stimuli: motion in, stimuli out
 
 
 class StyleError(FlipstudyValueError):
@@ -65,9 +81,209 @@ class CalibrationError(FlipstudyValueError):
     read or used: the message names the file and the field."""
 
 
-__all__ = ["CalibrationError", "FlipstudyError", "FlipstudyValueError", "FlipstudyFileNotFoundError",
-           "FlipstudyFileExistsError", "FlipstudyOSError", "FlipstudyStateError", "StyleError",
-           "ManifestError"]
+
+class BVHError(FlipstudyError, ValueError):
+    """A malformed BVH file: the message names the file, the line and what was expected."""
+
+    def __init__(self, path, line: int | None, message: str):
+        self.path = str(path)
+        self.line = line
+        where = f"{self.path}" + (f", line {line}" if line is not None else "")
+        super().__init__(f"{where}: {message}")
+
+
+class BodyMappingError(FlipstudyError, ValueError):
+    """A skeleton whose joints cannot be mapped to the body's segments (the message names them)."""
+
+
+class DesignError(FlipstudyError, ValueError):
+    """An invalid study design; the message names the file and field."""
+
+
+class SynthError(FlipstudyError, ValueError):
+    """Parameters for which no consistent motion exists (the message says which)."""
+
+
+class StimulusError(FlipstudyError, ValueError):
+    """A stimulus that cannot be made or whose measured error misses the nominal."""
+
+
+class AnimatorEditError(FlipstudyError, ValueError):
+    """An edit that cannot be made (bad joints or times)."""
+
+
+class FlipEditError(FlipstudyError, ValueError):
+    """A flip edit (more flips, a join in flight) that cannot be made; the message says why."""
+
+
+class ConcatError(FlipstudyError, ValueError):
+    """Two motions that cannot be concatenated; the message says why."""
+
+
+class StudyLocked(FlipstudyError, RuntimeError):
+    """Another build (or ``flipstudy archive``) holds the lock of this study folder."""
+
+
+class StudyFolderError(FlipstudyError, FileExistsError):
+    """A folder that a build will not replace (it holds files the build did not write)."""
+
+
+# ---- render: rendering
+
+
+class StudyRenderError(FlipstudyError, ValueError):
+    """A study that cannot be rendered as asked (its manifest, files or settings)."""
+
+
+class StaleRenderError(StudyRenderError):
+    """Rendered outputs that do not match the study (stale, missing, mixed settings)."""
+
+
+# ---- analysis: analysis
+
+
+class ResponsesError(FlipstudyError, ValueError):
+    """A response table that cannot be analysed; the message says where and what was expected."""
+
+
+class NeedsExport(ResponsesError):
+    """A study folder without ``responses.csv``: a step to take first (``flipstudy export``),
+    reported without "error:" and with exit status 2."""
+
+    exit_status = 2
+    label = ""
+
+
+# ---- study: sessions, storage, export, the web site, reproduce
+
+
+class RequestError(FlipstudyError):
+    """A request that is refused: ``status`` (4xx) and a message for the JSON body
+    (the server answers it; the CLI prints it as any other user error)."""
+
+    def __init__(self, status: int, message: str):
+        super().__init__(message)
+        self.status = status
+        self.message = message
+
+
+class Conflict(FlipstudyError):
+    """A write that contradicts what is stored (HTTP 409)."""
+
+
+class SessionError(FlipstudyError, ValueError):
+    """A session that cannot be opened; the message tells the experimenter what to do."""
+
+
+class StudyChanged(SessionError):
+    """The study folder a server serves was replaced or changed under it (its folder,
+    ``sessions.sqlite``, ``manifest.csv`` or ``design.toml``): the server stops taking
+    answers, since it could no longer store them in the study's own database."""
+
+
+class ParticipantBusy(FlipstudyError, ValueError):
+    """Another process serves this participant of this study."""
+
+
+class ModelError(FlipstudyError, ValueError):
+    """An invalid observer model; the message names the file and field."""
+
+
+class StudyHasAnswers(FlipstudyError, FileExistsError):
+    """A command would replace or delete a study that holds real participants' answers."""
+
+
+class ArchiveError(FlipstudyError, OSError):
+    """``flipstudy archive`` cannot move the study (the message says why)."""
+
+
+class ClusterError(FlipstudyError, RuntimeError):
+    """A cluster that cannot run this build (address, workers, files)."""
+
+
+class VersionMismatch(ClusterError):
+    """A worker whose Python or key packages differ from the client's."""
+
+
+class NoSharedFolder(ClusterError):
+    """A worker that cannot read or write the study folder at the client's path."""
+
+
+class ReproduceError(FlipstudyError, RuntimeError):
+    """The reproduce run cannot start or a stage failed (message names which)."""
+
+
+class OwnedPathError(FlipstudyError, FileExistsError):
+    """An output path is a file or folder that a study folder owns."""
+
+class StudyInUse(FlipstudyError, RuntimeError):
+    """A command would replace a study that a ``flipstudy run`` server has open, or a
+    server would open a study that a command is replacing right now."""
+
+class DesignFrozen(FlipstudyError, RuntimeError):
+    """The design of a study with answers would change, or has changed."""
+
+class CorruptDatabase(FlipstudyStateError):
+    """``sessions.sqlite`` is not a readable SQLite database (truncated, overwritten)."""
+
+
+class SiteError(FlipstudyError, ValueError):
+    """A site that cannot be written; the message says what to do."""
+
+
+class WebImportError(FlipstudyError, ValueError):
+    """A results file that cannot be imported; the message names file and line or row."""
+
+
+class JsPsychFetchError(FlipstudyError, RuntimeError):
+    """jsPsych could not be fetched or the cached copy does not match the pins."""
+
+
+__all__ = [
+    "FlipstudyError",
+    "FlipstudyValueError",
+    "FlipstudyFileNotFoundError",
+    "FlipstudyFileExistsError",
+    "FlipstudyOSError",
+    "FlipstudyStateError",
+    "FlipstudyUsageError",
+    "StyleError",
+    "ManifestError",
+    "CalibrationError",
+    "BVHError",
+    "BodyMappingError",
+    "DesignError",
+    "SynthError",
+    "StimulusError",
+    "AnimatorEditError",
+    "FlipEditError",
+    "ConcatError",
+    "StudyLocked",
+    "StudyFolderError",
+    "StudyRenderError",
+    "StaleRenderError",
+    "ResponsesError",
+    "NeedsExport",
+    "RequestError",
+    "Conflict",
+    "SessionError",
+    "StudyChanged",
+    "ParticipantBusy",
+    "ModelError",
+    "StudyHasAnswers",
+    "ArchiveError",
+    "ClusterError",
+    "VersionMismatch",
+    "NoSharedFolder",
+    "ReproduceError",
+    "OwnedPathError",
+    "StudyInUse",
+    "DesignFrozen",
+    "CorruptDatabase",
+    "SiteError",
+    "WebImportError",
+    "JsPsychFetchError",
+]
 
 
 class MotionFileError(FlipstudyValueError):

@@ -21,7 +21,8 @@ Entry points:
   thresholds; :mod:`flipstudy.analysis.plan` — the power analysis of ``flipstudy plan``.
 """
 from .core import count_cells, participant_dprimes, summarize
-from .io import NeedsExport, ResponsesError, load_responses
+from flipstudy.errors import NeedsExport, ResponsesError
+from .io import load_responses
 from .pipeline import Result, analyze
 from .sdt import CORRECTIONS, corrected_rate, criterion, dprime, dprime_2afc, rates, z
 from .stats import (PsychometricFit, detection_threshold, fit_psychometric, gee_levels,

@@ -47,7 +47,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 from scipy.special import ndtri, xlogy
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from .stats import _WSCALE, detection_threshold, psychometric_curve
 

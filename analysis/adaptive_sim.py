@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from .adaptive import ALPHA, Observer, QuestModel
 from .stats import psychometric_curve

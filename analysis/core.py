@@ -6,7 +6,7 @@ replacement and is one matrix product per block of resamples.
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 import warnings
 from dataclasses import dataclass

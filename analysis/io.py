@@ -1,7 +1,7 @@
 """Reading and checking response tables (the long format of DESIGN.md)."""
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import NeedsExport, ResponsesError
 from pathlib import Path
 
 import numpy as np
@@ -20,14 +20,6 @@ EXPORT_HINT = "flipstudy export {d} --out {d}/responses.csv"
 #: the values of the optional columns ``task`` and ``method`` (missing: yes-no, constant)
 TASKS = ("yes-no", "2afc")
 METHODS = ("constant", "quest+")
-
-
-class ResponsesError(FlipstudyError, ValueError):
-    """A response table that cannot be analysed; the message says where and what was expected."""
-
-
-class NeedsExport(ResponsesError):
-    """A study folder without ``responses.csv``."""
 
 
 def resolve_responses_path(path: str | Path) -> Path:

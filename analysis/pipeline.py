@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 
 from .core import summarize
-from .io import ResponsesError, group_order, load_responses, participants_label, select_participants
+from flipstudy.errors import ResponsesError
+from .io import group_order, load_responses, participants_label, select_participants
 from .sdt import CORRECTION_TEXT, normalise_correction
 from .stats import fit_psychometric, gee_levels
 from .tables import paper_layout, to_latex, to_markdown

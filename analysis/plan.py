@@ -27,7 +27,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.stats import t as t_dist
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from .adaptive import QuestSettings, population, quest_model
 from .adaptive_sim import simulate

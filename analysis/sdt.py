@@ -37,7 +37,7 @@ True
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 import numpy as np
 from scipy.special import ndtri

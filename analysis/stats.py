@@ -45,7 +45,7 @@ Psychometric function
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 import warnings
 from dataclasses import dataclass, field

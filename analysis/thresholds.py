@@ -36,7 +36,8 @@ import pandas as pd
 
 from .adaptive import LEVEL_ATOL, Quest, QuestSettings, quest_model
 from .adaptive_sim import QuestBatch
-from .io import ResponsesError, group_order
+from flipstudy.errors import ResponsesError
+from .io import group_order
 from .units import group_kinds, is_pose_rate, magnitudes
 
 PARTICIPANT_COLUMNS = ["participant", "group", "task", "method", "n_trials", "threshold", "ci_low",

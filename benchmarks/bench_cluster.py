@@ -94,7 +94,7 @@ def run(mode: str, design, root: Path, size, fps) -> dict:
     t_start = time.perf_counter() - t
     try:
         t = time.perf_counter()
-        rows = build_stimuli(design, study, progress=False, cluster=cluster)
+        rows = build_stimuli(design, study, progress=False, cluster=cluster).rows
         t_build = time.perf_counter() - t
         t = time.perf_counter()
         render_study(study, what="video", size=size, fps=fps, jobs=1, progress=False,

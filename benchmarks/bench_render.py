@@ -196,7 +196,7 @@ def bench_default_study(style, jobs=None, size=(640, 480)):
     with tempfile.TemporaryDirectory() as d:
         d = Path(d)
         (d / "design.toml").write_text(PAPER_DESIGN, encoding="utf-8")
-        rows = build_stimuli(load_design(d / "design.toml"), d / "study", progress=False)
+        rows = build_stimuli(load_design(d / "design.toml"), d / "study", progress=False).rows
         t = time.perf_counter()
         rec = render_study(d / "study", what=["video"], size=size, jobs=jobs, fps=60.0, progress=False,
                            style=style)

@@ -80,7 +80,7 @@ def main() -> int:
             rows = []
 
             def ours():
-                rows[:] = build_stimuli(design, Path(tmp) / "study", progress=False, force=True)
+                rows[:] = build_stimuli(design, Path(tmp) / "study", progress=False, force=True).rows
 
             t_ours = median_s(ours, 3, warmup=True)
         t_naive = median_s(lambda: naive(design), 1)

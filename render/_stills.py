@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from flipstudy.stimuli.motion.clip import Clip
 
 from .compose import draw_legend, find_font, write_png

@@ -8,7 +8,7 @@ spot, one camera) is :func:`flipstudy.render.staging.stage`.
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 import json
 from dataclasses import dataclass

@@ -7,7 +7,7 @@ expects.
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyOSError
+from flipstudy.errors import FlipstudyOSError
 
 import glob
 import os

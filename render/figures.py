@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from flipstudy.stimuli.body import Body
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from flipstudy.stimuli.motion.clip import Clip
 from flipstudy.stimuli.physics import center_of_mass
 
@@ -490,5 +490,31 @@ def overlay_image(what, path=None, *, interval: float = 0.2, span="flight", marg
     return _save(img, path)
 
 
-__all__ = ["TRAIL_JOINTS", "ghost_image", "trail_image", "strip_image",
+#: the strip of the thesis: frames collected at 10 fps, one in five shown (5.3)
+STRIP_DT = 0.5
+
+
+def jump_figures(res, strip=None, composite=None, *, strip_dt: float = STRIP_DT, size=(640, 480),
+                 interval: float = 0.1) -> dict:
+    """The animation strip (one frame in five at 10 fps, the whole clip) and the
+    composite (flight ± 0.25 s every ``interval`` s) of a jump
+    (:class:`flipstudy.stimuli.control.JumpResult`), with the boxes of its
+    course.  Returns the paths written."""
+    from .staging import stage
+    clip = res.clip
+    st = stage([clip], [res.takeoff], [max(res.landing, res.takeoff)],
+               size=size, boxes=[tuple(b) for b in clip.meta.get("boxes", [])])
+    out = {}
+    if strip:
+        h = size[1]
+        strip_image(st, strip, dt=strip_dt, span="clip", panel_size=(2 * int(round(0.35 * h)), h),
+                    label="t = {t:.1f} s")
+        out["strip"] = str(strip)
+    if composite:
+        composite_image(st, composite, interval=interval, span="flight", margin=0.25)
+        out["composite"] = str(composite)
+    return out
+
+
+__all__ = ["TRAIL_JOINTS", "STRIP_DT", "jump_figures", "ghost_image", "trail_image", "strip_image",
            "composite_image", "overlay_image"]

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from flipstudy.stimuli.body import Body
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from flipstudy.stimuli.motion.clip import Clip
 from flipstudy.stimuli.physics import momentum
 

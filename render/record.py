@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from flipstudy.errors import FlipstudyError
+from flipstudy.errors import StaleRenderError, StudyRenderError
 from flipstudy.stimuli.contract import StimulusSet, file_sha256
 
 #: What ``--what`` can ask for, and the file each writes (``{s}`` = stimulus).
@@ -28,12 +28,6 @@ RENDER_KINDS = {
 }
 
 
-class StudyRenderError(FlipstudyError, ValueError):
-    """A study that cannot be rendered as asked (its manifest, files or settings)."""
-
-
-class StaleRenderError(StudyRenderError):
-    """Rendered outputs that do not match the study (stale, missing, mixed settings)."""
 
 
 def versions() -> dict:

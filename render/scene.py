@@ -23,7 +23,7 @@ import numpy as np
 
 from flipstudy.stimuli.body import Body
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from ._pv import pv
 from .actors import Arrow, Character, Markers, Polyline

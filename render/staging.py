@@ -26,7 +26,7 @@ from functools import cached_property
 import numpy as np
 
 from flipstudy.stimuli.body import Body
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from flipstudy.stimuli.motion.clip import Clip
 from flipstudy.stimuli.physics import center_of_mass
 

@@ -30,11 +30,12 @@ from pathlib import Path
 import numpy as np
 
 from flipstudy.stimuli._progress import Progress
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError, StudyRenderError
+from flipstudy.results import RenderResult
 
 from flipstudy.stimuli.contract import Stimulus, StimulusSet, file_sha256
 
-from .record import (RENDER_KINDS, StudyRenderError, canonical_id, read_record,
+from .record import (RENDER_KINDS, canonical_id, read_record,
                      up_to_date, versions, write_record)
 from .workers import PARTIAL_PREFIX, clear_partials, publish, run_tasks
 
@@ -109,11 +110,12 @@ def _character(row: Stimulus, style, study_dir) -> str:
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
-                 cluster=None) -> dict:
+                 cluster=None) -> RenderResult:
     """Render the stimuli of a study (``study_dir``: its folder or its
     :class:`~flipstudy.stimuli.contract.StimulusSet`) with one style, one take-off spot and one
     camera per base clip (fitted to all its stimuli; ``cameras`` in the record,
-    and each stimulus's ``camera``); returns (and writes to ``render/render.json``) the settings.  With
+    and each stimulus's ``camera``); writes the settings to ``render/render.json`` and returns a
+    :class:`~flipstudy.results.RenderResult` (its ``record``).  With
     ``orient`` base clips that travel in other directions are turned about the
     vertical to travel like the first one (see :func:`flipstudy.render.staging.stage`).
 
@@ -152,12 +154,12 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     ... ''')
     >>> tmp = tempfile.TemporaryDirectory()
     >>> study = pathlib.Path(tmp.name) / "study"
-    >>> [r["stimulus"] for r in build_stimuli(design, study, progress=False)]
+    >>> [r["stimulus"] for r in build_stimuli(design, study, progress=False).rows]
     ['backflip_original', 'backflip_smooth-increase_25']
     >>> rec = render_study(study, what="ghost", size=(96, 64), jobs=1, progress=False)
-    >>> rec["made"], sorted(p.name for p in (study / "render").glob("*.png"))
+    >>> rec.made, sorted(p.name for p in (study / "render").glob("*.png"))
     (2, ['backflip_original_ghost.png', 'backflip_smooth-increase_25_ghost.png'])
-    >>> render_study(study, what="ghost", size=(96, 64), jobs=1, progress=False)["made"]   # resumed
+    >>> render_study(study, what="ghost", size=(96, 64), jobs=1, progress=False).made   # resumed
     0
     >>> tmp.cleanup()
     """
@@ -315,7 +317,11 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         import shutil
         shutil.rmtree(settings["partial"], ignore_errors=True)
         (out / ".render.json.tmp").unlink(missing_ok=True)     # a write cut short
-    return write()
+    rec = write()
+    return RenderResult(study=study_dir, what=tuple(rec["what"]), size=tuple(rec["size"]),
+                        fps=rec["fps"], jobs=rec["jobs"], made=rec["made"], up_to_date=rec["up_to_date"],
+                        seconds=rec["seconds"], n_stimuli=len(rec["stimuli"]),
+                        record_path=out / "render.json", record=rec)
 
 
 __all__ = ["RENDER_KINDS", "StudyRenderError", "parse_size", "parse_what", "load_stimuli",

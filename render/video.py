@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from flipstudy.stimuli.body import Body
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from flipstudy.stimuli.motion.clip import Clip
 
 from .geometry import resample

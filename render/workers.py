@@ -23,7 +23,8 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
-from .record import RENDER_KINDS, StudyRenderError, file_sha256
+from flipstudy.errors import StudyRenderError
+from .record import RENDER_KINDS, file_sha256
 
 _WORKER: dict = {}
 PARTIAL_PREFIX = ".partial-"          # STUDY/render/.partial-<pid>/: outputs being written

@@ -8,12 +8,12 @@ import importlib
 import sys
 import types
 
-from .exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError
 from .loading import load_clip
 
 #: each public name and the module it is defined in, imported on first use: the
-#: motion modules need scipy, and ``import flipstudy.stimuli.exceptions`` (the CLI's
-#: parser) should not load it
+#: motion modules need scipy, and ``import flipstudy.stimuli`` (the CLI's parser)
+#: should not load it
 _WHERE = {**dict.fromkeys(("BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh"), ".motion"),
           "Body": ".body", "Analysis": ".analyse", "analyse": ".analyse",
           "Stimulus": ".contract", "StimulusSet": ".contract"}

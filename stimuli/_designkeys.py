@@ -8,21 +8,14 @@ as written (shared by :mod:`flipstudy.stimuli.design` and
 >>> _get({"fps": "fast"}, "fps", float, "d.toml: [study]")
 Traceback (most recent call last):
 ...
-flipstudy.stimuli.design.DesignError: d.toml: [study].fps: expected a number, got 'fast'
+flipstudy.errors.DesignError: d.toml: [study].fps: expected a number, got 'fast'
 """
 from __future__ import annotations
 
 import difflib
 import math
 
-from .exceptions import FlipstudyError
-
-
-class DesignError(FlipstudyError, ValueError):
-    """An invalid study design; the message names the file and field."""
-
-
-DesignError.__module__ = "flipstudy.stimuli.design"   # where users import it from
+from flipstudy.errors import DesignError
 
 
 def _typename(typ) -> str:

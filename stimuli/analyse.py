@@ -9,7 +9,7 @@ contradiction becomes a warning that names the likely frame time and the
 
 from __future__ import annotations
 
-from .exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from dataclasses import dataclass, field
 

@@ -60,8 +60,8 @@ import numpy as np
 
 from .analyse import Analysis
 from .edit.timing import sample
-from .exceptions import FlipstudyValueError
-from .injection import Injected, StimulusError, _inside, _need_flight
+from flipstudy.errors import FlipstudyValueError, StimulusError
+from .injection import Injected, _inside, _need_flight
 from .motion.clip import Clip, derived_meta
 from .physics import center_of_mass
 

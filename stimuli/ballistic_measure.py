@@ -18,7 +18,8 @@ import numpy as np
 
 from .analyse import Analysis
 from .ballistic import G0
-from .injection import Injected, StimulusError, _lowest
+from flipstudy.errors import StimulusError
+from .injection import Injected, _lowest
 from .motion.clip import Clip
 from .physics import momentum
 

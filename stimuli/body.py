@@ -24,9 +24,8 @@ A bone ``a → b`` is rigid in the frame of joint ``a``.
 
 from __future__ import annotations
 
-from .exceptions import FlipstudyValueError
+from flipstudy.errors import BodyMappingError, FlipstudyValueError
 
-from .exceptions import FlipstudyError
 import re
 import warnings
 from dataclasses import dataclass
@@ -99,10 +98,6 @@ def _split_name(name: str) -> tuple[str | None, str]:
     if m:
         return m.group(2), re.sub(r"[^a-z0-9]", "", m.group(1))
     return None, re.sub(r"[^a-z0-9]", "", low)
-
-
-class BodyMappingError(FlipstudyError, ValueError):
-    pass
 
 
 def _is_ancestor(sk: Skeleton, a: int, b: int) -> bool:

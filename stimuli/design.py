@@ -49,8 +49,8 @@ import warnings
 from dataclasses import InitVar, dataclass, field
 from pathlib import Path
 
-from .exceptions import FlipstudyError  # noqa: F401  (re-exported)
-from ._designkeys import DesignError, _between, _check_keys, _get, _pct, _show  # noqa: F401
+from flipstudy.errors import DesignError
+from ._designkeys import _between, _check_keys, _get, _pct, _show  # noqa: F401
 
 try:
     import tomllib

@@ -13,14 +13,15 @@ file, group and key, like the rest of the design.
 >>> grid_levels({"from": 0, "to": 1, "step": 0.3}, "d.toml: groups[0] (g)")
 Traceback (most recent call last):
 ...
-flipstudy.stimuli.design.DesignError: d.toml: groups[0] (g).levels.to: 1 % is not on the grid from 0 % in steps of 0.3 % (its last level would be 0.9 %); choose to = 0.9 or a step that divides 1
+flipstudy.errors.DesignError: d.toml: groups[0] (g).levels.to: 1 % is not on the grid from 0 % in steps of 0.3 % (its last level would be 0.9 %); choose to = 0.9 or a step that divides 1
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
-from ._designkeys import DesignError, _check_keys, _get, _pct, _show
+from flipstudy.errors import DesignError
+from ._designkeys import _check_keys, _get, _pct, _show
 
 METHODS = ("constant", "quest+")
 TASKS = ("yes-no", "2afc")

@@ -40,7 +40,7 @@ import numpy as np
 from .analyse import Analysis, analyse
 from .edit.reposition import ballistic_path
 from .edit.timing import sample
-from .exceptions import FlipstudyError, FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError, StimulusError
 from .flight import path_values
 from .motion.clip import Clip, derived_meta
 from .physics import center_of_mass
@@ -51,10 +51,6 @@ KINDS = ("angular-momentum", "takeoff-angle",
          "pose-rate")
 PROFILES = ("smooth", "abrupt")
 COM_POLICIES = ("angle", "landing")
-
-
-class StimulusError(FlipstudyError, ValueError):
-    """A stimulus that cannot be made or whose measured error misses the nominal."""
 
 
 @dataclass

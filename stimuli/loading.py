@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .exceptions import FlipstudyFileNotFoundError
+from flipstudy.errors import FlipstudyFileNotFoundError
 
 #: file suffixes read as joint positions or SMPL parameters (every other file is read as BVH)
 POSITION_SUFFIXES = (".npy", ".npz")
@@ -24,13 +24,14 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None, *
     A position or SMPL clip passes the physics gate (``gate``; see :func:`physics_gate`):
     its apparent gravity and body height must agree with physics, else a
     :class:`~flipstudy.errors.MotionFileError` names the fix.  A name that is
-    nothing of the above raises :class:`~flipstudy.stimuli.exceptions.FlipstudyFileNotFoundError`.
+    nothing of the above raises :class:`~flipstudy.errors.FlipstudyFileNotFoundError`.
 
     >>> from flipstudy.stimuli import load_clip
     >>> load_clip("backflip", fps=60).fps
     60.0
     """
-    from flipstudy.stimuli import BUILTIN_NAMES, builtin, load_bvh
+    from .motion import load_bvh          # the modules, not this package's __init__ (which imports us)
+    from .synth import BUILTIN_NAMES, builtin
     if spec in BUILTIN_NAMES:
         clip = builtin(spec, **({"fps": fps} if fps else {}))
         if scale not in (None, 1.0):

@@ -236,3 +236,13 @@ def likelier_noticed(before: ClipScore, after: ClipScore, *, at=("takeoff", "lan
                        f"{_pct(b.p) if b.scored else 'not scored'}), {e.size:+.1f} {e.unit} "
                        f"(source {b.size:+.1f})")
     return out
+
+
+def score_lines(clip, source=None, calibration=None) -> list[str]:
+    """An editor's output scored (:func:`flipstudy.stimuli.score.score`), as report lines;
+    with its ``source``: a warning for each contact error likelier noticed than the source's."""
+    res = score([clip] + ([source] if source is not None else []), calibration).clips
+    lines = ["score: " + ln for ln in res[0].summary(brief=True).splitlines()]
+    if source is not None:
+        lines += [f"warning: likelier noticed than in the source: {w}" for w in likelier_noticed(res[1], res[0])]
+    return lines

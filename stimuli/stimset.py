@@ -29,7 +29,9 @@ The folder ``out`` is handled so that a study is never lost:
 
 from __future__ import annotations
 
-from .exceptions import FlipstudyFileExistsError, FlipstudyFileNotFoundError
+from flipstudy.errors import (DesignError, FlipstudyFileExistsError, FlipstudyFileNotFoundError,
+                              StimulusError, StudyFolderError, StudyLocked)
+from flipstudy.results import BuildResult
 
 import ctypes
 import errno
@@ -47,12 +49,12 @@ import numpy as np
 
 from ._progress import Progress
 from .analyse import analyse
-from .design import SHARED_ORIGINAL_GROUP, Design, DesignError, Group
-from .injection import Injected, StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
+from .design import SHARED_ORIGINAL_GROUP, Design, Group
+from .injection import Injected, check, inject_angular_momentum, inject_takeoff_angle, measure
 from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
 from .contract import MANIFEST_COLUMNS, StimulusSet  # noqa: F401  (MANIFEST_COLUMNS: re-exported)
-from .exceptions import FlipstudyError
+from flipstudy.errors import ManifestError
 from .motion.bvh import bvh_text, load_bvh
 from .motion.clip import Clip
 
@@ -85,7 +87,8 @@ def load_base_clip(spec, design: Design) -> Clip:
         if getattr(design, "fps_given", False) and abs(clip.fps - design.fps) > 1e-9 * design.fps:
             clip = resample(clip, design.fps)
     if getattr(spec, "flips", None):
-        from .edit.multiflip import FlipEditError, multiflip
+        from flipstudy.errors import FlipEditError
+        from .edit.multiflip import multiflip
         a = analyse(clip, total_mass=design.total_mass)
         physics_gate(spec, a, design)
         try:
@@ -181,17 +184,10 @@ def original_of(design: Design, clip_name: str, group) -> str:
     return f"{clip_name}_{group.name}_0" if 0.0 in group.levels else ""
 
 
-class StudyLocked(FlipstudyError, RuntimeError):
-    """Another build (or ``flipstudy archive``) holds the lock of this study folder."""
-
-
-class StudyFolderError(FlipstudyError, FileExistsError):
-    """A folder that a build will not replace (it holds files the build did not write)."""
-
-
 def build_stimuli(design: Design, out, force: bool = False, progress: bool = True,
-                  replace_check=None, cluster=None) -> list[dict]:
-    """Generate, measure and write the stimulus set of ``design`` into ``out``.
+                  replace_check=None, cluster=None) -> BuildResult:
+    """Generate, measure and write the stimulus set of ``design`` into ``out``;
+    returns a :class:`~flipstudy.results.BuildResult` (the manifest's rows).
 
     ``force``: replace an existing ``out`` that holds only a previous build's
     files.  ``replace_check(folder, foreign_names)``: called when ``out`` holds
@@ -208,7 +204,8 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
             if not force:
                 raise FlipstudyFileExistsError(f"{out} exists; choose another --out or pass --force to replace it")
             _check_replaceable(out, replace_check, out)      # fail before the work, not after
-        return _build(design, out, force, progress, replace_check, cluster)
+        rows = _build(design, out, force, progress, replace_check, cluster)
+    return BuildResult(out=out, rows=tuple(rows), tolerance_pct=design.tolerance_pct)
 
 
 def _build(design: Design, out: Path, force: bool, progress: bool, replace_check,
@@ -425,7 +422,7 @@ def foreign_files(folder) -> list[str]:
     try:
         for r in StimulusSet.read(folder, files=False, design=False):
             ours.update((str(r.bvh), str(r.npz)))
-    except (OSError, FlipstudyError):
+    except (OSError, ManifestError):
         ours = set()                      # no readable manifest: nothing here is known to be ours
     ours.add(".locks")                    # who serves or replaces the study: no data of it
     return sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir() if p.name not in ours)

@@ -35,19 +35,11 @@ import sqlite3
 from datetime import datetime, timezone
 from pathlib import Path
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import ArchiveError, StudyHasAnswers
 
 from .store import DB_NAME
 
 TRUE = {"1", "true", "yes", "y", "t"}
-
-
-class StudyHasAnswers(FlipstudyError, FileExistsError):
-    """A command would replace or delete a study that holds real participants' answers."""
-
-
-class ArchiveError(FlipstudyError, OSError):
-    """``flipstudy archive`` cannot move the study (the message says why)."""
 
 
 def _db_answers(path: Path) -> tuple[dict, dict]:

@@ -35,23 +35,11 @@ import sys
 from contextlib import nullcontext
 from pathlib import Path
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import ClusterError, NoSharedFolder, VersionMismatch
 
 #: the distributions whose versions must match between client and workers
 KEY_PACKAGES = ("flipstudy", "numpy", "scipy", "vtk", "pyvista", "imageio-ffmpeg",
                 "OpenImageIO", "dask", "distributed", "cloudpickle")
-
-
-class ClusterError(FlipstudyError, RuntimeError):
-    """A cluster that cannot run this build (address, workers, files)."""
-
-
-class VersionMismatch(ClusterError):
-    """A worker whose Python or key packages differ from the client's."""
-
-
-class NoSharedFolder(ClusterError):
-    """A worker that cannot read or write the study folder at the client's path."""
 
 
 def installed_versions() -> dict:

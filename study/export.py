@@ -43,7 +43,8 @@ written to a temporary file in the same folder and renamed into place
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
+from flipstudy.results import ExportResult
 
 import csv
 import io
@@ -152,14 +153,14 @@ def response_columns(styled: bool) -> list[str]:
 
 
 def export_responses(study_dir, out=None, *, participants_out=None,
-                     include_simulated: bool = False) -> dict:
+                     include_simulated: bool = False) -> ExportResult:
     """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``; ``study_dir``: the
     study folder or its :class:`~flipstudy.stimuli.contract.StimulusSet`) and
     ``participants.csv`` beside it (and ``simulated_truth.csv`` when simulated
-    sessions with known observers are included).  Returns ``{"responses": path,
-    "participants": path, "truth": path or None, "rows": n, "sessions": m, "real":
-    [IDs], "simulated": [IDs written],
-    "simulated_left_out": [IDs], "incomplete": ["P07/1 (6/18)", ...]}``."""
+    sessions with known observers are included).  Returns an
+    :class:`~flipstudy.results.ExportResult`: the paths (``truth`` None when not
+    written), ``rows``, ``sessions``, the ``real`` and ``simulated`` IDs written,
+    ``simulated_left_out`` and ``incomplete`` (``"P07/1 (6/18)"``, ...)."""
     from .owned import EXPORT_FILES, refuse_owned
     stimuli = study_stimuli(study_dir)
     study_dir = stimuli.folder if stimuli is not None else Path(study_dir)
@@ -207,13 +208,13 @@ def export_responses(study_dir, out=None, *, participants_out=None,
         atomic_write_text(tout, _csv(TRUTH_COLUMNS, truth))
     from .psychds import write_dataset_description      # Psych-DS metadata beside them
     write_dataset_description(out.parent, study_dir, columns, source="local sessions", stimuli=stimuli)
-    return {"responses": out, "participants": pout, "truth": tout, "rows": len(rows),
-            "sessions": len(written),
-            "real": sorted({p["participant"] for p in written if p["simulated"] == "false"}),
-            "simulated": sims if include_simulated else [],
-            "simulated_left_out": [] if include_simulated else sims,
-            "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/{p['n_trials']})"
-                           for p in written if p["complete"] == "false"]}
+    return ExportResult(
+        responses=out, participants=pout, truth=tout, rows=len(rows), sessions=len(written),
+        real=tuple(sorted({p["participant"] for p in written if p["simulated"] == "false"})),
+        simulated=tuple(sims) if include_simulated else (),
+        simulated_left_out=() if include_simulated else tuple(sims),
+        incomplete=tuple(f"{p['participant']}/{p['session']} ({p['answered']}/{p['n_trials']})"
+                         for p in written if p["complete"] == "false"))
 
 
 def status(study_dir) -> list[dict]:

@@ -34,13 +34,9 @@ import hashlib
 import sqlite3
 from pathlib import Path
 
-from flipstudy.errors import FlipstudyError
+from flipstudy.errors import DesignFrozen
 
 from .store import DB_NAME
-
-
-class DesignFrozen(FlipstudyError, RuntimeError):
-    """The design of a study with answers would change, or has changed."""
 
 
 def design_sha256(text: bytes | str) -> str:

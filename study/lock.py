@@ -17,7 +17,7 @@ Example
 >>> ParticipantLock(study.name, "P01").acquire()           # a second server for P01
 Traceback (most recent call last):
     ...
-flipstudy.study.lock.ParticipantBusy: participant P01 of ... is already being served by another `flipstudy run` (pid ...
+flipstudy.errors.ParticipantBusy: participant P01 of ... is already being served by another `flipstudy run` (pid ...
 >>> lock.release()
 >>> ParticipantLock(study.name, "P01").acquire().release()  # free again
 >>> study.cleanup()
@@ -30,13 +30,9 @@ import os
 import socket
 from pathlib import Path
 
-from flipstudy.errors import FlipstudyError
+from flipstudy.errors import ParticipantBusy, StudyInUse
 
 LOCK_DIR = ".locks"
-
-
-class ParticipantBusy(FlipstudyError, ValueError):
-    """Another process serves this participant of this study."""
 
 
 def _utc_now() -> str:
@@ -136,11 +132,6 @@ class ParticipantLock:
 OPEN_LOCK = "open.lock"
 
 
-class StudyInUse(FlipstudyError, RuntimeError):
-    """A command would replace a study that a ``flipstudy run`` server has open, or a
-    server would open a study that a command is replacing right now."""
-
-
 def _open_lock_path(study_dir) -> Path:
     return Path(study_dir) / LOCK_DIR / OPEN_LOCK
 
@@ -230,13 +221,13 @@ class study_closed:
     ...     pass
     Traceback (most recent call last):
         ...
-    flipstudy.study.lock.StudyInUse: ... is open in a `flipstudy run` server ...
+    flipstudy.errors.StudyInUse: ... is open in a `flipstudy run` server ...
     >>> server.release()
     >>> with study_closed(tmp.name, "archive"):
     ...     StudyOpen(tmp.name).acquire()
     Traceback (most recent call last):
         ...
-    flipstudy.study.lock.StudyInUse: ...: flipstudy archive (pid ...) is replacing this study right now ...
+    flipstudy.errors.StudyInUse: ...: flipstudy archive (pid ...) is replacing this study right now ...
     >>> tmp.cleanup()
     """
 

@@ -30,14 +30,14 @@ True
 >>> refuse_owned(st / "manifest.csv", "export --out")
 Traceback (most recent call last):
     ...
-flipstudy.study.owned.OwnedPathError: .../st/manifest.csv is the stimulus list of the study .../st; `flipstudy export --out` does not write over a study's own files: choose a path outside it (or under .../st/analysis/)
+flipstudy.errors.OwnedPathError: .../st/manifest.csv is the stimulus list of the study .../st; `flipstudy export --out` does not write over a study's own files: choose a path outside it (or under .../st/analysis/)
 >>> tmp.cleanup()
 """
 from __future__ import annotations
 
 from pathlib import Path
 
-from flipstudy.errors import FlipstudyError
+from flipstudy.errors import OwnedPathError
 
 #: top-level files of a study folder and what they are
 STUDY_FILES = {
@@ -58,10 +58,6 @@ EXPORT_FILES = {
 #: folders of a study folder whose every file it owns
 STUDY_DIRS = {"render": "the rendered videos", "web": "the web results",
               ".locks": "the server locks"}
-
-
-class OwnedPathError(FlipstudyError, FileExistsError):
-    """An output path is a file or folder that a study folder owns."""
 
 
 def is_study(folder) -> bool:

@@ -26,7 +26,9 @@ from __future__ import annotations
 
 import contextlib
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import ReproduceError
+from flipstudy.results import ReproduceResult
+
 import os
 import shutil
 import sys
@@ -45,10 +47,6 @@ SIZE = (640, 480)
 #: the reproduce run renders in ``flipstudy render``'s default style (FXAA
 #: anti-aliasing), so ``flipstudy render OUT/study`` finds every output up to date
 STYLE: dict = {}
-
-
-class ReproduceError(FlipstudyError, RuntimeError):
-    """The reproduce run cannot start or a stage failed (message names which)."""
 
 
 def sheet_label(row: Stimulus) -> str:
@@ -75,9 +73,9 @@ def _say(quiet: bool, text: str) -> None:
 
 
 def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = None,
-              size=SIZE, force: bool = False, quiet: bool = False, cluster=None) -> dict:
-    """Run the whole pipeline into ``out``; returns ``{"files": {...}, "seconds": {...},
-    "table_md": str, "result": analysis Result}``.
+              size=SIZE, force: bool = False, quiet: bool = False, cluster=None) -> ReproduceResult:
+    """Run the whole pipeline into ``out``; returns a :class:`~flipstudy.results.ReproduceResult`
+    (the files, the seconds per stage, the counts, the table as Markdown, the thresholds).
 
     Example
     -------
@@ -85,7 +83,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     about two minutes; ``tests/study/test_reproduce.py`` runs it.
 
     >>> r = reproduce("paper/")                  # doctest: +SKIP
-    >>> sorted(r["files"])[:3]                   # doctest: +SKIP
+    >>> sorted(r.files)[:3]                      # doctest: +SKIP
     ['analysis', 'design', 'figure_dprime']
     """
     from flipstudy.analysis.pipeline import analyze
@@ -101,7 +99,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     from .archive import refuse_real_answers
     from .lock import study_closed
 
-    out = Path(out)
+    shown, out = str(out), Path(out)
     if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
         raise ReproduceError(f"{out} exists and is not empty; choose another --out or pass --force "
                              f"to replace it")
@@ -162,7 +160,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         render_dir = study / "render"
         images = {f"{what}s: {sheet_label(stimuli[name])}": render_dir / f"{name}_{what}.png"
                   for what in ("ghost", "trail") for name in (SHEET_ORIGINAL, SHEET_ERROR)}
-        result = analyze(exp["responses"], work / "analysis", images=images, seed=seed,
+        result = analyze(exp.responses, work / "analysis", images=images, seed=seed,
                          include_simulated=True)
         seconds["analysis"] = time.perf_counter() - t
 
@@ -204,44 +202,9 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     missing = [str(p) for p in files.values() if not p.exists()]
     if missing:
         raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
-    return {"files": files, "seconds": seconds, "n_stimuli": len(stimuli), "worst_gap_pct": worst,
-            "n_videos": sum(1 for s in rec["stimuli"].values() if "video" in s["files"]),
-            "n_responses": exp["rows"], "n_simulated": len(exp["simulated"]), "table_md": to_markdown(result.table), "result": result}
-
-
-def summary_text(r: dict, out) -> str:
-    """The short summary printed at the end of ``flipstudy reproduce``."""
-    s, f = r["seconds"], r["files"]
-    res = r["result"]
-    lines = [f"flipstudy reproduce: done in {s['total']:.0f} s "
-             f"(stimuli {s['stimuli']:.0f} s, render {s['render']:.0f} s, "
-             f"sessions {s['sessions']:.0f} s, analysis {s['analysis']:.0f} s)", "",
-             r["table_md"].rstrip(), ""]
-    th = res.thresholds
-    if len(th):
-        lines.append("detection thresholds (P(incorrect) halfway from the base rate to 1):")
-        for _, t in th.iterrows():
-            lines.append(f"  {t['group']:18s} " + (f"{t['threshold']:.1f} %" if t["reached"]
-                                                   else "not reached within the tested levels"))
-        lines.append("")
-    lines += [
-        f"outputs in {out}/:",
-        f"  {f['design']}  the paper's design (edit and rerun `flipstudy stimuli`)",
-        f"  {f['manifest']}  {r['n_stimuli']} stimuli, nominal and measured errors "
-        f"(largest gap {r['worst_gap_pct']:.2f} points)",
-        f"  {f['videos']}/  {r['n_videos']} stimulus videos (.mp4), ghost and trail composites (.png), "
-        f"render.json",
-        f"  {f['sessions']}  every simulated answer; {f['responses']} ({r['n_responses']} rows, "
-        f"simulated=true)",
-        f"  {f['table_paper']}  the Table-2 layout (also .csv, .tex; table.csv has every column)",
-        f"  {f['figure_ratings']}, {f['figure_dprime'].name}, {f['figure_psychometric'].name}, "
-        f"{f['figure_sheet'].name}  figures (PNG + PDF)",
-        f"  {f['notes']}  methods: correction, tests, fits",
-        "",
-        f"{f['stimuli']} holds {r['n_simulated']} simulated participants (marked simulated=true; "
-        f"the analysis above includes them with --include-simulated). Real participants go into a "
-        f"fresh study, never this one:",
-        f"  flipstudy stimuli {f['design']} --out mystudy && flipstudy render mystudy && "
-        f"flipstudy run mystudy --participant P01",
-    ]
-    return "\n".join(lines)
+    return ReproduceResult(
+        out=str(shown).rstrip("/"), files={k: str(v) for k, v in files.items()},
+        seconds=dict(seconds), n_stimuli=len(stimuli), worst_gap_pct=worst,
+        n_videos=sum(1 for s in rec.record["stimuli"].values() if "video" in s["files"]),
+        n_responses=exp.rows, n_simulated=len(exp.simulated), table_md=to_markdown(result.table),
+        thresholds=tuple(result.to_dict()["thresholds"]))

@@ -3,8 +3,12 @@
 One server runs one participant's session.  Routes (nothing else answers; every
 error is a JSON object ``{"error": "..."}`` with a 4xx status):
 
-``GET  /``                  the page (``study/static/index.html``)
-``GET  /static/<file>``     ``session.js``, ``session.css`` (a fixed list, read at start)
+``GET  /``                  the page: the jsPsych site that ``export-web`` builds, in its
+                            ``local`` host mode (:func:`flipstudy.study.web.site.site_files`)
+``GET  /<file>``            the site's ``config.js``, scripts and CSS, and ``lib/<file>``
+                            (jsPsych, from npm: :func:`flipstudy.study.web.jspsych.fetch`;
+                            a 503 naming the problem when it cannot be had): a fixed set
+                            held in memory, served by exact name
 ``GET  /api/session``       the timeline (:func:`flipstudy.study.timeline.build_timeline`)
 ``GET  /api/trial/<n>``     trial ``n``'s filled screen (:func:`flipstudy.study.timeline.trial_screen`
                             of ``session.resolve(n)``: an adaptive trial's level is chosen
@@ -58,17 +62,17 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from .session import (Session, SessionError, StudyChanged, load_study, open_session, submit_answer,
-                      submit_demographics)
-from .timeline import build_timeline, is_default, trial_screen
-from .validate import MAX_BODY, RequestError, parse_json_object
+from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChanged
 
-STATIC_DIR = Path(__file__).resolve().parent / "static"
-STATIC_FILES = {"session.js": "text/javascript; charset=utf-8",
-                "session.css": "text/css; charset=utf-8"}
-CSP = ("default-src 'none'; script-src 'self'; style-src 'self'; connect-src 'self'; "
-       "media-src 'self' blob:; img-src 'self' data:; base-uri 'none'; form-action 'none'; "
-       "frame-ancestors 'none'")
+from .session import Session, load_study, open_session, submit_answer, submit_demographics
+from .timeline import build_timeline, is_default, trial_screen
+from .validate import MAX_BODY, parse_json_object
+from .web import jspsych as jsp
+from .web.site import LOCAL, lib_files, site_config, site_csp, site_files
+
+MEDIA_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
+               ".css": "text/css; charset=utf-8"}
+CSP = site_csp(LOCAL) + "; frame-ancestors 'none'"
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1", "[::1]")
 
 
@@ -175,11 +179,23 @@ def _changed_message(e: StudyChanged, stored_elsewhere: bool) -> str:
             ". Please tell the experimenter. (" + str(e) + ")")
 
 
+def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None, lib: bool = True) -> dict[str, bytes]:
+    """The files of the site ``export-web`` builds, in its ``local`` host mode, for
+    ``session``'s study: ``{relative path: bytes}``.  jsPsych (``lib/``, left out
+    with ``lib=False``) comes from ``jspsych_dir`` or npm's cache
+    (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    folder = jsp.fetch(jspsych_dir)[0] if lib else None
+    cfg = site_config(session.study, host=LOCAL, iti_ms=iti_ms, n_trials=session.n_trials)
+    return site_files(cfg, folder)
+
+
 def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
-               on_answer=None, on_changed=None) -> Starlette:
+               on_answer=None, on_changed=None, jspsych_dir=None) -> Starlette:
     """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
     Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
-    is called after every stored answer (the CLI prints progress).
+    is called after every stored answer (the CLI prints progress).  The page is
+    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
+    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first).
 
     A pinned session (:meth:`Session.pin`) is checked before and after every
     answer: once its study folder, database, manifest or design changed, every
@@ -198,18 +214,30 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
     study = session.study
     render_dir = study.render_dir.resolve()
     videos = {f"{r.stimulus}.mp4" for r in study.manifest}
-    assets = {name: (STATIC_DIR / name).read_bytes() for name in STATIC_FILES}
-    index = (STATIC_DIR / "index.html").read_bytes()
+    files = local_site(session, iti_ms=iti_ms, lib=False)
+    lib_lock = threading.Lock()
+
+    def load_lib():
+        with lib_lock:
+            if not any(name.startswith("lib/") for name in files):
+                files.update(lib_files(jsp.fetch(jspsych_dir)[0]))
 
     async def page(request: Request):
-        return Response(index, media_type="text/html; charset=utf-8",
+        return Response(files["index.html"], media_type=MEDIA_TYPES[".html"],
                         headers={"Content-Security-Policy": CSP, "Cache-Control": "no-store"})
 
     async def static(request: Request):
         name = request.path_params["name"]
-        if name not in STATIC_FILES:
+        if request.url.path.startswith("/lib/"):
+            name = f"lib/{name}"
+            try:
+                await run_in_threadpool(load_lib)
+            except JsPsychFetchError as e:
+                return _error(503, str(e))
+        if name not in files or name == "index.html":     # only the site's own files, by exact name
             return _error(404, "not found")
-        return Response(assets[name], media_type=STATIC_FILES[name], headers={"Cache-Control": "no-cache"})
+        return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
+                        headers={"Cache-Control": "no-cache"})
 
     async def api_session(request: Request):
         try:
@@ -293,13 +321,14 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
 
     app = Starlette(routes=[
         Route("/", page, methods=["GET"]),
-        Route("/static/{name}", static, methods=["GET"]),
         Route("/api/session", api_session, methods=["GET"]),
         Route("/api/trial/{n}", api_trial, methods=["GET"]),
         Route("/api/answer", api_answer, methods=["POST"]),
         Route("/api/demographics", api_demographics, methods=["POST"]),
         Route("/stimuli/{name:path}", stimulus, methods=["GET"]),
         Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
+        Route("/lib/{name}", static, methods=["GET"]),
+        Route("/{name}", static, methods=["GET"]),
     ], exception_handlers={HTTPException: http_error, 500: server_error})
     app.router.redirect_slashes = False
     hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}
@@ -363,7 +392,8 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
                   allowed_hosts, out) -> int:
     import uvicorn
 
-    from flipstudy.render.record import StaleRenderError, check_rendered
+    from flipstudy.errors import StaleRenderError
+    from flipstudy.render.record import check_rendered
     open_session(study, participant, new_session=new_session, dry_run=True)   # refusals first
     missing = study.missing_videos()
     if missing:
@@ -377,6 +407,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
     if lock.previous and lock.previous.get("pid"):
         print(f"flipstudy run: note: took over the lock of a server that is gone "
               f"(pid {lock.previous['pid']}, since {lock.previous.get('since', '?')})", file=out)
+    jspsych_folder, _ = jsp.fetch()          # the page's jsPsych (npm's cache), before anyone waits
     session = open_session(study, participant, new_session=new_session)
     session.pin()                    # answers go into this folder's database, or are refused
     state = session.state()
@@ -412,7 +443,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
               f"(Ctrl-C) and start it again on the study as it is now", file=out, flush=True)
 
     app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress,
-                     on_changed=changed)
+                     on_changed=changed, jspsych_dir=jspsych_folder)
     config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=False,
                             server_header=False, lifespan="off", timeout_graceful_shutdown=3)
     server = uvicorn.Server(config)

@@ -32,7 +32,7 @@ On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
 """
 from __future__ import annotations
 
-from flipstudy.errors import FlipstudyError
+from flipstudy.errors import RequestError, SessionError, StudyChanged
 import hashlib
 import threading
 from contextlib import contextmanager
@@ -43,19 +43,9 @@ from flipstudy.stimuli.contract import STIMULUS_RE, Stimulus, StimulusSet  # noq
 
 from . import store
 from .order import Trial, participant_seed, reference_stimuli, trial_order
-from .validate import RequestError, check_participant, check_task_response, parse_answer, parse_demographics
+from .validate import check_participant, check_task_response, parse_answer, parse_demographics
 
 VIDEO_EXT = ".mp4"
-
-
-class SessionError(FlipstudyError, ValueError):
-    """A session that cannot be opened; the message tells the experimenter what to do."""
-
-
-class StudyChanged(SessionError):
-    """The study folder a server serves was replaced or changed under it (its folder,
-    ``sessions.sqlite``, ``manifest.csv`` or ``design.toml``): the server stops taking
-    answers, since it could no longer store them in the study's own database."""
 
 
 def study_fingerprint(study_dir) -> dict:
@@ -401,7 +391,7 @@ def web_participants(study_dir) -> set[str]:
 def _check_quest_states(session: Session, conn) -> None:
     """A resumed session's stored QUEST+ states must belong to its groups' models
     now (the design's quest+ keys or levels unchanged)."""
-    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    from flipstudy.errors import FlipstudyValueError
     for g in sorted({t.group for t in session.trials if t.adaptive}):
         try:
             session.quest(g, conn)

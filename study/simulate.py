@@ -60,9 +60,8 @@ On a tiny study (:func:`flipstudy.study.demo.make_demo_study`: 8 trials):
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError, ModelError, SessionError
 
-from flipstudy.stimuli.exceptions import FlipstudyError
 import hashlib
 import json
 import math
@@ -81,7 +80,7 @@ except ModuleNotFoundError:  # Python 3.10
 from flipstudy.analysis.simulate import PAPER_TABLE2
 
 from . import store
-from .session import SessionError, load_study, open_session, submit_answer, submit_demographics
+from .session import load_study, open_session, submit_answer, submit_demographics
 from .validate import DEMOGRAPHIC_FIELDS, PREFER_NOT, parse_json_object
 
 #: Majkowska & Faloutsos 2007, Table 2 (:data:`flipstudy.analysis.simulate.PAPER_TABLE2`):
@@ -91,10 +90,6 @@ PAPER_RATINGS = {g: (t["levels"], t["rating"]) for g, t in PAPER_TABLE2.items()}
 # the angular-momentum groups' shared original (the 72 of their level-0 column)
 PAPER_RATINGS["original"] = ((0,), (72,))
 DEFAULT_SIGMA = 0.3
-
-
-class ModelError(FlipstudyError, ValueError):
-    """An invalid observer model; the message names the file and field."""
 
 
 def _fill(levels, ratings) -> list[float]:

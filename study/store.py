@@ -44,7 +44,7 @@ responses CHECK in place, so a migrated database takes no 2AFC answers
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyFileNotFoundError, FlipstudyStateError
+from flipstudy.errors import Conflict, CorruptDatabase, FlipstudyFileNotFoundError, FlipstudyStateError
 
 import sqlite3
 from contextlib import contextmanager
@@ -143,10 +143,6 @@ MIGRATE_1_TO_2 = [
 ]
 
 
-class Conflict(Exception):
-    """A write that contradicts what is stored (HTTP 409)."""
-
-
 def utc_now() -> str:
     """Now as ISO 8601 UTC with milliseconds, e.g. ``2026-01-05T10:00:00.123Z``."""
     return datetime.now(timezone.utc).isoformat(timespec="milliseconds").replace("+00:00", "Z")
@@ -197,10 +193,6 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
         conn.close()
         raise
     return conn
-
-
-class CorruptDatabase(FlipstudyStateError):
-    """``sessions.sqlite`` is not a readable SQLite database (truncated, overwritten)."""
 
 
 def corrupt(path, e: Exception) -> CorruptDatabase:

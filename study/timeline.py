@@ -6,9 +6,9 @@
      "keys": {"correct": "f", "incorrect": "j"},
      "timeline": [screen, screen, ...]}
 
-Each screen is an object with a ``type`` and an ``id``; the page
-(``study/static/session.js``) has one renderer ("plugin") per type and runs the
-screens in order from ``start``.  Types:
+Each screen is an object with a ``type`` and an ``id``; the page (the jsPsych site of
+``export-web`` in its ``local`` host mode, ``study/web/static/flipstudy-web.js``) builds
+jsPsych trials for each type and runs the screens in order from ``start``.  Types:
 
 ``instructions``  ``title``, ``paragraphs`` (list of str), ``button``
 ``demographics``  ``title``, ``text``, ``fields`` (see

@@ -11,6 +11,7 @@ from __future__ import annotations
 import json
 import math
 import re
+from flipstudy.errors import RequestError
 
 PARTICIPANT_RE = re.compile(r"[A-Za-z0-9_-]{1,32}")
 RESPONSES = ("correct", "incorrect", "first", "second")
@@ -41,15 +42,6 @@ DEMOGRAPHIC_FIELDS = [
     {"name": "gymnastics_experience", "label": "Experience with gymnastics or acrobatics",
      "kind": "choice", "options": EXPERIENCE},
 ]
-
-
-class RequestError(Exception):
-    """A request that is refused: ``status`` (4xx) and a message for the JSON body."""
-
-    def __init__(self, status: int, message: str):
-        super().__init__(message)
-        self.status = status
-        self.message = message
 
 
 def check_participant(pid) -> str:
@@ -159,7 +151,7 @@ def check_task_response(task: str, response: str) -> str:
     >>> check_task_response("yes-no", "first")
     Traceback (most recent call last):
     ...
-    flipstudy.study.validate.RequestError: response: a yes-no trial is answered correct or incorrect, not 'first'
+    flipstudy.errors.RequestError: response: a yes-no trial is answered correct or incorrect, not 'first'
     """
     ok = TASK_RESPONSES.get(task, TASK_RESPONSES["yes-no"])
     if response not in ok:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError
 from flipstudy.study.cli import main
 
 from _bvh_gen import many_joints_bvh

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from ..motion.clip import Clip
 from .course import Course
 from .model import SIDES, Jumper
@@ -33,7 +33,7 @@ def sole_points(jumper: Jumper, clip: Clip) -> np.ndarray:
 def check(jumper: Jumper, sc: Course, clip: Clip, stages: Stages) -> dict:
     """Ray casts for contact, collisions with boxes, foot motion in the windup,
     landing error: the fields of :class:`.controller.JumpReport` they fill.
-    Raises :class:`~flipstudy.stimuli.exceptions.FlipstudyValueError` when the
+    Raises :class:`~flipstudy.errors.FlipstudyValueError` when the
     feet meet a surface before the planned touch-down or the body a box."""
     i_to, i_td = stages.takeoff, stages.touchdown
     F1 = np.asarray(sc.target, float)

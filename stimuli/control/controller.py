@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..edit.report import Report
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from ..motion.clip import Clip
 from ..result import Result
 from .checks import CHECKED

@@ -10,7 +10,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 #: the scenes of Chapter 5, by name (:func:`make_course`)
 COURSES = ("forward", "sideways", "box", "over")

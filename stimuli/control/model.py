@@ -9,7 +9,7 @@ position, the legs (hip, knee, ankle, toe) and the upper body (Spine, Spine1).
 """
 from __future__ import annotations
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from dataclasses import dataclass, field
 from functools import cached_property

@@ -23,7 +23,7 @@ presets.
 """
 from __future__ import annotations
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 import numpy as np
 

@@ -17,7 +17,7 @@ vector (Y up): ``(0, −9.81, 0)``; a positive number is taken as its magnitude.
 """
 from __future__ import annotations
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from dataclasses import dataclass
 

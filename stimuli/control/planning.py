@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from .course import Course
 from .ik import solve_legs
 from .model import SIDES, Jumper

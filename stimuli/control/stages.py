@@ -36,7 +36,7 @@ from scipy.integrate import cumulative_trapezoid, trapezoid
 from scipy.spatial.transform import Rotation
 
 from ..edit.timing import slerp
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from .course import Course
 from .ik import EX, heel_pitch, reach
 from .model import SIDES, Jumper

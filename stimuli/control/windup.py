@@ -25,7 +25,7 @@ directly in :mod:`.assignment`.
 """
 from __future__ import annotations
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from dataclasses import dataclass
 

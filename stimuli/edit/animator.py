@@ -14,7 +14,7 @@ after landing follows on.
 """
 from __future__ import annotations
 
-from ..exceptions import FlipstudyError
+from flipstudy.errors import AnimatorEditError
 from dataclasses import dataclass
 
 import numpy as np
@@ -31,10 +31,6 @@ from .timing import ratio_retime_frames, sample
 #: joint groups an animator can straighten, by body landmark
 GROUPS = {"legs": ("hip_l", "knee_l", "hip_r", "knee_r"),
           "arms": ("shoulder_l", "elbow_l", "shoulder_r", "elbow_r")}
-
-
-class AnimatorEditError(FlipstudyError, ValueError):
-    """An edit that cannot be made (bad joints or times)."""
 
 
 def override_joints(clip: Clip, joints, target: np.ndarray, t0: float, t1: float,

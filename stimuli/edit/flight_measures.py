@@ -20,16 +20,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..analyse import Analysis, analyse
-from ..exceptions import FlipstudyError
+from flipstudy.errors import FlipEditError
 from ..flight import fit_path, path_values
 from ..motion.clip import Clip
 from ..physics import center_of_mass, momentum
 from ..result import Result
 from .report import Report
-
-
-class FlipEditError(FlipstudyError, ValueError):
-    """A flip edit (more flips, a join in flight) that cannot be made; the message says why."""
 
 
 def flight_axis(a: Analysis) -> np.ndarray:

@@ -47,7 +47,8 @@ from ..analyse import Analysis, analyse
 from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass, momentum
 from ..result import Result
-from .flight_measures import FlipEditError, flight_axis, momentum_jumps, standing_span, turn_angle, unwrapped_turn
+from flipstudy.errors import FlipEditError
+from .flight_measures import flight_axis, momentum_jumps, standing_span, turn_angle, unwrapped_turn
 from .report import Report
 from .reposition import rotate
 from .similarity import distance_matrix, pose_features, twist_angles

@@ -43,7 +43,8 @@ from ..analyse import Analysis, analyse
 from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass
 from ..result import Result
-from .flight_measures import FlipEditError, _jumps, flight_axis, standing_span, unwrapped_turn
+from flipstudy.errors import FlipEditError
+from .flight_measures import _jumps, flight_axis, standing_span, unwrapped_turn
 from .report import Report
 from .reposition import ballistic_path
 from .similarity import distance_matrix, pose_features

@@ -20,7 +20,8 @@ from ..analyse import Analysis, analyse
 from ..motion.clip import Clip
 from ..result import Result
 from .animator import Repair, RepairReport, repair_momentum, straighten as straighten_group
-from .flight_measures import FlipEditError, FlipMeasure, measure
+from flipstudy.errors import FlipEditError
+from .flight_measures import FlipMeasure, measure
 from .multiflip import MultiFlip, MultiFlipReport, multiflip
 from .report import Report
 

@@ -9,7 +9,7 @@ second) or the paper's frame rule ``next = last + 1/ratio(last)``.
 
 from __future__ import annotations
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 
 from typing import Callable
 

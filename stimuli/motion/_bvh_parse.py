@@ -17,7 +17,7 @@ block into one (F, C) array of numbers, every malformed line refused with a
 >>> parse_motion(lines[:-1], at, 6, "tiny.bvh")
 Traceback (most recent call last):
 ...
-flipstudy.stimuli.motion._bvh_parse.BVHError: tiny.bvh, line 15: truncated MOTION block: 'Frames: 2' but the file ends after 1 frame line(s)
+flipstudy.errors.BVHError: tiny.bvh, line 15: truncated MOTION block: 'Frames: 2' but the file ends after 1 frame line(s)
 """
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ import re
 
 import numpy as np
 
-from ..exceptions import FlipstudyError
+from flipstudy.errors import BVHError
 from ._bvh_units import FPS_RANGE
 from .skeleton import POSITION_CHANNELS, ROTATION_CHANNELS
 
@@ -34,16 +34,6 @@ KNOWN_CHANNELS = set(POSITION_CHANNELS) | set(ROTATION_CHANNELS)
 
 _FRAMES_RE = re.compile(r"Frames\s*:\s*(.*)\Z", re.IGNORECASE)
 _FRAME_TIME_RE = re.compile(r"Frame\s+Time\s*:\s*(.*)\Z", re.IGNORECASE)
-
-
-class BVHError(FlipstudyError, ValueError):
-    """A malformed BVH file: the message names the file, the line and what was expected."""
-
-    def __init__(self, path, line: int | None, message: str):
-        self.path = str(path)
-        self.line = line
-        where = f"{self.path}" + (f", line {line}" if line is not None else "")
-        super().__init__(f"{where}: {message}")
 
 
 def parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:

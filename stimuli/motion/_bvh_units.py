@@ -15,7 +15,7 @@ from decimal import Decimal, InvalidOperation
 
 import numpy as np
 
-from ..exceptions import FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from .skeleton import Skeleton
 
 #: Length units a BVH file is commonly written in: (metres per unit, name).

@@ -37,8 +37,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ..exceptions import FlipstudyValueError
-from ._bvh_parse import BVHError, parse_hierarchy, parse_motion
+from flipstudy.errors import BVHError, FlipstudyValueError
+from ._bvh_parse import parse_hierarchy, parse_motion
 from ._bvh_units import FPS_RANGE, STANDING_HEIGHT_M, UNIT_CANDIDATES, check_fps, guess_scale, header_fps
 from ._bvh_write import bvh_text, save_bvh
 from .clip import Clip

@@ -11,7 +11,8 @@ they are constructed and :mod:`.planar` for the sagittal kinematics.
 from __future__ import annotations
 
 from ..motion.clip import Clip
-from .clips import BUILTIN_NAMES, DESIGNS, PARAMS, SynthError, build
+from flipstudy.errors import SynthError
+from .clips import BUILTIN_NAMES, DESIGNS, PARAMS, build
 from .skeleton import make_skeleton
 
 

@@ -60,7 +60,8 @@ import numpy as np
 from ..body import Body
 from ..motion.clip import Clip
 from ..physics import center_of_mass
-from .designs import BUILTIN_NAMES, DESIGNS, PARAMS, REF_HEIGHT, SUBSTEPS, G, SynthError, check_params
+from flipstudy.errors import SynthError
+from .designs import BUILTIN_NAMES, DESIGNS, PARAMS, REF_HEIGHT, SUBSTEPS, G, check_params
 from .phases import ground_after, ground_before, solve_flight
 from .planar import D, IX, PlanarModel
 from .poses import com_from_ball, crouch_pose, landing_pose, takeoff_pose

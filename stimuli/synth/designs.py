@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..exceptions import FlipstudyError, FlipstudyValueError
+from flipstudy.errors import FlipstudyValueError
 from .planar import D, IX
 
 G = 9.81
@@ -79,10 +79,6 @@ PARAMS = ("height", "flight_time", "tuck", "horizontal_speed", "crouch_depth", "
 #: body shapes in flight: "tuck" (hips and knees flexed), "pike" (hips flexed, knees
 #: straight), "layout" (body straight; the same as tuck = 0)
 SHAPES = ("tuck", "pike", "layout")
-
-
-class SynthError(FlipstudyError, ValueError):
-    """Parameters for which no consistent motion exists (the message says which)."""
 
 
 def check_params(name, fps, total_mass, params):

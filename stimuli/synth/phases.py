@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import fsolve
 
-from .designs import G, SUBSTEPS, SynthError, dof_vector
+from flipstudy.errors import SynthError
+from .designs import G, SUBSTEPS, dof_vector
 from .planar import D, IX, HermiteSegment, QuinticSpline, cumulative_simpson
 from .poses import N_LEG, com_from_ball, contact_rates, leg_pitches, legs_for_com
 

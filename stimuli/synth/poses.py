@@ -8,7 +8,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .designs import G, REF_HEIGHT, SynthError, dof_vector
+from flipstudy.errors import SynthError
+from .designs import G, REF_HEIGHT, dof_vector
 from .planar import D, IX, PlanarModel, rot_x
 
 def _two_bone_ik(hip_pos, ankle_pos, l1, l2):

@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         ap.print_help()
         return 2
-    from flipstudy.stimuli.exceptions import FlipstudyError
+    from flipstudy.errors import FlipstudyError
     import signal
     import threading
     if args.command != "run" and threading.current_thread() is threading.main_thread():
@@ -103,8 +103,8 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:                       # Ctrl-C: one line, the shell's 128 + SIGINT
         return _interrupted(args.command)
     except FlipstudyError as e:                     # a user error: one line, no traceback
-        print(f"flipstudy {args.command}: error: {e}", file=sys.stderr)
-        return 1
+        print(f"flipstudy {args.command}: {e.label}{e}", file=sys.stderr)
+        return e.exit_status
     except OSError as e:
         if e.filename is None or e.errno not in _ENVIRONMENT_ERRNOS:
             return _bug(args, e)

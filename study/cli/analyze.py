@@ -5,11 +5,8 @@
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyError
-
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from .common import add_json
@@ -72,78 +69,15 @@ def _images(specs):
     return out
 
 
-def _design_specs(sources):
-    """The QUEST+ models of the groups of the study folder's design.toml (beside the first
-    responses table), to replay adaptive answers; None without a design."""
-    from flipstudy.analysis.io import resolve_responses_path
-    from flipstudy.stimuli.design import load_design
 
-    from .plan import quest_specs
-    design = resolve_responses_path(sources[0]).parent / "design.toml"
-    return quest_specs(load_design(design)) if design.is_file() else None
 
 
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
-    from flipstudy.analysis.io import NeedsExport, combine_responses, resolve_responses_path
-    from flipstudy.analysis.pipeline import analyze
-    try:
-        src = resolve_responses_path(args.responses[0])
-        from ..frozen import refuse_changed_design
-        for r in args.responses:           # a study whose design changed after its answers
-            refuse_changed_design(resolve_responses_path(r).parent, "analyze")
-        out = Path(args.out) if args.out else src.parent / "analysis"
-        if len(args.responses) > 1:
-            src = combine_responses(args.responses)
-        res = analyze(src, out, correction=args.correction, images=_images(args.image) or None,
-                      quest_specs=_design_specs(args.responses),
-                      seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
-                      gee=not args.no_gee, figures=not args.no_figures,
-                      include_simulated=args.include_simulated,
-                      include_incomplete=args.include_incomplete)
-    except NeedsExport as e:
-        print(f"flipstudy analyze: {e}", file=sys.stderr)
-        return 2
-    except FlipstudyError as e:
-        print(f"flipstudy analyze: error: {e}", file=sys.stderr)
-        return 1
-    if args.json:
-        print(json.dumps(res.to_dict(), indent=2, ensure_ascii=False))
-        return 0
-    s = res.settings
-    who = s["participants"]
-    print(f"analysed {s['n_trials']} trials of {s['participants_label']} "
-          f"({len(s['groups'])} groups); correction for rates of 0 or 1: {s['correction']}")
-    if who["simulated_left_out"]:
-        print(f"left out {len(who['simulated_left_out'])} simulated participant(s) "
-              f"(--include-simulated to keep them)")
-    if who["incomplete_left_out"]:
-        print(f"left out {len(who['incomplete_left_out'])} incomplete session(s) "
-              f"(--include-incomplete to keep them): {', '.join(who['incomplete_left_out'][:8])}"
-              + (", ..." if len(who["incomplete_left_out"]) > 8 else ""))
-    if who["n"] < 5:
-        print(f"note: with {who['n']} participant(s), intervals and tests over participants are "
-              f"not meaningful (notes.md)")
-    print()
-    from flipstudy.analysis.tables import to_markdown
-    print(to_markdown(res.table))
-    if len(res.thresholds):
-        print("detection thresholds (P(incorrect) = (1 + γ)/2):")
-        for _, t in res.thresholds.iterrows():
-            if t["reached"]:
-                hi = "open" if t["threshold_ci_high"] != t["threshold_ci_high"] else f"{t['threshold_ci_high']:.1f}"
-                print(f"  {t['group']:20s} {t['threshold']:5.1f} %  [{t['threshold_ci_low']:.1f}, {hi}]")
-            else:
-                print(f"  {t['group']:20s} not reached")
-    if res.group_thresholds is not None and len(res.group_thresholds):
-        print("per-participant thresholds x* (thresholds_participants.csv), per group:")
-        for _, t in res.group_thresholds.iterrows():
-            print(f"  {t['group']:20s} {t['method']:8s} {t['task']:6s} N = {t['n_participants']:<3d} "
-                  f"median {t['median']:5.1f} %  quartiles [{t['q25']:.1f}, {t['q75']:.1f}]  "
-                  f"mean 95 % interval width {t['mean_ci_width']:.1f} %")
-    notable = [n for n in res.notes if "not found" in n or "no images" in n or "failed" in n
-               or "differ from the ones the session stored" in n or "no design" in n]
-    for n in notable:
-        print(f"note: {n}")
-    print(f"\nwrote {len(res.files)} files to {out}/ (table.csv, table_paper.md/.tex, figures, notes.md)")
+    from flipstudy.study.pipeline import analyze
+    res = analyze(args.responses, args.out, correction=args.correction, images=_images(args.image),
+                  seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
+                  gee=not args.no_gee, figures=not args.no_figures,
+                  include_simulated=args.include_simulated, include_incomplete=args.include_incomplete)
+    print(json.dumps(res.report, indent=2, ensure_ascii=False) if args.json else res.summary())
     return 0

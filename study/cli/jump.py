@@ -11,11 +11,8 @@ energy-based controller of Ooi 2016 (``flipstudy.stimuli.control``), written as 
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyError
-
 import argparse
 import json
-import sys
 
 from .common import add_json, add_mass, add_out
 
@@ -30,75 +27,13 @@ def _vec3(text: str):
     return tuple(v)
 
 
-#: the strip of the thesis: frames collected at 10 fps, one in five shown (5.3)
-STRIP_DT = 0.5
-
-
-def jump_figures(res, strip=None, composite=None, *, strip_dt: float = STRIP_DT, size=(640, 480),
-                 interval: float = 0.1) -> dict:
-    """The animation strip (one frame in five at 10 fps, the whole clip) and the
-    composite (flight ± 0.25 s every ``interval`` s) of a jump
-    (:class:`flipstudy.stimuli.control.JumpResult`), with the boxes of its
-    course.  Returns the paths written."""
-    from flipstudy.render import figures as fg
-    from flipstudy.render.staging import stage
-    clip = res.clip
-    st = stage([clip], [res.takeoff], [max(res.landing, res.takeoff)],
-               size=size, boxes=[tuple(b) for b in clip.meta.get("boxes", [])])
-    out = {}
-    if strip:
-        h = size[1]
-        fg.strip_image(st, strip, dt=strip_dt, span="clip", panel_size=(2 * int(round(0.35 * h)), h),
-                       label="t = {t:.1f} s")
-        out["strip"] = str(strip)
-    if composite:
-        fg.composite_image(st, composite, interval=interval, span="flight", margin=0.25)
-        out["composite"] = str(composite)
-    return out
-
-
 def cmd_jump(args) -> int:
-    """``flipstudy jump``: generate, write, report."""
-    from flipstudy.stimuli import save_bvh
-    from flipstudy.stimuli.control import jump as make_jump
-    from flipstudy.stimuli.control import make_course
-    try:
-        course = args.scene
-        if args.scene == "box" and args.to is not None:
-            course = make_course("box", box_height=args.to[1], target=args.to)
-        res = make_jump(args.to, course=course, t_air=args.air, t_windup=args.windup, k=args.k,
-                        strength=args.strength, g=args.gravity, mass=args.mass, height=args.height,
-                        fps=args.fps)
-        clip = res.clip
-        save_bvh(clip, args.out)
-        figs = jump_figures(res, args.strip, args.composite) if (args.strip or args.composite) else {}
-    except FlipstudyError as e:
-        print(f"flipstudy jump: error: {e}", file=sys.stderr)
-        return 1
-    r = res.report
-    from flipstudy.stimuli.score import score
-    scored = score(clip).clips[0]
-    if args.json:
-        print(json.dumps({**r.to_dict(), "out": args.out, **figs, "score": scored.to_dict()}, indent=2))
-        return 0
-    f3 = lambda v: "(" + ", ".join(f"{x:.3f}" for x in v) + ")"  # noqa: E731
-    print(f"jump ({r.scene}): {f3(r.start)} → {f3(r.target)}, {clip.num_frames} frames at "
-          f"{clip.fps:g} fps, written to {args.out}")
-    print(f"  path       v0 {f3(r.v0)} m/s, thrust a {f3(r.a)} m/s² over {r.t_windup:g} s, "
-          f"{r.t_air:g} s in the air (COM displacement {f3(r.displacement)} m)")
-    print(f"  windup     E_k {r.E_k:.0f} J, stored {r.E_el_crouch:.0f} J in the crouch (pelvis "
-          f"{f3(r.crouch_pelvis)} from the feet, upper body leaning {r.crouch_lean_deg[0]:+.1f}° (+ forward)); "
-          f"PD: {r.windup_iterations} iterations, energy met at {r.energy_met_at_iteration}; "
-          f"feet moved {1000 * r.windup_foot_motion_m:.2f} mm")
-    land = "absorbed" if r.landing_energy_met else "partly absorbed (the rest dissipated)"
-    print(f"  landing    touch-down frame {r.touchdown}, {100 * r.landing_error_m:.2f} cm from the "
-          f"target; E {r.E_land:.0f} J {land} by a {r.E_el_landing:.0f} J crouch")
-    if r.obstacle_clearance_m is not None:
-        print(f"  clearance  {100 * r.obstacle_clearance_m:.1f} cm over the obstacle")
-    print(f"  springs    k = {', '.join(f'{v:g}' for v in r.k)} × strength {r.strength:g}")
-    for k, v in figs.items():
-        print(f"  {k:<10s} {v}")
-    print("\n".join("  score: " + ln for ln in scored.summary(brief=True).splitlines()))
+    """``flipstudy jump``: generate, write, report (:func:`flipstudy.study.motions.jump`)."""
+    from flipstudy.study.motions import jump
+    res = jump(args.to, args.out, scene=args.scene, air=args.air, windup=args.windup, k=args.k,
+               strength=args.strength, gravity=args.gravity, mass=args.mass, height=args.height,
+               fps=args.fps, strip=args.strip, composite=args.composite)
+    print(json.dumps(res.report, indent=2) if args.json else res.summary())
     return 0
 
 

@@ -18,8 +18,6 @@ its old spelling, still accepted with a warning.
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyError
-
 import argparse
 import sys
 
@@ -30,7 +28,7 @@ def _size(text: str):
     from flipstudy.render.study import parse_size
     try:
         return parse_size(text)
-    except FlipstudyError as e:
+    except ValueError as e:                  # parse_size's FlipstudyValueError, as argparse's
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
@@ -44,7 +42,7 @@ def _style(values):
 
     from flipstudy.render.style import Style
     from flipstudy.stimuli.design import CHARACTER_STYLES
-    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    from flipstudy.errors import FlipstudyValueError
     values = [values] if isinstance(values, str) else list(values)
     names = [v for v in values if v in CHARACTER_STYLES]
     files = [v for v in values if v not in CHARACTER_STYLES]
@@ -74,66 +72,24 @@ class _DeprecatedFps(argparse.Action):
 
 def cmd_render(args) -> int:
     """``flipstudy render``: all stimuli of a study, one camera, in parallel."""
-    from flipstudy.render.study import parse_what, render_study
-    try:
-        what = parse_what(args.what)
-        from flipstudy.study.cluster import open_cluster
-        from flipstudy.study.lock import study_closed
-        import contextlib                # --force replaces videos a `run` server may be showing
-        held = study_closed(args.study_dir, "render --force") if args.force else contextlib.nullcontext()
-        with held, open_cluster(args.cluster) as cluster:
-            rec = render_study(args.study_dir, what=what, size=args.size, jobs=args.jobs,
-                               fps=args.video_fps,
-                               style=_style(args.style), frames=args.frames,
-                               progress=not args.quiet, orient=not args.no_orient,
-                               force=args.force, cluster=cluster)
-    except FlipstudyError as e:
-        print(f"flipstudy render: error: {e}", file=sys.stderr)
-        return 1
-    n = len(rec["stimuli"])
-    print(f"rendered {n} stimuli ({', '.join(rec['what'])}) at {rec['size'][0]}x{rec['size'][1]}, "
-          f"{rec['fps']:g} fps: {rec['made']} output(s) made, {rec['up_to_date']} already up to "
-          f"date; {rec['jobs']} worker(s), {rec['seconds']:.1f} s")
-    print(f"  settings  {args.study_dir.rstrip('/')}/render/render.json")
+    from flipstudy.render.study import parse_what
+    from flipstudy.study.pipeline import render
+    res = render(args.study_dir, cluster=args.cluster, what=parse_what(args.what), size=args.size,
+                 jobs=args.jobs, fps=args.video_fps, style=_style(args.style), frames=args.frames,
+                 progress=not args.quiet, orient=not args.no_orient, force=args.force)
+    print(res.summary())
     return 0
 
 
 def cmd_figure(args) -> int:
     """``flipstudy figure``: one still of one clip (ghost, trail, strip, composite, overlay)."""
-    from .common import load_clip
-
-    from flipstudy.render import figures as fg
-    from flipstudy.render.staging import stage
-    try:
-        clips = [load_clip(args.clip, args.scale, args.fps, **reader_options(args))]
-        if args.overlay:
-            clips.append(load_clip(args.overlay, args.scale, args.fps, **reader_options(args)))
-        st = stage(clips, size=args.size, style=_style(args.style))
-        debug = ("com", "path", "L", "v", "support") if args.debug else ()
-        interval = args.interval
-        if args.overlay:
-            from pathlib import Path
-            labels = (Path(args.clip).stem, Path(args.overlay).stem)
-            fg.overlay_image(st, args.out, interval=interval or 0.2, labels=labels)
-            kind = "overlay"
-        elif args.trail:
-            fg.trail_image(st, args.out, debug=debug)
-            kind = "trail"
-        elif args.strip:
-            h = args.size[1]
-            fg.strip_image(st, args.out, dt=interval or 0.1, panel_size=(2 * int(round(0.35 * h)), h),
-                           debug=debug)
-            kind = "strip"
-        elif args.composite:
-            fg.composite_image(st, args.out, interval=interval or 0.2, debug=debug)
-            kind = "composite"
-        else:
-            fg.ghost_image(st, args.out, interval=interval, debug=debug)
-            kind = "ghost"
-    except FlipstudyError as e:
-        print(f"flipstudy figure: error: {e}", file=sys.stderr)
-        return 1
-    print(f"{kind} figure of {args.clip}: {args.out}")
+    from flipstudy.study.motions import figure
+    kind = ("overlay" if args.overlay else "trail" if args.trail else "strip" if args.strip
+            else "composite" if args.composite else "ghost")
+    res = figure(args.clip, args.out, kind=kind, overlay=args.overlay, scale=args.scale, fps=args.fps,
+                 readers=reader_options(args),
+                 size=args.size, style=_style(args.style), interval=args.interval, debug=args.debug)
+    print(res.summary())
     return 0
 
 

@@ -1,25 +1,13 @@
 """``flipstudy reproduce``: the paper's study end to end on the embedded default."""
 from __future__ import annotations
 
-import sys
-
-from flipstudy.stimuli.exceptions import FlipstudyError
-
-from flipstudy.study.reproduce import reproduce, summary_text
-
 from .common import add_cluster
 
 
 def cmd_reproduce(args) -> int:
-    try:
-        from flipstudy.study.cluster import open_cluster
-        with open_cluster(args.cluster) as cluster:
-            r = reproduce(args.out, participants=args.participants, seed=args.seed,
-                          jobs=args.jobs, force=args.force, quiet=args.quiet, cluster=cluster)
-    except FlipstudyError as e:
-        print(f"flipstudy reproduce: error: {e}", file=sys.stderr)
-        return 1
-    print(summary_text(r, args.out.rstrip("/")))
+    from flipstudy.study.pipeline import reproduce
+    print(reproduce(args.out, cluster=args.cluster, participants=args.participants, seed=args.seed,
+                    jobs=args.jobs, force=args.force, quiet=args.quiet).summary())
     return 0
 
 

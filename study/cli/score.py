@@ -1,5 +1,5 @@
-"""``flipstudy score`` and ``flipstudy calibrate``; :func:`score_lines` is what
-``edit``, ``concat`` and ``jump`` print about their output."""
+"""``flipstudy score`` and ``flipstudy calibrate`` (what ``edit``, ``concat`` and ``jump``
+print about their output is :func:`flipstudy.stimuli.score.score_lines`)."""
 from __future__ import annotations
 
 import glob
@@ -21,17 +21,6 @@ def _expand(specs) -> list[str]:
         else:
             out.append(s)
     return out
-
-
-def score_lines(clip, source=None, calibration=None) -> list[str]:
-    """An editor's output scored (:func:`flipstudy.stimuli.score.score`), as report lines;
-    with its ``source``: a warning for each contact error likelier noticed than the source's."""
-    from flipstudy.stimuli.score import likelier_noticed, score
-    res = score([clip] + ([source] if source is not None else []), calibration).clips
-    lines = ["score: " + ln for ln in res[0].summary(brief=True).splitlines()]
-    if source is not None:
-        lines += [f"warning: likelier noticed than in the source: {w}" for w in likelier_noticed(res[1], res[0])]
-    return lines
 
 
 def cmd_score(args) -> int:

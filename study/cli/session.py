@@ -5,13 +5,10 @@ each sets ``func`` to a handler ``handler(args) -> int``.
 """
 from __future__ import annotations
 
-from flipstudy.stimuli.exceptions import FlipstudyError
-
 import argparse
 import json
 import sys
 
-from ..validate import RequestError
 from .common import add_json, add_study_dir
 
 
@@ -33,101 +30,37 @@ _positive_int = _int_in(1)
 _nonneg_int = _int_in(0)
 
 
-def _fail(cmd: str, e: Exception) -> int:
-    msg = e.message if isinstance(e, RequestError) else str(e)
-    print(f"flipstudy {cmd}: error: {msg}", file=sys.stderr)
-    return 1
-
-
 def cmd_run(args) -> int:
     from ..server import serve
     try:
         return serve(args.study_dir, args.participant, host=args.host, port=args.port,
                      open_browser=not args.no_browser, new_session=args.new_session,
                      iti_ms=args.iti_ms, allowed_hosts=args.allowed_host)
-    except (FlipstudyError, RequestError) as e:
-        return _fail("run", e)
     except KeyboardInterrupt:
         return 0
 
 
 def cmd_export(args) -> int:
-    from ..export import export_responses
-    try:
-        r = export_responses(args.study_dir, args.out, participants_out=args.participants_out,
-                             include_simulated=args.include_simulated)
-    except FlipstudyError as e:
-        return _fail("export", e)
-    who = f"{len(r['real'])} real participant(s)"
-    if r["simulated"]:
-        who += f" and {len(r['simulated'])} simulated (marked simulated=true on every row)"
-    print(f"wrote {r['rows']} responses of {who} to {r['responses']} and {r['sessions']} session(s) "
-          f"to {r['participants']}")
-    if r["simulated_left_out"]:
-        print(f"left out {len(r['simulated_left_out'])} simulated participant(s) "
-              f"({r['simulated_left_out'][0]}..{r['simulated_left_out'][-1]}); "
-              f"--include-simulated writes them, marked")
-    if r["incomplete"]:
-        print(f"{len(r['incomplete'])} incomplete session(s), marked complete=false (analyze leaves "
-              f"them out by default): {', '.join(r['incomplete'][:8])}"
-              + (", ..." if len(r["incomplete"]) > 8 else ""))
+    from ..pipeline import export
+    print(export(args.study_dir, args.out, participants_out=args.participants_out,
+                 include_simulated=args.include_simulated).summary())
     return 0
 
 
 def cmd_status(args) -> int:
-    from pathlib import Path
-
-    from ..export import status
-    from ..store import db_path
-    d = Path(args.study_dir)
-    if not (d / "manifest.csv").is_file():
-        return _fail("status", ValueError(f"{d} is not a study folder (no manifest.csv)"))
-    try:
-        rows = status(d) if db_path(d).exists() else []
-    except FlipstudyError as e:
-        return _fail("status", e)
+    from ..pipeline import status
+    res = status(args.study_dir)
     from ..frozen import design_change
-    changed = design_change(d)
+    changed = design_change(args.study_dir)
     if changed:                     # flagged on every call; run, export and analyze refuse
         print(f"flipstudy status: WARNING: {changed}", file=sys.stderr)
-    if args.json:
-        print(json.dumps(rows, indent=2))
-        return 0
-    if not rows:
-        print("no sessions yet")
-        return 0
-    head = ("participant", "session", "source", "answered", "", "started", "last answer", "finished")
-    table = [(r["participant"], str(r["session"]), r["source"], f"{r['answered']}/{r['total']}",
-              "" if r["complete"] else "INCOMPLETE",
-              r["started"] or "—", r["last_answer"] or "—", r["finished"] or "no") for r in rows]
-    widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(head)]
-    line = lambda cells: "  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip()  # noqa: E731
-    print(line(head))
-    for t in table:
-        print(line(t))
-    done = sum(1 for r in rows if r["finished"])
-    print(f"{len(rows)} session(s), {done} finished")
-    real = sorted({r["participant"] for r in rows if not r["simulated"]})
-    sim = sorted({r["participant"] for r in rows if r["simulated"]})
-    print(f"{len(real)} real participant(s), {len(sim)} simulated"
-          + (" (left out of export and analyze unless --include-simulated)" if sim else ""))
-    inc = [r for r in rows if not r["complete"]]
-    if inc:
-        print(f"{len(inc)} incomplete session(s) (analyze leaves them out by default): "
-              + ", ".join(f"{r['participant']}/{r['session']} {r['answered']}/{r['total']}" for r in inc))
+    print(json.dumps(list(res.sessions), indent=2) if args.json else res.summary())
     return 0
 
 
 def cmd_simulate(args) -> int:
-    from ..simulate import simulate
-    try:
-        ids = simulate(args.study_dir, args.participants, model=args.model, seed=args.seed)
-    except (FlipstudyError, RequestError) as e:
-        return _fail("simulate", e)
-    print(f"simulated {len(ids)} participant(s) ({ids[0]}..{ids[-1]}) in "
-          f"{args.study_dir}/sessions.sqlite, stored as source=simulated; export and analyze leave "
-          f"them out unless --include-simulated. next: flipstudy export {args.study_dir} "
-          f"--include-simulated")
+    from ..pipeline import simulate
+    print(simulate(args.study_dir, args.participants, model=args.model, seed=args.seed).summary())
     return 0
 
 

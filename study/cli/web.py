@@ -37,30 +37,8 @@ def cmd_export_web(args) -> int:
 
 
 def cmd_import_web(args) -> int:
-    from ..web.importer import import_web
-    r = import_web(args.study_dir, args.files)
-    for f in r["files"]:
-        if f["status"] == "imported":
-            print(f"{f['file']}: {f['records']} records, {f['new_answers']} new answers")
-        elif f["status"] == "nothing new":
-            print(f"{f['file']}: {f['records']} records, every one already imported; the file is "
-                  f"not kept")
-        else:
-            print(f"{f['file']}: already imported (same content), nothing new")
-    print(f"{r['responses']}: {r['answers']} answers of {r['participants']} web participant(s) in "
-          f"{r['sessions']} session(s)" + (f"; {r['duplicates']} records read more than once, kept once"
-                                             if r["duplicates"] else ""))
-    if r["incomplete"]:
-        print(f"{len(r['incomplete'])} incomplete session(s), marked complete=false: "
-              + ", ".join(r["incomplete"][:8]))
-    if r["flagged"]:
-        print(f"{len(r['flagged'])} trial(s) with dropped frames over the threshold, marked "
-              f"playback_flagged=true: " + ", ".join(r["flagged"][:8]))
-    if r["repeats"]:
-        print(f"{len(r['repeats'])} flagged trial(s) shown once more at the end, rows with repeat=1 "
-              f"(analyze uses them in place of the flagged first answers): " + ", ".join(r["repeats"][:8]))
-    print(f"next: flipstudy analyze {r['responses'].parent}  (or with the local answers: "
-          f"flipstudy analyze {args.study_dir}/responses.csv {r['responses']} --out DIR)")
+    from ..pipeline import import_results
+    print(import_results(args.study_dir, args.files).summary())
     return 0
 
 

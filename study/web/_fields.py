@@ -6,17 +6,13 @@ raises :class:`WebImportError` naming where the record came from and the field.
 >>> _str("maybe", "f: line 3", "response", ("first", "second"))
 Traceback (most recent call last):
 ...
-flipstudy.study.web._fields.WebImportError: f: line 3: response: must be one of first, second, got 'maybe'
+flipstudy.errors.WebImportError: f: line 3: response: must be one of first, second, got 'maybe'
 """
 from __future__ import annotations
 
 import math
 
-from flipstudy.stimuli.exceptions import FlipstudyError
-
-
-class WebImportError(FlipstudyError, ValueError):
-    """A results file that cannot be imported; the message names file and line or row."""
+from flipstudy.errors import WebImportError
 
 
 def _num(v, where, key, lo=0.0, hi=math.inf, *, integer=False, optional=False):

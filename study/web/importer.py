@@ -64,7 +64,9 @@ from ..export import (ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS, _
 from ..psychds import write_dataset_description
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
-from ._fields import WebImportError, _bool, _need, _num, _str
+from flipstudy.errors import WebImportError
+from flipstudy.results import ImportResult
+from ._fields import _bool, _need, _num, _str
 from .order import order_groups, web_trial_order
 from .sites import SITES, read_sites as _sites
 from .site import FORMAT, HOSTS
@@ -461,13 +463,15 @@ def _kept(d: Path) -> list[Path]:
     return [files[n] for n in order] + [files[n] for n in sorted(files) if n not in order]
 
 
-def import_web(study_dir, files) -> dict:
+def import_web(study_dir, files) -> ImportResult:
     """Import results files into ``STUDY_DIR/web/`` (see the module docstring).
 
-    Returns ``{"files": [{"file", "status" ("imported" | "already imported" | "nothing new":
-    every record already kept, so the file is not kept),
-    "records", "new_answers"}], "answers", "participants", "sessions",
-    "incomplete", "flagged", "repeats", "responses", "participants_csv", "description"}``."""
+    Returns an :class:`~flipstudy.results.ImportResult`: ``files`` (per file: "file",
+    "status" ("imported" | "already imported" | "nothing new": every record already kept,
+    so the file is not kept), "records", "new_answers"), ``answers``,
+    ``participants``, ``sessions``, ``incomplete``, ``flagged``, ``repeats``,
+    ``duplicates`` and the tables written (``responses``, ``participants_csv``,
+    ``description``)."""
     study = load_study(study_dir)
     d = study.dir / WEB_DIR
     imports = d / IMPORTS
@@ -539,11 +543,15 @@ def import_web(study_dir, files) -> dict:
     atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
     desc = write_dataset_description(d, study.dir, columns, source="web sessions", stimuli=study.stimuli)
-    return {"files": report, "answers": len(rows), "participants": len({p["participant"] for p in parts}),
-            "sessions": len(parts), "incomplete": [f"{p['participant']}/{p['session']} ({p['answered']}/"
-                                                   f"{p['n_trials']})" for p in parts if p["complete"] != "true"],
-            "flagged": [f"{r['participant']}/{r['session']} trial {r['trial']} ({r['dropped_pct']} % dropped)"
-                        + (" repeat" if r["repeat"] == "1" else "") for r in rows if r["playback_flagged"] == "true"],
-            "repeats": [f"{r['participant']}/{r['session']} trial {r['trial']}" for r in rows if r["repeat"] == "1"],
-            "duplicates": dup, "responses": out, "participants_csv": d / "participants.csv",
-            "description": desc}
+    return ImportResult(
+        files=tuple({k: str(v) if isinstance(v, Path) else v for k, v in r.items()} for r in report),
+        answers=len(rows), participants=len({p["participant"] for p in parts}), sessions=len(parts),
+        incomplete=tuple(f"{p['participant']}/{p['session']} ({p['answered']}/{p['n_trials']})"
+                         for p in parts if p["complete"] != "true"),
+        flagged=tuple(f"{r['participant']}/{r['session']} trial {r['trial']} ({r['dropped_pct']} % dropped)"
+                      + (" repeat" if r["repeat"] == "1" else "") for r in rows
+                      if r["playback_flagged"] == "true"),
+        repeats=tuple(f"{r['participant']}/{r['session']} trial {r['trial']}" for r in rows
+                      if r["repeat"] == "1"),
+        duplicates=dup, responses=out, participants_csv=d / "participants.csv",
+        description=Path(desc) if desc is not None else None, study=str(study_dir))

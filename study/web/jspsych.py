@@ -25,7 +25,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import JsPsychFetchError
 
 #: npm package -> pinned version
 PACKAGES = {
@@ -43,10 +43,6 @@ BUNDLES = {
     **{p: ("dist/index.browser.min.js", p.split("/")[1] + ".js") for p in PACKAGES if p != "jspsych"},
 }
 CSS = ("jspsych", "css/jspsych.css", "jspsych.css")
-
-
-class JsPsychFetchError(FlipstudyError, RuntimeError):
-    """jsPsych could not be fetched or the cached copy does not match the pins."""
 
 
 def _pins_key() -> str:
@@ -97,8 +93,10 @@ def fetch(jspsych_dir=None, *, npm: str = "npm") -> tuple[Path, dict]:
             shutil.rmtree(d, ignore_errors=True)          # a broken cache entry: fetch again
     exe = shutil.which(npm)
     if exe is None:
-        raise JsPsychFetchError("export-web fetches jsPsych with npm, which is not on PATH "
-                                "(apt-get install npm), or name a folder with --jspsych-dir")
+        raise JsPsychFetchError("the participant page (run, export-web) needs jsPsych, fetched with npm, "
+                                "which is not on PATH (apt-get install npm); or name a folder holding "
+                                "its node_modules: export-web --jspsych-dir, or $FLIPSTUDY_NPM_CACHE "
+                                "holding a filled cache")
     d.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=".fetch-", dir=d.parent))
     try:
@@ -121,16 +119,3 @@ def fetch(jspsych_dir=None, *, npm: str = "npm") -> tuple[Path, dict]:
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
-
-
-def copy_bundles(folder: Path, lib: Path) -> list[str]:
-    """Copy the browser bundles and jsPsych's CSS into ``lib``; returns the file names
-    in the order the page loads the scripts (jsPsych first)."""
-    lib.mkdir(parents=True, exist_ok=True)
-    names = []
-    for pkg, (src, dst) in BUNDLES.items():
-        shutil.copyfile(folder / "node_modules" / pkg / src, lib / dst)
-        names.append(dst)
-    pkg, src, dst = CSS
-    shutil.copyfile(folder / "node_modules" / pkg / src, lib / dst)
-    return names

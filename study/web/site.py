@@ -45,7 +45,7 @@ import tempfile
 from pathlib import Path
 from types import SimpleNamespace
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import SiteError
 
 from .. import timeline as local_timeline
 from ..session import load_study
@@ -55,16 +55,15 @@ from .order import RULE, order_groups
 
 FORMAT = "flipstudy-web/1"
 HOSTS = ("static", "jatos", "pavlovia")
+#: the local runner (``flipstudy run``): the same site, served by :mod:`flipstudy.study.server`,
+#: with that server as its data endpoint (never written by export-web)
+LOCAL = "local"
 STATIC = Path(__file__).resolve().parent / "static"
 OWN_FILES = ("flipstudy-order.js", "flipstudy-2afc.js", "flipstudy-web.js", "flipstudy-web.css")
 #: URL query parameters read as the participant ID, first found wins (Prolific's first)
 PARTICIPANT_PARAMS = ("PROLIFIC_PID", "participant", "PARTICIPANT_ID", "workerId", "id")
 SITE_RECORD = "flipstudy-site.json"
 PAVLOVIA_API = "https://pavlovia.org"
-
-
-class SiteError(FlipstudyError, ValueError):
-    """A site that cannot be written; the message says what to do."""
 
 
 def _sha256(path: Path) -> str:
@@ -128,18 +127,24 @@ def refuse_adaptive(design) -> None:
 
 
 def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_pct: float | None = None,
-                video_width: int = 640, videos: dict | None = None) -> dict:
+                video_width: int = 640, videos: dict | None = None, n_trials: int | None = None) -> dict:
     """The ``window.FLIPSTUDY`` object of ``config.js`` (``videos``: stimulus →
     :func:`probe_video`; without it the manifest's frames and fps stand in;
-    ``max_dropped_pct`` None: the design's ``[session]`` threshold)."""
-    if host not in HOSTS:
+    ``max_dropped_pct`` None: the design's ``[session]`` threshold).  With
+    ``host="local"`` (the local runner) the trials, their order and every QUEST+ level
+    come from the server, so adaptive groups are allowed, ``groups`` is empty and
+    ``n_trials`` is the session's."""
+    if host not in HOSTS + (LOCAL,):
         raise SiteError(f"host {host!r}: choose one of {', '.join(HOSTS)}")
     design = study.design
-    refuse_adaptive(design)
+    if host == LOCAL:
+        groups, n = [], int(n_trials or 0)
+    else:
+        refuse_adaptive(design)
+        groups = order_groups(design, study.manifest)
+        n = sum(len(rows) for _, rows in groups) * int(design.repetitions)
     if max_dropped_pct is None:
         max_dropped_pct = design.session.max_dropped_pct
-    groups = order_groups(design, study.manifest)
-    n = sum(len(rows) for _, rows in groups) * int(design.repetitions)
     vids = {}
     for r in study.manifest:
         name = r.stimulus
@@ -165,11 +170,41 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
     return cfg
 
 
-def _index_html(host: str, scripts: list[str]) -> str:
+def site_csp(host: str) -> str:
+    """The page's Content-Security-Policy: its own origin only (and, for Pavlovia, its API)."""
     connect = "'self'" + (f" {PAVLOVIA_API}" if host == "pavlovia" else "")
-    csp = (f"default-src 'none'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
-           f"connect-src {connect}; media-src 'self' blob:; img-src 'self' data: blob:; font-src data:; "
-           f"base-uri 'none'; form-action 'none'")
+    return (f"default-src 'none'; script-src 'self'; style-src 'self' 'unsafe-inline'; "
+            f"connect-src {connect}; media-src 'self' blob:; img-src 'self' data: blob:; font-src data:; "
+            f"base-uri 'none'; form-action 'none'")
+
+
+def lib_files(jspsych_folder: Path) -> dict[str, bytes]:
+    """jsPsych's browser bundles and CSS as the site's ``lib/`` files, from the npm
+    packages in ``jspsych_folder`` (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    files = {f"lib/{dst}": (jspsych_folder / "node_modules" / pkg / src).read_bytes()
+             for pkg, (src, dst) in jsp.BUNDLES.items()}
+    pkg, src, dst = jsp.CSS
+    files[f"lib/{dst}"] = (jspsych_folder / "node_modules" / pkg / src).read_bytes()
+    return files
+
+
+def site_files(cfg: dict, jspsych_folder: Path | None) -> dict[str, bytes]:
+    """The site's code as ``{relative path: bytes}``: ``index.html``, ``config.js`` (``cfg``),
+    flipstudy's own scripts and CSS, and (unless ``jspsych_folder`` is None) jsPsych's
+    :func:`lib_files`.  ``export-web`` writes these files; the local runner serves the
+    same bytes from memory."""
+    files = lib_files(jspsych_folder) if jspsych_folder is not None else {}
+    scripts = [dst for _, dst in jsp.BUNDLES.values()]
+    for f in OWN_FILES:
+        files[f] = (STATIC / f).read_bytes()
+    files["config.js"] = ("// written by flipstudy export-web; the study as data\n"
+                          "window.FLIPSTUDY = " + json.dumps(cfg, indent=1) + ";\n").encode()
+    files["index.html"] = _index_html(cfg["host"], scripts).encode()
+    return files
+
+
+def _index_html(host: str, scripts: list[str]) -> str:
+    csp = site_csp(host)
     tags = ([f'<script src="jatos.js"></script>'] if host == "jatos" else [])
     tags += [f'<script src="lib/{s}"></script>' for s in scripts]
     tags += ['<script src="config.js"></script>', '<script src="flipstudy-order.js"></script>',
@@ -198,7 +233,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     ``force``; the site is built in a hidden folder beside it and renamed into place.
     ``max_dropped_pct`` None takes the design's ``[session] max_dropped_pct``; a number
     overrides it (the site record says which)."""
-    from flipstudy.render.record import StaleRenderError, check_rendered
+    from flipstudy.errors import StaleRenderError
+    from flipstudy.render.record import check_rendered
     study = load_study(study_dir)
     refuse_adaptive(study.design)
     out = Path(out)
@@ -228,15 +264,12 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
     try:
-        scripts = jsp.copy_bundles(folder, tmp / "lib")
+        for rel, data in site_files(cfg, folder).items():
+            (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+            (tmp / rel).write_bytes(data)
         (tmp / "stimuli").mkdir()
         for r in study.manifest:
             shutil.copyfile(study.video_path(r.stimulus), tmp / "stimuli" / f"{r.stimulus}.mp4")
-        for f in OWN_FILES:
-            shutil.copyfile(STATIC / f, tmp / f)
-        (tmp / "config.js").write_text("// written by flipstudy export-web; the study as data\n"
-                                       "window.FLIPSTUDY = " + json.dumps(cfg, indent=1) + ";\n")
-        (tmp / "index.html").write_text(_index_html(host, scripts))
         from flipstudy import __version__ as fs_version
         files = {p.relative_to(tmp).as_posix(): _sha256(p) for p in sorted(tmp.rglob("*")) if p.is_file()}
         design_path = study.dir / "design.toml"

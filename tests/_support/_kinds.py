@@ -80,7 +80,7 @@ INTERVAL_COLOUR_JS = """(interval) => new Promise((resolve) => {
     }
     return bs > 60 ? best : null;
   };
-  const root = document.getElementById('app') || document.getElementById('jspsych-target');
+  const root = document.getElementById('jspsych-target');
   let done = false;
   setTimeout(() => { done = true; resolve(null); }, 10000);      // never hang a test
   const tick = () => {

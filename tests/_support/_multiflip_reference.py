@@ -47,7 +47,8 @@ from flipstudy.stimuli.physics import center_of_mass
 from flipstudy.stimuli.edit.reposition import ballistic_path
 from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features
 # unchanged by the fast path: shared with the module rather than copied
-from flipstudy.stimuli.edit.multiflip import (FlipEditError, MultiFlip, SelfLoop, find_self_loop,  # noqa: F401
+from flipstudy.errors import FlipEditError
+from flipstudy.stimuli.edit.multiflip import (MultiFlip, SelfLoop, find_self_loop,  # noqa: F401
                                     k_star, piecewise_source)
 from flipstudy.stimuli.edit.flight_measures import flight_axis, momentum_jumps, standing_span
 from flipstudy.stimuli.edit.timing import smoothstep as _smooth

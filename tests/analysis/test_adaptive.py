@@ -10,7 +10,7 @@ from scipy.special import xlogy
 from flipstudy.analysis.adaptive import (Observer, Quest, QuestSettings, population,
                                          quest_model)
 from flipstudy.analysis.stats import detection_threshold, psychometric_curve
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError
 
 LEVELS = np.arange(0, 61, 2.0)
 

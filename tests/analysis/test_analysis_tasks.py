@@ -11,7 +11,7 @@ from scipy.special import ndtr
 
 from flipstudy.analysis import analyze, load_responses
 from flipstudy.analysis.adaptive import Observer, Quest, QuestSettings, quest_model
-from flipstudy.analysis.io import ResponsesError
+from flipstudy.errors import ResponsesError
 from flipstudy.analysis.simulate import paper_panel
 
 GRID = list(np.arange(0, 61, 2.0))

@@ -10,7 +10,7 @@ from scipy.stats import t as t_dist
 from flipstudy.analysis.adaptive import population
 from flipstudy.analysis.plan import participants_for_width, plan_group
 from flipstudy.study.cli import main
-from flipstudy.study.cli.plan import group_grids
+from flipstudy.study.pipeline import group_grids
 
 
 @pytest.mark.parametrize("sd,width", [(10.0, 10.0), (5.0, 12.0), (8.0, 3.0)])

@@ -73,7 +73,7 @@ def test_sides_from_joint_names_and_a_skeleton_without_sides():
 
 
 def test_unknown_character_style_says_did_you_mean():
-    from flipstudy.stimuli.exceptions import FlipstudyError
+    from flipstudy.errors import FlipstudyError
     with pytest.raises(FlipstudyError, match="did you mean 'stick'"):
         Style(character="stik")
 
@@ -149,7 +149,8 @@ def test_design_style_is_validated_and_recorded_in_manifest_and_render_json(tmp_
     import csv
     import json
     from flipstudy.render.study import render_study
-    from flipstudy.stimuli.design import DesignError, parse_design
+    from flipstudy.errors import DesignError
+    from flipstudy.stimuli.design import parse_design
     from flipstudy.stimuli.stimset import MANIFEST_COLUMNS, build_stimuli
     with pytest.raises(DesignError, match="did you mean 'mannequin'"):
         parse_design(DESIGN.format(study_style='style = "manequin"', group_style=""))
@@ -159,7 +160,7 @@ def test_design_style_is_validated_and_recorded_in_manifest_and_render_json(tmp_
     assert plain.style is None and not plain.styled
     d = parse_design(DESIGN.format(study_style='style = "capsules"', group_style='style = "stick"'))
     assert d.style == "capsules" and d.groups[0].style == "stick"
-    rows = build_stimuli(plain, tmp_path / "plain", progress=False)
+    rows = build_stimuli(plain, tmp_path / "plain", progress=False).rows
     header = (tmp_path / "plain" / "manifest.csv").read_text().splitlines()[0].split(",")
     assert header == MANIFEST_COLUMNS and "style" not in rows[0]       # unchanged without a style
     build_stimuli(d, tmp_path / "s", progress=False)
@@ -175,7 +176,7 @@ def test_design_style_is_validated_and_recorded_in_manifest_and_render_json(tmp_
 
 
 def test_cli_style_takes_a_name_or_a_file(tmp_path):
-    from flipstudy.stimuli.exceptions import FlipstudyError
+    from flipstudy.errors import FlipstudyError
     from flipstudy.study.cli.render import _style
     assert _style(["stick"]).character == "stick"
     f = tmp_path / "s.toml"

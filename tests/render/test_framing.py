@@ -36,7 +36,7 @@ def default_study_videos(tmp_path_factory):
     from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
     from flipstudy.stimuli.stimset import build_stimuli
     study = tmp_path_factory.mktemp("framing") / "study"
-    rows = build_stimuli(parse_design(PAPER_DESIGN), study, progress=False)
+    rows = build_stimuli(parse_design(PAPER_DESIGN), study, progress=False).rows
     render_study(study, what="video", size=SIZE, fps=15, style=NO_GROUND, progress=False)
     return study, rows
 

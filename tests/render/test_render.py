@@ -494,7 +494,7 @@ def test_stage_once_for_every_picture_of_its_clips():
     """One Stage: a clip of it drawn alone keeps the camera and the ground of
     all; another image size refits the camera to the same points; a camera that
     follows the action keeps a given ground and refits a fitted one."""
-    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    from flipstudy.errors import FlipstudyValueError
     a, t0, t1 = jumper(flip=0.0)
     b = a.replace(root_pos=a.root_pos + [1.5, 0.0, 0.5])
     st = stage([a, b], [t0, t0], [t1, t1], size=(160, 120), style=PLAIN)
@@ -518,7 +518,7 @@ def test_stage_once_for_every_picture_of_its_clips():
 
 
 def test_a_reused_scene_must_have_the_stage_style():
-    from flipstudy.stimuli.exceptions import FlipstudyValueError
+    from flipstudy.errors import FlipstudyValueError
     clip, t0, t1 = jumper()
     st = stage([clip], [t0], [t1], size=(96, 64), style=PLAIN)
     with Scene(st.bodies[0], Style(), (96, 64), st.camera) as sc:
@@ -592,8 +592,8 @@ def test_cli_render_and_figure(tmp_path, capsys):
                           "--jobs", "1", "--quiet"])
     assert args.func(args) == 0
     assert (tmp_path / "render" / "ref_strip.png").exists()
-    args = ap.parse_args(["render", str(tmp_path), "--what", "nonsense"])
-    assert args.func(args) == 1
+    from flipstudy.study.cli import main            # main() reports the user errors
+    assert main(["render", str(tmp_path), "--what", "nonsense"]) == 1
     assert "choose from" in capsys.readouterr().err
     out = tmp_path / "fig.png"
     args = ap.parse_args(["figure", str(tmp_path / "ref.bvh"), "--trail", "--out", str(out),

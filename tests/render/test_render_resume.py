@@ -14,7 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from flipstudy.render.record import StaleRenderError, check_rendered
+from flipstudy.errors import StaleRenderError
+from flipstudy.render.record import check_rendered
 from flipstudy.render.study import render_study
 from test_render import _write_study, jumper
 

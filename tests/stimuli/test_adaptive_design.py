@@ -6,7 +6,8 @@ import csv
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from flipstudy.stimuli.design import GRID_MAX, TRIALS_MAX, DesignError, QuestSpec, parse_design
+from flipstudy.errors import DesignError
+from flipstudy.stimuli.design import GRID_MAX, TRIALS_MAX, QuestSpec, parse_design
 from flipstudy.stimuli.groupkeys import grid_levels
 
 HEAD = """[study]
@@ -113,7 +114,7 @@ def test_a_grid_group_builds_every_level_within_tolerance(tmp_path):
     from flipstudy.stimuli.stimset import build_stimuli
     d = parse_design(design('levels = {from = 0, to = 30, step = 7.5}\noriginal = "own"\n'
                             'method = "quest+"\n', "tolerance_pct = 1.0\nfps = 60"))
-    rows = build_stimuli(d, tmp_path / "s", progress=False)
+    rows = build_stimuli(d, tmp_path / "s", progress=False).rows
     with open(tmp_path / "s" / "manifest.csv", newline="") as f:
         manifest = list(csv.DictReader(f))
     assert [r["stimulus"] for r in manifest] == [f"backflip_am_{v:g}" for v in (0, 7.5, 15, 22.5, 30)]

@@ -12,8 +12,9 @@ from flipstudy.stimuli import analyse, builtin
 from flipstudy.stimuli.ballistic import inject_kind, held_times
 from flipstudy.stimuli.ballistic_measure import measure_ballistic
 from flipstudy.stimuli.body import Body
-from flipstudy.stimuli.design import DesignError, parse_design
-from flipstudy.stimuli.injection import StimulusError, check
+from flipstudy.errors import DesignError, StimulusError
+from flipstudy.stimuli.design import parse_design
+from flipstudy.stimuli.injection import check
 from flipstudy.stimuli.physics import center_of_mass, momentum
 
 from test_contact import geometric_airborne, lowest_point

@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from flipstudy.stimuli.body import Body, BodyMappingError, GROUPS, SEGMENT_TABLE, ellipsoid_inertia
+from flipstudy.errors import BodyMappingError
+from flipstudy.stimuli.body import Body, GROUPS, SEGMENT_TABLE, ellipsoid_inertia
 from flipstudy.stimuli.motion import Skeleton, load_bvh
 
 from _shared import ALL_BVH, shared_file

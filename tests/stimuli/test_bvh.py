@@ -17,7 +17,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 from scipy.spatial.transform import Rotation
 
-from flipstudy.stimuli.motion import BVHError, Clip, Skeleton, bvh_text, load_bvh, save_bvh
+from flipstudy.errors import BVHError
+from flipstudy.stimuli.motion import Clip, Skeleton, bvh_text, load_bvh, save_bvh
 
 CMU_UNIT = 0.0254 / 0.45          # metres per CMU/ASF length unit (0.056444)
 ORDERS = ["XYZ", "XZY", "YXZ", "YZX", "ZXY", "ZYX"]

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from flipstudy.stimuli.exceptions import FlipstudyError
-from flipstudy.stimuli.motion import BVHError, load_bvh
+from flipstudy.errors import FlipstudyError, BVHError
+from flipstudy.stimuli.motion import load_bvh
 from flipstudy.stimuli.motion import bvh as bvh_mod
 
 from _bvh_gen import many_joints_bvh

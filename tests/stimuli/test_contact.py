@@ -8,7 +8,8 @@ import pytest
 from flipstudy.stimuli import analyse, builtin, load_bvh
 from flipstudy.stimuli.body import Body
 from flipstudy.stimuli.design import PAPER_DESIGN, parse_design
-from flipstudy.stimuli.injection import (AIR_MARGIN, Injected, StimulusError, check, inject_angular_momentum,
+from flipstudy.errors import StimulusError
+from flipstudy.stimuli.injection import (AIR_MARGIN, Injected, check, inject_angular_momentum,
                             inject_takeoff_angle, measure)
 from flipstudy.stimuli.motion.bvh import bvh_text
 from flipstudy.stimuli.physics import center_of_mass, momentum

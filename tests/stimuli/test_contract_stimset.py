@@ -128,7 +128,7 @@ def built(tmp_path_factory):
     out = {}
     for name, text in DESIGNS.items():
         (root / f"{name}.toml").write_text(text)
-        rows = build_stimuli(parse_design(text, root / f"{name}.toml"), root / name, progress=False)
+        rows = build_stimuli(parse_design(text, root / f"{name}.toml"), root / name, progress=False).rows
         out[name] = (root / name, rows)
     return out
 

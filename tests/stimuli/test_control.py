@@ -436,14 +436,9 @@ def test_jump_without_checks_leaves_their_fields_empty():
 
 # ------------------------------------------------------------------------ CLI
 def _cli(argv):
-    import argparse
-
-    from flipstudy.study.cli.jump import add_commands
-    ap = argparse.ArgumentParser(prog="flipstudy")
-    sub = ap.add_subparsers(dest="command")
-    add_commands(sub)
-    args = ap.parse_args(argv)
-    return args.func(args)
+    """``flipstudy jump ...`` as the command line runs it (``main()`` reports the errors)."""
+    from flipstudy.study.cli import main
+    return main(argv)
 
 
 def test_cli_jump_writes_bvh_and_reports(tmp_path, capsys):

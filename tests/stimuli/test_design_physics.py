@@ -10,7 +10,8 @@ from hypothesis import strategies as st
 
 from _shared import shared_file
 from flipstudy.stimuli.analyse import analyse, gravity_warning, physics_advice
-from flipstudy.stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
+from flipstudy.errors import DesignError
+from flipstudy.stimuli.design import PAPER_DESIGN, load_design, parse_design
 from flipstudy.stimuli.motion.bvh import load_bvh
 from flipstudy.stimuli.stimset import build_stimuli, plan
 
@@ -235,7 +236,7 @@ def test_scale_0_01_is_refused_naming_the_scale_not_fps(tmp_path, cmu):
 
 def test_accept_unphysical_builds_and_the_manifest_records_it(tmp_path, cmu):
     p = design_file(tmp_path, source=cmu, clip="accept_unphysical = true")
-    rows = build_stimuli(load_design(p), tmp_path / "out", progress=False)
+    rows = build_stimuli(load_design(p), tmp_path / "out", progress=False).rows
     with open(tmp_path / "out" / "manifest.csv", newline="") as f:
         man = list(csv.DictReader(f))
     assert [r["stimulus"] for r in man] == [r["stimulus"] for r in rows] == ["c_ti_0", "c_ti_20"]
@@ -278,9 +279,9 @@ def test_study_fps_resamples_bvh_clips(tmp_path, cmu):
     """[study] fps = 120 with a clip read at 60: the stimuli are at 120 fps, twice the
     frames, the same motion in time (flight duration and take-off angle kept)."""
     p60 = design_file(tmp_path, source=cmu, clip="fps = 60")
-    r60 = build_stimuli(load_design(p60), tmp_path / "o60", progress=False)
+    r60 = build_stimuli(load_design(p60), tmp_path / "o60", progress=False).rows
     p120 = design_file(tmp_path, source=cmu, clip="fps = 60", study="fps = 120")
-    r120 = build_stimuli(load_design(p120), tmp_path / "o120", progress=False)
+    r120 = build_stimuli(load_design(p120), tmp_path / "o120", progress=False).rows
     assert r60[0]["fps"] == 60 and r120[0]["fps"] == 120
     assert r120[0]["frames"] == 2 * r60[0]["frames"] - 1
     assert r120[0]["flight_s"] == pytest.approx(r60[0]["flight_s"], abs=2 / 60)
@@ -354,7 +355,8 @@ def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
 
 def test_a_session_refuses_a_manifest_with_duplicate_or_too_many_trials(tmp_path):
     from flipstudy.study.demo import make_demo_study
-    from flipstudy.study.session import SessionError, load_study
+    from flipstudy.errors import SessionError
+    from flipstudy.study.session import load_study
     d = make_demo_study(tmp_path / "s", videos=False)
     man = (d / "manifest.csv").read_text().splitlines()
     (d / "manifest.csv").write_text("\n".join(man + [man[-1]]) + "\n")
@@ -387,7 +389,8 @@ def test_a_group_may_keep_its_own_original():
 def test_shared_answers_go_only_to_groups_of_their_kind():
     import pandas as pd
 
-    from flipstudy.analysis.io import ResponsesError, load_responses
+    from flipstudy.errors import ResponsesError
+    from flipstudy.analysis.io import load_responses
     rows = []
     for p in ("P1", "P2"):
         for g, kind, lv in [("original", "angular-momentum", 0), ("am", "angular-momentum", 25),

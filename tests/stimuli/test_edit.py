@@ -109,7 +109,8 @@ def test_ratio_rule_next_frame():
 def test_edit_pipeline_straightens_then_flips_the_repaired_clip():
     from flipstudy.stimuli import analyse, builtin
     from flipstudy.stimuli.edit.animator import repair_momentum, straighten
-    from flipstudy.stimuli.edit.multiflip import FlipEditError, multiflip
+    from flipstudy.errors import FlipEditError
+    from flipstudy.stimuli.edit.multiflip import multiflip
     from flipstudy.stimuli.edit.pipeline import edit
     clip = builtin("backflip")
     r = edit(clip, straighten="arms", flips=2)

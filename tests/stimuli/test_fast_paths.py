@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from flipstudy.stimuli.motion import BVHError, Clip, Skeleton, load_bvh
+from flipstudy.errors import BVHError
+from flipstudy.stimuli.motion import Clip, Skeleton, load_bvh
 from flipstudy.stimuli.motion import _bvh_parse as parse_mod
 from flipstudy.stimuli.motion import bvh as bvh_mod
 from flipstudy.stimuli.motion.skeleton import ROTATION_CHANNELS
@@ -221,7 +222,8 @@ def test_multiflip_of_real_cmu_equals_the_plain_implementation(name):
     sequenced clip's COM is read (and computed for them alone)."""
     import _multiflip_reference as ref
     from flipstudy.stimuli import analyse
-    from flipstudy.stimuli.edit.multiflip import FlipEditError, flip_source, multiflip
+    from flipstudy.errors import FlipEditError
+    from flipstudy.stimuli.edit.multiflip import flip_source, multiflip
     a = analyse(load_bvh(shared_file(name)))
     pre = flip_source(a)
     for flips in (2, 3):

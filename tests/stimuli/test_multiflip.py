@@ -9,7 +9,8 @@ from scipy.spatial.transform import Rotation
 from flipstudy.stimuli import analyse, builtin, load_bvh
 from flipstudy.stimuli.edit import rotate
 from flipstudy.stimuli.edit.flight_measures import flight_axis, measure
-from flipstudy.stimuli.edit.multiflip import FlipEditError, find_self_loop, k_star, multiflip, piecewise_source
+from flipstudy.errors import FlipEditError
+from flipstudy.stimuli.edit.multiflip import find_self_loop, k_star, multiflip, piecewise_source
 from flipstudy.stimuli.edit.similarity import distance_matrix, pose_features, twist_angles
 from flipstudy.stimuli.physics import momentum
 

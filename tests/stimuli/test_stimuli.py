@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from flipstudy.stimuli import analyse, load_bvh
-from flipstudy.stimuli.design import PAPER_DESIGN, DesignError, load_design, parse_design
-from flipstudy.stimuli.injection import StimulusError, check, inject_angular_momentum, inject_takeoff_angle, measure
+from flipstudy.errors import DesignError, StimulusError
+from flipstudy.stimuli.design import PAPER_DESIGN, load_design, parse_design
+from flipstudy.stimuli.injection import check, inject_angular_momentum, inject_takeoff_angle, measure
 from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli.stimset import build_stimuli
 
@@ -154,7 +155,7 @@ def test_default_design_on_builtin_flips_is_exact(tmp_path):
 def test_default_design_from_real_cmu_flips(tmp_path):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path)
-    rows = build_stimuli(d, tmp_path / "study", progress=False)
+    rows = build_stimuli(d, tmp_path / "study", progress=False).rows
     man = StimulusSet.read(tmp_path / "study", files=False, design=False).rows()
     assert len(man) == len(rows) == 2 + 2 * (4 * 4 + 1 + 5)   # shared AM original per clip
     for r in man:
@@ -226,7 +227,7 @@ def test_design_with_a_multiflip_base_clip(tmp_path):
     text = PAPER_DESIGN.replace('source = "backflip"', 'source = "backflip"\nflips = 2\nk_ratio = 1.0')
     d = parse_design(text)
     assert d.clips[0].flips == 2 and d.clips[0].k_ratio == 1.0
-    rows = build_stimuli(d, tmp_path / "study", progress=False)
+    rows = build_stimuli(d, tmp_path / "study", progress=False).rows
     ref = next(r for r in rows if r["stimulus"] == "backflip_reference")
     orig = next(r for r in rows if r["stimulus"] == "frontflip_reference")
     assert float(ref["flight_s"]) > float(orig["flight_s"])          # a longer flight: two turns

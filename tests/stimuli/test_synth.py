@@ -12,7 +12,8 @@ from flipstudy.stimuli.body import Body
 from flipstudy.stimuli.motion import Clip, finite_difference
 from flipstudy.stimuli.motion.bvh import bvh_text
 from flipstudy.stimuli.physics import center_of_mass, momentum
-from flipstudy.stimuli.synth import BUILTIN_NAMES, SynthError, builtin, make_skeleton
+from flipstudy.errors import SynthError
+from flipstudy.stimuli.synth import BUILTIN_NAMES, builtin, make_skeleton
 from flipstudy.stimuli.synth.planar import D, PlanarModel, QuinticSpline, cumulative_simpson
 
 G = 9.81

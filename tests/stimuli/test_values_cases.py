@@ -114,7 +114,7 @@ def test_the_closed_form_flight_time_is_the_flight_of_the_built_stimulus():
 def test_a_long_but_landing_flight_is_still_built(tmp_path):
     """The bound is a bound, not a ban on slow flights: gravity −60 % (a 1.7 s flight) builds."""
     p = design(tmp_path, 'kind = "gravity"\nsign = -1\npolicy = "takeoff-velocity"\nlevels = [0, 60]')
-    rows = build_stimuli(load_design(p), tmp_path / "out", progress=False)
+    rows = build_stimuli(load_design(p), tmp_path / "out", progress=False).rows
     assert 1.5 < float(rows[-1]["flight_s"]) < MAX_FLIGHT_S
 
 
@@ -128,7 +128,7 @@ def test_a_grid_step_of_1e_308_is_a_design_error_naming_the_step(tmp_path):
 def test_a_pose_rate_of_1e_9_is_a_design_error_naming_group_and_level(tmp_path):
     p = design(tmp_path, 'kind = "pose-rate"\nlevels = [1e-9]')
     with pytest.raises(DesignError) as e:
-        build_stimuli(load_design(p), tmp_path / "out", progress=False)
+        build_stimuli(load_design(p), tmp_path / "out", progress=False).rows
     msg = str(e.value)
     assert str(p) in msg and "groups[0] (g)" in msg and "1e-09 poses per second" in msg, msg
     assert "no pose is shown inside" in msg
@@ -153,7 +153,7 @@ def test_angular_momentum_500_is_refused_when_read_naming_file_group_and_range(t
     assert str(p) in msg and "groups[0] (g).levels" in msg and "below 500 %" in msg, msg
     p = design(tmp_path, 'kind = "angular-momentum"\nprofile = "abrupt"\nlevels = [0, 499]')
     p.write_text(p.read_text().replace("seed = 1", "seed = 1\ntolerance_pct = 5"))
-    rows = build_stimuli(load_design(p), tmp_path / "out", progress=False)   # just below: built
+    rows = build_stimuli(load_design(p), tmp_path / "out", progress=False).rows   # just below: built
     assert abs(float(rows[-1]["measured_error_pct"]) - 499) < 5
 
 

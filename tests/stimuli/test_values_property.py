@@ -65,7 +65,7 @@ try:
     if kind == "design":
         from flipstudy.stimuli.design import load_design
         from flipstudy.stimuli.stimset import build_stimuli
-        rows = build_stimuli(load_design(src), out, progress=False)
+        rows = build_stimuli(load_design(src), out, progress=False).rows
         print(json.dumps({"ok": len(rows)}))
     else:
         from flipstudy import builtin

@@ -16,7 +16,7 @@ import pytest
 from flipstudy.analysis.adaptive import Observer, Quest
 from flipstudy.study import store
 from flipstudy.study.session import detected, load_study, open_session, submit_answer
-from flipstudy.study.validate import RequestError
+from flipstudy.errors import RequestError
 
 from _adaptive import answer, design_text, make_study
 
@@ -239,7 +239,7 @@ def test_level_0_of_a_quest_group_sharing_the_original_shows_the_shared_original
 
 
 def test_a_session_resumed_after_its_quest_settings_changed_is_refused(tmp_path):
-    from flipstudy.study.session import SessionError
+    from flipstudy.errors import SessionError
     study = load_study(make_study(tmp_path / "s", groups=("yn", "quest"), trials=12))
     s = open_session(study, "P01")
     run(s, upto=next(t.trial for t in s.trials if t.adaptive))

@@ -13,7 +13,8 @@ from flipstudy.study import session as session_mod
 from flipstudy.study import store
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.export import ADAPTIVE_COLUMNS, RESPONSE_COLUMNS, TRUTH_FILE, export_responses
-from flipstudy.study.simulate import ModelError, simulate
+from flipstudy.errors import ModelError
+from flipstudy.study.simulate import simulate
 
 from _adaptive import make_study
 

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import pytest
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError, SessionError
 from flipstudy.study import store
 from flipstudy.study.demo import make_demo_study
-from flipstudy.study.session import SessionError, load_study, open_session, submit_answer
+from flipstudy.study.session import load_study, open_session, submit_answer
 
 from _adaptive import answer, make_study
 
@@ -155,6 +155,7 @@ def _old_order_module():
                              capture_output=True, text=True, check=True).stdout
     except (OSError, subprocess.CalledProcessError):
         pytest.skip("no git history with commit 200504d (the code before issue 19)")
+    src = src.replace("flipstudy.stimuli.exceptions", "flipstudy.errors")   # where the error family lives now
     mod = types.ModuleType("order_before_issue19")
     sys.modules[mod.__name__] = mod
     exec(compile(src, "order_before_issue19.py", "exec"), mod.__dict__)

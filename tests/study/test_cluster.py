@@ -82,8 +82,8 @@ def test_parse_address_refuses_what_it_cannot_use():
 def test_cluster_build_and_render_are_the_local_bytes(tmp_path, cluster):
     d = design((10, 25))
     here, there = tmp_path / "local", tmp_path / "cluster"
-    rows_here = build_stimuli(d, here, progress=False)
-    rows_there = build_stimuli(d, there, progress=False, cluster=cluster)
+    rows_here = build_stimuli(d, here, progress=False).rows
+    rows_there = build_stimuli(d, there, progress=False, cluster=cluster).rows
     assert [r["stimulus"] for r in rows_there] == [r["stimulus"] for r in rows_here]
     h1, h2 = hashes(here), hashes(there)
     assert len(h1) == 2 * len(rows_here) + 1          # .bvh, .npz, manifest.csv
@@ -109,13 +109,13 @@ def test_cluster_build_and_render_are_the_local_bytes(tmp_path, cluster):
 
 def test_a_worker_killed_mid_build_has_its_tasks_rerun(tmp_path, cluster):
     d = design(tuple(range(2, 26, 2)))                 # 15 stimuli
-    want = build_stimuli(d, tmp_path / "local", progress=False)
+    want = build_stimuli(d, tmp_path / "local", progress=False).rows
     before = worker_pids(cluster)
     box = {}
 
     def run():
         try:
-            box["rows"] = build_stimuli(d, tmp_path / "cluster", progress=False, cluster=cluster)
+            box["rows"] = build_stimuli(d, tmp_path / "cluster", progress=False, cluster=cluster).rows
         except BaseException as e:  # noqa: BLE001 — reported below
             box["error"] = e
     th = threading.Thread(target=run)
@@ -142,7 +142,7 @@ def test_a_worker_killed_mid_build_has_its_tasks_rerun(tmp_path, cluster):
 def test_a_worker_killed_mid_render_has_its_video_made_again(tmp_path, cluster):
     from flipstudy.render.record import check_rendered
     study = tmp_path / "study"
-    rows = build_stimuli(design((10, 25)), study, progress=False)
+    rows = build_stimuli(design((10, 25)), study, progress=False).rows
     before = worker_pids(cluster)
     box = {}
 
@@ -257,7 +257,7 @@ def test_cli_cluster_option_builds_and_names_a_bad_address(tmp_path, capsys, clu
 
 
 def test_a_failing_stimulus_fails_the_cluster_build_as_locally(tmp_path, cluster):
-    from flipstudy.stimuli.injection import StimulusError
+    from flipstudy.errors import StimulusError
     d = parse_design(DESIGN.format(levels="25").replace("seed = 11", "seed = 11\ntolerance_pct = 1e-9"))
     with pytest.raises(StimulusError) as local:
         build_stimuli(d, tmp_path / "local", progress=False)

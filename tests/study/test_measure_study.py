@@ -44,7 +44,7 @@ def ballistic_design() -> str:
 def study(request, tmp_path_factory):
     text = PAPER_DESIGN if request.param == "paper" else ballistic_design()
     out = tmp_path_factory.mktemp(request.param) / "s"
-    rows = build_stimuli(parse_design(text), out, progress=False)
+    rows = build_stimuli(parse_design(text), out, progress=False).rows
     return out, rows
 
 

@@ -52,7 +52,7 @@ def small(text: str) -> str:
                                   for n in NEW])
 def test_preset_builds_and_runs_end_to_end(tmp_path, name):
     d = parse_design(PRESETS[name])
-    rows = build_stimuli(d, tmp_path / "full", progress=False)
+    rows = build_stimuli(d, tmp_path / "full", progress=False).rows
     assert [r["stimulus"] for r in rows] == d.stimulus_names()
     assert all(abs(float(r["measured_error_pct"]) - float(r["nominal_error_pct"])) <= d.tolerance_pct
                for r in rows)

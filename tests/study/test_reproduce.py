@@ -6,7 +6,8 @@ import json
 import pytest
 
 from flipstudy.study.cli import main
-from flipstudy.study.reproduce import ReproduceError, reproduce
+from flipstudy.errors import ReproduceError
+from flipstudy.study.reproduce import reproduce
 
 
 @pytest.fixture(scope="module")
@@ -80,14 +81,13 @@ def test_cli_refuses_a_nonempty_folder_cleanly(tmp_path, capsys):
 
 @pytest.mark.slow
 def test_simulated_panel_is_marked_and_real_participants_go_elsewhere(run):
-    from flipstudy.study.reproduce import summary_text
     out, r = run
     responses = list(csv.DictReader(open(out / "study" / "responses.csv")))
     assert {x["simulated"] for x in responses} == {"true"}
     notes = (out / "analysis" / "notes.md").read_text()
     assert "N = 4 participants (0 real, 4 simulated)" in notes
     assert "describe the observer model" in notes and "not meaningful" in notes
-    text = summary_text(r, str(out))
+    text = r.summary()
     assert "4 simulated participants" in text and "fresh study" in text
     assert f"flipstudy run {out / 'study'}" not in text
     assert "--out mystudy" in text and "flipstudy run mystudy --participant P01" in text

@@ -1,5 +1,6 @@
 """2AFC and adaptive (QUEST+) sessions in headless Chromium (Debian's, through Playwright),
-every request but the page's own (127.0.0.1) blocked.
+every request but the page's own (127.0.0.1) blocked.  The page is the jsPsych site of
+``export-web`` in its ``local`` host mode, served by the local runner.
 
 * A 2AFC study (one clip, two groups, levels 25 and 50 against each group's own
   original, shown twice: 8 trials) is answered by key and by click.  On two trials the
@@ -21,7 +22,7 @@ from urllib.parse import urlparse
 
 import pytest
 
-from test_session_browser import ARGS, CHROMIUM, TIMEOUT, pw  # noqa: F401 (fixtures)
+from test_session_browser import ARGS, CHROMIUM, TIMEOUT, jspsych_dir, pw  # noqa: F401 (fixtures)
 from _kinds import INTERVAL_COLOUR_JS, colour_of, design_text, make_study, nearest
 from _screenshots import screenshot
 
@@ -35,7 +36,7 @@ from flipstudy.study.session import load_study, open_session  # noqa: E402
 
 
 @pytest.fixture
-def page(pw, tmp_path):  # noqa: F811
+def page(pw, tmp_path, jspsych_dir):  # noqa: F811
     """A Chromium page that reaches 127.0.0.1 only (every other request is aborted and
     noted in ``page.blocked``)."""
     ctx = pw.chromium.launch_persistent_context(
@@ -60,22 +61,25 @@ def page(pw, tmp_path):  # noqa: F811
     assert not blocked, blocked
 
 
+APP = "#jspsych-target"
+
+
 def _screen_id(page):
-    return page.get_attribute("#app", "data-screen-id")
+    return page.get_attribute(APP, "data-screen-id")
 
 
 def _intro(page):
-    page.wait_for_selector('#app[data-screen-id="instructions"]')
-    page.click("text=Continue")
-    page.wait_for_selector('#app[data-screen-id="demographics"]')
-    page.check("#f-age-none")
+    page.wait_for_selector(f'{APP}[data-screen-id="instructions"]')
+    page.click("#jspsych-instructions-next")
+    page.wait_for_selector(f'{APP}[data-screen-id="demographics"]')
+    page.check("#fs-age-none")
     page.check('input[name=gender][value="other"]')
     page.check('input[name=animation_experience][value="some"]')
     page.check('input[name=gymnastics_experience][value="none"]')
-    page.click("button[type=submit]")
-    page.wait_for_selector('#app[data-screen-id="examples"]')
-    page.wait_for_selector("#app button.primary:enabled")
-    page.click("#app button.primary")
+    page.click("#jspsych-survey-html-form-next")
+    page.wait_for_selector(f'{APP}[data-screen-id="example-1"]')
+    page.wait_for_selector("button.fs-next:enabled")
+    page.click("button.fs-next")
 
 
 def _reach(page, trial):
@@ -84,10 +88,10 @@ def _reach(page, trial):
     while True:
         sid = _screen_id(page)
         if sid == f"trial-{trial}":
-            return page.get_attribute("#app", "data-screen")
+            return page.get_attribute(APP, "data-screen")
         if sid and (sid.startswith("break-") or sid == "resume"):
-            page.click("#app button.primary")
-            page.wait_for_function(f"() => document.getElementById('app').dataset.screenId !== '{sid}'")
+            page.click("#jspsych-html-button-response-btngroup button")
+            page.wait_for_selector(f'{APP}:not([data-screen-id="{sid}"])')
             continue
         assert time.monotonic() < deadline, f"trial {trial} never came (screen {sid})"
         time.sleep(0.02)
@@ -95,13 +99,14 @@ def _reach(page, trial):
 
 def _answer(page, trial, response, how):
     kind = _reach(page, trial)
-    page.wait_for_selector(f"#app button.{response}:enabled")
+    page.wait_for_selector(f"button.fs-{response}:enabled")
     keys = {"correct": "f", "incorrect": "j", "first": "f", "second": "j"}
     if how == "key":
         page.keyboard.press(keys[response])
     else:
-        page.click(f"#app button.{response}")
-    page.wait_for_function(f"() => document.getElementById('app').dataset.screenId !== 'trial-{trial}'")
+        page.click(f"button.fs-{response}")
+    # the next screen comes only once the server has stored the answer
+    page.wait_for_selector(f'{APP}:not([data-screen-id="trial-{trial}"])')
     return kind
 
 
@@ -136,30 +141,31 @@ def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
     how = ["click", "key", "key", "click", "click", "key", "key", "click"]    # 1: the early F is not it
     with ServerThread(create_app(session, iti_ms=50)) as srv:
         page.goto(srv.url)
-        page.wait_for_selector('#app[data-screen-id="instructions"]')
-        text = page.inner_text("#app")
+        page.wait_for_selector(f'{APP}[data-screen-id="instructions"]')
+        text = page.inner_text(APP)
         assert "two motions" in text and "which one was physically correct" in text
         _intro(page)
         for i, t in enumerate(trials, start=1):
             if i in (1, 4):
                 _reach(page, i)
                 if i == 1:           # before both motions were shown, nothing answers
-                    assert page.is_disabled("#app button.first") and page.is_disabled("#app button.second")
+                    assert page.query_selector("button.fs-first") is None
                     page.keyboard.press("f")
                 shown = [_seen_colour(page, 1), _seen_colour(page, 2)]
                 order = [t.original, t.stimulus] if t.first == "original" else [t.stimulus, t.original]
                 assert shown == [colour_of(study_dir, s) for s in order], (i, t.first)
                 if i == 1:
-                    assert page.text_content("#app .stage .interval") == "2"
+                    assert page.text_content(f"{APP} .fs-interval") == "2"
                     shot = screenshot(page, "session_2afc.png", tmp_path)
                     assert shot.stat().st_size <= 200_000
             if i == 3:                                               # replay both, then answer
                 _reach(page, i)
-                page.wait_for_selector("#app button.replay:enabled")
-                page.click("#app button.replay")                     # disables the answers at once
-                assert page.is_disabled("#app button.first") and page.is_disabled("#app button.replay")
+                page.wait_for_selector("button.fs-replay:enabled")
+                page.click("button.fs-replay")                       # the pair plays again, no answer
+                page.wait_for_selector(f'{APP}[data-interval="1"][data-playing="1"]')
+                assert page.query_selector("button.fs-first") is None
             assert _answer(page, i, resp[i - 1], how[i - 1]) == "trial-2afc"
-        page.wait_for_selector('#app[data-screen-id="end"]')
+        page.wait_for_selector(f'{APP}[data-screen-id="end"]')
     session.close()
 
     out = export_responses(study_dir, tmp_path / "export" / "responses.csv")
@@ -209,25 +215,25 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
     reload_at = adaptive[2]
     with ServerThread(create_app(session, iti_ms=30)) as srv:
         page.goto(srv.url)
-        page.wait_for_selector('#app[data-screen-id="instructions"]')
-        assert "Judging motions" in page.inner_text("#app")
+        page.wait_for_selector(f'{APP}[data-screen-id="instructions"]')
+        assert "Judging motions" in page.inner_text(APP)
         _intro(page)
         for i in range(1, n + 1):
             kind = _reach(page, i)
             assert kind == "trial"
-            page.wait_for_selector('#app[data-playing="0"] button.correct:enabled')
-            stim = page.get_attribute("#app", "data-stimulus")
+            page.wait_for_selector(f'{APP}[data-playing="0"] button.fs-correct:enabled')
+            stim = page.get_attribute(APP, "data-stimulus")
             if i == reload_at:                                  # reload before answering
                 page.reload()
-                page.wait_for_selector('#app[data-screen-id="resume"]')
-                assert f"continues with motion {i} of {n}" in page.inner_text("#app")
+                page.wait_for_selector(f'{APP}[data-screen-id="resume"]')
+                assert f"continues with motion {i} of {n}" in page.inner_text(APP)
                 _reach(page, i)
-                page.wait_for_selector('#app[data-playing="0"] button.correct:enabled')
-                assert page.get_attribute("#app", "data-stimulus") == stim     # the same level
+                page.wait_for_selector(f'{APP}[data-playing="0"] button.fs-correct:enabled')
+                assert page.get_attribute(APP, "data-stimulus") == stim     # the same level
             level = study.by_name[stim].level
             answer[i] = "incorrect" if level > 30 else "correct"
             _answer(page, i, answer[i], "key" if i % 2 else "click")
-        page.wait_for_selector('#app[data-screen-id="end"]')
+        page.wait_for_selector(f'{APP}[data-screen-id="end"]')
         # only the current trial is served, and none once the session is finished
         status = page.evaluate("async () => (await fetch('/api/trial/1')).status")
         assert status == 409

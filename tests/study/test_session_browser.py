@@ -1,5 +1,8 @@
 """Whole sessions in headless Chromium (Playwright for Python, sync API).
 
+The page is the jsPsych site ``export-web`` builds, served by the local runner in its
+``local`` host mode (the server is its data endpoint).
+
 A tiny study (1 clip, 2 groups × 2 levels, 2 repetitions = 8 trials, a break
 every 3 trials, 0.4 s videos) is run end to end: instructions, demographics,
 the example of a correct motion, every trial answered by key or by click, and
@@ -41,6 +44,20 @@ BREAK_EVERY = 3
 TIMEOUT = 15_000          # ms, for any one screen
 
 
+@pytest.fixture(scope="session")
+def jspsych_dir():
+    """The pinned jsPsych packages (npm, cached): the page's lib/ (the local runner's too);
+    skips when npm cannot fetch them."""
+    from flipstudy.study.web import jspsych as jsp
+    if shutil.which("npm") is None and not jsp.cache_root().is_dir():
+        pytest.skip("needs npm to fetch jsPsych (apt-get install npm)")
+    try:
+        folder, _ = jsp.fetch()
+    except jsp.JsPsychFetchError as e:
+        pytest.skip(f"npm could not fetch jsPsych: {e}")
+    return folder
+
+
 @pytest.fixture(scope="module")
 def pw():
     with sync_api.sync_playwright() as p:
@@ -48,7 +65,7 @@ def pw():
 
 
 @pytest.fixture
-def page(pw, tmp_path):
+def page(pw, tmp_path, jspsych_dir):
     ctx = pw.chromium.launch_persistent_context(
         str(tmp_path / "profile"), executable_path=CHROMIUM, headless=True, args=ARGS,
         viewport={"width": 900, "height": 760})
@@ -84,27 +101,30 @@ def tiny_replay(tiny):
 
 
 
+APP = "#jspsych-target"
+
+
 def screen(page, sid):
-    return page.wait_for_selector(f'#app[data-screen-id="{sid}"]')
+    return page.wait_for_selector(f'{APP}[data-screen-id="{sid}"]')
 
 
 def do_intro(page, *, age="23"):
     screen(page, "instructions")
-    assert "some of them are not" in page.inner_text("#app")
-    page.click("text=Continue")
+    assert "some of them are not" in page.inner_text(APP)
+    page.click("#jspsych-instructions-next")
     screen(page, "demographics")
     if age is None:
-        page.check("#f-age-none")
+        page.check("#fs-age-none")
     else:
-        page.fill("#f-age", age)
+        page.fill("#fs-age", age)
     page.check('input[name=gender][value="woman"]')
     page.check('input[name=animation_experience][value="none"]')
     page.check('input[name=gymnastics_experience][value="some"]')
-    page.click("button[type=submit]")
-    screen(page, "examples")
-    assert "correct motion" in page.inner_text("#app").lower()
-    page.wait_for_selector("#app button.primary:enabled")
-    page.click("#app button.primary")
+    page.click("#jspsych-survey-html-form-next")
+    screen(page, "example-1")
+    assert "correct motion" in page.inner_text(APP).lower()
+    page.wait_for_selector("button.fs-next:enabled")
+    page.click("button.fs-next")
 
 
 def answer_trial(page, trial, response, how, replay=False):
@@ -112,24 +132,24 @@ def answer_trial(page, trial, response, how, replay=False):
     wait for the motion, then answer by key or click."""
     deadline = time.monotonic() + TIMEOUT / 1000
     while True:
-        sid = page.get_attribute("#app", "data-screen-id")
+        sid = page.get_attribute(APP, "data-screen-id")
         if sid == f"trial-{trial}":
             break
         if sid and sid.startswith("break-") or sid == "resume":
-            page.click("#app button.primary")
-            page.wait_for_function(f"() => document.getElementById('app').dataset.screenId !== '{sid}'")
+            page.click("#jspsych-html-button-response-btngroup button")
+            page.wait_for_selector(f'{APP}:not([data-screen-id="{sid}"])')
             continue
         assert time.monotonic() < deadline, f"trial {trial} never came (screen {sid})"
         time.sleep(0.02)
-    page.wait_for_selector("#app button.correct:enabled")
+    page.wait_for_selector("button.fs-correct:enabled")
     if replay:
-        page.click("#app button.replay")
-        assert page.is_disabled("#app button.correct")          # while the motion plays again
-        page.wait_for_selector("#app button.correct:enabled")
+        page.click("button.fs-replay")
+        assert page.is_disabled("button.fs-correct")          # while the motion plays again
+        page.wait_for_selector("button.fs-correct:enabled")
     if how == "key":
         page.keyboard.press("f" if response == "correct" else "j")
     else:
-        page.click(f"#app button.{response}")
+        page.click(f"button.fs-{response}")
 
 
 def plan(n):
@@ -179,14 +199,14 @@ def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
         for i in range(1, session.n_trials + 1):
             if i == 2:
                 # buttons are disabled and keys ignored until the motion has been shown
-                page.wait_for_selector('#app[data-screen-id="trial-2"][data-playing="1"]')
-                assert page.is_disabled("#app button.correct") and page.is_disabled("#app button.incorrect")
+                page.wait_for_selector(f'{APP}[data-screen-id="trial-2"][data-playing="1"]')
+                assert page.is_disabled("button.fs-correct") and page.is_disabled("button.fs-incorrect")
                 page.keyboard.press("f")
                 shot = screenshot(page, "session_trial.png", tmp_path)
                 assert shot.stat().st_size <= 150_000
             answer_trial(page, i, resp[i - 1], how[i - 1], replay=i == 5)
         screen(page, "end")
-        assert "saved" in page.inner_text("#app")
+        assert "saved" in page.inner_text(APP)
     session.close()
     rows, parts = check_export(tiny, tmp_path, "P01", session.trials, resp, how, replayed={5})
     assert [(p["participant"], p["age"], p["gender"], p["animation_experience"],
@@ -233,8 +253,8 @@ def test_server_killed_mid_session_resumes_and_loses_nothing(page, tiny, tmp_pat
 
         srv.kill9()                                   # 1: killed while the page is open
         answer_trial(page, 4, resp[3], how[3])        # the video was preloaded; the post waits
-        page.wait_for_selector("#banner:not([hidden])")
-        assert "retrying" in page.inner_text("#banner")
+        page.wait_for_selector("#fs-banner:not([hidden])")
+        assert "retrying" in page.inner_text("#fs-banner")
         assert len(answers_in_db(tiny)) == 3
         srv.start()
         screen(page, "trial-5")                       # the retried post went through
@@ -246,7 +266,7 @@ def test_server_killed_mid_session_resumes_and_loses_nothing(page, tiny, tmp_pat
         srv.start()
         page.goto(url)
         screen(page, "resume")
-        assert "continues with motion 6 of 8" in page.inner_text("#app")
+        assert "continues with motion 6 of 8" in page.inner_text(APP)
         for i in (6, 7, 8):
             answer_trial(page, i, resp[i - 1], how[i - 1])
         screen(page, "end")

@@ -18,7 +18,8 @@ from flipstudy.study import store
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.server import allowed_host_names
-from flipstudy.study.session import SessionError, load_study, open_session
+from flipstudy.errors import SessionError
+from flipstudy.study.session import load_study, open_session
 
 
 @pytest.fixture
@@ -49,7 +50,8 @@ def test_second_server_for_a_participant_is_refused_and_a_dead_ones_lock_taken_o
         # the first one still serves, and is the only session of P01
         assert get(port, "/api/session", f"127.0.0.1:{port}")[0] == 200
         # another participant is not blocked; the same one is, in this process too
-        from flipstudy.study.lock import ParticipantBusy, ParticipantLock
+        from flipstudy.errors import ParticipantBusy
+        from flipstudy.study.lock import ParticipantLock
         with ParticipantLock(demo, "P02"):
             assert json.loads((demo / ".locks" / "run-P02.lock").read_text())["pid"] == os.getpid()
         with pytest.raises(ParticipantBusy, match=f"pid {first.proc.pid}"):

@@ -68,10 +68,32 @@ def assert_json_4xx(status, headers, data, expect=None):
 def test_serves_the_page_assets_and_manifest_videos(served):
     d, session, srv = served
     st, h, data = request(srv, "GET", "/")
-    assert st == 200 and b"session.js" in data and "script-src 'self'" in h["content-security-policy"]
+    csp = h["content-security-policy"]
+    assert st == 200 and b'src="flipstudy-web.js"' in data and "script-src 'self'" in csp
+    assert "connect-src 'self';" in csp and "frame-ancestors 'none'" in csp and "https:" not in csp
     assert h["x-content-type-options"] == "nosniff"
-    for asset in ("session.js", "session.css"):
-        assert request(srv, "GET", f"/static/{asset}")[0] == 200
+    # the site export-web builds, in its local host mode: jsPsych from lib/, flipstudy's own files
+    for asset, ctype in (("flipstudy-web.js", "text/javascript"), ("flipstudy-2afc.js", "text/javascript"),
+                         ("flipstudy-web.css", "text/css"), ("config.js", "text/javascript")):
+        st, h, data = request(srv, "GET", f"/{asset}")
+        assert st == 200 and h["content-type"].startswith(ctype), asset
+    assert b'"host": "local"' in request(srv, "GET", "/config.js")[2]
+
+
+def test_serves_jspsych_from_lib(served):
+    """jsPsych's bundles, read from npm's packages when first asked for (never a CDN)."""
+    from flipstudy.study.web import jspsych as jsp
+    try:
+        folder, _ = jsp.fetch()
+    except jsp.JsPsychFetchError as e:
+        pytest.skip(f"npm could not fetch jsPsych: {e}")
+    d, session, srv = served
+    for asset, ctype in (("lib/jspsych.js", "text/javascript"), ("lib/jspsych.css", "text/css")):
+        st, h, data = request(srv, "GET", f"/{asset}")
+        assert st == 200 and h["content-type"].startswith(ctype), asset
+    pkg, (src, _) = "jspsych", jsp.BUNDLES["jspsych"]
+    assert data == (folder / "node_modules" / pkg / "css" / "jspsych.css").read_bytes()
+    assert request(srv, "GET", "/lib/jspsych.js")[2] == (folder / "node_modules" / pkg / src).read_bytes()
     st, h, data = request(srv, "GET", "/stimuli/backflip_reference.mp4")
     assert st == 200 and h["content-type"] == "video/mp4"
     assert data == (d / "render" / "backflip_reference.mp4").read_bytes()
@@ -105,6 +127,16 @@ TRAVERSAL = [
     "/static/%2e%2e/session.py",
     "/static/index.html/../../store.py",
     "/static/session.js/",
+    "/static/flipstudy-web.js",
+    "/index.html",
+    "/config.js/",
+    "/lib/",
+    "/lib",
+    "/lib/../config.js",
+    "/lib/%2e%2e/config.js",
+    "/lib/../../server.py",
+    "/flipstudy-web.js/../../session.py",
+    "/node_modules/jspsych/package.json",
     "/render/backflip_reference.mp4",
     "/manifest.csv",
     "/sessions.sqlite",

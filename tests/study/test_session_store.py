@@ -10,10 +10,10 @@ from flipstudy.study import store
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.export import PARTICIPANT_COLUMNS, RESPONSE_COLUMNS, export_responses, status
 from flipstudy.study.order import trial_order
-from flipstudy.study.session import SessionError, load_study, open_session, submit_answer, submit_demographics
+from flipstudy.errors import ModelError, RequestError, SessionError
+from flipstudy.study.session import load_study, open_session, submit_answer, submit_demographics
 from flipstudy.study.cli import main as cli
-from flipstudy.study.simulate import DEFAULT_MODEL, ModelError, parse_model, simulate
-from flipstudy.study.validate import RequestError
+from flipstudy.study.simulate import DEFAULT_MODEL, parse_model, simulate
 
 DESIGN_COLS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
                "response", "rt_ms", "shown_ms", "timestamp"]
@@ -234,7 +234,7 @@ def test_simulate_and_export_leave_real_rows_alone_and_mark_or_omit_simulated(st
         ("P01", "false", "true"), ("P02", "false", "false")]
     # asked for: every simulated row says so, and the real rows are unchanged
     r = export_responses(study_dir, tmp_path / "all.csv", include_simulated=True)
-    assert r["simulated"] == ["sim001", "sim002", "sim003"] and r["real"] == ["P01", "P02"]
+    assert r.simulated == ("sim001", "sim002", "sim003") and r.real == ("P01", "P02")
     both = read_csv(tmp_path / "all.csv")
     assert [x for x in both if x["simulated"] == "false"] == real_only
     sim = [x for x in both if x["simulated"] == "true"]
@@ -291,7 +291,7 @@ def test_analyze_leaves_out_simulated_and_incomplete_and_says_who(study_dir, tmp
     only = make_demo_study(tmp_path / "sim", videos=False, levels=(0, 25, 50))
     simulate(only, 2, seed=1)
     csv_sim = export_responses(only, tmp_path / "s.csv", include_simulated=True)["responses"]
-    from flipstudy.analysis.io import ResponsesError
+    from flipstudy.errors import ResponsesError
     with pytest.raises(ResponsesError, match="--include-simulated"):
         analyze(csv_sim, None, psychometric="none", gee=False, n_boot=50)
 

@@ -15,10 +15,11 @@ from pathlib import Path
 import pytest
 
 from flipstudy.stimuli.design import parse_design
+from flipstudy.errors import StudyFolderError, StudyHasAnswers, StudyLocked
 from flipstudy.stimuli.contract import StimulusSet
-from flipstudy.stimuli.stimset import (StudyFolderError, StudyLocked, build_stimuli,
+from flipstudy.stimuli.stimset import (build_stimuli,
                              study_lock)
-from flipstudy.study.archive import StudyHasAnswers, answers_in, refuse_real_answers
+from flipstudy.study.archive import answers_in, refuse_real_answers
 from flipstudy.study.cli import main as flipstudy
 from flipstudy.study.session import load_study, open_session, submit_answer
 

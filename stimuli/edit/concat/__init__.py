@@ -64,7 +64,8 @@ from .mirror import mirror, mirror_pairs, rest_asymmetry
 from .motion import Motion, foot_contacts, motion_of, suggest_rule, torso_facing, transformed
 from .motion_graph import motion_graph_join, point_cloud_distance
 from .periods import blendable_periods, support_frames
-from .phases import UP, ConcatError, Phases, align_angle, phases, yaw
+from flipstudy.errors import ConcatError
+from .phases import UP, Phases, align_angle, phases, yaw
 from .result import ConcatReport, Concatenation, FeetReport, MotionGraphReport
 from .search import Timing, optimal_timing, optimal_timing_bruteforce
 

@@ -17,7 +17,7 @@ from ...body import Body
 from ...motion.clip import Clip, derived_meta
 from ...physics import momentum
 from ..timing import ratio_retime_frames, sample, slerp, smoothstep
-from .phases import ConcatError
+from flipstudy.errors import ConcatError
 
 
 def blend(c1: Clip, c2: Clip, T: int, f0: int, f1: int, ease: bool = True) -> Clip:

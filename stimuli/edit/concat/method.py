@@ -15,7 +15,8 @@ from .blend import blend, smooth, smoothing_factor
 from .feet import pin_feet
 from .motion import motion_of, suggest_rule, transformed
 from .periods import blendable_periods, support_frames
-from .phases import ConcatError, align_angle
+from flipstudy.errors import ConcatError
+from .phases import align_angle
 from .result import ConcatReport, Concatenation
 from .search import optimal_timing
 

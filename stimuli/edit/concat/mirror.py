@@ -8,7 +8,8 @@ from scipy.spatial.transform import Rotation
 from ...body import Body, _split_name
 from ...motion.clip import Clip, derived_meta
 from .motion import torso_facing
-from .phases import UP, ConcatError
+from flipstudy.errors import ConcatError
+from .phases import UP
 
 
 def mirror_pairs(sk) -> np.ndarray:

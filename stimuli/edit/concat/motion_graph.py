@@ -13,7 +13,8 @@ from ...motion.clip import Clip, derived_meta
 from ..reposition import rotate
 from ..timing import sample, slerp
 from .motion import Motion, motion_of
-from .phases import ConcatError, yaw
+from flipstudy.errors import ConcatError
+from .phases import yaw
 from .result import Concatenation, MotionGraphReport
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from .motion import Motion
-from .phases import ConcatError
+from flipstudy.errors import ConcatError
 
 
 def _half(mo: Motion, r, which: str) -> np.ndarray:

@@ -18,13 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from ...exceptions import FlipstudyError
+from flipstudy.errors import ConcatError
 
 UP = np.array([0.0, 1.0, 0.0])
-
-
-class ConcatError(FlipstudyError, ValueError):
-    """Two motions that cannot be concatenated; the message says why."""
 
 
 @dataclass

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .phases import ConcatError
+from flipstudy.errors import ConcatError
 
 
 @dataclass

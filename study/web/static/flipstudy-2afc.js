@@ -12,14 +12,16 @@
 // counted and flagged against max_dropped_pct as for one motion.
 'use strict';
 (function (root) {
-  // env: {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, emit, refresh, n, app}
+  // env: {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, arrange, loadNode, record, refresh, n, app};
+  // record(rec) may return a Promise (the local runner: the trial ends once the server stored it).
+  // `t` may be filled only when the trial starts (a QUEST+ trial of the local runner), so
+  // its stimuli are read late.
   function nodes(t, repeat, env) {
-    const {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, emit} = env;
+    const {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, arrange, record} = env;
     const keys = C.keys_2afc;
     const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
     const progress = repeat ? `Once more: trial ${t.trial} of ${env.n}` : `Trial ${t.trial} of ${env.n}`;
-    const stimuli = t.first === 'original' ? [t.original, t.stimulus] : [t.stimulus, t.original];
-    const infos = stimuli.map((s) => C.videos[s]);
+    const infos = () => (t.first === 'original' ? [t.original, t.stimulus] : [t.stimulus, t.original]).map((s) => C.videos[s]);
     const head = `<p class="fs-progress"><span>${esc(progress)}</span><span>${esc(keys.first.toUpperCase())} = first · ${esc(keys.second.toUpperCase())} = second</span></p>`;
     const question = `<p class="fs-prompt">${esc(C.texts.prompt_2afc)}</p>`;
     const fix = `<div class="fs-stage"><div class="fs-fixation">+</div></div>`;
@@ -28,13 +30,14 @@
     let watches = [];
 
     const motion = (i) => ({
-      type: jsPsychVideoButtonResponse, stimulus: [infos[i].video], choices: [],
+      type: jsPsychVideoButtonResponse, stimulus: () => [infos()[i].video], choices: [],
       prompt: head + question, trial_ends_after_video: true, response_allowed_while_playing: false,
       autoplay: true, controls: false, width: C.video_width,
       on_load: () => {
         setScreen(sid, 'trial-2afc');
         const el = env.app();
         el.dataset.trial = String(t.trial);
+        el.dataset.stimulus = t.stimulus;
         el.dataset.playing = '1';
         el.dataset.interval = String(i + 1);
         const v = document.getElementById('jspsych-video-button-response-stimulus');
@@ -44,16 +47,17 @@
         const wrap = v.parentElement;
         wrap.classList.add('fs-pair');
         wrap.insertAdjacentHTML('beforeend', `<div class="fs-interval">${i + 1}</div>`);
-        watches[i] = watchPlayback(v, infos[i]);
+        watches[i] = watchPlayback(v, infos()[i]);
+        arrange(v, document.getElementById('jspsych-video-button-response-btngroup'));
       },
       on_finish: () => { watches[i] = watches[i].result(); },
     });
 
-    const gap = {type: jsPsychHtmlKeyboardResponse, stimulus: label(2) + head + question, choices: 'NO_KEYS',
+    const gap = {type: jsPsychHtmlKeyboardResponse, stimulus: head + label(2) + question, choices: 'NO_KEYS',
                  trial_duration: C.gap_ms, on_load: () => { env.app().dataset.interval = '2'; }};
 
     const choose = {
-      type: jsPsychHtmlButtonResponse, stimulus: fix.replace('+', '') + head + question,
+      type: jsPsychHtmlButtonResponse, stimulus: head + fix.replace('+', '') + question,
       choices: ['First', 'Second'].concat(C.replay ? ['Replay both'] : []),
       button_html: (c) => {
         const cls = c === 'First' ? 'first' : c === 'Second' ? 'second' : 'replay';
@@ -75,8 +79,8 @@
         if (data.response === 2) { replays += 1; input = 'click'; watches = []; return; }
         const tAnswer = performance.now();
         const vb = jsPsych.pluginAPI.video_buffers;
-        for (const info of infos) if (vb && vb[info.video]) { URL.revokeObjectURL(vb[info.video]); delete vb[info.video]; }
-        emit(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
+        for (const info of infos()) if (vb && vb[info.video]) { URL.revokeObjectURL(vb[info.video]); delete vb[info.video]; }
+        return record(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
           repetition: t.repetition, clip: t.clip, kind: t.kind, task: '2afc', first: t.first, original: t.original,
           response: data.response === 0 ? 'first' : 'second',
           rt_ms: Math.round((tAnswer - (tEnabled === null ? tAnswer : tEnabled)) * 10) / 10, input, replays, repeat,
@@ -85,8 +89,7 @@
     };
 
     return [
-      {type: jsPsychPreload, video: infos.map((x) => x.video), auto_preload: false, show_progress_bar: false,
-       message: fix, continue_after_error: false, on_start: () => setScreen(`load-${sid}`, 'loading')},
+      env.loadNode(() => infos().map((x) => x.video), fix, `load-${sid}`),
       {type: jsPsychHtmlKeyboardResponse, stimulus: fix, choices: 'NO_KEYS', trial_duration: C.iti_ms,
        on_load: () => setScreen(`iti-${sid}`, 'iti')},
       {timeline: [motion(0), gap, motion(1), choose],

@@ -295,8 +295,178 @@
     return (choice) => `<button class="jspsych-btn fs-${cls(choice)}">${esc(choice)}${key(choice) ? ` <kbd>${esc(key(choice).toUpperCase())}</kbd>` : ''}</button>`;
   }
 
-  async function main() {
-    const jsPsych = initJsPsych({display_element: 'jspsych-target'});
+  // ---- nodes shared by every host ------------------------------------------------------------
+  // env: {jsPsych, n, refresh, record(rec) (may return a Promise: the trial ends once it
+  // resolves), fetchVideos(urls) (optional, the local runner: load them into jsPsych's video
+  // buffers, retrying while the server is unreachable; without it jsPsych's preload plugin)}
+
+  // A screen that stays until work() resolves (its failure stops the page with the message).
+  function waitNode(env, message, screenId, work) {
+    return {type: jsPsychHtmlKeyboardResponse, stimulus: message, choices: 'NO_KEYS',
+      on_load: () => {
+        if (screenId) setScreen(screenId, 'loading');
+        work().then(() => env.jsPsych.finishTrial(), fatal);
+      }};
+  }
+
+  // load `videos` (a list, or a function giving it when the screen starts) completely
+  function loadNode(env, videos, message, screenId) {
+    const list = () => (typeof videos === 'function' ? videos() : videos);
+    if (env.fetchVideos) return waitNode(env, message, screenId, () => env.fetchVideos(list()));
+    return {type: jsPsychPreload, video: list, auto_preload: false, show_progress_bar: false, message,
+            continue_after_error: false, on_start: () => { if (screenId) setScreen(screenId, 'loading'); }};
+  }
+
+  function instructionsNode(id, title, paragraphs, button) {
+    if (id === 'instructions') {
+      return {type: jsPsychInstructions, pages: [card(title, paragraphs)], show_clickable_nav: true, allow_keys: false, allow_backward: false,
+              button_label_next: button || 'Continue', on_load: () => setScreen('instructions', 'instructions')};
+    }
+    return {type: jsPsychHtmlButtonResponse, choices: [button || 'Continue'], stimulus: card(title, paragraphs),
+            on_load: () => setScreen(id, 'instructions')};
+  }
+
+  function demographicsNode(title, text, env) {
+    return {type: jsPsychSurveyHtmlForm,
+      preamble: `<div class="fs-card"><h1>${esc(title)}</h1><p class="fs-muted">${esc(text)}</p></div>`,
+      html: demographicsHtml(C.demographic_fields), button_label: 'Continue',
+      on_load: () => {
+        setScreen('demographics', 'demographics');
+        for (const f of C.demographic_fields.filter((x) => x.kind === 'number')) {
+          const input = document.getElementById(`fs-${f.name}`);
+          const none = document.getElementById(`fs-${f.name}-none`);
+          none.addEventListener('change', () => { input.disabled = none.checked; input.required = !none.checked; if (none.checked) input.value = ''; });
+        }
+      },
+      on_finish: (data) => {
+        const r = data.response || {};
+        const rec = {record: 'demographics'};
+        for (const f of C.demographic_fields) {
+          if (f.kind === 'number') rec[f.name] = r[`${f.name}_none`] ? null : Number(r[f.name]);
+          else rec[f.name] = r[f.name];
+        }
+        return env.record(rec);
+      }};
+  }
+
+  // the examples of correct motions: `videos` (URLs), each loaded, played, watched again on request
+  function exampleNodes(videos, env) {
+    const tl = [];
+    videos.forEach((video, i) => {
+      const last = i === videos.length - 1;
+      tl.push(loadNode(env, [video], '<p class="fs-muted">Loading…</p>', null));
+      tl.push({timeline: [{type: jsPsychVideoButtonResponse, stimulus: [video],
+        choices: ['Watch again', last ? C.texts.examples_button : 'Next example'],
+        button_html: buttonHtml((c) => (c === 'Watch again' ? 'again' : 'next'), () => null),
+        prompt: `<p class="fs-progress">${esc(C.texts.examples_title)} · Correct motion ${i + 1} of ${videos.length}</p>
+                 <p class="fs-prompt">This is a physically correct motion.</p><p class="fs-muted">${esc(C.texts.examples_text)}</p>`,
+        response_allowed_while_playing: false, trial_ends_after_video: false, autoplay: true, controls: false,
+        width: C.video_width, on_load: () => {
+          setScreen(`example-${i + 1}`, 'examples');
+          const v = document.getElementById('jspsych-video-button-response-stimulus');
+          v.muted = true;
+          arrange(v, document.getElementById('jspsych-video-button-response-btngroup'));
+        }}],
+        loop_function: (data) => data.values()[0].response === 0});
+    });
+    return tl;
+  }
+
+  function breakNode(id, title, text) {
+    return {type: jsPsychHtmlButtonResponse, choices: ['Continue'], stimulus: card(title, [text]),
+            on_load: () => setScreen(id, 'break')};
+  }
+
+  // The prompt of a video-button-response trial comes after its buttons: the progress line
+  // goes above the video, the question between the video and the buttons.
+  function arrange(video, group) {
+    const root = group.parentNode;
+    const progress = root.querySelector(':scope > .fs-progress');
+    if (progress) root.insertBefore(progress, video.parentNode);
+    root.querySelectorAll(':scope > .fs-prompt, :scope > .fs-muted').forEach((p) => root.insertBefore(p, group));
+  }
+
+  // A yes/no or 2AFC trial.  `t` may be filled only when the trial starts (a QUEST+ trial
+  // of the local runner, served by the server): everything read from it is read late.
+  function trialNodes(t, repeat, env) {
+    const jsPsych = env.jsPsych;
+    if (t.task === '2afc') {
+      return window.Flipstudy2afc.nodes(t, repeat, {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, arrange,
+                                                    loadNode: (videos, message, id) => loadNode(env, videos, message, id),
+                                                    record: env.record, refresh: env.refresh, n: env.n, app});
+    }
+    const keys = C.keys;
+    const info = () => C.videos[t.stimulus];
+    const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
+    const progress = repeat ? `Once more: motion ${t.trial} of ${env.n}` : `Motion ${t.trial} of ${env.n}`;
+    let watch = null, input = 'click', tEnabled = null, onKey = null, replays = 0;
+    const fix = `<div class="fs-stage"><div class="fs-fixation">+</div></div>`;
+    return [
+      loadNode(env, () => [info().video], fix, `load-${sid}`),
+      {type: jsPsychHtmlKeyboardResponse, stimulus: fix, choices: 'NO_KEYS', trial_duration: C.iti_ms,
+       on_load: () => setScreen(`iti-${sid}`, 'iti')},
+      {type: jsPsychVideoButtonResponse, stimulus: () => [info().video], choices: ['Correct', 'Incorrect'],
+       button_html: buttonHtml((c) => c.toLowerCase(), (c) => keys[c.toLowerCase()]),
+       prompt: `<p class="fs-progress"><span>${esc(progress)}</span><span>${esc(keys.correct.toUpperCase())} = correct · ${esc(keys.incorrect.toUpperCase())} = incorrect</span></p>
+                <p class="fs-prompt">${esc(C.texts.prompt)}</p>`,
+       response_allowed_while_playing: false, trial_ends_after_video: false, autoplay: true, controls: false,
+       width: C.video_width,
+       on_load: () => {
+         setScreen(sid, 'trial');
+         const el = app();
+         el.dataset.trial = String(t.trial);
+         el.dataset.stimulus = t.stimulus;
+         el.dataset.playing = '1';
+         const v = document.getElementById('jspsych-video-button-response-stimulus');
+         v.muted = true;
+         v.setAttribute('playsinline', '');
+         v.disablePictureInPicture = true;
+         watch = watchPlayback(v, info());
+         const group = document.getElementById('jspsych-video-button-response-btngroup');
+         arrange(v, group);
+         const buttons = group.querySelectorAll('button');
+         let bR = null;
+         if (C.replay) {
+           bR = document.createElement('button');
+           bR.className = 'jspsych-btn fs-replay';
+           bR.textContent = 'Replay';
+           bR.disabled = true;
+           group.appendChild(bR);
+           bR.addEventListener('click', () => {
+             replays += 1;
+             buttons.forEach((b) => b.setAttribute('disabled', 'disabled'));
+             bR.disabled = true;
+             el.dataset.playing = '1';
+             v.style.visibility = 'visible';
+             v.currentTime = 0;
+             v.play();
+           });
+         }
+         v.addEventListener('ended', () => {
+           el.dataset.playing = '0';
+           v.style.visibility = 'hidden';                 // a blank stage while answering
+           if (tEnabled === null) tEnabled = performance.now();
+           if (bR) { bR.disabled = false; buttons.forEach((b) => b.removeAttribute('disabled')); }
+         });
+         onKey = answerKeys(buttons, keys.correct, keys.incorrect, () => { input = 'key'; });
+         document.addEventListener('keydown', onKey);
+       },
+       on_finish: (data) => {
+         document.removeEventListener('keydown', onKey);
+         const tAnswer = performance.now();
+         const pb = watch.result();
+         const vb = jsPsych.pluginAPI.video_buffers;
+         if (vb && vb[info().video]) { URL.revokeObjectURL(vb[info().video]); delete vb[info().video]; }
+         return env.record(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
+           repetition: t.repetition, clip: t.clip, kind: t.kind, response: data.response === 0 ? 'correct' : 'incorrect',
+           rt_ms: round1(tAnswer - (tEnabled === null ? tAnswer : tEnabled)), input, replays, repeat,
+           refresh_hz: env.refresh, max_dropped_pct: C.max_dropped_pct}, pb));
+       }},
+    ];
+  }
+
+  // ---- the exported site (static, jatos, pavlovia): the order and the records are the browser's
+  async function runWeb(jsPsych) {
     const host = hosts[C.host];
     if (!host) throw new Error(`unknown host ${C.host}`);
     if (C.host === 'jatos') await host.init();
@@ -330,6 +500,7 @@
       sender.kick();                                   // whatever the last page did not send
     }
     window.flipstudyState = {participant: pid, trials, checkpoint: cp};   // for tests and debugging
+    const env = {jsPsych, n, refresh, record: emit};
 
     const answered = cp.firsts().length;
     // trials flagged on their first showing and not repeated yet, in the trials' order
@@ -340,66 +511,23 @@
       return trials.filter((t) => flagged.has(t.trial) && !done.has(t.trial));
     };
     const tl = [];
-    const keys = C.keys;
     if (answered === 0) {
-      tl.push({type: jsPsychInstructions, pages: [card(C.texts.instructions_title, C.texts.instructions)],
-               show_clickable_nav: true, allow_keys: false, button_label_next: 'Continue',
-               on_load: () => setScreen('instructions', 'instructions')});
-      if (!cp.has('demographics')) {
-        tl.push({type: jsPsychSurveyHtmlForm,
-          preamble: `<div class="fs-card"><h1>${esc(C.texts.demographics_title)}</h1><p class="fs-muted">${esc(C.texts.demographics_text)}</p></div>`,
-          html: demographicsHtml(C.demographic_fields), button_label: 'Continue',
-          on_load: () => {
-            setScreen('demographics', 'demographics');
-            for (const f of C.demographic_fields.filter((x) => x.kind === 'number')) {
-              const input = document.getElementById(`fs-${f.name}`);
-              const none = document.getElementById(`fs-${f.name}-none`);
-              none.addEventListener('change', () => { input.disabled = none.checked; input.required = !none.checked; if (none.checked) input.value = ''; });
-            }
-          },
-          on_finish: (data) => {
-            const r = data.response || {};
-            const rec = {record: 'demographics'};
-            for (const f of C.demographic_fields) {
-              if (f.kind === 'number') rec[f.name] = r[`${f.name}_none`] ? null : Number(r[f.name]);
-              else rec[f.name] = r[f.name];
-            }
-            emit(rec);
-          }});
-      }
-      C.references.forEach((ex, i) => {
-        const last = i === C.references.length - 1;
-        tl.push({type: jsPsychPreload, video: [ex.video], auto_preload: false, show_progress_bar: false,
-                 message: '<p class="fs-muted">Loading…</p>', continue_after_error: false});
-        tl.push({timeline: [{type: jsPsychVideoButtonResponse, stimulus: [ex.video],
-          choices: ['Watch again', last ? C.texts.examples_button : 'Next example'],
-          button_html: buttonHtml((c) => (c === 'Watch again' ? 'again' : 'next'), () => null),
-          prompt: `<p class="fs-progress">${esc(C.texts.examples_title)} · Correct motion ${i + 1} of ${C.references.length}</p>
-                   <p class="fs-prompt">This is a physically correct motion.</p><p class="fs-muted">${esc(C.texts.examples_text)}</p>`,
-          response_allowed_while_playing: false, trial_ends_after_video: false, autoplay: true, controls: false,
-          width: C.video_width, on_load: () => {
-            setScreen(`example-${i + 1}`, 'examples');
-            const v = document.getElementById('jspsych-video-button-response-stimulus');
-            v.muted = true;
-          }}],
-          loop_function: (data) => data.values()[0].response === 0});
-      });
+      tl.push(instructionsNode('instructions', C.texts.instructions_title, C.texts.instructions));
+      if (!cp.has('demographics')) tl.push(demographicsNode(C.texts.demographics_title, C.texts.demographics_text, env));
+      tl.push(...exampleNodes(C.references.map((ex) => ex.video), env));
     } else {
       const next = answered < n ? `The study continues with ${C.texts.noun || 'motion'} ${answered + 1} of ${n}.`
         : 'The study continues with the motions shown once more.';
-      tl.push({type: jsPsychHtmlButtonResponse, choices: ['Continue'],
-               stimulus: card('Welcome back', [`Your first ${answered} answers are saved. ${next}`,
-                                                C.texts.remember || 'Remember: some motions are physically correct and some are not.', C.texts.keys_sentence]),
-               on_load: () => setScreen('resume', 'instructions')});
+      tl.push(instructionsNode('resume', 'Welcome back', [`Your first ${answered} answers are saved. ${next}`,
+        C.texts.remember || 'Remember: some motions are physically correct and some are not.', C.texts.keys_sentence]));
     }
     const every = Math.max(1, C.break_every);
     for (const t of trials.slice(answered)) {
       if (t.trial > 1 && (t.trial - 1) % every === 0 && t.trial - 1 > answered) {
-        tl.push({type: jsPsychHtmlButtonResponse, choices: ['Continue'],
-                 stimulus: card('Break', [`Take a short rest. ${t.trial - 1} of ${n} ${C.texts.noun || 'motion'}s done. Continue when you are ready.`]),
-                 on_load: () => setScreen(`break-${t.trial - 1}`, 'break')});
+        tl.push(breakNode(`break-${t.trial - 1}`, 'Break',
+          `Take a short rest. ${t.trial - 1} of ${n} ${C.texts.noun || 'motion'}s done. Continue when you are ready.`));
       }
-      tl.push(...trialNodes(t, 0));
+      tl.push(...trialNodes(t, 0, env));
     }
     if (C.repeat_dropped) {
       let total = 0;
@@ -408,107 +536,180 @@
                  on_load: () => setScreen('repeats', 'break')}],
                conditional_function: () => { total = dueRepeats().length; return total > 0 && cp.repeats().length === 0; }});
       for (const t of trials) {
-        tl.push({timeline: trialNodes(t, 1), conditional_function: () => dueRepeats().some((d) => d.trial === t.trial)});
+        tl.push({timeline: trialNodes(t, 1, env), conditional_function: () => dueRepeats().some((d) => d.trial === t.trial)});
       }
     }
-    tl.push(endNode());
-
-    function trialNodes(t, repeat) {
-      if (t.task === '2afc') {
-        return window.Flipstudy2afc.nodes(t, repeat, {C, jsPsych, esc, setScreen, watchPlayback, answerKeys, emit, refresh, n, app});
-      }
-      const info = C.videos[t.stimulus];
-      const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
-      const progress = repeat ? `Once more: motion ${t.trial} of ${n}` : `Motion ${t.trial} of ${n}`;
-      let watch = null, input = 'click', tEnabled = null, onKey = null, replays = 0;
-      const fix = `<div class="fs-stage"><div class="fs-fixation">+</div></div>`;
-      return [
-        {type: jsPsychPreload, video: [info.video], auto_preload: false, show_progress_bar: false,
-         message: fix, continue_after_error: false, on_start: () => setScreen(`load-${sid}`, 'loading')},
-        {type: jsPsychHtmlKeyboardResponse, stimulus: fix, choices: 'NO_KEYS', trial_duration: C.iti_ms,
-         on_load: () => setScreen(`iti-${sid}`, 'iti')},
-        {type: jsPsychVideoButtonResponse, stimulus: [info.video], choices: ['Correct', 'Incorrect'],
-         button_html: buttonHtml((c) => c.toLowerCase(), (c) => keys[c.toLowerCase()]),
-         prompt: `<p class="fs-progress"><span>${esc(progress)}</span><span>${esc(keys.correct.toUpperCase())} = correct · ${esc(keys.incorrect.toUpperCase())} = incorrect</span></p>
-                  <p class="fs-prompt">${esc(C.texts.prompt)}</p>`,
-         response_allowed_while_playing: false, trial_ends_after_video: false, autoplay: true, controls: false,
-         width: C.video_width,
-         on_load: () => {
-           setScreen(sid, 'trial');
-           const el = app();
-           el.dataset.trial = String(t.trial);
-           el.dataset.playing = '1';
-           const v = document.getElementById('jspsych-video-button-response-stimulus');
-           v.muted = true;
-           v.setAttribute('playsinline', '');
-           v.disablePictureInPicture = true;
-           watch = watchPlayback(v, info);
-           const group = document.getElementById('jspsych-video-button-response-btngroup');
-           const buttons = group.querySelectorAll('button');
-           let bR = null;
-           if (C.replay) {
-             bR = document.createElement('button');
-             bR.className = 'jspsych-btn fs-replay';
-             bR.textContent = 'Replay';
-             bR.disabled = true;
-             group.appendChild(bR);
-             bR.addEventListener('click', () => {
-               replays += 1;
-               buttons.forEach((b) => b.setAttribute('disabled', 'disabled'));
-               bR.disabled = true;
-               v.style.visibility = 'visible';
-               v.currentTime = 0;
-               v.play();
-             });
-           }
-           v.addEventListener('ended', () => {
-             el.dataset.playing = '0';
-             v.style.visibility = 'hidden';                 // a blank stage while answering
-             if (tEnabled === null) tEnabled = performance.now();
-             if (bR) { bR.disabled = false; buttons.forEach((b) => b.removeAttribute('disabled')); }
-           });
-           onKey = answerKeys(buttons, keys.correct, keys.incorrect, () => { input = 'key'; });
-           document.addEventListener('keydown', onKey);
-         },
-         on_finish: (data) => {
-           document.removeEventListener('keydown', onKey);
-           const tAnswer = performance.now();
-           const pb = watch.result();
-           const vb = jsPsych.pluginAPI.video_buffers;
-           if (vb && vb[info.video]) { URL.revokeObjectURL(vb[info.video]); delete vb[info.video]; }
-           emit(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
-             repetition: t.repetition, clip: t.clip, kind: t.kind, response: data.response === 0 ? 'correct' : 'incorrect',
-             rt_ms: round1(tAnswer - (tEnabled === null ? tAnswer : tEnabled)), input, replays, repeat,
-             refresh_hz: refresh, max_dropped_pct: C.max_dropped_pct}, pb));
-         }},
-      ];
-    }
-
-    function endNode() {
-      return {type: jsPsychHtmlButtonResponse, choices: [],
-        stimulus: `<div class="fs-card"><h1>${esc(C.texts.end_title)}</h1><p id="fs-end-status">Saving your answers…</p>
-                   <p>${esc(C.texts.end_download)}</p>
-                   <div class="fs-actions"><button id="fs-download" class="jspsych-btn fs-next">Download your answers</button>
-                   ${C.host === 'jatos' ? '<button id="fs-finish" class="jspsych-btn fs-next" disabled>Finish</button>' : ''}</div></div>`,
-        on_load: async () => {
-          setScreen('end', 'end');
-          document.getElementById('fs-download').addEventListener('click', () => download(cp, pid));
-          if (!cp.has('end')) emit({record: 'end', answered: cp.firsts().length, repeats: cp.repeats().length, n_trials: n});
-          await sender.flush();
-          let msg = C.texts.end_saved;
-          if (!cp.s.finished) {
-            try { await host.finish(cp, cp.firsts().length); cp.s.finished = nowIso(); cp.save(); } catch (e) { console.warn(e); }
-          }
-          if (C.host === 'static') msg = C.texts.end_static;
-          const st = document.getElementById('fs-end-status');
-          st.textContent = msg;
-          app().dataset.saved = '1';
-          const fin = document.getElementById('fs-finish');
-          if (fin) { fin.disabled = false; fin.addEventListener('click', () => jatos.endStudy(true)); }
-        }};
-    }
-
+    tl.push({type: jsPsychHtmlButtonResponse, choices: [],
+      stimulus: `<div class="fs-card"><h1>${esc(C.texts.end_title)}</h1><p id="fs-end-status">Saving your answers…</p>
+                 <p>${esc(C.texts.end_download)}</p>
+                 <div class="fs-actions"><button id="fs-download" class="jspsych-btn fs-next">Download your answers</button>
+                 ${C.host === 'jatos' ? '<button id="fs-finish" class="jspsych-btn fs-next" disabled>Finish</button>' : ''}</div></div>`,
+      on_load: async () => {
+        setScreen('end', 'end');
+        document.getElementById('fs-download').addEventListener('click', () => download(cp, pid));
+        if (!cp.has('end')) emit({record: 'end', answered: cp.firsts().length, repeats: cp.repeats().length, n_trials: n});
+        await sender.flush();
+        let msg = C.texts.end_saved;
+        if (!cp.s.finished) {
+          try { await host.finish(cp, cp.firsts().length); cp.s.finished = nowIso(); cp.save(); } catch (e) { console.warn(e); }
+        }
+        if (C.host === 'static') msg = C.texts.end_static;
+        const st = document.getElementById('fs-end-status');
+        st.textContent = msg;
+        app().dataset.saved = '1';
+        const fin = document.getElementById('fs-finish');
+        if (fin) { fin.disabled = false; fin.addEventListener('click', () => jatos.endStudy(true)); }
+      }});
     await jsPsych.run(tl);
+  }
+
+  // ---- the local runner (flipstudy run): the server holds the session ----------------------
+  // The screens, their order and every QUEST+ level come from the server (GET api/session,
+  // GET api/trial/<n>); each answer is POSTed to api/answer and the page moves on only once
+  // the server says it is stored.  While the server cannot be reached (a restart after a
+  // crash) the request is retried and a banner says so; an error answer is shown to the
+  // participant and the page stops: nothing advances as if it were stored.
+  class HttpError extends Error {
+    constructor(status, message) { super(message); this.status = status; }
+  }
+
+  function banner(text) {
+    let b = document.getElementById('fs-banner');
+    if (!b) {
+      b = document.createElement('div');
+      b.id = 'fs-banner';
+      b.setAttribute('role', 'status');
+      document.body.appendChild(b);
+    }
+    b.textContent = text || '';
+    b.hidden = !text;
+  }
+
+  async function request(url, options, as) {
+    let wait = 250;
+    for (;;) {
+      let resp = null;
+      try { resp = await fetch(url, Object.assign({cache: 'no-store'}, options)); } catch (e) { resp = null; }
+      if (resp && resp.ok) {
+        let body = null;
+        try { body = await (as === 'blob' ? resp.blob() : resp.json()); } catch (e) { body = null; }  // cut off
+        if (body !== null) { banner(''); return body; }
+        resp = null;
+      }
+      let msg = null;
+      if (resp) {
+        msg = `the study program answered HTTP ${resp.status}`;
+        try { msg = (await resp.json()).error || msg; } catch (e) { /* not JSON */ }
+        if (resp.status < 500 && resp.status !== 408 && resp.status !== 429) throw new HttpError(resp.status, msg);
+      }
+      banner(msg ? `${msg} — retrying… (your answers so far are saved)`
+        : 'Connection to the study program lost — retrying… (your answers so far are saved)');
+      await sleep(wait);
+      wait = Math.min(wait * 2, 1500);
+    }
+  }
+  const postJSON = (url, body) => request(url, {method: 'POST', headers: {'Content-Type': 'application/json'},
+                                                body: JSON.stringify(body)});
+  const nameOf = (url) => url.replace(/^.*\//, '').replace(/\.mp4$/, '');
+  const siteVideo = (url) => C.videos[nameOf(url)].video;          // the server's URL as the site names it
+
+  // videos fetched whole (retried like every request) into jsPsych's video buffers, where the
+  // video plugin finds them; the next trials' videos are fetched ahead while one is answered
+  function videoLoader(jsPsych) {
+    const ahead = new Map();                                          // URL -> Promise<Blob>
+    const get = (url) => {
+      if (!ahead.has(url)) {
+        const p = request(url, {}, 'blob');
+        ahead.set(url, p);
+        p.catch(() => ahead.delete(url));
+      }
+      return ahead.get(url);
+    };
+    return {
+      async fetch(urls) {
+        const vb = jsPsych.pluginAPI.video_buffers;
+        for (const url of urls) {
+          if (vb[url]) continue;
+          const blob = await get(url);
+          ahead.delete(url);
+          vb[url] = URL.createObjectURL(blob);
+        }
+      },
+      prefetch(urls) { for (const url of urls) if (!jsPsych.pluginAPI.video_buffers[url]) get(url).catch(() => {}); },
+    };
+  }
+
+  // the site's trial object of a server trial screen
+  function trialOf(s) {
+    const t = {trial: s.trial, task: s.type === 'trial-2afc' ? '2afc' : 'yes-no', stimulus: s.stimulus || null};
+    if (t.task === '2afc' && s.videos) {
+      t.first = s.first;
+      t.original = nameOf(s.videos[s.first === 'original' ? 0 : 1]);
+    }
+    return t;
+  }
+
+  async function runLocal(jsPsych) {
+    const data = await request('api/session');
+    const n = data.n_trials;
+    // next: the server's next open trial (the first trial screen from `start` on: a resumed
+    // session's, after the welcome back), then what each stored answer says
+    const first = data.timeline.slice(data.start).find((x) => x.trial);
+    const state = {participant: data.participant, session: data.session, next: first ? first.trial : null, stored: 0};
+    window.flipstudyState = state;                                        // for tests and debugging
+    const refresh = await measureRefresh(500);
+    const record = async (rec) => {
+      const body = {participant: state.participant, session: state.session};
+      if (rec.record === 'demographics') {
+        for (const f of C.demographic_fields) body[f.name] = rec[f.name];
+        await postJSON('api/demographics', body);
+        return;
+      }
+      Object.assign(body, {trial: rec.trial, stimulus: rec.stimulus, response: rec.response, rt_ms: rec.rt_ms,
+        shown_ms: rec.shown_ms, late_frames: rec.frames_dropped, replays: rec.replays, input: rec.input});
+      const r = await postJSON('api/answer', body);
+      state.next = r.next_trial;
+      state.stored += 1;
+      app().dataset.stored = String(state.stored);                     // for tests (no eval under the CSP)
+    };
+    const loader = videoLoader(jsPsych);
+    // the videos of the two trials after trial k that are known before they are served
+    const upcoming = (k) => data.timeline.filter((x) => (x.type === 'trial' || x.type === 'trial-2afc') && x.trial > k
+      && x.stimulus).slice(0, 2).flatMap((x) => (x.videos || [x.video]).map(siteVideo));
+    let current = 0;
+    const fetchVideos = async (urls) => { await loader.fetch(urls); loader.prefetch(upcoming(current)); };
+    const env = {jsPsych, n, refresh, record, fetchVideos};
+    // the server's next open trial: QUEST+ slots of a group that stopped early (stop_width)
+    // are passed over, and so are breaks once nothing is left
+    const passed = (trial) => state.next !== null && trial < state.next;
+    const tl = [];
+    for (const s of data.timeline.slice(data.start)) {
+      if (s.type === 'instructions') tl.push(instructionsNode(s.id, s.title, s.paragraphs, s.button));
+      else if (s.type === 'demographics') tl.push(demographicsNode(s.title, s.text, env));
+      else if (s.type === 'examples') tl.push(...exampleNodes(s.stimuli.map((x) => siteVideo(x.video)), env));
+      else if (s.type === 'break') {
+        tl.push({timeline: [breakNode(s.id, s.title, s.text)], conditional_function: () => !(state.next > n)});
+      } else if (s.type === 'trial' || s.type === 'trial-2afc') {
+        const t = trialOf(s);
+        const nodes = trialNodes(t, 0, env);
+        // an adaptive trial's level is chosen by the server when it is served, just before it is shown
+        nodes.unshift(waitNode(env, '<div class="fs-stage"><div class="fs-fixation">+</div></div>', `serve-trial-${s.trial}`,
+          async () => {
+            current = s.trial;
+            if (s.adaptive && !s.stimulus) Object.assign(t, trialOf(await request(`api/trial/${s.trial}`)));
+          }));
+        tl.push({timeline: nodes, conditional_function: () => !passed(s.trial)});
+      } else if (s.type === 'end') {
+        tl.push({type: jsPsychHtmlButtonResponse, choices: [], stimulus: card(s.title, s.paragraphs),
+                 on_load: () => { setScreen('end', 'end'); app().dataset.saved = '1'; }});
+      } else throw new Error(`unknown screen type ${s.type}`);
+    }
+    await jsPsych.run(tl);
+  }
+
+  async function main() {
+    const jsPsych = initJsPsych({display_element: 'jspsych-target'});
+    await (C.host === 'local' ? runLocal(jsPsych) : runWeb(jsPsych));
   }
 
   function download(cp, pid) {
@@ -525,7 +726,9 @@
     console.error(e);
     const el = app();
     el.dataset.screen = 'error';
-    el.innerHTML = card('Please contact the experimenter', ['The study cannot continue on this page. Your saved answers are kept in this browser.', String(e && e.message || e)]);
+    el.dataset.screenId = 'error';
+    const kept = C.host === 'local' ? 'Your saved answers are safe.' : 'Your saved answers are kept in this browser.';
+    el.innerHTML = card('Please contact the experimenter', [`The study cannot continue on this page. ${kept}`, String(e && e.message || e)]);
   }
 
   window.addEventListener('load', () => { main().catch(fatal); });

@@ -25,7 +25,8 @@ from _screenshots import screenshot
 from flipstudy.study.cli import main as cli
 from flipstudy.study.web.importer import import_web
 from flipstudy.study.web.order import web_trial_order
-from flipstudy.study.web.site import SiteError, export_site, site_config
+from flipstudy.errors import SiteError
+from flipstudy.study.web.site import export_site, site_config
 from flipstudy.study.session import load_study
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
@@ -115,7 +116,7 @@ def test_2afc_site_session_import_analyze(page, tmp_path, jspsych_dir):  # noqa:
     data = tmp_path / "jatos.txt"
     data.write_text("".join(host.bodies))
     imp = import_web(study, [data])
-    assert imp["answers"] == 8 and imp["incomplete"] == []
+    assert imp.answers == 8 and imp.incomplete == ()
     rows = _csv(study / "web" / "responses.csv")
     assert [r["response"] for r in rows] == [resp[t.trial] for t in twin]
     assert [(r["task"], r["first"], r["original_stimulus"]) for r in rows] == [

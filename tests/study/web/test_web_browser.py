@@ -27,7 +27,6 @@ import functools
 import json
 import contextlib
 import os
-import shutil
 import threading
 import time
 import zipfile
@@ -39,7 +38,7 @@ from urllib.parse import urlparse
 
 import pytest
 
-from test_session_browser import ARGS, CHROMIUM, TIMEOUT, page, pw  # noqa: F401 (fixtures)
+from test_session_browser import ARGS, CHROMIUM, TIMEOUT, jspsych_dir, page, pw  # noqa: F401 (fixtures)
 
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study, write_demo_record, write_test_video
@@ -156,18 +155,6 @@ class _Host:
     def __exit__(self, *exc):
         self.srv.shutdown()
         self.srv.server_close()
-
-
-@pytest.fixture(scope="session")
-def jspsych_dir():
-    """The pinned jsPsych packages (npm, cached); skips when npm cannot fetch them."""
-    if shutil.which("npm") is None:
-        pytest.skip("needs npm to fetch jsPsych (apt-get install npm)")
-    try:
-        folder, _ = jsp.fetch()
-    except jsp.JsPsychFetchError as e:
-        pytest.skip(f"npm could not fetch jsPsych: {e}")
-    return folder
 
 
 @pytest.fixture
@@ -287,7 +274,7 @@ def test_pavlovia_site_saves_after_every_answer(page, tmp_path, jspsych_dir):  #
     f = tmp_path / key
     f.write_text(text)
     out = import_web(study, [f])
-    assert out["answers"] == 4 and out["incomplete"] == []
+    assert out.answers == 4 and out.incomplete == ()
     got = _csv(study / "web" / "responses.csv")
     assert [r["response"] for r in got] == RESP[:4] and {r["source"] for r in got} == {"web-pavlovia"}
     assert _csv(study / "web" / "participants.csv")[0]["age"] == "41"
@@ -468,7 +455,7 @@ def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  #
     assert lines[-1]["record"] == "end" and (lines[-1]["answered"], lines[-1]["repeats"]) == (8, 2)
 
     imp = import_web(study, [download])
-    assert imp["answers"] == 10 and imp["incomplete"] == [] and len(imp["repeats"]) == 2
+    assert imp.answers == 10 and imp.incomplete == () and len(imp.repeats) == 2
     rows = _csv(study / "web" / "responses.csv")
     assert [(int(r["trial"]), r["repeat"]) for r in rows] == sorted(
         [(i, "0") for i in range(1, 9)] + [(fast[0], "1"), (fast[1], "1")])

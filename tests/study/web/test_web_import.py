@@ -9,12 +9,12 @@ import zipfile
 
 import pytest
 
-from flipstudy.stimuli.exceptions import FlipstudyError
+from flipstudy.errors import FlipstudyError, WebImportError
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.export import export_responses
 from flipstudy.study.session import load_study, open_session, submit_answer
-from flipstudy.study.web.importer import WebImportError, import_web, read_records
+from flipstudy.study.web.importer import import_web, read_records
 from flipstudy.study.web.order import order_groups, web_trial_order
 from flipstudy.study.web.site import FORMAT, site_config
 
@@ -110,7 +110,7 @@ def test_jatos_archive_and_incomplete_runs(study, tmp_path):
         z.writestr("study_result_2/comp-result_2/data.txt",
                    "".join(json.dumps(r) + "\n" for r in run_records(study, "W02", run="r2")))
     out = import_web(study, [zpath])
-    assert out["participants"] == 2 and out["answers"] == 13 and out["incomplete"] == ["W01/1 (5/8)"]
+    assert out["participants"] == 2 and out["answers"] == 13 and out.incomplete == ("W01/1 (5/8)",)
     assert {r["complete"] for r in rows(study) if r["participant"] == "W01"} == {"false"}
 
 
@@ -223,7 +223,7 @@ def test_repeats_of_flagged_trials_are_kept_beside_the_first_answer(study, tmp_p
     rep = dict(next(r for r in recs if r.get("trial") == 3), repeat=1, response="incorrect",
                frames_presented=12, frames_dropped=0, dropped_pct=0.0, playback_flagged=False)
     out = import_web(study, [pavlovia_csv(tmp_path / "run.csv", recs + [rep, end])])
-    assert out["answers"] == 9 and out["incomplete"] == [] and out["repeats"] == ["W09/1 trial 3"]
+    assert out["answers"] == 9 and out.incomplete == () and out.repeats == ("W09/1 trial 3",)
     got = rows(study)
     assert [(r["trial"], r["repeat"]) for r in got][2:4] == [("3", "0"), ("3", "1")]
     assert [(r["response"], r["playback_flagged"]) for r in got][2:4] == [("correct", "true"),

@@ -1,0 +1,185 @@
+"""The pipeline's typed steps: each returns a frozen result that round-trips through
+JSON, and the CLI prints exactly its ``summary()``."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import typing
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from flipstudy import results
+from flipstudy.errors import FlipstudyError
+from flipstudy.results import (AnalyzeResult, BuildResult, MotionResult, ExportResult, ImportResult,
+                               PlanResult, RenderResult, ReproduceResult, SimulateResult, StatusResult,
+                               StepResult)
+from flipstudy.study import pipeline
+from flipstudy.study.cli import main
+from flipstudy.study.demo import make_demo_study
+
+RESULTS = [BuildResult, RenderResult, SimulateResult, ExportResult, ImportResult, AnalyzeResult,
+           ReproduceResult, StatusResult, PlanResult, MotionResult]
+
+# ---- strategies: any value of a field's declared type that JSON can carry
+text = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12)
+paths = st.lists(st.text("abcxyz_-.", min_size=1, max_size=6).filter(lambda s: s not in (".", "..")),
+                 min_size=1, max_size=3).map(lambda parts: Path(*parts))
+json_leaf = st.none() | st.booleans() | st.integers(-10**6, 10**6) | \
+    st.floats(allow_nan=False, allow_infinity=False) | text
+json_doc = st.recursive(json_leaf, lambda inner: st.lists(inner, max_size=3)
+                        | st.dictionaries(text, inner, max_size=3), max_leaves=8)
+
+
+def strategy(hint):
+    origin = typing.get_origin(hint)
+    if hint is Path:
+        return paths
+    if hint is str:
+        return text
+    if hint is int:
+        return st.integers(0, 10**6)
+    if hint is float:
+        return st.floats(-1e6, 1e6, allow_nan=False)
+    if hint is dict:
+        return st.dictionaries(text, json_doc, max_size=4)
+    if origin in (typing.Union, getattr(__import__("types"), "UnionType")):
+        args = [a for a in typing.get_args(hint) if a is not type(None)]
+        return st.none() | strategy(args[0])
+    if origin is tuple:
+        args = typing.get_args(hint)
+        if len(args) == 2 and args[1] is Ellipsis:
+            return st.lists(strategy(args[0]), max_size=4).map(tuple)
+        return st.tuples(*(strategy(a) for a in args))
+    if origin is dict:
+        k, v = typing.get_args(hint)
+        return st.dictionaries(strategy(k), strategy(v), max_size=4)
+    raise AssertionError(f"no strategy for {hint}")
+
+
+def instances(cls):
+    hints = typing.get_type_hints(cls)
+    return st.builds(cls, **{f.name: strategy(hints[f.name]) for f in dataclasses.fields(cls)})
+
+
+@pytest.mark.parametrize("cls", RESULTS, ids=lambda c: c.__name__)
+@settings(max_examples=30, deadline=None)
+@given(data=st.data())
+def test_every_result_round_trips_through_json(cls, data, tmp_path_factory):
+    r = data.draw(instances(cls))
+    path = tmp_path_factory.mktemp("rt") / "r.json"
+    back = cls.load_json(r.save_json(path))
+    assert back == r
+    assert type(back) is cls
+    assert json.loads(path.read_text()) == r.to_dict()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        setattr(r, dataclasses.fields(cls)[0].name, None)
+
+
+def test_results_module_lists_every_step():
+    assert set(results.__all__) == {c.__name__ for c in RESULTS} | {"StepResult"}
+    for cls in RESULTS:
+        assert issubclass(cls, StepResult) and cls.summary is not StepResult.summary, cls
+
+
+def test_a_file_that_is_not_a_saved_result_is_refused(tmp_path):
+    p = tmp_path / "x.json"
+    p.write_text("[1, 2]")
+    with pytest.raises(FlipstudyError, match="x.json: not a saved ExportResult"):
+        ExportResult.load_json(p)
+    p.write_text("{")
+    with pytest.raises(FlipstudyError, match="x.json"):
+        ExportResult.load_json(p)
+    with pytest.raises(FlipstudyError, match="unknown field"):
+        SimulateResult.from_dict({"study": "s", "participants": [], "colour": 1})
+
+
+def test_the_steps_that_returned_dicts_return_results():
+    """``build_stimuli``, ``render_study``, ``export_responses``, ``import_web`` and
+    ``reproduce`` are annotated with (and, below, return) their result types."""
+    from flipstudy.render.study import render_study
+    from flipstudy.stimuli.stimset import build_stimuli
+    from flipstudy.study.export import export_responses
+    from flipstudy.study.reproduce import reproduce
+    from flipstudy.study.web.importer import import_web
+    for fn, cls in [(build_stimuli, "BuildResult"), (render_study, "RenderResult"),
+                    (export_responses, "ExportResult"), (import_web, "ImportResult"),
+                    (reproduce, "ReproduceResult")]:
+        assert fn.__annotations__["return"] == cls, fn.__name__
+    for name in pipeline.__all__[:7]:
+        assert getattr(pipeline, name).__annotations__["return"].endswith("Result"), name
+
+
+def _run(capsys, argv):
+    status = main(argv)
+    captured = capsys.readouterr()
+    return status, captured.out
+
+
+def test_simulate_export_analyze_print_their_results_summaries(tmp_path, capsys):
+    """On a real (placeholder) study: the CLI's output is the step's ``summary()``, and the
+    saved results load back equal."""
+    study = make_demo_study(tmp_path / "cli", videos=False)
+    twin = make_demo_study(tmp_path / "lib", videos=False)
+    status, out = _run(capsys, ["simulate", str(study), "--participants", "3", "--seed", "2"])
+    assert status == 0
+    sim = pipeline.simulate(twin, 3, seed=2)
+    assert out == sim.summary().replace(str(twin), str(study)) + "\n"
+    assert sim.participants == ("sim001", "sim002", "sim003")
+
+    status, out = _run(capsys, ["export", str(study), "--include-simulated"])
+    assert status == 0
+    exp = pipeline.export(twin, include_simulated=True)
+    assert out == exp.summary().replace(str(twin), str(study)) + "\n"
+    assert exp.rows == 3 * 8 and exp.simulated == sim.participants and exp.real == ()
+    rows = (twin / "responses.csv").read_text().splitlines()
+    assert len(rows) == 1 + exp.rows                  # what the result says is what is on disk
+
+    opts = ["--psychometric", "none", "--no-gee", "--no-figures", "--n-boot", "50", "--include-simulated"]
+    status, out = _run(capsys, ["analyze", str(study), *opts])
+    assert status == 0
+    ana = pipeline.analyze(twin, psychometric="none", gee=False, figures=False, n_boot=50,
+                           include_simulated=True)
+    assert out == ana.summary().replace(str(twin), str(study)) + "\n"
+    assert ana.out == twin / "analysis" and (ana.out / "table.csv").is_file()
+    assert ana.report["settings"]["n_trials"] == exp.rows
+    back = AnalyzeResult.load_json(ana.save_json(tmp_path / "analyze.json"))
+    assert back.summary() == ana.summary()
+
+    status, out = _run(capsys, ["analyze", str(study), *opts, "--json"])
+    assert json.loads(out)["settings"]["n_trials"] == exp.rows
+
+
+def test_reproduce_summary_matches_the_counts_it_states():
+    """A ReproduceResult's summary states its counts and files (thresholds of None shown
+    as not reached)."""
+    files = {k: f"p/{k}" for k in ("design", "manifest", "videos", "sessions", "responses",
+                                  "table_paper", "figure_ratings", "figure_dprime",
+                                  "figure_psychometric", "figure_sheet", "notes", "stimuli")}
+    r = ReproduceResult(out="p", files=files, seconds=dict.fromkeys(
+        ("total", "stimuli", "render", "sessions", "analysis"), 1.0), n_stimuli=46, worst_gap_pct=0.25,
+        n_videos=46, n_responses=88, n_simulated=1, table_md="| t |",
+        thresholds=({"group": "g", "reached": False, "threshold": None},
+                    {"group": "h", "reached": True, "threshold": 12.34}))
+    s = r.summary()
+    assert "p/manifest  46 stimuli" in s and "(largest gap 0.25 points)" in s
+    assert "  g                  not reached within the tested levels" in s
+    assert "  h                  12.3 %" in s
+    assert not math.isnan(ReproduceResult.from_dict(json.loads(json.dumps(r.to_dict()))).worst_gap_pct)
+
+
+def test_every_cli_command_body_is_short():
+    """Parse, one library call, print the result's summary: no command body over 25 lines."""
+    import ast
+    cli = Path(pipeline.__file__).parent / "cli"
+    long = []
+    for p in sorted(cli.glob("*.py")):
+        for node in ast.parse(p.read_text()).body:
+            if isinstance(node, ast.FunctionDef) and (node.name.startswith("cmd_") or node.name == "handler"):
+                n = node.end_lineno - node.lineno + 1
+                if n > 25:
+                    long.append(f"{p.name}: {node.name} has {n} lines")
+    assert not long, "\n".join(long)
