@@ -14,11 +14,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from flipstudy.errors import FlipstudyFileExistsError
+from flipstudy.results import StepResult
 from .loading import load_clip
 
 
 @dataclass(frozen=True)
-class Converted:
+class Converted(StepResult):
     """What :func:`convert` wrote: the source, the BVH file, frames, rate, joints, and
     (for a position source) the largest distance of the written joints from the
     given positions (``fit_mm``; None for a clip of rotations)."""
@@ -29,7 +30,7 @@ class Converted:
     fps: float
     joints: int
     fit_mm: float | None
-    warnings: tuple
+    warnings: tuple[str, ...]
 
     def summary(self) -> str:
         fit = "" if self.fit_mm is None else f"; joints within {self.fit_mm:.2g} mm of the positions"

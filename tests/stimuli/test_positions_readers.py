@@ -242,6 +242,7 @@ def test_cli_inspect_and_convert(tmp_path, capsys, cmu88):
     assert "exists" in capsys.readouterr().err
     r = convert(str(path), tmp_path / "amass.bvh", body_model=str(model))
     assert r.frames == len(np.load(path)["poses"]) and r.joints == 22
+    assert type(r).load_json(r.save_json(tmp_path / "convert.json")) == r
 
 
 def test_every_reader_error_is_a_flipstudy_error():
