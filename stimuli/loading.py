@@ -56,10 +56,22 @@ def physics_gate(clip) -> None:
     options: a body lying along a horizontal axis (the up axis is wrong: ``--up``),
     a body height outside an adult's, or an apparent gravity in flight that is not
     9.81 m/s² (``--scale``, ``--fps``; see :func:`flipstudy.stimuli.analyse.physics_advice`)."""
-    import numpy as np
-
     from flipstudy.errors import MotionFileError
     from .analyse import analyse, physics_advice
+    check_up_axis(clip)
+    a = analyse(clip, estimate=False)
+    adv = physics_advice(a.apparent_gravity, clip)
+    if adv is not None:
+        fix = adv.options()
+        where = clip.meta.get("path", clip.meta.get("name", "clip"))
+        raise MotionFileError(f"{where}: {adv.problem}" + (f" Rerun with {fix}." if fix else ""))
+
+
+def check_up_axis(clip) -> None:
+    """Refuse a clip whose body spreads less vertically than horizontally over the
+    clip (on average over frames, by a factor 0.6): it lies down, so a position or
+    AMASS file was read with the wrong up axis; the message names ``--up``."""
+    from flipstudy.errors import MotionFileError
     where = clip.meta.get("path", clip.meta.get("name", "clip"))
     X = clip.joint_positions()
     extent = (X.max(axis=1) - X.min(axis=1)).mean(axis=0)            # mean (x, y, z) spread
@@ -68,9 +80,5 @@ def physics_gate(clip) -> None:
         raise MotionFileError(
             f"{where}: read with up axis {clip.meta.get('up', 'y')!r}, the body spreads "
             f"{extent[1]:.2f} m vertically but {max(extent[0], extent[2]):.2f} m horizontally: it lies "
-            f"down, so the up axis is probably wrong; rerun with --up {other}")
-    a = analyse(clip, estimate=False)
-    adv = physics_advice(a.apparent_gravity, clip)
-    if adv is not None:
-        fix = adv.options()
-        raise MotionFileError(f"{where}: {adv.problem}" + (f" Rerun with {fix}." if fix else ""))
+            f"down, so the up axis is probably wrong; rerun with --up {other} (a design's source: "
+            f"`flipstudy convert {where} --up {other} --out FILE.bvh` first)")
