@@ -123,3 +123,25 @@ def test_a_stretching_source_keeps_its_joints_and_says_so():
     assert np.abs(rel).max() < 1e-9
     assert clip.meta["fit_mm"] > 10.0
     assert any(f"{clip.meta['fit_mm']:.0f} mm off" in w for w in clip.meta["warnings"])
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2 ** 32 - 1), J=st.integers(2, 14), zero_frac=st.floats(0.0, 0.4))
+def test_any_tree_of_rigid_bones_gives_back_its_positions(seed, J, zero_frac):
+    """Random trees (helper joints at their parent's place included) moved by smooth
+    random rotations: the clip made from the positions puts every joint back."""
+    from flipstudy.stimuli.motion import Clip, Skeleton
+    rng = np.random.default_rng(seed)
+    parents = [-1] + [int(rng.integers(0, j)) for j in range(1, J)]
+    offsets = rng.normal(0, 0.3, (J, 3))
+    offsets[0] = 0.0
+    offsets[1:][rng.random(J - 1) < zero_frac] = 0.0
+    F = 40
+    t = np.linspace(0, 1, F)[:, None, None]
+    rot = Rotation.from_rotvec((rng.normal(0, 1, (1, J, 3)) + rng.normal(0, 2, (1, J, 3)) * t).reshape(-1, 3))
+    src = Clip(Skeleton([f"j{i}" for i in range(J)], parents, offsets), 30.0,
+               rng.normal(0, 1, (F, 3)), rot.as_quat().reshape(F, J, 4))
+    X = src.joint_positions()
+    clip = clip_from_positions(X, Layout("random", src.skeleton.joint_names, parents, fps=30))
+    assert np.abs(clip.joint_positions() - X).max() < 1e-6
+    assert clip.meta["fit_mm"] < 1e-3
