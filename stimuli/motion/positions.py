@@ -425,7 +425,7 @@ def load_positions(path, scale: float | None = None, fps: float | None = None, l
         fps, meta["fps_source"] = lay.fps, f"layout {lay.name}"
     else:
         raise MotionFileError(f"{path}: neither the file nor layout {lay.name!r} gives a frame rate; pass --fps")
-    meta["header_fps"] = fps if meta["fps_source"] != "given" else (file_fps or lay.fps)
+    meta["header_fps"] = file_fps or lay.fps or fps       # what the file (or its layout) says
     if scale is not None:
         s, meta["scale_source"] = float(scale), "given"
         if not (np.isfinite(s) and 1e-6 <= s <= 1e3):

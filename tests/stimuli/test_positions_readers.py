@@ -84,6 +84,10 @@ def test_the_physics_gate_names_the_fix(cmu88, tmp_path):
     np.save(path, cmu_humanml3d(cmu88))
     with pytest.raises(MotionFileError, match=r"m\.npy: apparent gravity .* --fps 20"):
         load_clip(str(path), fps=40)
+    (tmp_path / "nofps.json").write_text(json.dumps({"joints": list(SMPL22_NAMES),
+                                                     "parents": list(SMPL_PARENTS)}))
+    with pytest.raises(MotionFileError, match=r"m\.npy: apparent gravity .* --fps 20"):
+        load_clip(str(path), fps=40, layout=str(tmp_path / "nofps.json"))      # no rate in the files
     np.save(path, cmu_humanml3d(cmu88) * 100.0)                  # centimetres read as metres
     with pytest.raises(MotionFileError, match=r"m\.npy: the body is .* tall .* --scale 0\.01"):
         load_clip(str(path))
