@@ -32,7 +32,8 @@ def synthetic_body_model(seed: int = 0, V: int = 300, B: int = 10) -> tuple[dict
     J_regressor, kintree_table, posedirs, weights) whose regressed rest joints,
     for betas = 0, are ``rest`` (22, 3): an adult in a T-pose, metres, Y up.  Each
     joint is the mean of its own cluster of vertices (so the regressor is a real
-    averaging matrix), and shapedirs move whole clusters."""
+    averaging matrix, 24 rows as SMPL's); beta 0 scales the body by 5 % about the
+    template's centroid, the other betas add small random per-vertex offsets."""
     rng = np.random.default_rng(seed)
     rest = np.array([
         [0, 0.93, 0], [0.09, 0.85, 0], [-0.09, 0.85, 0], [0, 1.04, -0.01], [0.10, 0.47, 0.01],
