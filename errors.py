@@ -284,3 +284,12 @@ __all__ = [
     "WebImportError",
     "JsPsychFetchError",
 ]
+
+
+class MotionFileError(FlipstudyValueError):
+    """A joint-position array, an AMASS/SMPL ``.npz``, a layout file or a body-model
+    file that is not what its reader expects (shape, NaN frames, unknown layout, a
+    missing ``--body-model``): the message names the file and what was expected."""
+
+
+__all__ += ["MotionFileError"]

@@ -79,7 +79,12 @@ def load_base_clip(spec, design: Design) -> Clip:
         if not p.exists():
             raise DesignError(f"{where}clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
                               f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
-        clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
+        from .loading import POSITION_SUFFIXES, check_up_axis, load_clip
+        if p.suffix.lower() in POSITION_SUFFIXES:   # joint positions (22: humanml3d-22); the design's gate runs below
+            clip = load_clip(str(p), scale=spec.scale, fps=spec.fps, gate=False)
+            check_up_axis(clip)
+        else:
+            clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
         if getattr(design, "fps_given", False) and abs(clip.fps - design.fps) > 1e-9 * design.fps:
             clip = resample(clip, design.fps)
     if getattr(spec, "flips", None):
