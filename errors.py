@@ -298,3 +298,12 @@ class ComparisonError(FlipstudyValueError):
 
 
 __all__ += ["SourceMismatchError", "ComparisonError"]
+
+
+class MotionFileError(FlipstudyValueError):
+    """A joint-position array, an AMASS/SMPL ``.npz``, a layout file or a body-model
+    file that is not what its reader expects (shape, NaN frames, unknown layout, a
+    missing ``--body-model``): the message names the file and what was expected."""
+
+
+__all__ += ["MotionFileError"]

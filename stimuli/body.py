@@ -68,7 +68,7 @@ SEGMENTS = ["head", "trunk",
 _PART_NAMES = {
     "hip": ["upleg", "thigh", "upperleg", "hip"],
     "knee": ["leg", "calf", "knee", "shin", "lowerleg"],
-    "ankle": ["foot", "ankle"],
+    "ankle": ["ankle", "foot"],          # SMPL has both: its "foot" is the toe joint
     "shoulder": ["arm", "upperarm", "shoulder"],
     "elbow": ["forearm", "lowerarm", "elbow"],
     "wrist": ["hand", "wrist"],
@@ -223,12 +223,16 @@ class Body:
         F = clip.num_frames
         pick = np.unique(np.linspace(0, F - 1, min(F, max_frames)).round().astype(int))
         ref = (clip.joint_positions()[pick], clip.joint_rotations()[pick])
+        if mapping is None:                    # a position layout's landmarks (its file says them)
+            mapping = clip.meta.get("body_mapping")
         try:
             return cls.from_skeleton(clip.skeleton, total_mass, mapping, segment_masses, pose=ref)
         except BodyMappingError as e:          # name the file the skeleton came from
             src = clip.meta.get("path")
+            hint = (" (for a position file: a 'landmarks' table of landmark = joint name in its "
+                    "layout file)") if clip.meta.get("layout") else ""
             if src and not str(e).startswith(f"{src}: "):
-                raise BodyMappingError(f"{src}: {e}") from None
+                raise BodyMappingError(f"{src}: {e}{hint}") from None
             raise
 
     @classmethod

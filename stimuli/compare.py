@@ -39,14 +39,9 @@ from flipstudy.errors import FlipstudyFileNotFoundError, SourceMismatchError
 
 from .design import GIVEN_KIND, Design, SourceSpec
 
-#: the file suffixes of a source folder read as clips: BVH, joint-position arrays and AMASS
-#: ``.npz`` (each read by the loading rule; ``loading.CLIP_SUFFIXES`` replaces these when defined)
-DEFAULT_SUFFIXES = (".bvh", ".npy", ".npz")
-
-
 def clip_suffixes() -> tuple[str, ...]:
-    from . import loading
-    return tuple(getattr(loading, "CLIP_SUFFIXES", DEFAULT_SUFFIXES))
+    from .loading import POSITION_SUFFIXES
+    return tuple(dict.fromkeys((".bvh", *POSITION_SUFFIXES)))
 
 
 def stimulus_name(item: str, source: str) -> str:

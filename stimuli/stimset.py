@@ -80,7 +80,12 @@ def load_base_clip(spec, design: Design) -> Clip:
         if not p.exists():
             raise DesignError(f"{where}clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
                               f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
-        clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
+        from .loading import POSITION_SUFFIXES, check_up_axis, load_clip
+        if p.suffix.lower() in POSITION_SUFFIXES:   # joint positions (22: humanml3d-22); the design's gate runs below
+            clip = load_clip(str(p), scale=spec.scale, fps=spec.fps, gate=False)
+            check_up_axis(clip)
+        else:
+            clip = load_bvh(p, scale=spec.scale, fps=spec.fps)
         if getattr(design, "fps_given", False) and abs(clip.fps - design.fps) > 1e-9 * design.fps:
             clip = resample(clip, design.fps)
     if getattr(spec, "flips", None):
@@ -250,8 +255,10 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
 def load_source_clip(design: Design, s: SourceSpec, item: str, path: Path):
     """One given clip through the loading rule, resampled to ``[study] fps`` when the
     design writes it, its analysis after the physics gate."""
-    from .loading import load_clip
-    clip = load_clip(str(path), scale=s.scale, fps=s.fps)
+    from .loading import POSITION_SUFFIXES, check_up_axis, load_clip
+    clip = load_clip(str(path), scale=s.scale, fps=s.fps, gate=False)    # the design's gate runs below
+    if path.suffix.lower() in POSITION_SUFFIXES:
+        check_up_axis(clip)
     if design.fps_given and abs(clip.fps - design.fps) > 1e-9 * design.fps:
         clip = resample(clip, design.fps)
     clip.meta["name"] = item

@@ -33,7 +33,8 @@ def _pick(clip, rng, label: str, spec: str):
     return out
 
 
-def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None, range_a=None, range_b=None,
+def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None,
+           readers=None, range_a=None, range_b=None,
            mirror_b: bool = False, mass: float = 70.0, rule=None, tm_a=None, tm_b=None, main_a=None,
            main_b=None, smoothing: str = "profile", baseline=None, plot=None, ghost=None,
            ghost_interval: float = 0.15, ghost_margin: float = 0.4, ghost_view: str = "across-L"
@@ -49,8 +50,8 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None, range_a=
     from flipstudy.stimuli.edit.concat import concatenate, mirror, motion_graph_join
     from flipstudy.stimuli.loading import load_clip
     try:
-        a = _pick(load_clip(a_spec, scale, fps), range_a, "a", a_spec)
-        b = _pick(load_clip(b_spec, scale, fps), range_b, "b", b_spec)
+        a = _pick(load_clip(a_spec, scale, fps, **(readers or {})), range_a, "a", a_spec)
+        b = _pick(load_clip(b_spec, scale, fps, **(readers or {})), range_b, "b", b_spec)
         if mirror_b:
             b = mirror(b)
         body = analyse(a, total_mass=mass).body
@@ -136,17 +137,19 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None, range_a=
                         report=json.loads(json.dumps(out, default=float)), lines=tuple(lines))
 
 
-def inspect(clip_spec: str, *, scale=None, fps=None, mass: float = 70.0, compare=None,
+def inspect(clip_spec: str, *, scale=None, fps=None, readers=None, mass: float = 70.0, compare=None,
             prior_masses: bool = False, plot=None) -> MotionResult:
     """``flipstudy inspect``: the flight analysis of one clip (units, flight, gravity,
     momentum, masses); with ``compare`` measured with that original's body, drawn
-    against it into ``plot``."""
+    against it into ``plot``.  ``readers`` (here and in :func:`concat`, :func:`edit`,
+    :func:`figure`): the position and AMASS readers' keywords of
+    :func:`~flipstudy.stimuli.loading.load_clip` (``layout``, ``up``, ``body_model``)."""
     from flipstudy.stimuli import analyse
     from flipstudy.stimuli.loading import load_clip
-    clip = load_clip(clip_spec, scale, fps)
+    clip = load_clip(clip_spec, scale, fps, **(readers or {}))
     original = None
     if compare:
-        original = analyse(load_clip(compare, scale, fps), total_mass=mass,
+        original = analyse(load_clip(compare, scale, fps, **(readers or {})), total_mass=mass,
                            estimate=not prior_masses)
         # measure the stimulus with the original's body (same masses)
         a = analyse(clip, body=original.body, estimate=False)
@@ -196,7 +199,7 @@ def inspect(clip_spec: str, *, scale=None, fps=None, mass: float = 70.0, compare
                         lines=tuple(lines))
 
 
-def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: float = 1.0,
+def edit(clip_spec: str, out, *, scale=None, fps=None, readers=None, flips=None, k_ratio: float = 1.0,
          straighten=None, t_from=None, t_to=None, midpoint: bool = False, join_spec=None,
          mass: float = 70.0, plot=None) -> MotionResult:
     """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit with
@@ -208,8 +211,8 @@ def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: floa
     from flipstudy.stimuli.loading import load_clip
     if flips is None and not straighten and not join_spec:
         raise FlipstudyUsageError("nothing to do: give --flips N, --straighten legs|arms or --join OTHER")
-    clip = load_clip(clip_spec, scale, fps)
-    other = load_clip(join_spec, scale, fps) if join_spec else None
+    clip = load_clip(clip_spec, scale, fps, **(readers or {}))
+    other = load_clip(join_spec, scale, fps, **(readers or {})) if join_spec else None
     try:
         res = edit_clip(clip, flips=flips, k_ratio=k_ratio, straighten=straighten,
                    t_from=t_from, t_to=t_to, midpoint=midpoint, join=other,
@@ -315,16 +318,16 @@ def jump(to, out, *, scene="forward", air=None, windup=None, k="global-normal", 
     return MotionResult(command="jump", out=Path(out), report=report, lines=tuple(lines))
 
 
-def figure(clip_spec: str, out, *, kind: str = "ghost", overlay=None, scale=None, fps=None,
+def figure(clip_spec: str, out, *, kind: str = "ghost", overlay=None, scale=None, fps=None, readers=None,
            size=(640, 480), style=None, interval=None, debug: bool = False) -> MotionResult:
     """``flipstudy figure``: one still of one clip into ``out``: ``kind`` ghost, trail,
     strip or composite (with ``debug`` gizmos), or overlay (the clip over ``overlay``)."""
     from flipstudy.render import figures as fg
     from flipstudy.render.staging import stage
     from flipstudy.stimuli.loading import load_clip
-    clips = [load_clip(clip_spec, scale, fps)]
+    clips = [load_clip(clip_spec, scale, fps, **(readers or {}))]
     if kind == "overlay":
-        clips.append(load_clip(overlay, scale, fps))
+        clips.append(load_clip(overlay, scale, fps, **(readers or {})))
     st = stage(clips, size=size, style=style)
     gizmos = ("com", "path", "L", "v", "support") if debug else ()
     if kind == "overlay":

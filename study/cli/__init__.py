@@ -12,6 +12,7 @@ options, calls one library function and prints what it did:
 * :mod:`.web` — ``export-web``, ``import-web``
 * :mod:`.plan` — ``plan``
 * :mod:`.score` — ``score``, ``calibrate``
+* :mod:`.convert` — ``convert``
 
 Heavy libraries (pandas, pyvista, …) are imported by the command that needs them.
 """
@@ -24,7 +25,7 @@ import sys
 from .common import load_clip
 
 FAMILIES = ("motion", "render", "session", "analyze", "reproduce", "concat", "jump", "web", "plan",
-            "score")
+            "score", "convert")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -9,12 +9,13 @@ import argparse
 from flipstudy.stimuli.loading import load_clip
 
 __all__ = ["load_clip", "add_clip", "add_units", "add_clip_args", "add_mass", "add_json", "add_out",
-           "add_study_dir", "add_cluster"]
+           "add_study_dir", "add_cluster", "reader_options"]
 
 
 def add_clip(p: argparse.ArgumentParser) -> None:
     """The positional CLIP: a built-in name or a BVH path (see :func:`load_clip`)."""
-    p.add_argument("clip", metavar="CLIP", help="built-in name (backflip, frontflip, jump) or BVH path")
+    p.add_argument("clip", metavar="CLIP", help="built-in name (backflip, frontflip, jump), BVH path, joint "
+                   "positions (.npy/.npz) or AMASS .npz")
 
 
 def add_units(p: argparse.ArgumentParser, *,
@@ -23,6 +24,24 @@ def add_units(p: argparse.ArgumentParser, *,
     """``--scale`` and ``--fps`` of the clips a command loads (see :func:`load_clip`)."""
     p.add_argument("--scale", type=float, default=None, help=scale_help)
     p.add_argument("--fps", type=float, default=None, help=fps_help)
+    add_readers(p)
+
+
+def add_readers(p: argparse.ArgumentParser) -> None:
+    """``--layout``, ``--up`` and ``--body-model`` of the joint-position and AMASS
+    readers (see :func:`load_clip`; pass them on with :func:`reader_options`)."""
+    p.add_argument("--layout", default=None, metavar="NAME|FILE",
+                   help="joints of a .npy/.npz position array: humanml3d-22 (default for 22 joints) "
+                        "or a JSON/TOML layout file of joint names and parents")
+    p.add_argument("--up", choices=("y", "z"), default=None,
+                   help="up axis of a position or AMASS file (default: y; z for AMASS)")
+    p.add_argument("--body-model", default=None, metavar="PATH",
+                   help="your licensed SMPL/SMPL-H/SMPL-X body model (.npz) to read an AMASS file")
+
+
+def reader_options(args) -> dict:
+    """The reader options a command's ``args`` carry, as :func:`load_clip` keywords."""
+    return {k: getattr(args, k, None) for k in ("layout", "up", "body_model")}
 
 
 def add_clip_args(p: argparse.ArgumentParser) -> None:

@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import json
 
-from .common import add_json, add_mass, add_out, add_units
+from .common import add_json, add_mass, add_out, add_units, reader_options
 
 
 def cmd_concat(args) -> int:
     from flipstudy.study.motions import concat
-    res = concat(args.a, args.b, args.out, scale=args.scale, fps=args.fps, range_a=args.range_a,
+    res = concat(args.a, args.b, args.out, scale=args.scale, fps=args.fps,
+                 readers=reader_options(args), range_a=args.range_a,
                  range_b=args.range_b, mirror_b=args.mirror_b, mass=args.mass, rule=args.rule,
                  tm_a=args.tm_a, tm_b=args.tm_b, main_a=args.main_a, main_b=args.main_b,
                  smoothing=args.smoothing, baseline=args.baseline, plot=args.plot, ghost=args.ghost,

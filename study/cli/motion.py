@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 
-from .common import add_clip_args, add_cluster, add_json, add_mass, add_out, add_study_dir
+from .common import add_clip_args, add_cluster, add_json, add_mass, add_out, add_study_dir, reader_options
 
 #: the names of flipstudy.stimuli.presets.PRESETS (written out: building the parser
 #: imports no numpy; a test checks they agree)
@@ -20,7 +20,8 @@ def cmd_inspect(args) -> int:
     from flipstudy.study.motions import inspect
     if args.compare and not args.plot:
         print("flipstudy inspect: --compare draws into the --plot file; add --plot FILE.png", file=sys.stderr)
-    res = inspect(args.clip, scale=args.scale, fps=args.fps, mass=args.mass, compare=args.compare,
+    res = inspect(args.clip, scale=args.scale, fps=args.fps,
+                  readers=reader_options(args), mass=args.mass, compare=args.compare,
                   prior_masses=args.prior_masses, plot=args.plot)
     print(json.dumps(res.report, indent=2) if args.json else res.summary())
     return 0
@@ -69,7 +70,8 @@ def cmd_edit(args) -> int:
     """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit
     with momentum repair (5.5), measured (:func:`flipstudy.study.motions.edit`)."""
     from flipstudy.study.motions import edit
-    res = edit(args.clip, args.out, scale=args.scale, fps=args.fps, flips=args.flips,
+    res = edit(args.clip, args.out, scale=args.scale, fps=args.fps,
+               readers=reader_options(args), flips=args.flips,
                k_ratio=args.k_ratio, straighten=args.straighten, t_from=args.t_from, t_to=args.t_to,
                midpoint=args.midpoint, join_spec=args.join, mass=args.mass, plot=args.plot)
     print(res.summary())

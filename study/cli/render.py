@@ -21,7 +21,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from .common import add_clip, add_cluster, add_out, add_study_dir, add_units
+from .common import add_clip, add_cluster, add_out, add_study_dir, add_units, reader_options
 
 
 def _size(text: str):
@@ -87,6 +87,7 @@ def cmd_figure(args) -> int:
     kind = ("overlay" if args.overlay else "trail" if args.trail else "strip" if args.strip
             else "composite" if args.composite else "ghost")
     res = figure(args.clip, args.out, kind=kind, overlay=args.overlay, scale=args.scale, fps=args.fps,
+                 readers=reader_options(args),
                  size=args.size, style=_style(args.style), interval=args.interval, debug=args.debug)
     print(res.summary())
     return 0
