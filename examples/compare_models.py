@@ -1,26 +1,26 @@
-"""Make a comparison study's sources: ground truth from real CMU clips and two
-degraded "model" outputs, plus the design that compares them.
+"""Make a comparison study's sources: ground truth from real CMU clips as joint
+positions, two degraded "model" outputs, and the design that compares them.
 
     python examples/compare_models.py --out /tmp/cmp [--mocap ../shared/mocap]
 
-writes ``/tmp/cmp/{gt,jitter,floaty}/ITEM.bvh`` (metres, the clip's true frame
-rate) and ``/tmp/cmp/design.toml`` (three ``[[sources]]``, 2AFC against ``gt``).
-The README's "Comparing given motions" section runs the rest: build, render,
-simulated panel, ranking.
+writes ``/tmp/cmp/{gt,jitter,floaty}/ITEM.npz`` (joint positions in the HumanML3D
+layout: the 22 SMPL body joints in SMPL order, Y up, metres, with the take's frame
+rate as ``fps``) and ``/tmp/cmp/design.toml`` (three ``[[sources]]``, 2AFC against
+``gt``).  The README's "Comparing given motions" section runs the rest: build,
+render, simulated panel, ranking.
 
 * ``gt``: the CMU takes, read with the fixes ``../shared/mocap/SOURCES.md`` asks
   for: subjects 87 and 88 are 60 Hz although the una-dinosauria headers say
   120 Hz (``fps=60``), frame 1 of every raw CMU file is a T-pose (dropped), the
-  ASF length unit is 0.056444 m (the loader's unit guess finds it).
+  ASF length unit is 0.056444 m (the loader's unit guess finds it); their joints
+  at the SMPL body joints (:data:`CMU_AS_SMPL22`), as a motion-generation model
+  writes them.
 * ``jitter``: temporal jitter: frame k is the take at time k + e_k frames,
-  e_k ~ N(0, 0.35), so poses arrive early or late (a model with an unsteady clock).
-* ``floaty``: a smoothed, floating copy: root and joint rotations smoothed over
-  time (Gaussian, σ = 3 frames: contacts and take-offs lose their snap) and the
-  body rising by 0 → 6 cm over the clip (its feet leave the floor they stand on).
-
-The sources are written as BVH: the joint-position reader (HumanML3D layout) is a
-separate piece of work; once it is in, the ground truth may be given as joint
-positions through the same loading rule, with no change to the study.
+  e_k ~ N(0, 0.35) (positions interpolated linearly), so poses arrive early or
+  late (a model with an unsteady clock).
+* ``floaty``: a smoothed, floating copy: the joint trajectories smoothed over time
+  (Gaussian, σ = 3 frames: contacts and take-offs lose their snap) and the body
+  rising by 0 → 6 cm over the clip (its feet leave the floor they stood on).
 """
 from __future__ import annotations
 
@@ -32,6 +32,17 @@ from scipy.ndimage import gaussian_filter1d
 
 #: item → (file, its true frame rate or None for the header's); SOURCES.md: 87/88 are 60 Hz
 TAKES = {"88_01": ("88_01.bvh", 60.0), "87_03": ("87_03.bvh", 60.0), "90_11": ("90_11.bvh", None)}
+
+#: the CMU joint at each of the 22 SMPL body joints, in SMPL order (CMU has two spine
+#: joints above the hips and its neck and clavicles at the top of the spine)
+CMU_AS_SMPL22 = {
+    "pelvis": "Hips", "left_hip": "LeftUpLeg", "right_hip": "RightUpLeg", "spine1": "Spine",
+    "left_knee": "LeftLeg", "right_knee": "RightLeg", "spine2": "Spine1", "left_ankle": "LeftFoot",
+    "right_ankle": "RightFoot", "spine3": "Neck", "left_foot": "LeftToeBase",
+    "right_foot": "RightToeBase", "neck": "Neck1", "left_collar": "LeftShoulder",
+    "right_collar": "RightShoulder", "head": "Head", "left_shoulder": "LeftArm",
+    "right_shoulder": "RightArm", "left_elbow": "LeftForeArm", "right_elbow": "RightForeArm",
+    "left_wrist": "LeftHand", "right_wrist": "RightHand"}
 
 DESIGN = """# A comparison study: which source's motions look physically possible?
 [study]
@@ -58,46 +69,42 @@ accept_unphysical = true
 """
 
 
-def ground_truth(mocap: Path, name: str, fps):
-    """A CMU take in metres at its true rate, without the leading T-pose frame."""
+def ground_truth(mocap: Path, name: str) -> tuple[np.ndarray, float]:
+    """A CMU take as (F, 22, 3) joint positions in the HumanML3D layout (metres, Y up)
+    at its true rate, without the leading T-pose frame; and that rate."""
     from flipstudy.stimuli.loading import load_clip
-    from flipstudy.stimuli.motion.clip import Clip
+    from flipstudy.stimuli.motion.positions import SMPL22_NAMES
     file, rate = TAKES[name]
     c = load_clip(str(mocap / file), fps=rate)
-    return Clip(c.skeleton, c.fps, c.root_pos[1:], c.rotations[1:], None, {"name": name})
+    idx = [c.skeleton.index(CMU_AS_SMPL22[n]) for n in SMPL22_NAMES]
+    return c.joint_positions()[1:, idx], c.fps
 
 
-def jittered(clip, rng, sd_frames: float = 0.35):
-    """Frame k at time k + N(0, sd) frames (the slerp sampler of the editors)."""
-    from flipstudy.stimuli.edit.timing import sample
-    t = np.arange(clip.num_frames) + rng.normal(0.0, sd_frames, clip.num_frames)
-    return sample(clip, np.clip(t, 0, clip.num_frames - 1))
+def jittered(X: np.ndarray, rng, sd_frames: float = 0.35) -> np.ndarray:
+    """Frame k at time k + N(0, sd) frames (positions interpolated linearly)."""
+    F = len(X)
+    t = np.clip(np.arange(F) + rng.normal(0.0, sd_frames, F), 0, F - 1)
+    k = np.minimum(np.floor(t).astype(int), F - 2)
+    w = (t - k)[:, None, None]
+    return (1 - w) * X[k] + w * X[k + 1]
 
 
-def smoothed_floating(clip, sigma_frames: float = 3.0, lift_m: float = 0.06):
-    """Root and rotations smoothed over time, the body rising 0 → ``lift_m``."""
-    from flipstudy.stimuli.motion.clip import Clip
-    q = clip.rotations.copy()                                     # (F, J, 4) unit quaternions
-    flip = np.cumprod(np.where(np.sum(q[1:] * q[:-1], -1) < 0, -1.0, 1.0), axis=0)
-    q[1:] *= flip[..., None]                                      # one hemisphere along time
-    q = gaussian_filter1d(q, sigma_frames, axis=0, mode="nearest")
-    q /= np.linalg.norm(q, axis=-1, keepdims=True)
-    root = gaussian_filter1d(clip.root_pos, sigma_frames, axis=0, mode="nearest")
-    root[:, 1] += np.linspace(0.0, lift_m, clip.num_frames)
-    return Clip(clip.skeleton, clip.fps, root, q, None, dict(clip.meta))
+def smoothed_floating(X: np.ndarray, sigma_frames: float = 3.0, lift_m: float = 0.06) -> np.ndarray:
+    """Joint trajectories smoothed over time, the body rising 0 → ``lift_m``."""
+    Y = gaussian_filter1d(X, sigma_frames, axis=0, mode="nearest")
+    Y[..., 1] += np.linspace(0.0, lift_m, len(X))[:, None]
+    return Y
 
 
 def make_sources(out: Path, mocap: Path, seed: int = 31) -> Path:
     """Write the three sources and the design into ``out``; returns the design's path."""
-    from flipstudy import save_bvh
     rng = np.random.default_rng(seed)
     for s in ("gt", "jitter", "floaty"):
         (out / s).mkdir(parents=True, exist_ok=True)
     for name in TAKES:
-        gt = ground_truth(mocap, name, TAKES[name][1])
-        save_bvh(gt, out / "gt" / f"{name}.bvh")
-        save_bvh(jittered(gt, rng), out / "jitter" / f"{name}.bvh")
-        save_bvh(smoothed_floating(gt), out / "floaty" / f"{name}.bvh")
+        X, fps = ground_truth(mocap, name)
+        for s, Y in (("gt", X), ("jitter", jittered(X, rng)), ("floaty", smoothed_floating(X))):
+            np.savez(out / s / f"{name}.npz", joints=Y.astype(np.float32), fps=np.float64(fps))
     (out / "design.toml").write_text(DESIGN)
     return out / "design.toml"
 

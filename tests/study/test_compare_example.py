@@ -1,6 +1,7 @@
 """The README's comparison example on the real CMU takes: examples/compare_models.py
-makes the ground truth with SOURCES.md's fixes (60 Hz, no T-pose) and two degraded
-sources, and the design builds into a comparison study."""
+makes the ground truth as HumanML3D-layout joint positions with SOURCES.md's fixes
+(60 Hz, no T-pose) and two degraded sources, and the design builds into a
+comparison study through the loading rule's position reader."""
 from __future__ import annotations
 
 import importlib.util
@@ -37,27 +38,34 @@ def example(tmp_path_factory):
 
 
 def test_the_ground_truth_is_the_take_at_its_true_rate_without_the_t_pose(example):
+    """gt/88_01.npz: the take's joints at the SMPL body joints, 60 Hz, frame 1 (the
+    T-pose) dropped; read back through the loading rule its flight's gravity is
+    near 9.81 m/s² (SOURCES.md: 10.7-11.7 for a rough COM at 1/60 s, 43-47 at the
+    header's 1/120 s)."""
+    from flipstudy.stimuli.loading import load_clip
     raw = load_bvh(MOCAP / "88_01.bvh", fps=60.0)
-    gt = load_bvh(example / "gt" / "88_01.bvh", scale=1.0)
-    assert gt.fps == 60.0 and gt.num_frames == raw.num_frames - 1
-    np.testing.assert_allclose(gt.joint_positions(), raw.joint_positions()[1:], atol=1e-4)
-    # gravity says the rate is right: the flight's COM parabola near 9.81 m/s² (SOURCES.md: 10.7-11.7
-    # for a rough COM at 1/60 s, 43-47 at the header's 1/120 s)
-    assert 8.5 < analyse(gt).apparent_gravity < 12.5
+    with np.load(example / "gt" / "88_01.npz") as z:
+        X, fps = z["joints"], float(z["fps"])
+    assert X.shape == (raw.num_frames - 1, 22, 3) and fps == 60.0
+    hips = raw.joint_positions()[1:, raw.skeleton.index("Hips")]
+    np.testing.assert_allclose(X[:, 0], hips, atol=1e-5)                 # SMPL joint 0: the pelvis
+    clip = load_clip(str(example / "gt" / "88_01.npz"))
+    assert clip.fps == 60.0 and 8.5 < analyse(clip).apparent_gravity < 12.5
 
 
 def test_the_models_are_degraded_copies_of_the_same_items(example):
-    gt = load_bvh(example / "gt" / "87_03.bvh", scale=1.0)
-    jit = load_bvh(example / "jitter" / "87_03.bvh", scale=1.0)
-    flo = load_bvh(example / "floaty" / "87_03.bvh", scale=1.0)
-    assert gt.num_frames == jit.num_frames == flo.num_frames
-    # the floating copy ends 6 cm higher; the jittered one is the take at times off by a
-    # fraction of a frame: within a frame's travel of the take, never the same
-    dy = flo.root_pos[:, 1] - gt.root_pos[:, 1]
+    def joints(s):
+        with np.load(example / s / "87_03.npz") as z:
+            return z["joints"]
+    gt, jit, flo = joints("gt"), joints("jitter"), joints("floaty")
+    assert gt.shape == jit.shape == flo.shape
+    # the floating copy's pelvis ends 6 cm higher; the jittered one is the take at times off by
+    # a fraction of a frame: within two frames' travel of the take, never the same
+    dy = flo[:, 0, 1] - gt[:, 0, 1]
     assert dy[-1] == pytest.approx(0.06, abs=0.01) and abs(dy[0]) < 0.01
-    d = np.linalg.norm(jit.root_pos - gt.root_pos, axis=1)
-    step = np.linalg.norm(np.diff(gt.root_pos, axis=0), axis=1)
-    assert d.max() > 0.005 and np.all(d[1:-1] <= 2 * np.maximum(step[1:], step[:-1]) + 1e-6)
+    d = np.linalg.norm(jit - gt, axis=2)
+    step = np.linalg.norm(np.diff(gt, axis=0), axis=2)
+    assert d.max() > 0.005 and np.all(d[1:-1] <= 2 * np.maximum(step[1:], step[:-1]) + 1e-5)
 
 
 def test_the_example_builds_a_comparison_study_of_three_sources(example):
