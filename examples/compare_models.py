@@ -13,7 +13,8 @@ render, simulated panel, ranking.
   for: subjects 87 and 88 are 60 Hz although the una-dinosauria headers say
   120 Hz (``fps=60``), frame 1 of every raw CMU file is a T-pose (dropped), the
   ASF length unit is 0.056444 m (the loader's unit guess finds it); their joints
-  at the SMPL body joints (:data:`CMU_AS_SMPL22`), as a motion-generation model
+  at the SMPL body joints
+  (:data:`flipstudy.stimuli.motion.positions.CMU_AS_SMPL22`), as a motion-generation model
   writes them.
 * ``jitter``: temporal jitter: frame k is the take at time k + e_k frames,
   e_k ~ N(0, 0.35) (positions interpolated linearly), so poses arrive early or
@@ -32,17 +33,6 @@ from scipy.ndimage import gaussian_filter1d
 
 #: item → (file, its true frame rate or None for the header's); SOURCES.md: 87/88 are 60 Hz
 TAKES = {"88_01": ("88_01.bvh", 60.0), "87_03": ("87_03.bvh", 60.0), "90_11": ("90_11.bvh", None)}
-
-#: the CMU joint at each of the 22 SMPL body joints, in SMPL order (CMU has two spine
-#: joints above the hips and its neck and clavicles at the top of the spine)
-CMU_AS_SMPL22 = {
-    "pelvis": "Hips", "left_hip": "LeftUpLeg", "right_hip": "RightUpLeg", "spine1": "Spine",
-    "left_knee": "LeftLeg", "right_knee": "RightLeg", "spine2": "Spine1", "left_ankle": "LeftFoot",
-    "right_ankle": "RightFoot", "spine3": "Neck", "left_foot": "LeftToeBase",
-    "right_foot": "RightToeBase", "neck": "Neck1", "left_collar": "LeftShoulder",
-    "right_collar": "RightShoulder", "head": "Head", "left_shoulder": "LeftArm",
-    "right_shoulder": "RightArm", "left_elbow": "LeftForeArm", "right_elbow": "RightForeArm",
-    "left_wrist": "LeftHand", "right_wrist": "RightHand"}
 
 DESIGN = """# A comparison study: which source's motions look physically possible?
 [study]
@@ -73,7 +63,7 @@ def ground_truth(mocap: Path, name: str) -> tuple[np.ndarray, float]:
     """A CMU take as (F, 22, 3) joint positions in the HumanML3D layout (metres, Y up)
     at its true rate, without the leading T-pose frame; and that rate."""
     from flipstudy.stimuli.loading import load_clip
-    from flipstudy.stimuli.motion.positions import SMPL22_NAMES
+    from flipstudy.stimuli.motion.positions import CMU_AS_SMPL22, SMPL22_NAMES
     file, rate = TAKES[name]
     c = load_clip(str(mocap / file), fps=rate)
     idx = [c.skeleton.index(CMU_AS_SMPL22[n]) for n in SMPL22_NAMES]
