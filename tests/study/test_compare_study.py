@@ -288,3 +288,14 @@ def test_errors_are_injected_into_each_sources_clip_and_shown_beside_it(tmp_path
     trials = trial_order(st.design, st, "P01")
     assert Counter((t.stimulus, t.original) for t in trials if t.group == "takeoff") == \
         Counter({(f"backflip_{s}_takeoff_20", f"backflip_{s}"): 1 for s in ("gt", "jitter", "floaty")})
+
+
+def test_an_item_twice_in_one_folder_and_a_bad_strengths_option_are_clear_errors(tmp_path, built, capsys):
+    from flipstudy.study.cli import main
+    _write_sources(tmp_path, items=("jump",))
+    (tmp_path / "jitter" / "jump.npy").write_bytes(b"")
+    with pytest.raises(SourceMismatchError, match=r"sources 'jitter': folder .*jitter holds item 'jump' twice "
+                                                  r"\(jump.bvh and jump.npy\)"):
+        build_stimuli(Design.from_toml(_design(tmp_path)), tmp_path / "study", progress=False)
+    assert main(["simulate", str(built), "--participants", "1", "--strengths", "gt:0"]) == 1
+    assert "--strengths: 'gt:0' is not SOURCE=LOGIT" in capsys.readouterr().err
