@@ -14,7 +14,9 @@ The manifest holds one row per item and source: stimulus ``ITEM_SOURCE``,
 sources), ``group`` = ``source`` = the source's name, ``kind`` = ``given``,
 ``level`` 0.  Error ``[[groups]]`` are injected into every source's clip of every
 item (``ITEM_SOURCE_GROUP_LEVEL``, ``source`` the source's, ``original`` the
-source's clip as given: their level 0), judged with the study's task.  With ``[study] task = "2afc"`` a row of every source but the first
+source's clip as given: their level 0), judged with the study's task.  ``[study] compare = "all"`` adds, per item, the
+pairs of sources other than the first (``ITEM_B-vs-A``: B's clip written again,
+group ``B-vs-A``, beside A's clip), so every pair of sources is compared directly.  With ``[study] task = "2afc"`` a row of every source but the first
 has as its ``original`` the first source's row of the same item: the session
 shows the two side by side in time (which comes first balanced within each
 source and recorded, as for every 2AFC group) and asks which moved in a
@@ -37,7 +39,7 @@ from pathlib import Path
 
 from flipstudy.errors import FlipstudyFileNotFoundError, SourceMismatchError
 
-from .design import GIVEN_KIND, Design, SourceSpec
+from .design import GIVEN_KIND, Design, SourceSpec, pair_group
 
 def clip_suffixes() -> tuple[str, ...]:
     from .loading import POSITION_SUFFIXES
@@ -100,8 +102,12 @@ def plan_comparison(design: Design) -> list[tuple]:
     """(stimulus, item, source, file, original, group, level) of every stimulus, in
     manifest order: item by item, sources in the design's order, each source's clip as
     given (group None, level 0) followed by its error groups' levels other than 0
-    (``ITEM_SOURCE_GROUP_LEVEL``, their original the source's clip as given)."""
+    (``ITEM_SOURCE_GROUP_LEVEL``, their original the source's clip as given); with
+    ``compare = "all"`` then the pairs without the first source (``ITEM_B-vs-A``: B's
+    clip again, in the pair's group, beside A's)."""
     first = design.sources[0].name
+    by = {x.name: x for x in design.sources}
+    groups = {g.name: g for g in design.groups}
     rows = []
     for item, files in match_items(design).items():
         for s in design.sources:
@@ -111,6 +117,10 @@ def plan_comparison(design: Design) -> list[tuple]:
             for g in design.error_groups:
                 rows += [(f"{given}_{g.name}_{lv:g}", item, s, files[s.name], given, g, lv)
                          for lv in g.levels if lv != 0]
+        for a, b in design.source_pairs():      # compare = "all": b's clip again, beside a's
+            if a != first:
+                g = groups[pair_group(b, a)]
+                rows.append((stimulus_name(item, g.name), item, by[b], files[b], stimulus_name(item, a), g, 0.0))
     names = [r[0] for r in rows]
     if len(set(names)) != len(names):
         dup = sorted({n for n in names if names.count(n) > 1})

@@ -241,6 +241,12 @@ SOURCE_FIELDS = {
 GIVEN_KIND = "given"
 
 
+def pair_group(shown: str, comparison: str) -> str:
+    """The group of a comparison design's 2AFC trials that show ``shown``'s clip beside
+    ``comparison``'s (other than the first source's, whose are the source's own group)."""
+    return f"{shown}-vs-{comparison}"
+
+
 @dataclass(frozen=True)
 class SourceSpec(_TableSpec):
     """A ``[[sources]]`` entry of a comparison design: a named folder of clips (ground
@@ -457,6 +463,7 @@ STUDY_FIELDS = {
     "original": (str, "shared", _one_of(ORIGINAL_MODES)),
     "style": (str, None, None),                  # checked by _style_ok (defined below)
     "task": (str, "yes-no", _one_of(TASKS)),
+    "compare": (str, "first", _one_of(("first", "all"))),   # [[sources]] 2AFC: which pairs
 }
 
 
@@ -490,6 +497,7 @@ class Design:
     session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
     style: str | None = None          # character style of every stimulus (None: the renderer's)
     task: str = "yes-no"              # [study] task: the groups' default task
+    compare: str = "first"            # [[sources]] 2AFC pairs: each source with the first, or all pairs
     sources: tuple[SourceSpec, ...] = ()   # [[sources]]: a comparison design (see _check_sources)
     where: InitVar[str | None] = None
 
@@ -504,6 +512,9 @@ class Design:
         if self.sources:
             self._check_sources(src)
             return
+        if self.compare != "first":
+            raise DesignError(f"{w}.compare: {self.compare!r} chooses the pairs of a [[sources]] design; "
+                              f"this design has none (remove compare)")
         for key, typ in (("clips", ClipSpec), ("groups", Group)):
             items = getattr(self, key)
             if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__") \
@@ -610,10 +621,31 @@ class Design:
                                   f"source's clip as given)")
             if g.style is not None and g.style != (self.style or "ellipsoids"):
                 raise DesignError(f"{w}.style: one style for the whole comparison study; remove it")
+        if self.compare == "all" and self.task != "2afc":
+            raise DesignError(f"{src}: [study].compare: 'all' pairs the sources in 2AFC trials; the "
+                              f"study's task is {self.task!r} (set task = \"2afc\" or remove compare)")
+        pairs = tuple(SourceGroup(pair_group(b, a), "2afc") for a, b in self.source_pairs()
+                      if a != self.sources[0].name)
+        taken = {g.name for g in errors} | {x.name for x in self.sources}
+        for g in pairs:
+            if g.name in taken:
+                raise DesignError(f"{src}: [[sources]]: the pair group {g.name!r} has the name of a source "
+                                  f"or group; rename one")
+            _field(g, "name", str, f"{src}: [[sources]] pair", _name_ok)
         object.__setattr__(self, "clips", ())
         object.__setattr__(self, "reference", ())
         object.__setattr__(self, "groups", tuple(SourceGroup(x.name, self.task) for x in self.sources)
-                           + tuple(errors))
+                           + pairs + tuple(errors))
+
+    def source_pairs(self) -> list[tuple[str, str]]:
+        """The (comparison, shown) source pairs of a 2AFC comparison: each source with
+        the first (``compare = "first"``), or every pair in the design's order (``"all"``)."""
+        names = [x.name for x in self.sources]
+        if self.task != "2afc":
+            return []
+        if self.compare == "all":
+            return [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+        return [(names[0], b) for b in names[1:]]
 
     @property
     def error_groups(self) -> tuple:
@@ -720,7 +752,8 @@ class Design:
         """The design's TOML tables; :meth:`from_dict` reads them back to an equal design
         (``[study] fps`` is written only when the design wrote it)."""
         study = {k: getattr(self, k) for k in STUDY_FIELDS
-                 if getattr(self, k) is not None and (k != "fps" or self.fps_given)}
+                 if getattr(self, k) is not None and (k != "fps" or self.fps_given)
+                 and (k != "compare" or self.sources)}
         out = {"study": study, "session": self.session.to_dict()}
         if self.sources:
             out["sources"] = [s.to_dict() for s in self.sources]

@@ -50,7 +50,7 @@ import numpy as np
 
 from ._progress import Progress
 from .analyse import analyse
-from .design import GIVEN_KIND, SHARED_ORIGINAL_GROUP, Design, Group, SourceSpec
+from .design import GIVEN_KIND, SHARED_ORIGINAL_GROUP, Design, Group, SourceGroup, SourceSpec
 from .injection import Injected, check, inject_angular_momentum, inject_takeoff_angle, measure
 from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
@@ -278,7 +278,7 @@ def make_given_stimulus(design: Design, a, item: tuple, folder) -> dict:
     when it has a flight; NaN measures when it has none)."""
     name, it, s, path, orig, group, level = item
     spec = SimpleNamespace(name=it, accept_unphysical=s.accept_unphysical)
-    if group is not None:                       # an error injected into the source's clip
+    if group is not None and not isinstance(group, SourceGroup):    # an error injected into it
         if a.flight is None:
             raise StimulusError(f"item {it!r} of source '{s.name}' ({path}): the analyser finds no flight "
                                 f"phase, so it cannot carry group '{group.name}''s errors")
@@ -298,7 +298,8 @@ def make_given_stimulus(design: Design, a, item: tuple, folder) -> dict:
                **({"style": design.style or "ellipsoids"} if design.styled else {})}
         row.update({k: np.nan for k in ("takeoff_angle_deg", "flight_s", "jump_height_m", "jump_length_m",
                                         "takeoff_time", "landing_time")})
-    row.update(group=s.name, kind=GIVEN_KIND, profile="", original=orig, source=s.name)
+    row.update(group=group.name if group is not None else s.name, kind=GIVEN_KIND, profile="",
+               original=orig, source=s.name)
     return row
 
 
@@ -322,11 +323,13 @@ def _build_comparison(design: Design, out: Path, force: bool, progress: bool, re
     bar = Progress(len(todo), "stimuli", progress)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
     try:
-        rows, a = [], None
+        rows, read = [], {}
         for item in todo:
-            if item[5] is None:                 # the source's clip as given, then its errors
-                a = load_source_clip(design, item[2], item[1], item[3])
-            rows.append(make_given_stimulus(design, a, item, tmp))
+            key = (item[1], item[2].name)       # one reading per item and source
+            if key not in read:
+                read = {k: v for k, v in read.items() if k[0] == item[1]}
+                read[key] = load_source_clip(design, item[2], item[1], item[3])
+            rows.append(make_given_stimulus(design, read[key], item, tmp))
             bar.step(item[0])
         StimulusSet.from_rows(tmp, rows).write()
         if design.path is not None:

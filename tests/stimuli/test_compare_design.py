@@ -31,6 +31,8 @@ def comparison_tables(draw):
               "sources": sources}
     if draw(st.booleans()):
         tables["study"]["fps"] = float(draw(st.integers(10, 240)))
+    if task == "2afc" and draw(st.booleans()):
+        tables["study"]["compare"] = draw(st.sampled_from(["first", "all"]))
     gnames = draw(st.lists(NAMES.filter(lambda x: x not in names and x not in ("reference", "original")),
                            max_size=2, unique=True))
     tables["groups"] = [{"name": g, "kind": "takeoff-angle",
@@ -47,7 +49,10 @@ def comparison_tables(draw):
 def test_a_comparison_design_round_trips_through_dict_and_toml(t):
     d = Design.from_dict(t, "drawn.toml")
     assert d.compares and [s.name for s in d.sources] == [s["name"] for s in t["sources"]]
-    assert [g.name for g in d.groups if isinstance(g, SourceGroup)] == [s["name"] for s in t["sources"]]
+    names = [s["name"] for s in t["sources"]]
+    pairs = [f"{b}-vs-{a}" for i, a in enumerate(names[1:], 1) for b in names[i + 1:]] \
+        if t["study"].get("compare") == "all" else []
+    assert [g.name for g in d.groups if isinstance(g, SourceGroup)] == names + pairs
     assert [g.name for g in d.error_groups] == [g["name"] for g in t.get("groups", [])]
     assert Design.from_dict(d.to_dict(), d.path) == d
     back = parse_design(d.to_toml(), "again.toml")

@@ -299,3 +299,37 @@ def test_an_item_twice_in_one_folder_and_a_bad_strengths_option_are_clear_errors
         build_stimuli(Design.from_toml(_design(tmp_path)), tmp_path / "study", progress=False)
     assert main(["simulate", str(built), "--participants", "1", "--strengths", "gt:0"]) == 1
     assert "--strengths: 'gt:0' is not SOURCE=LOGIT" in capsys.readouterr().err
+
+
+def test_compare_all_adds_the_pairs_without_the_first_source(tmp_path):
+    """compare = "all": per item the first source's pairs as before, and the pair of
+    the others (floaty-vs-jitter: floaty's clip again, beside jitter's); each pair
+    balanced left/right; the ranking counts every pair's choices."""
+    from flipstudy.study.cli import main
+    from flipstudy.study.order import trial_order
+    from flipstudy.study.simulate import simulate
+    with pytest.raises(DesignError, match="compare: 'all' pairs the sources in 2AFC trials"):
+        Design.from_toml_text(_design(tmp_path, task="yes-no").read_text()
+                              .replace('task = "yes-no"', 'task = "yes-no"\ncompare = "all"'))
+    with pytest.raises(DesignError, match=r"\[study\].compare: 'all' chooses the pairs of a \[\[sources\]\] design"):
+        Design.from_toml_text('[study]\nname = "x"\nseed = 1\ncompare = "all"\n[[clips]]\nname = "b"\n'
+                              'source = "backflip"\n[[groups]]\nname = "g"\nkind = "takeoff-angle"\nlevels = [0, 10]\n')
+    _write_sources(tmp_path, items=("jump",))
+    p = _design(tmp_path, repetitions=2)
+    p.write_text(p.read_text().replace('task = "2afc"', 'task = "2afc"\ncompare = "all"'))
+    design = Design.from_toml(p)
+    assert Design.from_toml_text(design.to_toml()) == design and 'compare = "all"' in design.to_toml()
+    build_stimuli(design, tmp_path / "study", progress=False)
+    st = StimulusSet.read(tmp_path / "study")
+    s = st["jump_floaty-vs-jitter"]
+    assert (s.group, s.source, s.original, s.sha256) == ("floaty-vs-jitter", "floaty", "jump_jitter",
+                                                         st["jump_floaty"].sha256)   # the same clip again
+    trials = trial_order(st.design, st, "P01")
+    pairs = Counter((t.stimulus, t.original, t.first) for t in trials)
+    for shown, comp in (("jump_jitter", "jump_gt"), ("jump_floaty", "jump_gt"), ("jump_floaty-vs-jitter", "jump_jitter")):
+        assert pairs[(shown, comp, "original")] == pairs[(shown, comp, "modified")] == 1
+    simulate(tmp_path / "study", 5, seed=4, strengths={"gt": 0.0, "jitter": -1.0, "floaty": -2.0})
+    assert main(["export", str(tmp_path / "study"), "--include-simulated"]) == 0
+    assert main(["analyze", str(tmp_path / "study"), "--include-simulated", "--n-boot", "20", "--no-figures"]) == 0
+    r = pd.read_csv(tmp_path / "study" / "analysis" / "ranking.csv").set_index("source")
+    assert (r.n == 2 * 5 * 2).all() and r.n.sum() == 2 * 30      # each source in 2 of the 3 pairs
