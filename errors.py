@@ -286,6 +286,20 @@ __all__ = [
 ]
 
 
+class SourceMismatchError(FlipstudyValueError):
+    """The ``[[sources]]`` of a comparison design do not hold the same items (a clip
+    missing in one folder, a folder without clips, an item twice); the message names
+    the folder and the item."""
+
+
+class ComparisonError(FlipstudyValueError):
+    """A comparison study's answers or strengths that cannot be analysed or simulated
+    as asked (a source never compared, an unknown source); the message says which."""
+
+
+__all__ += ["SourceMismatchError", "ComparisonError"]
+
+
 class MotionFileError(FlipstudyValueError):
     """A joint-position array, an AMASS/SMPL ``.npz``, a layout file or a body-model
     file that is not what its reader expects (shape, NaN frames, unknown layout, a

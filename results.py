@@ -448,3 +448,34 @@ class MotionResult(StepResult):
 __all__ = ["StepResult", "BuildResult", "RenderResult", "SimulateResult", "ExportResult",
            "ImportResult", "AnalyzeResult", "ReproduceResult", "StatusResult", "PlanResult",
            "MotionResult"]
+
+
+# ---- analyze of a comparison study: the ranking of its sources (flipstudy.study.compare)
+
+@dataclass(frozen=True)
+class CompareResult(StepResult):
+    """A comparison study's analysis written to ``out``: ``report`` is what ``analyze
+    --json`` prints (participants, the Bradley–Terry ranking, the agreement of the
+    clips' numbers with the choices, notes, files)."""
+    out: Path
+    report: dict
+
+    def summary(self) -> str:
+        r = self.report
+        rank = sorted(r["ranking"], key=lambda x: -x["strength"])
+        lines = [f"comparison study: {r['participants']} participant(s)",
+                 f"Bradley–Terry ranking ({r['choices']} choices; θ in logits, {r['reference']} = 0, "
+                 f"{100 * r['ci']:g} % intervals):"]
+        lines += [f"  {x['source']:16s} θ = {x['strength']:+.2f} [{x['low']:+.2f}, {x['high']:+.2f}]   "
+                  f"won {x['wins']}/{x['n']}" for x in rank]
+        if r["agreement"]:
+            lines.append("agreement with people's choices (smaller number predicted chosen; "
+                         "bootstrap over participants):")
+            for a in r["agreement"]:
+                lines.append(f"  {a['metric']:22s} accuracy {a['accuracy']:.2f} [{a['accuracy_low']:.2f}, "
+                             f"{a['accuracy_high']:.2f}]  AUC {a['auc']:.2f} [{a['auc_low']:.2f}, "
+                             f"{a['auc_high']:.2f}]  ({a['n']} trials)" if a.get("n")
+                             else f"  {a['metric']:22s} not measured on these clips")
+        lines += [f"note: {n}" for n in r["notes"]]
+        lines += [f"wrote {p}" for p in r["files"].values()]
+        return "\n".join(lines)

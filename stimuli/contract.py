@@ -213,7 +213,9 @@ class Stimulus(_Record):
     (numbers as numbers, file names as paths relative to the study folder,
     ``accept_unphysical`` as a bool).  ``style`` is the character style (None
     when the design chooses none: no ``style`` column); ``ballistic`` the
-    columns of the ballistic kinds (None when the design uses none).
+    columns of the ballistic kinds (None when the design uses none); ``source``
+    the ``[[sources]]`` entry a comparison study's clip comes from (None in other
+    studies: no ``source`` column).
 
     Angles are in degrees, errors in percent, times in seconds, lengths in
     metres unless the name says otherwise (``_mm``); ``takeoff``/``landing`` are
@@ -258,6 +260,7 @@ class Stimulus(_Record):
     below_floor_mm: float = 0.0
     style: str | None = None
     ballistic: Ballistic | None = None
+    source: str | None = None
 
     def __post_init__(self):
         if not STIMULUS_RE.fullmatch(_Typed.coerce(str, self.stimulus, "stimulus")):
@@ -266,6 +269,8 @@ class Stimulus(_Record):
         super().__post_init__()
         if self.style is not None:
             _Typed.coerce(str, self.style, "style")
+        if self.source is not None:
+            _Typed.coerce(str, self.source, "source")
         if self.ballistic is not None and not isinstance(self.ballistic, Ballistic):
             raise TypeError(f"ballistic: expected Ballistic, got {self.ballistic!r}")
 
@@ -285,6 +290,8 @@ class Stimulus(_Record):
             out.append(self.style)
         if self.ballistic is not None:
             out += self.ballistic.cells()
+        if self.source is not None:
+            out.append(self.source)
         return out
 
     @classmethod
@@ -292,7 +299,8 @@ class Stimulus(_Record):
         """From a mapping of column → value (a build's row; numbers, not text)."""
         base = {c: row[c] for c in cls.columns() if c in row}
         b = {c: row[c] for c in Ballistic.columns() if c in row}
-        return cls(**base, style=row.get("style"), ballistic=Ballistic(**b) if b else None)
+        return cls(**base, style=row.get("style"), ballistic=Ballistic(**b) if b else None,
+                   source=row.get("source"))
 
     def as_dict(self) -> dict:
         """Column → typed value, as a flat mapping (paths as text), in manifest order."""
@@ -302,6 +310,8 @@ class Stimulus(_Record):
             d["style"] = self.style
         if self.ballistic is not None:
             d.update({c: getattr(self.ballistic, c) for c in Ballistic.columns()})
+        if self.source is not None:
+            d["source"] = self.source
         return d
 
 
@@ -316,9 +326,11 @@ EXTRA_COLUMNS = Ballistic.columns()
 REQUIRED_COLUMNS = MANIFEST_COLUMNS[:MANIFEST_COLUMNS.index("sha256") + 1]
 
 
-def manifest_columns(styled: bool, ballistic: bool) -> list[str]:
-    """The header of a manifest with or without ``style`` and the ballistic columns."""
-    return MANIFEST_COLUMNS + (["style"] if styled else []) + (EXTRA_COLUMNS if ballistic else [])
+def manifest_columns(styled: bool, ballistic: bool, sourced: bool = False) -> list[str]:
+    """The header of a manifest with or without ``style``, the ballistic columns and
+    ``source`` (a comparison study's)."""
+    return MANIFEST_COLUMNS + (["style"] if styled else []) + (EXTRA_COLUMNS if ballistic else []) \
+        + (["source"] if sourced else [])
 
 
 @dataclass(frozen=True, eq=False)
@@ -349,9 +361,11 @@ class StimulusSet:
             first = self.stimuli[0]
             for s in self.stimuli:
                 if (s.style is None) != (first.style is None) or \
-                        (s.ballistic is None) != (first.ballistic is None):
+                        (s.ballistic is None) != (first.ballistic is None) or \
+                        (s.source is None) != (first.source is None):
                     raise ManifestError(f"{self.manifest_path}: stimulus {s.stimulus!r} has other "
-                                        f"columns than {first.stimulus!r} (style or ballistic columns)")
+                                        f"columns than {first.stimulus!r} (style, ballistic or source "
+                                        f"columns)")
         object.__setattr__(self, "_by_name", by)
 
     # --- access -------------------------------------------------------------------------
@@ -418,7 +432,17 @@ class StimulusSet:
 
     @property
     def columns(self) -> list[str]:
-        return manifest_columns(self.styled, bool(self.stimuli) and self.stimuli[0].ballistic is not None)
+        return manifest_columns(self.styled, bool(self.stimuli) and self.stimuli[0].ballistic is not None,
+                                self.sourced)
+
+    @property
+    def sourced(self) -> bool:
+        """Is it a comparison study's set (a ``source`` column)?"""
+        return bool(self.stimuli) and self.stimuli[0].source is not None
+
+    def sources(self) -> list[str]:
+        """The sources of a comparison study's stimuli, in manifest order ([] elsewhere)."""
+        return list(dict.fromkeys(s.source for s in self.stimuli if s.source is not None))
 
     # --- the manifest -------------------------------------------------------------------
     def manifest_text(self) -> str:
@@ -505,7 +529,8 @@ def _parse(p: Path, text: str) -> list[Stimulus]:
             raise ManifestError(f"{p} line 1: no header (an empty manifest)")
         styled = "style" in header
         ballistic = EXTRA_COLUMNS[0] in header
-        want = manifest_columns(styled, ballistic)
+        sourced = "source" in header
+        want = manifest_columns(styled, ballistic, sourced)
         if header != want:                  # an older build's manifest lacks some measured columns
             need = REQUIRED_COLUMNS + (EXTRA_COLUMNS if ballistic else [])
             missing = [c for c in need if c not in header]
@@ -527,7 +552,8 @@ def _parse(p: Path, text: str) -> list[Stimulus]:
                 raise ManifestError(f"{where}: {len(cells)} cells, the header has {len(header)}")
             row = dict(zip(header, cells))
             b = Ballistic.parse(row, where) if ballistic else None
-            out.append(Stimulus.parse(row, where, style=row["style"] if styled else None, ballistic=b))
+            out.append(Stimulus.parse(row, where, style=row["style"] if styled else None, ballistic=b,
+                                      source=row["source"] if sourced else None))
     except csv.Error as e:
         raise ManifestError(f"{p} line {reader.line_num}: {e}") from None
     return out

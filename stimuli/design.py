@@ -129,7 +129,7 @@ OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as desi
 #: the character styles a design may choose (drawn by flipstudy.render.characters)
 CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
-SECTIONS = ("study", "session", "clips", "groups", "reference")
+SECTIONS = ("study", "session", "clips", "groups", "reference", "sources")
 ORIGINAL_MODES = ("shared", "per-group")   # [study] original
 GROUP_ORIGINAL = ("shared", "own")         # [[groups]] original
 #: the group name of the shared original in the manifest and the responses
@@ -183,8 +183,38 @@ CLIP_FIELDS = {
 }
 
 
+class _TableSpec:
+    """An entry of an array of tables (``[[clips]]``, ``[[sources]]``) whose keys are
+    its ``FIELDS`` (TOML key → (type, default, check); ``...``: required, None: may
+    be left out): checked on construction, read by :meth:`from_dict`, written by
+    :meth:`to_dict`.  ``SECTION`` names the array in errors."""
+    FIELDS: dict = {}
+    SECTION = ""
+
+    def __post_init__(self, where):
+        w = where or self.SECTION
+        _field(self, "name", str, w, _name_ok)
+        for key, (typ, default, check) in self.FIELDS.items():
+            if key != "name":
+                _field(self, key, typ, w, check, optional=default is None)
+
+    @classmethod
+    def from_dict(cls, c: dict, where: str | None = None):
+        where = where or cls.SECTION
+        if not isinstance(c, dict):
+            raise DesignError(f"{where}: expected a table")
+        _check_keys(c, tuple(cls.FIELDS), where + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
+        for key, (typ, default, check) in cls.FIELDS.items():
+            if default is ... and key not in c:
+                raise DesignError(f"{where}: missing field '{key}'")
+        return cls(**c, where=where)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in self.FIELDS if getattr(self, k) is not None}
+
+
 @dataclass(frozen=True)
-class ClipSpec:
+class ClipSpec(_TableSpec):
     """A ``[[clips]]`` entry, valid when it exists (every field checked against
     :data:`CLIP_FIELDS`; ``where`` names the file and entry in errors)."""
     name: str
@@ -195,26 +225,70 @@ class ClipSpec:
     k_ratio: float = 0.7        # its retiming factor as a fraction of k*
     accept_unphysical: bool = False  # build it although its gravity or height contradicts physics
     where: InitVar[str | None] = None
+    FIELDS = CLIP_FIELDS
+    SECTION = "clips"
 
-    def __post_init__(self, where):
-        w = where or "clips"
-        _field(self, "name", str, w, _name_ok)
-        for key, (typ, default, check) in CLIP_FIELDS.items():
-            if key != "name":
-                _field(self, key, typ, w, check, optional=default is None)
 
-    @classmethod
-    def from_dict(cls, c: dict, where: str = "clips") -> "ClipSpec":
-        if not isinstance(c, dict):
-            raise DesignError(f"{where}: expected a table")
-        _check_keys(c, CLIP_KEYS, where + (f" ({c['name']})" if isinstance(c.get("name"), str) else ""))
-        for key, (typ, default, check) in CLIP_FIELDS.items():
-            if default is ... and key not in c:
-                raise DesignError(f"{where}: missing field '{key}'")
-        return cls(**c, where=where)
+#: what a ``[[sources]]`` entry may hold (see :class:`SourceSpec`)
+SOURCE_FIELDS = {
+    "name": (str, ..., None),          # checked by _name_ok
+    "folder": (str, ..., lambda v: None if 0 < len(v) <= 4096 else "expected a folder path"),
+    "scale": (float, None, _between(*SCALE_RANGE, " metres per file unit")),
+    "fps": (float, None, _between(*FPS_RANGE, " frames per second")),
+    "accept_unphysical": (bool, False, None),
+}
+#: the kind of a stimulus that is a source's clip as given (no error injected)
+GIVEN_KIND = "given"
 
-    def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in CLIP_FIELDS if getattr(self, k) is not None}
+
+def pair_group(shown: str, comparison: str) -> str:
+    """The group of a comparison design's 2AFC trials that show ``shown``'s clip beside
+    ``comparison``'s (other than the first source's, whose are the source's own group)."""
+    return f"{shown}-vs-{comparison}"
+
+
+@dataclass(frozen=True)
+class SourceSpec(_TableSpec):
+    """A ``[[sources]]`` entry of a comparison design: a named folder of clips (ground
+    truth, model A, ...), each clip read by the one loading rule of every CLIP
+    (:func:`flipstudy.stimuli.loading.load_clip`, with this entry's ``scale`` and
+    ``fps``); clips of different sources are the same item when their file stems
+    are equal.  ``folder`` is relative to the design file."""
+    name: str
+    folder: str
+    scale: float | None = None
+    fps: float | None = None
+    accept_unphysical: bool = False
+    where: InitVar[str | None] = None
+    FIELDS = SOURCE_FIELDS
+    SECTION = "sources"
+
+
+@dataclass(frozen=True)
+class SourceGroup:
+    """The group of one source's clips in a comparison design (made by :class:`Design`
+    from ``[[sources]]``, never written): its stimuli are the source's clips as
+    given (kind :data:`GIVEN_KIND`, level 0).  With ``task = "2afc"`` each clip of a
+    source other than the first is shown beside the first source's clip of the same
+    item (its ``original``); the first source's clips are the comparisons, not
+    trials.  It answers what the session code asks of a :class:`Group`."""
+    name: str
+    task: str = "yes-no"
+    kind: str = GIVEN_KIND
+    profile: None = None
+    sign: int = 1
+    levels: tuple = (0.0,)
+    original: str = "own"
+    style: None = None
+    method: str = "constant"
+    quest: None = None
+    policy: None = None
+    axis: None = None
+    span: None = None
+    adaptive = False
+
+    def trial_levels(self) -> list[float]:
+        return [0.0]
 
 
 GROUP_FIELDS = {
@@ -389,6 +463,7 @@ STUDY_FIELDS = {
     "original": (str, "shared", _one_of(ORIGINAL_MODES)),
     "style": (str, None, None),                  # checked by _style_ok (defined below)
     "task": (str, "yes-no", _one_of(TASKS)),
+    "compare": (str, "first", _one_of(("first", "all"))),   # [[sources]] 2AFC: which pairs
 }
 
 
@@ -422,6 +497,8 @@ class Design:
     session: SessionSettings = field(default_factory=SessionSettings)  # the [session] table
     style: str | None = None          # character style of every stimulus (None: the renderer's)
     task: str = "yes-no"              # [study] task: the groups' default task
+    compare: str = "first"            # [[sources]] 2AFC pairs: each source with the first, or all pairs
+    sources: tuple[SourceSpec, ...] = ()   # [[sources]]: a comparison design (see _check_sources)
     where: InitVar[str | None] = None
 
     def __post_init__(self, where):
@@ -432,6 +509,12 @@ class Design:
         _field(self, "fps_given", bool, w)
         if not isinstance(self.session, SessionSettings):
             raise DesignError(f"{src}: [session]: expected SessionSettings, got {_show(self.session)}")
+        if self.sources:
+            self._check_sources(src)
+            return
+        if self.compare != "first":
+            raise DesignError(f"{w}.compare: {self.compare!r} chooses the pairs of a [[sources]] design; "
+                              f"this design has none (remove compare)")
         for key, typ in (("clips", ClipSpec), ("groups", Group)):
             items = getattr(self, key)
             if isinstance(items, (str, bytes, dict)) or not hasattr(items, "__iter__") \
@@ -492,6 +575,88 @@ class Design:
                               f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "
                               f"(fewer repetitions, clips, groups or levels)")
 
+    def _check_sources(self, src: str) -> None:
+        """A comparison design: ``[[sources]]`` (at least two, names and folders not
+        repeated), no ``[[clips]]`` (its items are the sources' clips, matched by file
+        stem when it is built) and no ``[reference]``; its groups are one
+        :class:`SourceGroup` per source, with the ``[study]`` task, then the
+        ``[[groups]]`` of errors injected into every source's clips (constant, the
+        study's task; their level 0 is each source's clip as given)."""
+        srcs = self.sources
+        if isinstance(srcs, (str, bytes, dict)) or not hasattr(srcs, "__iter__") \
+                or not all(isinstance(x, SourceSpec) for x in srcs):
+            raise DesignError(f"{src}: [[sources]]: expected SourceSpec entries, got {_show(srcs)}")
+        object.__setattr__(self, "sources", tuple(srcs))
+        if len(self.sources) < 2:
+            raise DesignError(f"{src}: [[sources]]: a comparison needs at least two sources (e.g. the "
+                              f"ground truth and a model), got {len(self.sources)}")
+        for what in ("name", "folder"):
+            vals = [getattr(x, what) for x in self.sources]
+            if len(set(vals)) != len(vals):
+                raise DesignError(f"{src}: [[sources]]: duplicate source {what}s "
+                                  f"{sorted({v for v in vals if vals.count(v) > 1})}")
+        if self.clips:
+            raise DesignError(f"{src}: [[clips]] and [[sources]]: a comparison design takes its items "
+                              f"from the [[sources]] folders (clips matched by file name); remove [[clips]]")
+        if self.reference:
+            raise DesignError(f"{src}: [reference] and [[sources]]: a comparison design has no reference "
+                              f"clips; remove [reference]")
+        groups = self.groups
+        if isinstance(groups, (str, bytes, dict)) or not hasattr(groups, "__iter__") \
+                or not all(isinstance(g, (Group, SourceGroup)) for g in groups):
+            raise DesignError(f"{src}: [[groups]]: expected Group entries, got {_show(groups)}")
+        errors = [g for g in groups if isinstance(g, Group)]
+        names = [x.name for x in self.sources] + [g.name for g in errors]
+        for i, g in enumerate(errors):
+            w = f"{src}: groups[{i}] ({g.name})"
+            if g.name in RESERVED_GROUP_NAMES or names.count(g.name) > 1:
+                raise DesignError(f"{w}.name: '{g.name}' is a source's, another group's or a reserved "
+                                  f"name; choose another")
+            if g.adaptive:
+                raise DesignError(f"{w}.method: a comparison design's error groups are constant "
+                                  f"(quest+ picks among a clip list, and its items come from folders)")
+            if g.task != self.task:
+                raise DesignError(f"{w}.task: {g.task!r}, the study's is {self.task!r}; an error group "
+                                  f"on given sources is judged like the sources (its level 0 is the "
+                                  f"source's clip as given)")
+            if g.style is not None and g.style != (self.style or "ellipsoids"):
+                raise DesignError(f"{w}.style: one style for the whole comparison study; remove it")
+        if self.compare == "all" and self.task != "2afc":
+            raise DesignError(f"{src}: [study].compare: 'all' pairs the sources in 2AFC trials; the "
+                              f"study's task is {self.task!r} (set task = \"2afc\" or remove compare)")
+        pairs = tuple(SourceGroup(pair_group(b, a), "2afc") for a, b in self.source_pairs()
+                      if a != self.sources[0].name)
+        taken = {g.name for g in errors} | {x.name for x in self.sources}
+        for g in pairs:
+            if g.name in taken:
+                raise DesignError(f"{src}: [[sources]]: the pair group {g.name!r} has the name of a source "
+                                  f"or group; rename one")
+            _field(g, "name", str, f"{src}: [[sources]] pair", _name_ok)
+        object.__setattr__(self, "clips", ())
+        object.__setattr__(self, "reference", ())
+        object.__setattr__(self, "groups", tuple(SourceGroup(x.name, self.task) for x in self.sources)
+                           + pairs + tuple(errors))
+
+    def source_pairs(self) -> list[tuple[str, str]]:
+        """The (comparison, shown) source pairs of a 2AFC comparison: each source with
+        the first (``compare = "first"``), or every pair in the design's order (``"all"``)."""
+        names = [x.name for x in self.sources]
+        if self.task != "2afc":
+            return []
+        if self.compare == "all":
+            return [(a, b) for i, a in enumerate(names) for b in names[i + 1:]]
+        return [(names[0], b) for b in names[1:]]
+
+    @property
+    def error_groups(self) -> tuple:
+        """The groups of injected errors (a comparison design's without its sources')."""
+        return tuple(g for g in self.groups if isinstance(g, Group))
+
+    @property
+    def compares(self) -> bool:
+        """Is it a comparison design (``[[sources]]``: given clips, no injected errors)?"""
+        return bool(self.sources)
+
     # ------------------------------------------------------------ reading, writing
     @classmethod
     def from_dict(cls, d: dict, path: Path | str | None = None) -> "Design":
@@ -514,6 +679,8 @@ class Design:
         study = {k: _get(st, k, typ, w, default, _style_ok if k == "style" else check)
                  for k, (typ, default, check) in STUDY_FIELDS.items()}
         session = _parse_session(d, st, src)
+        if "sources" in d:
+            return cls._from_sources(d, study, session, st, path, src)
         clips = d.get("clips")
         if not isinstance(clips, list) or not clips:
             raise DesignError(f"{src}: [[clips]]: at least one base clip is needed")
@@ -531,6 +698,26 @@ class Design:
         p = Path(path) if path is not None and str(path) != "<design>" else None
         return cls(**study, clips=tuple(specs), groups=tuple(gs), reference=tuple(reference),
                    fps_given="fps" in st, path=p, session=session, where=src)
+
+    @classmethod
+    def _from_sources(cls, d, study, session, st, path, src) -> "Design":
+        for k, label, what in (("clips", "[[clips]]", "takes its items from the [[sources]] folders "
+                                "(clips matched by file name); remove [[clips]]"),
+                               ("reference", "[reference]", "has no reference clips; remove [reference]")):
+            if k in d:
+                raise DesignError(f"{src}: {label} and [[sources]]: a comparison design {what}")
+        sources = d["sources"]
+        if not isinstance(sources, list):
+            raise DesignError(f"{src}: [[sources]]: expected an array of tables, got {_show(sources)}")
+        specs = [SourceSpec.from_dict(c, f"{src}: sources[{i}]") for i, c in enumerate(sources)]
+        groups = d.get("groups", [])
+        if not isinstance(groups, list):
+            raise DesignError(f"{src}: [[groups]]: expected an array of tables, got {_show(groups)}")
+        gs = [Group.from_dict(g, f"{src}: groups[{i}]", study["task"], "per-group")
+              for i, g in enumerate(groups)]
+        p = Path(path) if path is not None and str(path) != "<design>" else None
+        return cls(**study, clips=(), groups=tuple(gs), sources=tuple(specs), fps_given="fps" in st, path=p,
+                   session=session, where=src)
 
     @classmethod
     def from_toml_text(cls, text: str, path: Path | str = "<design>") -> "Design":
@@ -565,10 +752,15 @@ class Design:
         """The design's TOML tables; :meth:`from_dict` reads them back to an equal design
         (``[study] fps`` is written only when the design wrote it)."""
         study = {k: getattr(self, k) for k in STUDY_FIELDS
-                 if getattr(self, k) is not None and (k != "fps" or self.fps_given)}
-        out = {"study": study, "session": self.session.to_dict(),
-               "clips": [c.to_dict() for c in self.clips],
-               "groups": [g.to_dict() for g in self.groups]}
+                 if getattr(self, k) is not None and (k != "fps" or self.fps_given)
+                 and (k != "compare" or self.sources)}
+        out = {"study": study, "session": self.session.to_dict()}
+        if self.sources:
+            out["sources"] = [s.to_dict() for s in self.sources]
+            if self.error_groups:
+                out["groups"] = [g.to_dict() for g in self.error_groups]
+            return out
+        out.update(clips=[c.to_dict() for c in self.clips], groups=[g.to_dict() for g in self.groups])
         if self.reference:
             out["reference"] = {"clips": list(self.reference)}
         return out

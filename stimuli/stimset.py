@@ -44,12 +44,13 @@ import tempfile
 import zipfile
 from contextlib import contextmanager
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
 from ._progress import Progress
 from .analyse import analyse
-from .design import SHARED_ORIGINAL_GROUP, Design, Group
+from .design import GIVEN_KIND, SHARED_ORIGINAL_GROUP, Design, Group, SourceGroup, SourceSpec
 from .injection import Injected, check, inject_angular_momentum, inject_takeoff_angle, measure
 from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
@@ -211,6 +212,8 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
 
 def _build(design: Design, out: Path, force: bool, progress: bool, replace_check,
            cluster=None) -> list[dict]:
+    if design.compares:
+        return _build_comparison(design, out, force, progress, replace_check)
     todo = plan(design)
     bar = Progress(len(todo), "stimuli", progress)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
@@ -243,6 +246,97 @@ def _build(design: Design, out: Path, force: bool, progress: bool, replace_check
             shutil.rmtree(tmp, ignore_errors=True)
         if isinstance(e, StimulusError) and design.path is not None and str(design.path) not in str(e):
             raise StimulusError(f"{design.path}: {e}") from None       # name the design file
+        raise
+    finally:
+        bar.close()
+    return rows
+
+
+def load_source_clip(design: Design, s: SourceSpec, item: str, path: Path):
+    """One given clip through the loading rule, resampled to ``[study] fps`` when the
+    design writes it, its analysis after the physics gate."""
+    from .loading import POSITION_SUFFIXES, check_up_axis, load_clip
+    clip = load_clip(str(path), scale=s.scale, fps=s.fps, gate=False)    # the design's gate runs below
+    if path.suffix.lower() in POSITION_SUFFIXES:
+        check_up_axis(clip)
+    if design.fps_given and abs(clip.fps - design.fps) > 1e-9 * design.fps:
+        clip = resample(clip, design.fps)
+    clip.meta["name"] = item
+    a = analyse(clip, total_mass=design.total_mass)
+    spec = SimpleNamespace(name=f"{item} of source {s.name}", source=str(path), scale=s.scale,
+                           accept_unphysical=s.accept_unphysical)
+    try:
+        physics_gate(spec, a, design)
+    except DesignError as e:
+        raise DesignError(str(e).replace("[[clips]] entry", f"[[sources]] entry '{s.name}'")) from None
+    return a
+
+
+def make_given_stimulus(design: Design, a, item: tuple, folder) -> dict:
+    """Write one given clip (``item`` of :func:`plan_comparison`) as ``.bvh`` and
+    ``.npz`` into ``folder``; its manifest row (measured like a reference motion
+    when it has a flight; NaN measures when it has none)."""
+    name, it, s, path, orig, group, level = item
+    spec = SimpleNamespace(name=it, accept_unphysical=s.accept_unphysical)
+    if group is not None and not isinstance(group, SourceGroup):    # an error injected into it
+        if a.flight is None:
+            raise StimulusError(f"item {it!r} of source '{s.name}' ({path}): the analyser finds no flight "
+                                f"phase, so it cannot carry group '{group.name}''s errors")
+        row = make_stimulus(design, a, (name, spec, group, level), folder)
+        row.update(original=orig, source=s.name)
+        return row
+    if a.flight is not None:
+        row = make_stimulus(design, a, (name, spec, None, 0.0), folder)
+    else:
+        data = bvh_text(a.clip, 1.0).encode()
+        (Path(folder) / f"{name}.bvh").write_bytes(data)
+        (Path(folder) / f"{name}.npz").write_bytes(npz_bytes(clip_arrays(a.clip, 0, 0)))
+        row = {"stimulus": name, "clip": it, "level": 0.0, "takeoff": 0, "landing": 0,
+               "seed": derived_seed(design.seed, name), "sha256": hashlib.sha256(data).hexdigest(),
+               "frames": a.clip.num_frames, "fps": a.clip.fps, "bvh": f"{name}.bvh", "npz": f"{name}.npz",
+               "accept_unphysical": bool(s.accept_unphysical),
+               **({"style": design.style or "ellipsoids"} if design.styled else {})}
+        row.update({k: np.nan for k in ("takeoff_angle_deg", "flight_s", "jump_height_m", "jump_length_m",
+                                        "takeoff_time", "landing_time")})
+    row.update(group=group.name if group is not None else s.name, kind=GIVEN_KIND, profile="",
+               original=orig, source=s.name)
+    return row
+
+
+def build_comparison(design: Design, tmp: Path, bar=None) -> list[dict]:
+    """The rows of a comparison design's stimuli, written into ``tmp`` (the build's
+    staging folder; :func:`flipstudy.stimuli.stimset.build_stimuli` installs it)."""
+    rows = []
+    for item in plan_comparison(design):
+        a = load_source_clip(design, item[2], item[1], item[3])
+        rows.append(make_given_stimulus(design, a, item, tmp))
+        if bar is not None:
+            bar.step(item[0])
+    return rows
+
+
+def _build_comparison(design: Design, out: Path, force: bool, progress: bool, replace_check) -> list[dict]:
+    """A comparison design's build (:mod:`flipstudy.stimuli.compare`): staged and
+    installed like every build."""
+    from .compare import plan_comparison
+    todo = plan_comparison(design)            # items matched across the sources, before any work
+    bar = Progress(len(todo), "stimuli", progress)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.tmp-{os.getpid()}-", dir=out.parent))
+    try:
+        rows, read = [], {}
+        for item in todo:
+            key = (item[1], item[2].name)       # one reading per item and source
+            if key not in read:
+                read = {k: v for k, v in read.items() if k[0] == item[1]}
+                read[key] = load_source_clip(design, item[2], item[1], item[3])
+            rows.append(make_given_stimulus(design, read[key], item, tmp))
+            bar.step(item[0])
+        StimulusSet.from_rows(tmp, rows).write()
+        if design.path is not None:
+            shutil.copyfile(design.path, tmp / "design.toml")
+        _install(tmp, out, force, replace_check)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
         raise
     finally:
         bar.close()

@@ -131,7 +131,8 @@ def group_stimuli(manifest: Iterable[Stimulus], design=None) -> dict[str, list[S
     order (then any others in manifest order), rows in manifest order.
 
     With a ``design``, only the rows that are constant trials: no quest+ group
-    (the session picks its stimuli), no level 0 of a 2AFC group (its comparison),
+    (the session picks its stimuli), no level 0 of a 2AFC group (its comparison: a
+    2AFC row is a trial when its ``original`` names another row),
     and the shared originals only while a constant yes/no group shares them."""
     groups: dict[str, list[Stimulus]] = {}
     keep = None
@@ -156,8 +157,10 @@ def _constant_row_rule(design):
         g = by.get(row.group)
         if g is None:
             return shared or row.group != SHARED_ORIGINAL_GROUP
+        # a 2AFC trial is a row with a comparison other than itself (a group's own level 0
+        # names itself; a comparison study's first source names none)
         return (not getattr(g, "adaptive", False)
-                and (getattr(g, "task", "yes-no") == "yes-no" or row.level != 0))
+                and (getattr(g, "task", "yes-no") == "yes-no" or row.original not in ("", row.stimulus)))
     return keep
 
 

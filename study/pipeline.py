@@ -93,11 +93,12 @@ def status(study_dir) -> StatusResult:
     return StatusResult(study=d, sessions=tuple(_status(d)) if db_path(d).exists() else ())
 
 
-def simulate(study_dir, participants: int, *, model=None, seed: int = 0) -> SimulateResult:
+def simulate(study_dir, participants: int, *, model=None, seed: int = 0, strengths=None) -> SimulateResult:
     """``flipstudy simulate``: simulated observers answer every trial
-    (:func:`flipstudy.study.simulate.simulate`)."""
+    (:func:`flipstudy.study.simulate.simulate`; ``strengths``: a comparison study's
+    known source strengths)."""
     from .simulate import simulate as _simulate
-    ids = _simulate(study_dir, participants, model=model, seed=seed)
+    ids = _simulate(study_dir, participants, model=model, seed=seed, strengths=strengths)
     return SimulateResult(study=str(study_dir), participants=tuple(ids))
 
 

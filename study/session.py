@@ -171,7 +171,7 @@ def load_study(study_dir) -> Study:
         from flipstudy.stimuli.design import load_design
         design = load_design(d / "design.toml")
     n_tests = len(stimuli.tests)
-    if any(g.adaptive or g.task != "yes-no" for g in design.groups):
+    if any(g.adaptive or g.task != "yes-no" for g in design.groups) and not getattr(design, "compares", False):
         n = design.trials_per_participant()
         if n > TRIALS_MAX:
             raise SessionError(f"{d / 'design.toml'}: {n} trials per participant; at most {TRIALS_MAX}")

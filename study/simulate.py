@@ -281,23 +281,62 @@ def _observer_response(o, t, u: float) -> str:
     return "incorrect" if seen else "correct"
 
 
+def comparison_probability(strengths: dict, rows, t) -> float:
+    """P(the trial's stimulus is chosen) for an observer with source ``strengths``
+    (Bradley–Terry logits, :func:`flipstudy.analysis.compare.p_first_wins`): in a
+    2AFC trial of a comparison study over the trial's original, in a yes/no trial
+    P(answered "correct")."""
+    from flipstudy.analysis.compare import p_first_wins
+    a = strengths[rows[t.stimulus].source]
+    if t.task == "2afc":
+        return float(p_first_wins(a, strengths[rows[t.original].source]))
+    return float(expit(a))
+
+
+def check_strengths(strengths: dict, study) -> dict:
+    """``strengths`` (source → logit) for the comparison study ``study``: every source
+    named, no other; floats."""
+    from flipstudy.errors import ComparisonError
+    sources = study.stimuli.sources()
+    if not sources:
+        raise ComparisonError(f"{study.dir}: --strengths simulates "
+                              f"a comparison study (a design with [[sources]]); this one has none")
+    unknown = sorted(set(strengths) - set(sources))
+    missing = [x for x in sources if x not in strengths]
+    if unknown or missing:
+        raise ComparisonError(f"--strengths: the study's sources are {', '.join(sources)}; "
+                              + (f"unknown {', '.join(unknown)}" if unknown else f"missing {', '.join(missing)}"))
+    out = {k: float(v) for k, v in strengths.items()}
+    bad = [k for k, v in out.items() if not math.isfinite(v) or abs(v) > 20]
+    if bad:
+        raise ComparisonError(f"--strengths {bad[0]}: expected a finite logit within ±20, got {out[bad[0]]}")
+    return out
+
+
 def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None, seed: int = 0,
-             progress=None, population: dict | None = None) -> list[str]:
+             progress=None, population: dict | None = None, strengths: dict | None = None) -> list[str]:
     """Simulate ``n`` participants (``sim001``…) answering every trial of the study.
 
     ``model`` is an :class:`ObserverModel`, a TOML file, or None (the paper's
     Table 2; for a study with quest+ or 2AFC groups: observers drawn from
     ``population``, see the module docstring; ``population`` given: observers in
-    any study).  Unfinished simulated participants are resumed; finished ones are
-    left as they are (their answers would be the same).  Returns the IDs.
+    any study).  ``strengths`` (source → Bradley–Terry logit): a comparison study's
+    observers with known source preferences (:func:`comparison_probability`; stored as
+    the sessions' simulated truth).  Unfinished simulated participants are resumed;
+    finished ones are left as they are (their answers would be the same).  Returns the IDs.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1 or n > 9999:
         raise FlipstudyValueError(f"--participants: expected 1 to 9999, got {n!r}")
     study = load_study(study_dir)
-    observers = population is not None or (model is None and needs_observers(study.design))
+    if strengths is not None:
+        if model is not None or population is not None:
+            raise FlipstudyValueError("simulate: pass source strengths, an observer model or a "
+                                      "population, not two")
+        strengths = check_strengths(strengths, study)
+    observers = strengths is None and (population is not None or (model is None and needs_observers(study.design)))
     if observers and model is not None:
         raise FlipstudyValueError("simulate: pass an observer model or a population, not both")
-    if not observers and any(g.task == "2afc" for g in study.design.groups):
+    if strengths is None and not observers and any(g.task == "2afc" for g in study.design.groups):
         raise ModelError("an observer model (ratings of yes/no answers) cannot answer the 2afc "
                          "groups; simulate them with observers (no --model)")
     if model is None:
@@ -305,7 +344,7 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
     elif not isinstance(model, ObserverModel):
         model = load_model(model)
     rows = study.by_name
-    if not observers:
+    if not observers and strengths is None:
         model = _with_shared_original(model, study.manifest)
         groups = {r.group for r in study.manifest if not r.is_reference}
         for g in sorted(groups):                   # fail before anything is stored
@@ -343,12 +382,20 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
             obs = draw_observers(study.design, rng, population)
             with session.db() as conn:
                 store.set_simulated_truth(conn, pid, session.session, truth_json(obs))
+        elif strengths is not None:
+            with session.db() as conn:
+                store.set_simulated_truth(conn, pid, session.session, json.dumps(
+                    {"model": "bradley-terry", "strengths": strengths}, sort_keys=True))
         nxt = state["next_trial"]
         for t, ui, rti, ji, li in zip(session.trials, u, rt, jitter, late):
             if t.trial != nxt:                 # answered, or a skipped quest+ slot
                 continue
             t = session.resolve(t.trial)
-            if observers:
+            if strengths is not None:
+                chosen = ui < comparison_probability(strengths, rows, t)
+                response = (("first" if chosen == (t.first == "modified") else "second")
+                            if t.task == "2afc" else "correct" if chosen else "incorrect")
+            elif observers:
                 response = _observer_response(obs[t.group], t, float(ui))
             else:
                 response = "correct" if ui < model.probability(t.group, t.level, shift) else "incorrect"

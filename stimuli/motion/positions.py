@@ -463,5 +463,17 @@ def depth_first(clip: Clip) -> Clip:
     return Clip(skel, clip.fps, clip.root_pos, clip.rotations[:, order], jp, clip.meta)
 
 
-__all__ = ["depth_first", "load_positions", "POSITION_KEYS", "Layout", "LAYOUTS", "SMPL22_NAMES", "SMPL22_PARENTS", "read_layout", "check_positions",
+__all__ = ["CMU_AS_SMPL22", "depth_first", "load_positions", "POSITION_KEYS", "Layout", "LAYOUTS", "SMPL22_NAMES", "SMPL22_PARENTS", "read_layout", "check_positions",
            "clip_from_positions", "positions_of", "rest_frame", "z_up_to_y_up"]
+
+
+#: the CMU joint at each of the 22 SMPL body joints, in SMPL order (CMU has two spine
+#: joints above the hips and its neck and clavicles at the top of the spine)
+CMU_AS_SMPL22 = {
+    "pelvis": "Hips", "left_hip": "LeftUpLeg", "right_hip": "RightUpLeg", "spine1": "Spine",
+    "left_knee": "LeftLeg", "right_knee": "RightLeg", "spine2": "Spine1", "left_ankle": "LeftFoot",
+    "right_ankle": "RightFoot", "spine3": "Neck", "left_foot": "LeftToeBase",
+    "right_foot": "RightToeBase", "neck": "Neck1", "left_collar": "LeftShoulder",
+    "right_collar": "RightShoulder", "head": "Head", "left_shoulder": "LeftArm",
+    "right_shoulder": "RightArm", "left_elbow": "LeftForeArm", "right_elbow": "RightForeArm",
+    "left_wrist": "LeftHand", "right_wrist": "RightHand"}

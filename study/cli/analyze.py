@@ -74,6 +74,9 @@ def _images(specs):
 
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
+    from .compare import analyze_comparison_cmd, wants_comparison
+    if wants_comparison(args):                 # a study with [[sources]]: the ranking of the sources
+        return analyze_comparison_cmd(args)
     from flipstudy.study.pipeline import analyze
     res = analyze(args.responses, args.out, correction=args.correction, images=_images(args.image),
                   seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,

@@ -58,9 +58,17 @@ def cmd_status(args) -> int:
     return 0
 
 
+def _strengths(args):
+    if getattr(args, "strengths", None) is None:
+        return None
+    from .compare import strengths_arg
+    return strengths_arg(args.strengths)
+
+
 def cmd_simulate(args) -> int:
     from ..pipeline import simulate
-    print(simulate(args.study_dir, args.participants, model=args.model, seed=args.seed).summary())
+    print(simulate(args.study_dir, args.participants, model=args.model, seed=args.seed,
+                   strengths=_strengths(args)).summary())
     return 0
 
 
@@ -133,4 +141,7 @@ def add_commands(subparsers) -> None:
     p.add_argument("--model", metavar="MODEL.toml", default=None,
                    help="observer model: [groups.NAME] levels = [...], p_correct = [...]; sigma = 0.3")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--strengths", metavar="SOURCE=LOGIT,...", default=None,
+                   help="a comparison study ([[sources]]): observers with these known Bradley–Terry "
+                        "source strengths (logits), e.g. gt=0,jitter=-1,floaty=-2")
     p.set_defaults(func=cmd_simulate)

@@ -4,18 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flipstudy.stimuli.motion.positions import SMPL22_NAMES, SMPL22_PARENTS
-
-#: the CMU joint at each SMPL body joint (CMU has two spine joints above the hips and
-#: puts its neck and clavicle joints at the top of the spine: those SMPL joints fall on it)
-CMU_AS_SMPL22 = {
-    "pelvis": "Hips", "left_hip": "LeftUpLeg", "right_hip": "RightUpLeg", "spine1": "Spine",
-    "left_knee": "LeftLeg", "right_knee": "RightLeg", "spine2": "Spine1", "left_ankle": "LeftFoot",
-    "right_ankle": "RightFoot", "spine3": "Neck", "left_foot": "LeftToeBase",
-    "right_foot": "RightToeBase", "neck": "Neck1", "left_collar": "LeftShoulder",
-    "right_collar": "RightShoulder", "head": "Head", "left_shoulder": "LeftArm",
-    "right_shoulder": "RightArm", "left_elbow": "LeftForeArm", "right_elbow": "RightForeArm",
-    "left_wrist": "LeftHand", "right_wrist": "RightHand"}
+from flipstudy.stimuli.motion.positions import CMU_AS_SMPL22, SMPL22_NAMES, SMPL22_PARENTS  # noqa: F401
 
 
 def cmu_humanml3d(clip, fps: float = 20.0) -> np.ndarray:
