@@ -542,7 +542,11 @@ def import_web(study_dir, files) -> ImportResult:
     out = d / "responses.csv"
     atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
-    desc = write_dataset_description(d, study.dir, columns, source="web sessions", stimuli=study.stimuli)
+    from ..psychds import write_data_files
+    write_data_files(d, study.design.name, "web", {"": _table_text(columns, rows),
+                                                   "participants": _table_text(WEB_PARTICIPANT_COLUMNS, parts)})
+    desc = write_dataset_description(d, study.dir, list(dict.fromkeys(columns + WEB_PARTICIPANT_COLUMNS)),
+                                     source="web sessions", stimuli=study.stimuli)
     return ImportResult(
         files=tuple({k: str(v) if isinstance(v, Path) else v for k, v in r.items()} for r in report),
         answers=len(rows), participants=len({p["participant"] for p in parts}), sessions=len(parts),
