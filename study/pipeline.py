@@ -131,6 +131,8 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
         refuse_changed_design(resolve_responses_path(r).parent, "analyze")
     out = Path(out) if out else src.parent / "analysis"
     design = src.parent / "design.toml"
+    if not design.is_file() and src.parent.name == "web":     # import-web's STUDY/web/responses.csv
+        design = src.parent.parent / "design.toml"
     d = load_design(design) if design.is_file() else None
     specs = quest_specs(d) if d is not None else None
     rules = d.exclusions.to_dict() if d is not None and not d.exclusions.is_default else None
