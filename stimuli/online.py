@@ -7,7 +7,7 @@ stated before any data came in.
     recruit_params  = ["PROLIFIC_PID", "STUDY_ID", "SESSION_ID"]  # URL parameters kept on every row
     completion_code = "C1A2B3"      # shown at the end (and put into completion_url's {code})
     completion_url  = ""            # "": Prolific's https://app.prolific.com/submissions/complete?cc={code}
-    consent         = "consent.md"  # text/Markdown beside the design; "" = no consent screen
+    consent         = "consent.md"  # Markdown in the study folder (beside its design.toml); "" = none
     debrief         = "debrief.md"  # shown at the end; "" = none
     demographics    = true          # the demographics form
     min_refresh_hz  = 0.0           # screen check: below it the participant is told and stopped

@@ -35,7 +35,7 @@ name = "catch"
 kind = "angular-momentum"
 profile = "abrupt"
 sign = 1
-levels = [300]
+levels = [100]
 
 [online]
 completion_code = "{CODE}"
@@ -73,8 +73,9 @@ def _site(study, tmp_path, jspsych_dir, host="jatos"):
     return site
 
 
-def _route(page, origin, blocked, fail=None, slow_video=0.0):
-    """Only the test server; ``fail(request)`` True: answer HTTP 500 in its place."""
+def _route(page, origin, blocked, fail=None, hold=None):
+    """Only the test server; ``fail(request)`` True: answer HTTP 500 in its place;
+    ``hold``: {"pass": k, "held": []}: videos after the first k wait in ``held``."""
     def gate(route):
         u = urlparse(route.request.url)
         if u.netloc != origin:
@@ -82,9 +83,11 @@ def _route(page, origin, blocked, fail=None, slow_video=0.0):
             route.abort()
         elif fail is not None and fail(route.request):
             route.fulfill(status=500, body="down")
+        elif hold is not None and u.path.endswith(".mp4") and hold["pass"] <= 0 and hold["on"]:
+            hold["held"].append(route)
         else:
-            if slow_video and u.path.endswith(".mp4"):
-                time.sleep(slow_video)
+            if hold is not None and u.path.endswith(".mp4"):
+                hold["pass"] -= 1
             route.continue_()
     page.route("**/*", gate)
 
@@ -128,7 +131,8 @@ def test_prolific_link_end_to_end_ids_redirect_catch_exclusion(page, study, tmp_
     blocked = []
     with _Host(site) as host:
         origin = f"127.0.0.1:{host.port}"
-        _route(page, origin, blocked, slow_video=0.25)
+        hold = {"pass": 2, "held": [], "on": True}
+        _route(page, origin, blocked, hold=hold)
         page.goto(f"http://{origin}/index.html?PROLIFIC_PID={PID}&STUDY_ID={STUDY_ID}&SESSION_ID={SESSION_ID}")
         page.wait_for_selector('#jspsych-target[data-screen-id="consent"]')
         assert "Prolific ID only" in page.inner_text("#jspsych-target")
@@ -137,7 +141,12 @@ def test_prolific_link_end_to_end_ids_redirect_catch_exclusion(page, study, tmp_
         page.click("#fs-consent-yes")
         page.wait_for_selector('#jspsych-target[data-screen-id="preload"]')
         page.wait_for_selector("#jspsych-loading-progress-bar-container")
+        page.wait_for_function("() => parseFloat(document.getElementById('jspsych-loading-progress-bar')"
+                               ".style.width) > 0")                    # two of six videos in
         _shot(page, "web_preload.png", tmp_path)
+        hold["on"] = False
+        for route in hold["held"]:
+            route.continue_()
         # everything answered "correct": the catch trial (a gross error) is answered wrongly
         _through(page, n, lambda stim: "correct", consent=False)
         page.wait_for_selector('#jspsych-target[data-saved="1"]')

@@ -23,7 +23,7 @@ name = "catch"
 kind = "angular-momentum"
 profile = "abrupt"
 sign = 1
-levels = [300]
+levels = [100]
 
 [exclusions]
 catch_groups = ["catch"]
