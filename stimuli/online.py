@@ -14,6 +14,8 @@ stated before any data came in.
     min_width       = 0             # window size (CSS pixels) the videos need
     min_height      = 0
     preload         = true          # every video fetched (progress bar) before the first trial
+    block_order     = "interleaved" # or "latin-square": one block per group, blocks ordered by a
+                                    # balanced Latin square row (the participant ID's hash picks it)
 
 ``[exclusions]`` (participants; applied by ``analyze``, reported as a flow table)::
 
@@ -48,6 +50,9 @@ from flipstudy.errors import DesignError
 from ._designkeys import _between, _check_keys, _get, _show
 
 PROLIFIC_PARAMS = ("PROLIFIC_PID", "STUDY_ID", "SESSION_ID")
+#: the web trial order: groups interleaved (flipstudy.study.order's rule) or one block per
+#: group, the blocks' order a row of a balanced Latin square
+BLOCK_ORDERS = ("interleaved", "latin-square")
 PROLIFIC_COMPLETE = "https://app.prolific.com/submissions/complete?cc={code}"
 _PARAM = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
 
@@ -113,6 +118,7 @@ ONLINE_FIELDS = {
     "min_width": (int, 0, _between(0, 10000, " pixels")),
     "min_height": (int, 0, _between(0, 10000, " pixels")),
     "preload": (bool, True, None),
+    "block_order": (str, "interleaved", lambda v: None if v in BLOCK_ORDERS else f"must be one of {list(BLOCK_ORDERS)}"),
 }
 
 
@@ -131,6 +137,7 @@ class OnlineSettings(_Table):
     min_width: int = 0
     min_height: int = 0
     preload: bool = True
+    block_order: str = "interleaved"
     where: InitVar[str | None] = None
 
     def __post_init__(self, where):

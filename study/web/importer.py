@@ -92,7 +92,7 @@ def web_columns(two_afc: bool, styled: bool) -> list[str]:
     task = [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] if two_afc else []
     return response_columns(styled) + task + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
-                                                 "user_agent", "consent", "window", "screen_ok"]
+                                                 "user_agent", "consent", "window", "screen_ok", "block_order"]
 RECRUIT_RE = re.compile(r"[A-Za-z0-9_-]{1,64}")
 KINDS = ("start", "demographics", "answer", "end")
 #: the answers each task takes: yes/no judges one motion, 2AFC names the interval judged
@@ -229,7 +229,8 @@ class _Checker:
     def order(self, pid):
         if pid not in self.orders:
             self.orders[pid] = web_trial_order(self.groups, self.study.design.repetitions,
-                                               self.study.design.seed, pid)
+                                               self.study.design.seed, pid,
+                                               self.study.design.online.block_order)
         return self.orders[pid]
 
     def check(self, where: str, rec: dict) -> dict:
@@ -330,10 +331,15 @@ class _Checker:
             if n != len(self.order(pid)) or rec["order"] != order:
                 raise WebImportError(f"{where}: the run's trial order is not this study's order for "
                                      f"{pid} (another design or trial-order rule)")
+            if self.study.design.online.block_order == "latin-square":
+                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid)))
+                if rec.get("block_order") != blocks:
+                    raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
+                                         f"Latin-square row ({blocks!r})")
             out.update(n_trials=n, refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000,
                                                    optional=True),
                        participant_from=rec.get("participant_from"), user_agent=rec.get("user_agent"),
-                       consent=rec.get("consent"), window=rec.get("window"),
+                       consent=rec.get("consent"), window=rec.get("window"), block_order=rec.get("block_order"),
                        screen_ok=None if rec.get("screen_ok") in (None, "") else
                        _bool(rec["screen_ok"], where, "screen_ok"))
         return out
@@ -435,7 +441,8 @@ def _tables(merged: dict, n_trials: int, columns=COLUMNS, recruit=(), part_colum
              "answered": len(run_answers), "n_trials": n_trials, "simulated": False, "complete": done,
              "run_id": run, "host": info["host"], "participant_from": start.get("participant_from"),
              "refresh_hz": start.get("refresh_hz"), "user_agent": start.get("user_agent"),
-             "consent": start.get("consent"), "window": start.get("window"), "screen_ok": start.get("screen_ok")}
+             "consent": start.get("consent"), "window": start.get("window"), "screen_ok": start.get("screen_ok"),
+             "block_order": start.get("block_order")}
         p.update({k: v for k, v in start.items() if k in recruit})
         for f in DEMOGRAPHIC_FIELDS:
             p[f["name"]] = demo.get(f["name"])

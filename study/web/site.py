@@ -168,7 +168,8 @@ def online_config(study) -> dict:
     return {"recruit_params": list(o.recruit_params), "completion_code": o.completion_code,
             "redirect_url": o.redirect_url(), "consent_html": texts["consent"], "debrief_html": texts["debrief"],
             "demographics": o.demographics, "min_refresh_hz": o.min_refresh_hz,
-            "min_width": o.min_width, "min_height": o.min_height, "preload": o.preload}
+            "min_width": o.min_width, "min_height": o.min_height, "preload": o.preload,
+            "block_order": o.block_order}
 
 
 def refuse_adaptive(design) -> None:

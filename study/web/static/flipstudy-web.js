@@ -540,8 +540,10 @@
     }
     if (C.host === 'pavlovia') await host.init(cp, pid);
     const sender = makeSender(host, cp);
-    const trials = ORDER.webTrialOrder(C.groups, C.repetitions, C.design_seed, pid);
+    const trials = ORDER.webTrialOrder(C.groups, C.repetitions, C.design_seed, pid, O.block_order);
     const n = trials.length;
+    // the groups in the order their blocks come (a Latin-square row), recorded with the start
+    const blockOrder = O.block_order === 'latin-square' ? [...new Set(trials.map((t) => t.group))].join(' ') : null;
     let refresh = await measureRefresh(500);
     const base = () => Object.assign({format: FORMAT, site_id: C.site_id, study: C.study, manifest_sha256: C.manifest_sha256,
       host: C.host, participant: pid, run_id: cp.s.run_id, run_started: cp.s.run_started, timestamp: nowIso()}, recruit);
@@ -556,6 +558,7 @@
       emit({record: 'start', n_trials: n, participant_from: who.from, order_rule: ORDER.RULE,
             order: trials.map((t) => t.stimulus).join(' '), jspsych_version: jsPsych.version(),
             refresh_hz: refresh, user_agent: navigator.userAgent, consent, window: sc.window, screen_ok: sc.ok,
+            block_order: blockOrder,
             screen: `${screen.width}x${screen.height}@${window.devicePixelRatio}`});
     } else {
       sender.kick();                                   // whatever the last page did not send
