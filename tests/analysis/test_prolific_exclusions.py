@@ -2,7 +2,6 @@
 before anything is computed, reported as a flow table (+ figure), excluded rows kept."""
 import json
 
-import numpy as np
 import pandas as pd
 import pytest
 from hypothesis import given, settings, strategies as st

@@ -17,26 +17,18 @@ import pytest
 from test_session_browser import CHROMIUM, TIMEOUT, jspsych_dir, page, pw  # noqa: F401 (fixtures)
 from test_web_browser import _Host
 from _screenshots import screenshot as _shot
+from _prolific import CATCH_GROUP, web_records, write_jsonl
 
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.pipeline import analyze
-from flipstudy.study.session import load_study
 from flipstudy.study.web.importer import import_web
-from flipstudy.study.web.order import order_groups, web_trial_order
-from flipstudy.study.web.site import FORMAT, export_site
+from flipstudy.study.web.site import export_site
 
 pytestmark = [pytest.mark.slow,
               pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"needs Debian's chromium at {CHROMIUM}")]
 
 PID, STUDY_ID, SESSION_ID, CODE = "5f1a2b3c4d5e6f7a8b9c0d1e", "63aa01", "sess42", "C7XK2P"
-ONLINE = f"""
-[[groups]]
-name = "catch"
-kind = "angular-momentum"
-profile = "abrupt"
-sign = 1
-levels = [100]
-
+ONLINE = CATCH_GROUP + f"""
 [online]
 completion_code = "{CODE}"
 consent = "consent.md"
@@ -165,22 +157,10 @@ def test_prolific_link_end_to_end_ids_redirect_catch_exclusion(page, study, tmp_
     f = tmp_path / "jatos.jsonl"
     f.write_text("".join(host.bodies))
     # a second participant (records as the site writes them) who answers the catch trial right
-    st = load_study(study)
     other = "6a0b1c2d3e4f5a6b7c8d9e0f"
-    trials = web_trial_order(order_groups(st.design, st.manifest), 1, st.design.seed, other)
-    base = {"format": FORMAT, "site_id": recs[0]["site_id"], "study": st.design.name,
-            "manifest_sha256": st.manifest_sha256, "host": "jatos", "participant": other, "run_id": "r2",
-            "run_started": "2026-01-05T10:00:00.000Z", "timestamp": "2026-01-05T10:00:01.000Z",
-            "PROLIFIC_PID": other}
-    g = [dict(base, record="start", n_trials=n, order=" ".join(t.stimulus for t in trials), refresh_hz=60.0)]
-    g += [dict(base, record="answer", trial=t.trial, stimulus=t.stimulus, group=t.group, level=t.level,
-               repetition=1, clip=t.clip, kind=t.kind, response="incorrect" if t.level else "correct",
-               rt_ms=600.0, shown_ms=400.0, input="key", replays=0, frames_expected=12, frames_presented=12,
-               frames_dropped=0, dropped_pct=0.0, playback_ms=400.0, video_ms=400.0, timing="rvfc",
-               playback_flagged=False, max_dropped_pct=10.0) for t in trials]
-    g.append(dict(base, record="end", answered=n, n_trials=n))
-    f2 = tmp_path / "other.jsonl"
-    f2.write_text("".join(json.dumps(r) + "\n" for r in g))
+    f2 = write_jsonl(tmp_path / "other.jsonl", web_records(
+        study, other, run="r2", site_id=recs[0]["site_id"], PROLIFIC_PID=other,
+        response=lambda t: "incorrect" if t.level else "correct"))
     import_web(study, [f, f2])
     rows = pd.read_csv(study / "web" / "responses.csv", dtype=str, keep_default_na=False)
     mine = rows[rows["participant"] == PID]

@@ -7,24 +7,17 @@ import re
 
 import pytest
 
+from _prolific import CATCH_GROUP, web_records, write_jsonl
+
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.export import export_responses
 from flipstudy.study.owned import owner
 from flipstudy.study.session import load_study, open_session, submit_answer
 from flipstudy.study.web.importer import import_web
-from flipstudy.study.web.order import order_groups, web_trial_order
-from flipstudy.study.web.site import FORMAT
 
 # Psych-DS: keyword-value pairs (lowercase keyword, alphanumeric value) joined by "_", then _data.csv
 PSYCHDS_NAME = re.compile(r"([a-z]+-[a-zA-Z0-9]+)(_[a-z]+-[a-zA-Z0-9]+)*_data\.csv")
-RULES = """
-[[groups]]
-name = "catch"
-kind = "angular-momentum"
-profile = "abrupt"
-sign = 1
-levels = [100]
-
+RULES = CATCH_GROUP + """
 [exclusions]
 catch_groups = ["catch"]
 min_catch_accuracy_pct = 75.0
@@ -78,21 +71,6 @@ def test_export_writes_the_psychds_layout_with_the_exclusion_rules(study):
 
 
 def test_import_web_writes_the_psychds_layout(study, tmp_path):
-    st = load_study(study)
-    trials = web_trial_order(order_groups(st.design, st.manifest), st.design.repetitions, st.design.seed, "W01")
-    base = {"format": FORMAT, "site_id": "s", "study": st.design.name, "manifest_sha256": st.manifest_sha256,
-            "host": "jatos", "participant": "W01", "run_id": "r1", "run_started": "2026-01-05T10:00:00.000Z",
-            "timestamp": "2026-01-05T10:00:01.000Z"}
-    recs = [dict(base, record="start", n_trials=len(trials), order=" ".join(t.stimulus for t in trials),
-                 refresh_hz=60.0, participant_from="PROLIFIC_PID", user_agent="test")]
-    recs += [dict(base, record="answer", trial=t.trial, stimulus=t.stimulus, group=t.group, level=t.level,
-                  repetition=t.repetition, clip=t.clip, kind=t.kind, response="incorrect", rt_ms=500.0,
-                  shown_ms=400.0, input="key", replays=0, frames_expected=12, frames_presented=12,
-                  frames_dropped=0, dropped_pct=0.0, playback_ms=400.0, video_ms=400.0, timing="rvfc",
-                  playback_flagged=False, max_dropped_pct=10.0, refresh_hz=60.0) for t in trials]
-    recs.append(dict(base, record="end", answered=len(trials), n_trials=len(trials)))
-    f = tmp_path / "w.jsonl"
-    f.write_text("".join(json.dumps(r) + "\n" for r in recs))
-    import_web(study, [f])
+    import_web(study, [write_jsonl(tmp_path / "w.jsonl", web_records(study, "W01"))])
     desc = check_dataset(study / "web", "web")
     assert len(desc["comment"]) == 2
