@@ -496,6 +496,15 @@ class Design:
                 raise DesignError(f"{src}: [exclusions].catch_groups: {c!r}: a catch group shows gross "
                                   f"errors only (yes-no, constant, no level 0), whose right answer is "
                                   f"'incorrect'")
+        for c in self.online.between:
+            if c not in by_name:
+                raise DesignError(f"{src}: [online].between: {c!r} is not one of the groups {gnames}")
+            if c in self.exclusions.catch_groups:
+                raise DesignError(f"{src}: [online].between: {c!r} is a catch group; every participant sees those")
+        sizes = {c: len(by_name[c].trial_levels()) for c in self.online.between}
+        if len(set(sizes.values())) > 1:
+            raise DesignError(f"{src}: [online].between: the conditions' groups have different numbers of "
+                              f"trial levels ({sizes}); give them as many, so every session is as long")
         if len(self.exclusions.catch_groups) == len(self.groups):
             raise DesignError(f"{src}: [exclusions].catch_groups: every group is a catch group; "
                               f"at least one group must be a test group")

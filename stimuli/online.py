@@ -16,6 +16,9 @@ stated before any data came in.
     preload         = true          # every video fetched (progress bar) before the first trial
     block_order     = "interleaved" # or "latin-square": one block per group, blocks ordered by a
                                     # balanced Latin square row (the participant ID's hash picks it)
+    between         = ["a", "b"]    # between-subject conditions: each participant sees one of these
+                                    # groups (and every other group); least-filled first on JATOS
+                                    # (its batch session), by the participant ID's hash elsewhere
 
 ``[exclusions]`` (participants; applied by ``analyze``, reported as a flow table)::
 
@@ -118,6 +121,8 @@ ONLINE_FIELDS = {
     "min_width": (int, 0, _between(0, 10000, " pixels")),
     "min_height": (int, 0, _between(0, 10000, " pixels")),
     "preload": (bool, True, None),
+    "between": (list, [], lambda v: None if all(isinstance(x, str) for x in v) and len(set(v)) == len(v)
+                and len(v) != 1 else "group names, each once, at least two (or none)"),
     "block_order": (str, "interleaved", lambda v: None if v in BLOCK_ORDERS else f"must be one of {list(BLOCK_ORDERS)}"),
 }
 
@@ -138,6 +143,7 @@ class OnlineSettings(_Table):
     min_height: int = 0
     preload: bool = True
     block_order: str = "interleaved"
+    between: tuple[str, ...] = ()
     where: InitVar[str | None] = None
 
     def __post_init__(self, where):

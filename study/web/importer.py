@@ -67,7 +67,7 @@ from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS,
 from flipstudy.errors import WebImportError
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
-from .order import order_groups, web_trial_order
+from .order import condition_groups, order_groups, web_trial_order
 from .sites import SITES, read_sites as _sites
 from .site import FORMAT, HOSTS
 
@@ -92,7 +92,7 @@ def web_columns(two_afc: bool, styled: bool) -> list[str]:
     task = [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] if two_afc else []
     return response_columns(styled) + task + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
-                                                 "user_agent", "consent", "window", "screen_ok", "block_order"]
+                                                 "user_agent", "consent", "window", "screen_ok", "block_order", "condition"]
 RECRUIT_RE = re.compile(r"[A-Za-z0-9_-]{1,64}")
 KINDS = ("start", "demographics", "answer", "end")
 #: the answers each task takes: yes/no judges one motion, 2AFC names the interval judged
@@ -225,13 +225,15 @@ class _Checker:
         self.design_sha256 = hashlib.sha256(study.design_text.encode()).hexdigest()
         #: the recruiter's URL parameters the site keeps on every record ([online] recruit_params)
         self.recruit = tuple(study.design.online.recruit_params)
+        self.between = tuple(study.design.online.between)
 
-    def order(self, pid):
-        if pid not in self.orders:
-            self.orders[pid] = web_trial_order(self.groups, self.study.design.repetitions,
-                                               self.study.design.seed, pid,
-                                               self.study.design.online.block_order)
-        return self.orders[pid]
+    def order(self, pid, condition=None):
+        if (pid, condition) not in self.orders:
+            groups = condition_groups(self.groups, self.between, condition) if self.between else self.groups
+            self.orders[pid, condition] = web_trial_order(groups, self.study.design.repetitions,
+                                                          self.study.design.seed, pid,
+                                                          self.study.design.online.block_order)
+        return self.orders[pid, condition]
 
     def check(self, where: str, rec: dict) -> dict:
         _need(rec, where, COMMON)
@@ -275,9 +277,12 @@ class _Checker:
                     raise WebImportError(f"{where}: {name} {str(v)[:40]!r} is not a valid recruiter ID "
                                          f"(1-64 letters, digits, '_' or '-')")
                 out[name] = v
+        cond = None
+        if self.between:                       # the run's between-subject condition sets its order
+            cond = out["condition"] = _str(rec.get("condition"), where, "condition", self.between)
         if kind == "answer":
             _need(rec, where, ANSWER)
-            trials = self.order(pid)
+            trials = self.order(pid, cond)
             t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
             want = trials[t - 1]
             got = {"stimulus": rec["stimulus"], "group": rec["group"],
@@ -327,12 +332,12 @@ class _Checker:
         elif kind == "start":
             _need(rec, where, ("n_trials", "order"))
             n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
-            order = " ".join(t.stimulus for t in self.order(pid))
-            if n != len(self.order(pid)) or rec["order"] != order:
+            order = " ".join(t.stimulus for t in self.order(pid, cond))
+            if n != len(self.order(pid, cond)) or rec["order"] != order:
                 raise WebImportError(f"{where}: the run's trial order is not this study's order for "
                                      f"{pid} (another design or trial-order rule)")
             if self.study.design.online.block_order == "latin-square":
-                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid)))
+                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond)))
                 if rec.get("block_order") != blocks:
                     raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
                                          f"Latin-square row ({blocks!r})")
@@ -442,7 +447,7 @@ def _tables(merged: dict, n_trials: int, columns=COLUMNS, recruit=(), part_colum
              "run_id": run, "host": info["host"], "participant_from": start.get("participant_from"),
              "refresh_hz": start.get("refresh_hz"), "user_agent": start.get("user_agent"),
              "consent": start.get("consent"), "window": start.get("window"), "screen_ok": start.get("screen_ok"),
-             "block_order": start.get("block_order")}
+             "block_order": start.get("block_order"), "condition": start.get("condition")}
         p.update({k: v for k, v in start.items() if k in recruit})
         for f in DEMOGRAPHIC_FIELDS:
             p[f["name"]] = demo.get(f["name"])
@@ -498,7 +503,8 @@ def import_web(study_dir, files) -> ImportResult:
     d = study.dir / WEB_DIR
     imports = d / IMPORTS
     checker = _Checker(study)
-    n_trials = len(checker.order("x")) if checker.groups else 0
+    # (between-subject conditions have as many trials each: the design checks it)
+    n_trials = len(checker.order("x", checker.between[0] if checker.between else None)) if checker.groups else 0
     kept_sha = {p.name.split("-", 1)[0]: p for p in _kept(d)}
     # files read before that added nothing (not kept): known by their hash in the ledger
     read_not_kept = {e.get("sha256") for e in (json.loads((d / LEDGER).read_text())

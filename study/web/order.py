@@ -147,6 +147,18 @@ def latin_row(participant: str, k: int) -> int:
     return fnv1a32(f"flipstudy-latin:{participant}".encode()) % len(balanced_latin_square(k))
 
 
+def condition_groups(groups: list[list], between, condition: str | None) -> list[list]:
+    """The groups a participant in ``condition`` sees: every group not in ``between``,
+    and of those in it, only ``condition``."""
+    return [[g, rows] for g, rows in groups if g not in between or g == condition]
+
+
+def condition_by_hash(participant: str, between) -> str:
+    """A between-subject condition from the participant ID alone (a host that cannot count):
+    FNV-1a of ``"flipstudy-condition:ID"`` modulo the number of conditions."""
+    return list(between)[fnv1a32(f"flipstudy-condition:{participant}".encode()) % len(between)]
+
+
 def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
                     participant: str, block_order: str = "interleaved") -> list[Trial]:
     """The participant's trials online (``groups`` from :func:`order_groups`).

@@ -169,7 +169,7 @@ def online_config(study) -> dict:
             "redirect_url": o.redirect_url(), "consent_html": texts["consent"], "debrief_html": texts["debrief"],
             "demographics": o.demographics, "min_refresh_hz": o.min_refresh_hz,
             "min_width": o.min_width, "min_height": o.min_height, "preload": o.preload,
-            "block_order": o.block_order}
+            "block_order": o.block_order, "between": list(o.between)}
 
 
 def refuse_adaptive(design) -> None:

@@ -164,7 +164,12 @@
     return block;
   }
 
-  const api = {RULE, fnv1a32, orderKey, Sfc32, webTrialOrder, balanceFirst, balancedLatinSquare, latinRow};
+  // a between-subject condition from the participant ID alone (hosts that cannot count)
+  function conditionByHash(participant, between) { return between[fnv1a32(utf8(`flipstudy-condition:${participant}`)) % between.length]; }
+  function conditionGroups(groups, between, condition) { return groups.filter(([g]) => !between.includes(g) || g === condition); }
+
+  const api = {RULE, fnv1a32, orderKey, Sfc32, webTrialOrder, balanceFirst, balancedLatinSquare, latinRow,
+               conditionByHash, conditionGroups};
   if (typeof module !== 'undefined' && module.exports) module.exports = api;
   else root.FlipstudyOrder = api;
 })(typeof window !== 'undefined' ? window : globalThis);

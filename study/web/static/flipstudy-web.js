@@ -129,6 +129,18 @@
         cp.save();
       }
     },
+    // least-filled first through JATOS's batch session (shared by every run of the batch):
+    // the counts are read, the smallest taken, and the set retried when another run wrote first
+    async assign(between) {
+      for (let i = 0; i < 50; i++) {
+        const counts = Object.assign({}, jatos.batchSession.get('flipstudy-conditions') || {});
+        let best = between[0];
+        for (const c of between) if ((counts[c] || 0) < (counts[best] || 0)) best = c;
+        counts[best] = (counts[best] || 0) + 1;
+        try { await jatos.batchSession.set('flipstudy-conditions', counts); return best; } catch (e) { await sleep(50 + 200 * Math.random()); }
+      }
+      throw new Error('JATOS batch session: no condition could be assigned');
+    },
     async finish(cp, answered) {
       if (typeof jatos.endStudyAjax === 'function') await jatos.endStudyAjax(true, `flipstudy: ${answered} answers`);
     },
@@ -540,7 +552,15 @@
     }
     if (C.host === 'pavlovia') await host.init(cp, pid);
     const sender = makeSender(host, cp);
-    const trials = ORDER.webTrialOrder(C.groups, C.repetitions, C.design_seed, pid, O.block_order);
+    // between-subject condition: kept in the checkpoint, so a reload keeps it
+    const between = O.between || [];
+    if (between.length && !cp.s.condition) {
+      cp.s.condition = host.assign ? await host.assign(between) : ORDER.conditionByHash(pid, between);
+      cp.save();
+    }
+    if (between.length) recruit.condition = cp.s.condition;
+    const groups = between.length ? ORDER.conditionGroups(C.groups, between, cp.s.condition) : C.groups;
+    const trials = ORDER.webTrialOrder(groups, C.repetitions, C.design_seed, pid, O.block_order);
     const n = trials.length;
     // the groups in the order their blocks come (a Latin-square row), recorded with the start
     const blockOrder = O.block_order === 'latin-square' ? [...new Set(trials.map((t) => t.group))].join(' ') : null;
