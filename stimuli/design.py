@@ -501,6 +501,9 @@ class Design:
                 raise DesignError(f"{src}: [online].between: {c!r} is not one of the groups {gnames}")
             if c in self.exclusions.catch_groups:
                 raise DesignError(f"{src}: [online].between: {c!r} is a catch group; every participant sees those")
+            if by_name[c].adaptive:
+                raise DesignError(f"{src}: [online].between: {c!r} is a quest+ group; conditions are "
+                                  f"constant-stimuli groups")
         sizes = {c: len(by_name[c].trial_levels()) for c in self.online.between}
         if len(set(sizes.values())) > 1:
             raise DesignError(f"{src}: [online].between: the conditions' groups have different numbers of "

@@ -128,3 +128,28 @@ def test_ten_jatos_participants_fill_two_conditions_five_and_five(page, study, t
     import_web(study, [f])
     parts = pd.read_csv(study / "web" / "participants.csv", dtype=str)
     assert dict(zip(parts["participant"], parts["condition"])) == got
+
+
+def _conditions(study, source):
+    import sqlite3
+    with sqlite3.connect(study / "sessions.sqlite") as conn:
+        rows = conn.execute("SELECT DISTINCT t.participant, t.group_name FROM trials t JOIN sessions s "
+                            "ON s.participant = t.participant AND s.session = t.session WHERE s.source = ?",
+                            (source,)).fetchall()
+    return {p: g for p, g in rows if g in BETWEEN}
+
+
+def test_ten_simulated_participants_in_the_local_runner_fill_five_and_five(study):
+    from flipstudy.study.session import load_study, open_session
+    from flipstudy.study.simulate import simulate
+    ids = simulate(study, 10, seed=3)
+    got = _conditions(study, "simulated")
+    assert sorted(got) == sorted(ids) and collections.Counter(got.values()) == {BETWEEN[0]: 5, BETWEEN[1]: 5}
+    # browser sessions are counted apart, least-filled first in the design's order on ties
+    st = load_study(study)
+    order = [open_session(st, f"L{i}").trials for i in range(3)]
+    seen = [next(t.group for t in trials if t.group in BETWEEN) for trials in order]
+    assert seen == [BETWEEN[0], BETWEEN[1], BETWEEN[0]]
+    for trials in order:                                   # one condition each, every other group too
+        groups = {t.group for t in trials}
+        assert len(groups & set(BETWEEN)) == 1 and "takeoff-increase" in groups
