@@ -96,6 +96,7 @@ COLUMNS.update({
     "catch": "true: an attention (catch) trial, a gross error whose right answer is incorrect",
     "condition": "between-subject condition the participant was assigned to",
     "block_order": "the participant's order of blocks (balanced Latin square row)",
+    "latin_row": "the participant's row of the balanced Latin square (0-based)",
     "PROLIFIC_PID": "Prolific participant ID (URL parameter, checked like every participant ID)",
     "STUDY_ID": "Prolific study ID (URL parameter)",
     "SESSION_ID": "Prolific session ID (URL parameter)",

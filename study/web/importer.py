@@ -67,7 +67,7 @@ from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS,
 from flipstudy.errors import WebImportError
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
-from .order import condition_groups, order_groups, web_trial_order
+from .order import balanced_latin_square, condition_groups, order_groups, web_trial_order
 from .sites import SITES, read_sites as _sites
 from .site import FORMAT, HOSTS
 
@@ -92,7 +92,7 @@ def web_columns(two_afc: bool, styled: bool) -> list[str]:
     task = [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] if two_afc else []
     return response_columns(styled) + task + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
-                                                 "user_agent", "consent", "window", "screen_ok", "block_order", "condition"]
+                                                 "user_agent", "consent", "window", "screen_ok", "block_order", "latin_row", "condition"]
 RECRUIT_RE = re.compile(r"[A-Za-z0-9_-]{1,64}")
 KINDS = ("start", "demographics", "answer", "end")
 #: the answers each task takes: yes/no judges one motion, 2AFC names the interval judged
@@ -227,13 +227,13 @@ class _Checker:
         self.recruit = tuple(study.design.online.recruit_params)
         self.between = tuple(study.design.online.between)
 
-    def order(self, pid, condition=None):
-        if (pid, condition) not in self.orders:
+    def order(self, pid, condition=None, row=None):
+        if (pid, condition, row) not in self.orders:
             groups = condition_groups(self.groups, self.between, condition) if self.between else self.groups
-            self.orders[pid, condition] = web_trial_order(groups, self.study.design.repetitions,
-                                                          self.study.design.seed, pid,
-                                                          self.study.design.online.block_order)
-        return self.orders[pid, condition]
+            self.orders[pid, condition, row] = web_trial_order(groups, self.study.design.repetitions,
+                                                               self.study.design.seed, pid,
+                                                               self.study.design.online.block_order, row)
+        return self.orders[pid, condition, row]
 
     def check(self, where: str, rec: dict) -> dict:
         _need(rec, where, COMMON)
@@ -277,12 +277,16 @@ class _Checker:
                     raise WebImportError(f"{where}: {name} {str(v)[:40]!r} is not a valid recruiter ID "
                                          f"(1-64 letters, digits, '_' or '-')")
                 out[name] = v
-        cond = None
+        cond = row = None
         if self.between:                       # the run's between-subject condition sets its order
             cond = out["condition"] = _str(rec.get("condition"), where, "condition", self.between)
+        if self.study.design.online.block_order == "latin-square" and rec.get("latin_row") not in (None, ""):
+            seen = condition_groups(self.groups, self.between, cond) if self.between else self.groups
+            row = out["latin_row"] = _num(rec["latin_row"], where, "latin_row", 0,
+                                          len(balanced_latin_square(len(seen))) - 1, integer=True)
         if kind == "answer":
             _need(rec, where, ANSWER)
-            trials = self.order(pid, cond)
+            trials = self.order(pid, cond, row)
             t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
             want = trials[t - 1]
             got = {"stimulus": rec["stimulus"], "group": rec["group"],
@@ -332,12 +336,12 @@ class _Checker:
         elif kind == "start":
             _need(rec, where, ("n_trials", "order"))
             n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
-            order = " ".join(t.stimulus for t in self.order(pid, cond))
-            if n != len(self.order(pid, cond)) or rec["order"] != order:
+            order = " ".join(t.stimulus for t in self.order(pid, cond, row))
+            if n != len(self.order(pid, cond, row)) or rec["order"] != order:
                 raise WebImportError(f"{where}: the run's trial order is not this study's order for "
                                      f"{pid} (another design or trial-order rule)")
             if self.study.design.online.block_order == "latin-square":
-                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond)))
+                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond, row)))
                 if rec.get("block_order") != blocks:
                     raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
                                          f"Latin-square row ({blocks!r})")
@@ -447,7 +451,8 @@ def _tables(merged: dict, n_trials: int, columns=COLUMNS, recruit=(), part_colum
              "run_id": run, "host": info["host"], "participant_from": start.get("participant_from"),
              "refresh_hz": start.get("refresh_hz"), "user_agent": start.get("user_agent"),
              "consent": start.get("consent"), "window": start.get("window"), "screen_ok": start.get("screen_ok"),
-             "block_order": start.get("block_order"), "condition": start.get("condition")}
+             "block_order": start.get("block_order"), "latin_row": start.get("latin_row"),
+             "condition": start.get("condition")}
         p.update({k: v for k, v in start.items() if k in recruit})
         for f in DEMOGRAPHIC_FIELDS:
             p[f["name"]] = demo.get(f["name"])

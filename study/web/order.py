@@ -160,8 +160,10 @@ def condition_by_hash(participant: str, between) -> str:
 
 
 def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
-                    participant: str, block_order: str = "interleaved") -> list[Trial]:
+                    participant: str, block_order: str = "interleaved", row: int | None = None) -> list[Trial]:
     """The participant's trials online (``groups`` from :func:`order_groups`).
+    ``block_order`` "latin-square": one block per group in the order of Latin-square row
+    ``row`` (None: :func:`latin_row` of the participant ID).
 
     >>> groups = [["a", [{"stimulus": f"a{i}", "clip": "c", "kind": "k", "level": i} for i in range(3)]],
     ...           ["b", [{"stimulus": f"b{i}", "clip": "c", "kind": "k", "level": i} for i in range(3)]]]
@@ -177,7 +179,8 @@ def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
     if block_order == "latin-square":
         # one block per group in the order of the participant's Latin-square row; within a
         # block every repetition of the group's stimuli, shuffled, never one twice in a row
-        row = balanced_latin_square(len(groups))[latin_row(participant, len(groups))]
+        square = balanced_latin_square(len(groups))
+        row = square[latin_row(participant, len(groups)) if row is None else int(row)]
         for gi in row:
             g, rows = groups[gi]
             for _ in range(100):

@@ -80,7 +80,7 @@
   function latinRow(participant, k) { return fnv1a32(utf8(`flipstudy-latin:${participant}`)) % balancedLatinSquare(k).length; }
 
   // groups: [[group, [{stimulus, clip, kind, level}, ...]], ...] (the site's config)
-  function webTrialOrder(groups, repetitions, designSeed, participant, blockOrder) {
+  function webTrialOrder(groups, repetitions, designSeed, participant, blockOrder, row) {
     const rng = Sfc32.fromKey(orderKey(designSeed, participant));
     const nStimuli = groups.reduce((n, [, rows]) => n + rows.length, 0);
     const trials = [];
@@ -91,7 +91,8 @@
       trials.push(t);
     };
     if (blockOrder === 'latin-square') {
-      const order = balancedLatinSquare(groups.length)[latinRow(participant, groups.length)];
+      const square = balancedLatinSquare(groups.length);
+      const order = square[row === undefined || row === null ? latinRow(participant, groups.length) : row];
       for (const gi of order) {
         const [g, rows] = groups[gi];
         let items;

@@ -131,13 +131,13 @@
     },
     // least-filled first through JATOS's batch session (shared by every run of the batch):
     // the counts are read, the smallest taken, and the set retried when another run wrote first
-    async assign(between) {
+    async assign(between, key = 'flipstudy-conditions') {
       for (let i = 0; i < 50; i++) {
-        const counts = Object.assign({}, jatos.batchSession.get('flipstudy-conditions') || {});
+        const counts = Object.assign({}, jatos.batchSession.get(key) || {});
         let best = between[0];
         for (const c of between) if ((counts[c] || 0) < (counts[best] || 0)) best = c;
         counts[best] = (counts[best] || 0) + 1;
-        try { await jatos.batchSession.set('flipstudy-conditions', counts); return best; } catch (e) { await sleep(50 + 200 * Math.random()); }
+        try { await jatos.batchSession.set(key, counts); return best; } catch (e) { await sleep(50 + 200 * Math.random()); }
       }
       throw new Error('JATOS batch session: no condition could be assigned');
     },
@@ -560,7 +560,14 @@
     }
     if (between.length) recruit.condition = cp.s.condition;
     const groups = between.length ? ORDER.conditionGroups(C.groups, between, cp.s.condition) : C.groups;
-    const trials = ORDER.webTrialOrder(groups, C.repetitions, C.design_seed, pid, O.block_order);
+    // the Latin-square row: least-filled first on JATOS (its batch session), else the ID's hash
+    if (O.block_order === 'latin-square' && cp.s.latin_row === undefined) {
+      const rows = ORDER.balancedLatinSquare(groups.length).map((_, i) => String(i));
+      cp.s.latin_row = Number(host.assign ? await host.assign(rows, 'flipstudy-latin-rows') : ORDER.latinRow(pid, groups.length));
+      cp.save();
+    }
+    if (O.block_order === 'latin-square') recruit.latin_row = cp.s.latin_row;
+    const trials = ORDER.webTrialOrder(groups, C.repetitions, C.design_seed, pid, O.block_order, cp.s.latin_row);
     const n = trials.length;
     // the groups in the order their blocks come (a Latin-square row), recorded with the start
     const blockOrder = O.block_order === 'latin-square' ? [...new Set(trials.map((t) => t.group))].join(' ') : null;

@@ -22,7 +22,7 @@ import flipstudy.study.web as web_pkg
 from flipstudy.errors import DesignError, WebImportError
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.web.importer import import_web
-from flipstudy.study.web.order import condition_by_hash
+from flipstudy.study.web.order import balanced_latin_square, condition_by_hash
 from flipstudy.study.web.site import export_site
 
 JS = Path(web_pkg.__file__).parent / "static" / "flipstudy-order.js"
@@ -78,12 +78,10 @@ BATCH_STANDIN = test_web_browser.JATOS_STANDIN.replace("onLoad(cb) { setTimeout(
   },""")
 
 
-@pytest.mark.slow
-@pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"needs Debian's chromium at {CHROMIUM}")
-def test_ten_jatos_participants_fill_two_conditions_five_and_five(page, study, tmp_path, jspsych_dir,  # noqa: F811
-                                                                 monkeypatch):
-    site = tmp_path / "site"
-    export_site(study, site, host="jatos", iti_ms=20, jspsych_dir=jspsych_dir)
+def _jatos_runs(page, site, pids, monkeypatch, race_at=None):
+    """Open the JATOS site for each of ``pids`` (up to the instructions, so the run has
+    started) beside a stand-in batch session; returns each run's checkpoint state, the batch
+    session, the conflicting sets, the blocked requests and the host."""
     monkeypatch.setattr(test_web_browser, "JATOS_STANDIN", BATCH_STANDIN)
     batch = {"version": 0, "data": {}}
     conflicts, blocked, race = [], [], {"now": False}
@@ -112,22 +110,61 @@ def test_ten_jatos_participants_fill_two_conditions_five_and_five(page, study, t
             else:
                 route.continue_()
         page.route("**/*", gate)
-        got = {}
-        for i in range(10):
-            pid = f"PP{i:02d}"
-            race["now"] = i == 3                         # this run's first set meets a newer version
+        states = {}
+        for i, pid in enumerate(pids):
+            race["now"] = i == race_at                   # this run's first set meets a newer version
             page.goto(f"http://{origin}/index.html?PROLIFIC_PID={pid}")
             page.wait_for_selector('#jspsych-target[data-screen-id="instructions"]')
-            got[pid] = page.evaluate("() => window.flipstudyState.checkpoint.s.condition")
-            assert page.evaluate("() => window.flipstudyState.trials.map((t) => t.group)").count(got[pid]) == 2
+            states[pid] = page.evaluate("() => ({condition: window.flipstudyState.checkpoint.s.condition || null, "
+                                        "row: window.flipstudyState.checkpoint.s.latin_row ?? null, "
+                                        "groups: window.flipstudyState.trials.map((t) => t.group)})")
         page.wait_for_function("() => window.flipstudyState.checkpoint.s.sent >= 1")
+    return states, batch, conflicts, blocked, host
+
+
+def _import_runs(study, tmp_path, host):
+    f = write_jsonl(tmp_path / "jatos.jsonl", [json.loads(x) for b in host.bodies for x in b.splitlines() if x])
+    import_web(study, [f])
+    return pd.read_csv(study / "web" / "participants.csv", dtype=str)
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"needs Debian's chromium at {CHROMIUM}")
+def test_ten_jatos_participants_fill_two_conditions_five_and_five(page, study, tmp_path, jspsych_dir,  # noqa: F811
+                                                                 monkeypatch):
+    site = tmp_path / "site"
+    export_site(study, site, host="jatos", iti_ms=20, jspsych_dir=jspsych_dir)
+    states, batch, conflicts, blocked, host = _jatos_runs(page, site, [f"PP{i:02d}" for i in range(10)],
+                                                         monkeypatch, race_at=3)
+    got = {p: s["condition"] for p, s in states.items()}
+    for p, s in states.items():
+        assert s["groups"].count(got[p]) == 2 and not set(s["groups"]) & (set(BETWEEN) - {got[p]})
     assert collections.Counter(got.values()) == {BETWEEN[0]: 5, BETWEEN[1]: 5}
     assert batch["data"]["flipstudy-conditions"] == {BETWEEN[0]: 5, BETWEEN[1]: 5}
     assert blocked == [] and len(conflicts) == 1             # the conflicting set was retried
-    f = write_jsonl(tmp_path / "jatos.jsonl", [json.loads(x) for b in host.bodies for x in b.splitlines() if x])
-    import_web(study, [f])
-    parts = pd.read_csv(study / "web" / "participants.csv", dtype=str)
+    parts = _import_runs(study, tmp_path, host)
     assert dict(zip(parts["participant"], parts["condition"])) == got
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"needs Debian's chromium at {CHROMIUM}")
+def test_jatos_latin_square_rows_are_filled_evenly(page, tmp_path, jspsych_dir, monkeypatch):  # noqa: F811
+    study = make_demo_study(tmp_path / "study", levels=(0, 25), repetitions=1, groups=GROUPS, video_frames=12,
+                            size=(96, 72), extra='[online]\nblock_order = "latin-square"\n')
+    site = tmp_path / "site"
+    export_site(study, site, host="jatos", iti_ms=20, jspsych_dir=jspsych_dir)
+    states, batch, conflicts, blocked, host = _jatos_runs(page, site, [f"Q{i:02d}" for i in range(12)], monkeypatch)
+    square = balanced_latin_square(3)                        # 3 groups: 6 rows (odd: each row and its mirror)
+    names = [g for g, *_ in GROUPS]
+    assert collections.Counter(s["row"] for s in states.values()) == {r: 2 for r in range(6)}
+    for s in states.values():                               # each run's blocks follow its row
+        assert list(dict.fromkeys(s["groups"])) == [names[i] for i in square[s["row"]]]
+    # over the 12 runs every group is in every position, and after every other, equally often
+    firsts = collections.Counter(list(dict.fromkeys(s["groups"]))[0] for s in states.values())
+    assert set(firsts.values()) == {4}
+    assert blocked == []
+    parts = _import_runs(study, tmp_path, host)
+    assert dict(zip(parts["participant"], parts["latin_row"].astype(int))) == {p: s["row"] for p, s in states.items()}
 
 
 def _conditions(study, source):
