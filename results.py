@@ -290,6 +290,9 @@ class AnalyzeResult(StepResult):
             lines.append(f"left out {len(who['incomplete_left_out'])} incomplete session(s) "
                          f"(--include-incomplete to keep them): {', '.join(who['incomplete_left_out'][:8])}"
                          + (", ..." if len(who["incomplete_left_out"]) > 8 else ""))
+        if r.get("flow"):
+            lines.append("participant flow ([exclusions]): " + " → ".join(f"{f['stage']} {f['n']}"
+                                                                         for f in r["flow"]))
         if who["n"] < 5:
             lines.append(f"note: with {who['n']} participant(s), intervals and tests over participants "
                          f"are not meaningful (notes.md)")

@@ -53,6 +53,7 @@ class Result:
     participant_thresholds: pd.DataFrame | None = None
     group_thresholds: pd.DataFrame | None = None
     kinds: dict = field(default_factory=dict)       # group → error kind (column ``kind``)
+    exclusions: object | None = None                # ExclusionReport when the design states rules
 
     def to_dict(self) -> dict:
         """JSON-ready summary (what ``flipstudy analyze --json`` prints)."""
@@ -73,6 +74,9 @@ class Result:
         if self.participant_thresholds is not None:
             out["thresholds_participants"] = records(self.participant_thresholds)
             out["thresholds_groups"] = records(self.group_thresholds)
+        if self.exclusions is not None:
+            out["exclusion_rules"] = list(self.exclusions.rules)
+            out["flow"] = records(self.exclusions.flow)
         return {**out, "notes": list(self.notes), "files": {k: str(v) for k, v in self.files.items()}}
 
 
@@ -122,7 +126,8 @@ def _normalise_images(images) -> dict:
 def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=None, seed=0,
             n_boot: int = 2000, ci: float = 0.95, psychometric: str = "psignifit",
             gee: bool = True, figures: bool = True, include_simulated: bool = False,
-            include_incomplete: bool = False, quest_specs: dict | None = None) -> Result:
+            include_incomplete: bool = False, quest_specs: dict | None = None,
+            exclusions: dict | None = None) -> Result:
     """Run the whole analysis and write its outputs.
 
     ``responses``: a DataFrame, a responses CSV or a study folder (its
@@ -147,6 +152,12 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     :class:`~flipstudy.analysis.adaptive.QuestSettings`) of the design, to replay
     QUEST+ groups (without it their stored thresholds are used).
 
+    ``exclusions``: the design's ``[exclusions]`` table (a dict;
+    :mod:`flipstudy.analysis.exclusions`), applied before anything is computed: the
+    excluded participants and the catch trials are left out, ``flow.csv`` and the
+    ``flow`` figure report recruited → completed → excluded by rule → analysed, and
+    ``responses_exclusions.csv`` keeps every row with ``excluded`` and ``exclusion_rule``.
+
     Files (in ``out_dir``): ``table.csv``, ``table_paper.csv``,
     ``table_paper.md``, ``table_paper.tex``, ``participants.csv``,
     ``levels_vs_original.csv`` (GEE), ``thresholds.csv``, ``notes.md``,
@@ -160,8 +171,16 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     """
     correction = normalise_correction(correction)
     df = load_responses(responses)
+    report = None
+    if exclusions is not None:
+        from .exclusions import apply_exclusions
+        df, first = select_participants(df, include_simulated=include_simulated, include_incomplete=True)
+        report = apply_exclusions(df, exclusions, include_incomplete=include_incomplete)
+        df = report.kept()
     df, who = select_participants(df, include_simulated=include_simulated,
                                   include_incomplete=include_incomplete)
+    if report is not None:
+        who["simulated_left_out"] = first["simulated_left_out"]
     if df.empty:
         why = []
         if who["simulated_left_out"]:
@@ -203,6 +222,12 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                     if who["incomplete_left_out"] else "")
                  + (" Simulated participants (flipstudy simulate) are included: these results "
                     "describe the observer model, not people." if who["simulated"] else ""))
+    if report is not None:
+        flow = ", ".join(f"{st} {n}" for st, n in zip(report.flow["stage"], report.flow["n"]))
+        notes.insert(1, "Exclusions stated in the design ([exclusions]), applied before the analysis: "
+                     + ("; ".join(report.rules) or "no rule") + f". Flow: {flow}. Excluded participants' "
+                     "rows and the catch trials are kept in responses_exclusions.csv (excluded, "
+                     "exclusion_rule), not analysed.")
     if who["n"] < MIN_PARTICIPANTS:
         notes.insert(1, f"With {who['n']} participant{'s' if who['n'] != 1 else ''} (fewer than "
                         f"{MIN_PARTICIPANTS}), the intervals over participants (bootstrap), the GEE "
@@ -266,7 +291,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     paper = paper_layout(table, kinds=kinds) if len(table) else pd.DataFrame(columns=["group"])
     result = Result(table=table, participants=participants, gee=g, thresholds=thresholds, fits=fits,
                     paper=paper, notes=notes, participant_thresholds=per_participant,
-                    group_thresholds=per_group, kinds=kinds,
+                    group_thresholds=per_group, kinds=kinds, exclusions=report,
                     settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
                               "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
                               "n_participants": int(df["participant"].nunique()),
@@ -293,6 +318,16 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
         files["table_paper.tex"].write_text(to_latex(table, caption, kinds=kinds), encoding="utf-8")
     files["participants.csv"] = out / "participants.csv"
     participants.to_csv(files["participants.csv"], index=False)
+    if report is not None:
+        rows = report.rows
+        if "shared_copy" in rows.columns:                  # the answers as given, once each
+            rows = rows[~rows["shared_copy"].astype(bool)]
+        rows = rows.drop(columns=[c for c in ("shared_copy", "shared_original", "incorrect", "detected")
+                                  if c in rows.columns])
+        for name, frame in (("flow.csv", report.flow), ("exclusions_participants.csv", report.participants),
+                            ("responses_exclusions.csv", rows)):
+            files[name] = out / name
+            frame.to_csv(files[name], index=False)
     if gee and len(g):
         files["levels_vs_original.csv"] = out / "levels_vs_original.csv"
         g.to_csv(files["levels_vs_original.csv"], index=False)
@@ -325,6 +360,9 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                 ylabel="P(original chosen)")))
         if per_participant is not None and len(per_participant):
             figs.append(("thresholds_participants", thresholds_figure(per_participant, per_group)))
+        if report is not None:
+            from .exclusions import flow_figure
+            figs.append(("flow", flow_figure(report.flow)))
         for name, fig in figs:
             for p in save(_labelled(fig, label), out / name):
                 files[p.name] = p
@@ -358,6 +396,12 @@ def _notes_md(r: Result) -> str:
              f"{', '.join(s['groups'])}.", "",
              f"Correction for rates of 0 or 1: **{s['correction']}** — {s['correction_text']}.", ""]
     lines += [f"- {n}" for n in r.notes]
+    if r.exclusions is not None:
+        lines += ["", "## Exclusions (stated in the design before the data)", ""]
+        lines += [f"- {x}" for x in r.exclusions.rules] or ["- no rule"]
+        lines += ["", "| stage | participants |", "|:--|--:|"]
+        lines += [f"| {st} | {n} |" for st, n in zip(r.exclusions.flow["stage"], r.exclusions.flow["n"])]
+        lines.append("")
     lines += ["", "## Table (paper layout)", "", to_markdown(r.table, s["participants_label"] + ".", r.kinds)]
     if len(r.thresholds):
         lines += ["## Detection thresholds", "",

@@ -61,6 +61,7 @@ from .groupkeys import (GRID_MAX, LEVELS_MAX, METHODS, QUEST_KEYS, TASKS, QuestS
                         check_levels, check_quest, levels_table, quest_table, read_levels)
 from .ballistic import BALLISTIC_LEVEL_BOUNDS, KIND_OPTIONS
 from .injection import COM_POLICIES, KINDS, PROFILES
+from .online import Exclusions, OnlineSettings
 
 
 PAPER_DESIGN = """\
@@ -129,7 +130,7 @@ OLD_SESSION_KEYS = ("replay", "break_every")   # also read from [study], as desi
 #: the character styles a design may choose (drawn by flipstudy.render.characters)
 CHARACTER_STYLES = ("ellipsoids", "capsules", "stick", "point-light", "mannequin")
 REFERENCE_KEYS = ("clips",)
-SECTIONS = ("study", "session", "clips", "groups", "reference", "sources")
+SECTIONS = ("study", "session", "clips", "groups", "reference", "sources", "online", "exclusions")
 ORIGINAL_MODES = ("shared", "per-group")   # [study] original
 GROUP_ORIGINAL = ("shared", "own")         # [[groups]] original
 #: the group name of the shared original in the manifest and the responses
@@ -499,6 +500,8 @@ class Design:
     task: str = "yes-no"              # [study] task: the groups' default task
     compare: str = "first"            # [[sources]] 2AFC pairs: each source with the first, or all pairs
     sources: tuple[SourceSpec, ...] = ()   # [[sources]]: a comparison design (see _check_sources)
+    online: OnlineSettings = field(default_factory=OnlineSettings)   # the [online] table (issue 32)
+    exclusions: Exclusions = field(default_factory=Exclusions)        # the [exclusions] table
     where: InitVar[str | None] = None
 
     def __post_init__(self, where):
@@ -509,8 +512,16 @@ class Design:
         _field(self, "fps_given", bool, w)
         if not isinstance(self.session, SessionSettings):
             raise DesignError(f"{src}: [session]: expected SessionSettings, got {_show(self.session)}")
+        for key, typ in (("online", OnlineSettings), ("exclusions", Exclusions)):
+            if not isinstance(getattr(self, key), typ):
+                raise DesignError(f"{src}: [{key}]: expected {typ.__name__}, got {_show(getattr(self, key))}")
         if self.sources:
             self._check_sources(src)
+            if self.online.between or self.exclusions.catch_groups:
+                raise DesignError(f"{src}: [online].between / [exclusions].catch_groups: a comparison "
+                                  f"design ([[sources]]) has no between-subject conditions or catch "
+                                  f"groups yet; remove them (recruiting, consent, preload and the other "
+                                  f"exclusion rules work)")
             return
         if self.compare != "first":
             raise DesignError(f"{w}.compare: {self.compare!r} chooses the pairs of a [[sources]] design; "
@@ -564,6 +575,30 @@ class Design:
             dup = sorted({s for s in stimuli if stimuli.count(s) > 1})
             raise DesignError(f"{src}: clip and group names give the same stimulus name twice "
                               f"({dup[:3]}); rename a clip or group")
+        by_name = {g.name: g for g in self.groups}
+        for c in self.exclusions.catch_groups:
+            g = by_name.get(c)
+            if g is None:
+                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r} is not one of the groups {gnames}")
+            if g.task != "yes-no" or g.adaptive or 0.0 in g.levels:
+                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r}: a catch group shows gross "
+                                  f"errors only (yes-no, constant, no level 0), whose right answer is "
+                                  f"'incorrect'")
+        for c in self.online.between:
+            if c not in by_name:
+                raise DesignError(f"{src}: [online].between: {c!r} is not one of the groups {gnames}")
+            if c in self.exclusions.catch_groups:
+                raise DesignError(f"{src}: [online].between: {c!r} is a catch group; every participant sees those")
+            if by_name[c].adaptive:
+                raise DesignError(f"{src}: [online].between: {c!r} is a quest+ group; conditions are "
+                                  f"constant-stimuli groups")
+        sizes = {c: len(by_name[c].trial_levels()) for c in self.online.between}
+        if len(set(sizes.values())) > 1:
+            raise DesignError(f"{src}: [online].between: the conditions' groups have different numbers of "
+                              f"trial levels ({sizes}); give them as many, so every session is as long")
+        if len(self.exclusions.catch_groups) == len(self.groups):
+            raise DesignError(f"{src}: [exclusions].catch_groups: every group is a catch group; "
+                              f"at least one group must be a test group")
         n_trials = self.trials_per_participant()
         if any(g.adaptive or g.task != "yes-no" for g in self.groups) and n_trials > TRIALS_MAX:
             parts = [f"{g.name}: {g.quest.trials if g.adaptive else self.repetitions * len(self.clips) * len(g.trial_levels())}"
@@ -696,8 +731,11 @@ class Design:
         _check_keys(ref, REFERENCE_KEYS, f"{src}: [reference]")
         reference = _get(ref, "clips", list, f"{src}: [reference]", [])
         p = Path(path) if path is not None and str(path) != "<design>" else None
+        online = OnlineSettings.from_dict(d.get("online", {}), f"{src}: [online]")
+        exclusions = Exclusions.from_dict(d.get("exclusions", {}), f"{src}: [exclusions]")
         return cls(**study, clips=tuple(specs), groups=tuple(gs), reference=tuple(reference),
-                   fps_given="fps" in st, path=p, session=session, where=src)
+                   fps_given="fps" in st, path=p, session=session, online=online,
+                   exclusions=exclusions, where=src)
 
     @classmethod
     def _from_sources(cls, d, study, session, st, path, src) -> "Design":
@@ -716,8 +754,10 @@ class Design:
         gs = [Group.from_dict(g, f"{src}: groups[{i}]", study["task"], "per-group")
               for i, g in enumerate(groups)]
         p = Path(path) if path is not None and str(path) != "<design>" else None
+        online = OnlineSettings.from_dict(d.get("online", {}), f"{src}: [online]")
+        exclusions = Exclusions.from_dict(d.get("exclusions", {}), f"{src}: [exclusions]")
         return cls(**study, clips=(), groups=tuple(gs), sources=tuple(specs), fps_given="fps" in st, path=p,
-                   session=session, where=src)
+                   session=session, online=online, exclusions=exclusions, where=src)
 
     @classmethod
     def from_toml_text(cls, text: str, path: Path | str = "<design>") -> "Design":
@@ -759,10 +799,13 @@ class Design:
             out["sources"] = [s.to_dict() for s in self.sources]
             if self.error_groups:
                 out["groups"] = [g.to_dict() for g in self.error_groups]
-            return out
-        out.update(clips=[c.to_dict() for c in self.clips], groups=[g.to_dict() for g in self.groups])
-        if self.reference:
-            out["reference"] = {"clips": list(self.reference)}
+        else:
+            out.update(clips=[c.to_dict() for c in self.clips], groups=[g.to_dict() for g in self.groups])
+            if self.reference:
+                out["reference"] = {"clips": list(self.reference)}
+        for key in ("online", "exclusions"):      # written when given (older designs stay as they were)
+            if not getattr(self, key).is_default:
+                out[key] = getattr(self, key).to_dict()
         return out
 
     def to_toml(self) -> str:

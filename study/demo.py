@@ -48,10 +48,12 @@ def write_test_video(path, *, size=(64, 48), frames: int = 30, fps: float = 30.0
 def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_every=40,
                      clips=("backflip",), levels=(0, 25), groups=DEMO_GROUPS,
                      reference=True, original: str | None = "per-group",
-                     max_dropped_pct: float | None = None, repeat_dropped: bool = False) -> str:
+                     max_dropped_pct: float | None = None, repeat_dropped: bool = False,
+                     extra: str = "") -> str:
     """A demo design.  ``original``: written as ``[study] original`` — the demo keeps
     every group's own level 0 ("per-group") so its trial counts stay simple;
-    "shared" (or None: the default) gives the paper's shared original."""
+    "shared" (or None: the default) gives the paper's shared original.  ``extra``: TOML
+    appended as it is (more ``[[groups]]``, an ``[online]`` or ``[exclusions]`` table)."""
     lines = ["[study]", f'name = "{name}"', f"seed = {seed}", f"repetitions = {repetitions}"]
     lines += ([f'original = "{original}"'] if original else []) + [""]
     lines += ["[session]", f"replay = {'true' if replay else 'false'}", f"break_every = {break_every}"]
@@ -66,7 +68,7 @@ def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_
         if kind == "angular-momentum":
             lines.append(f'profile = "{profile}"')
         lines += [f"sign = {sign}", "levels = [" + ", ".join(f"{v:g}" for v in levels) + "]", ""]
-    return "\n".join(lines)
+    return "\n".join(lines) + ("\n" + extra if extra else "")
 
 
 def write_placeholder_study(out, text: str, *, frames: int, fps: float,

@@ -206,8 +206,15 @@ def export_responses(study_dir, out=None, *, participants_out=None,
     if truth:
         tout = out.parent / TRUTH_FILE
         atomic_write_text(tout, _csv(TRUTH_COLUMNS, truth))
-    from .psychds import write_dataset_description      # Psych-DS metadata beside them
-    write_dataset_description(out.parent, study_dir, columns, source="local sessions", stimuli=stimuli)
+    from .psychds import write_data_files, write_dataset_description   # Psych-DS: data/ and metadata
+    name = study_dir.name
+    if (study_dir / "design.toml").is_file():
+        from flipstudy.stimuli.design import load_design
+        name = load_design(study_dir / "design.toml").name
+    write_data_files(out.parent, name, "local", {"": _csv(columns, rows),
+                                                 "participants": _csv(PARTICIPANT_COLUMNS, written)})
+    write_dataset_description(out.parent, study_dir, list(dict.fromkeys(columns + PARTICIPANT_COLUMNS)),
+                              source="local sessions", stimuli=stimuli)
     return ExportResult(
         responses=out, participants=pout, truth=tout, rows=len(rows), sessions=len(written),
         real=tuple(sorted({p["participant"] for p in written if p["simulated"] == "false"})),

@@ -54,6 +54,7 @@ EXPORT_FILES = {
     "participants.csv": "the exported participants",
     "simulated_truth.csv": "the simulated observers' parameters",
     "dataset_description.json": "the exported tables' description",
+    "data": "the exported tables as Psych-DS data files (data/*_data.csv)",
 }
 #: folders of a study folder whose every file it owns
 STUDY_DIRS = {"render": "the rendered videos", "web": "the web results",
@@ -101,6 +102,8 @@ def owner(path) -> tuple[Path, str, str] | None:
                 return parent, "a stimulus file", top
         elif top in STUDY_DIRS:
             return parent, f"one of {STUDY_DIRS[top]} ({top}/)", str(rel)
+        elif top in EXPORT_FILES:           # data/: export's Psych-DS data files
+            return parent, f"one of {EXPORT_FILES[top]}", str(rel)
         return None                       # inside a study, but the user's (analysis/, ...)
     if p.is_dir():                        # a folder holding a study one level down
         try:

@@ -132,10 +132,14 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
         refuse_changed_design(resolve_responses_path(r).parent, "analyze")
     out = Path(out) if out else src.parent / "analysis"
     design = src.parent / "design.toml"
-    specs = quest_specs(load_design(design)) if design.is_file() else None
+    if not design.is_file() and src.parent.name == "web":     # import-web's STUDY/web/responses.csv
+        design = src.parent.parent / "design.toml"
+    d = load_design(design) if design.is_file() else None
+    specs = quest_specs(d) if d is not None else None
+    rules = d.exclusions.to_dict() if d is not None and not d.exclusions.is_default else None
     if len(responses) > 1:
         src = combine_responses(responses)
-    res = _analyze(src, out, images=images or None, quest_specs=specs, **options)
+    res = _analyze(src, out, images=images or None, quest_specs=specs, exclusions=rules, **options)
     return AnalyzeResult(out=out, report=res.to_dict(), table_markdown=to_markdown(res.table))
 
 

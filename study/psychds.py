@@ -30,6 +30,7 @@ from flipstudy.stimuli._io import atomic_write_text
 from flipstudy.stimuli.injection import KINDS
 
 FILE = "dataset_description.json"
+DATA_DIR = "data"              # Psych-DS: every data file lives under data/
 SCHEMA_VERSION = "Psych-DS 0.1.0"
 
 #: what each column of the response tables means
@@ -91,6 +92,53 @@ COLUMNS = {
 }
 
 
+COLUMNS.update({
+    "catch": "true: an attention (catch) trial, a gross error whose right answer is incorrect",
+    "condition": "between-subject condition the participant was assigned to",
+    "block_order": "the participant's order of blocks (balanced Latin square row)",
+    "latin_row": "the participant's row of the balanced Latin square (0-based)",
+    "PROLIFIC_PID": "Prolific participant ID (URL parameter, checked like every participant ID)",
+    "STUDY_ID": "Prolific study ID (URL parameter)",
+    "SESSION_ID": "Prolific session ID (URL parameter)",
+    "consent": "consent given on the consent screen (ISO 8601 time)",
+    "window": "browser window size at the screen check, CSS pixels (WxH)",
+    "screen_ok": "true when the screen met the design's minimum refresh rate and window size",
+    "host": "where the web session ran (static, jatos, pavlovia)",
+    "participant_from": "the URL parameter the participant ID was read from",
+    "user_agent": "the browser's user agent",
+})
+
+
+def keyword(value: str) -> str:
+    """A Psych-DS keyword value: letters and digits only (``my_study-2`` → ``mystudy2``)."""
+    v = "".join(ch for ch in str(value) if ch.isascii() and ch.isalnum())
+    return v or "x"
+
+
+def data_file_name(study: str, source: str, table: str | None = None) -> str:
+    """The Psych-DS name of a data file: ``study-<name>_source-<source>[_table-<table>]_data.csv``.
+
+    >>> data_file_name("paper replication", "web"), data_file_name("s", "local", "participants")
+    ('study-paperreplication_source-web_data.csv', 'study-s_source-local_table-participants_data.csv')
+    """
+    parts = [f"study-{keyword(study)}", f"source-{keyword(source)}"]
+    if table:
+        parts.append(f"table-{keyword(table)}")
+    return "_".join(parts) + "_data.csv"
+
+
+def write_data_files(folder, study: str, source: str, tables: dict[str, str]) -> list[Path]:
+    """Write the tables (``{"": responses CSV text, "participants": ...}``) as Psych-DS
+    data files under ``folder/data/``; returns their paths."""
+    out = []
+    for table, text in tables.items():
+        path = Path(folder) / DATA_DIR / data_file_name(study, source, table or None)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(path, text)
+        out.append(path)
+    return out
+
+
 def _sha256(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
@@ -107,11 +155,12 @@ def _software() -> list[dict]:
 
 
 def write_dataset_description(folder, study_dir, columns, *, source: str, extra_software=(),
-                              stimuli=None) -> Path:
+                              stimuli=None, exclusion_rules=None) -> Path:
     """Write ``folder/dataset_description.json`` for the response tables of
     ``study_dir`` with these ``columns`` (``source``: "local sessions", "web
     sessions", …; ``stimuli``: the study's :class:`~flipstudy.stimuli.contract.StimulusSet`
-    when the caller has read it, else it is read here); returns its path."""
+    when the caller has read it, else it is read here; ``exclusion_rules``: the design's
+    ``[exclusions]`` as sentences, else read from the design); returns its path."""
     folder, study_dir = Path(folder), Path(study_dir)
     name = study_dir.name
     based = []
@@ -119,7 +168,11 @@ def write_dataset_description(folder, study_dir, columns, *, source: str, extra_
     if design.is_file():
         try:
             from flipstudy.stimuli.design import load_design
-            name = load_design(design).name
+            d = load_design(design)
+            name = d.name
+            if exclusion_rules is None and not d.exclusions.is_default:
+                from flipstudy.analysis.exclusions import rule_sentences
+                exclusion_rules = rule_sentences(d.exclusions.to_dict())
         except Exception:                      # a description never blocks an export
             pass
         based.append({"@type": "MediaObject", "name": "design.toml", "sha256": _sha256(design)})
@@ -149,12 +202,18 @@ def write_dataset_description(folder, study_dir, columns, *, source: str, extra_
         "@type": "Dataset",
         "name": f"{name}: responses ({source})",
         "description": (f"Answers of the perception study '{name}' ({source}): one row per trial "
-                        f"in responses.csv (long format), one row per session in participants.csv. "
-                        f"Written by flipstudy."),
+                        f"in responses.csv (long format), one row per session in participants.csv; the same "
+                        f"tables as Psych-DS data files under {DATA_DIR}/ (*_data.csv). "
+                        f"Written by flipstudy."
+                        + (" Exclusion rules stated in the design before any data, applied by "
+                           "flipstudy analyze: " + "; ".join(exclusion_rules) + "."
+                           if exclusion_rules else "")),
         "schemaVersion": SCHEMA_VERSION,
         "keywords": ["perception", "character animation", "physical plausibility", "flipstudy"],
         "variableMeasured": [{"@type": "PropertyValue", "name": c, "description": COLUMNS.get(c, c)}
                              for c in columns],
+        **({"comment": [{"@type": "Comment", "name": "exclusion rule", "text": t}
+                        for t in exclusion_rules]} if exclusion_rules else {}),
         "isBasedOn": based + [{"@type": "CreativeWork", "name": "stimuli", "hasPart": stimuli}]
                      + _software() + list(extra_software),
     }

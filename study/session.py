@@ -353,7 +353,13 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
             raise SessionError(f"{store.db_path(study.dir)} was made by an older flipstudy (schema "
                                f"1): it accepts only correct/incorrect answers, not a 2AFC group's "
                                f"first/second; run this design in a new study folder")
-        trials = trial_order(study.design, study.manifest, participant, s)
+        manifest = study.manifest
+        between = tuple(study.design.online.between)
+        if between:      # between-subject conditions: the least-filled first (ties: the design's order)
+            counts = store.condition_counts(conn, between, source)
+            condition = min(between, key=lambda c: counts[c])
+            manifest = [r for r in study.manifest if r.group not in between or r.group == condition]
+        trials = trial_order(study.design, manifest, participant, s)
         seed = participant_seed(study.design.seed, participant, s)
         if not dry_run:
             try:

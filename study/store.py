@@ -545,3 +545,16 @@ def participant_rows(conn, *, include_simulated: bool = False) -> list[dict]:
     for r in out:
         r["complete"] = int(r["answered"] + r.pop("skipped") >= r["n_trials"])
     return out
+
+
+def condition_counts(conn, conditions, source: str) -> dict[str, int]:
+    """Sessions of ``source`` in each between-subject condition (``[online] between``): a
+    session's condition is the group of ``conditions`` its stored trials show."""
+    conditions = list(conditions)
+    marks = ",".join("?" * len(conditions))
+    rows = conn.execute(
+        f"SELECT t.group_name, COUNT(DISTINCT t.participant || '/' || t.session) FROM trials t "
+        f"JOIN sessions s ON s.participant = t.participant AND s.session = t.session "
+        f"WHERE s.source = ? AND t.group_name IN ({marks}) GROUP BY t.group_name",
+        (source, *conditions)).fetchall()
+    return {**{c: 0 for c in conditions}, **{r[0]: int(r[1]) for r in rows}}

@@ -67,7 +67,7 @@ from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS,
 from flipstudy.errors import WebImportError
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
-from .order import order_groups, web_trial_order
+from .order import balanced_latin_square, condition_groups, order_groups, web_trial_order
 from .sites import SITES, read_sites as _sites
 from .site import FORMAT, HOSTS
 
@@ -92,7 +92,8 @@ def web_columns(two_afc: bool, styled: bool) -> list[str]:
     task = [c for c in ADAPTIVE_COLUMNS if not c.startswith("quest_")] if two_afc else []
     return response_columns(styled) + task + WEB_COLUMNS
 WEB_PARTICIPANT_COLUMNS = PARTICIPANT_COLUMNS + ["run_id", "host", "participant_from", "refresh_hz",
-                                                 "user_agent"]
+                                                 "user_agent", "consent", "window", "screen_ok", "block_order", "latin_row", "condition"]
+RECRUIT_RE = re.compile(r"[A-Za-z0-9_-]{1,64}")
 KINDS = ("start", "demographics", "answer", "end")
 #: the answers each task takes: yes/no judges one motion, 2AFC names the interval judged
 #: physically correct
@@ -222,12 +223,17 @@ class _Checker:
         #: the site ids exported from this study (None: exported before they were recorded)
         self.sites = _sites(study.dir / WEB_DIR / SITES)
         self.design_sha256 = hashlib.sha256(study.design_text.encode()).hexdigest()
+        #: the recruiter's URL parameters the site keeps on every record ([online] recruit_params)
+        self.recruit = tuple(study.design.online.recruit_params)
+        self.between = tuple(study.design.online.between)
 
-    def order(self, pid):
-        if pid not in self.orders:
-            self.orders[pid] = web_trial_order(self.groups, self.study.design.repetitions,
-                                               self.study.design.seed, pid)
-        return self.orders[pid]
+    def order(self, pid, condition=None, row=None):
+        if (pid, condition, row) not in self.orders:
+            groups = condition_groups(self.groups, self.between, condition) if self.between else self.groups
+            self.orders[pid, condition, row] = web_trial_order(groups, self.study.design.repetitions,
+                                                               self.study.design.seed, pid,
+                                                               self.study.design.online.block_order, row)
+        return self.orders[pid, condition, row]
 
     def check(self, where: str, rec: dict) -> dict:
         _need(rec, where, COMMON)
@@ -264,9 +270,23 @@ class _Checker:
                "run_started": _str(rec["run_started"], where, "run_started"),
                "timestamp": _str(rec["timestamp"], where, "timestamp"),
                "site_id": _str(rec["site_id"], where, "site_id")}
+        for name in self.recruit:              # checked as the site checks them (and participant IDs)
+            v = rec.get(name)
+            if v not in (None, ""):
+                if not isinstance(v, str) or not RECRUIT_RE.fullmatch(v):
+                    raise WebImportError(f"{where}: {name} {str(v)[:40]!r} is not a valid recruiter ID "
+                                         f"(1-64 letters, digits, '_' or '-')")
+                out[name] = v
+        cond = row = None
+        if self.between:                       # the run's between-subject condition sets its order
+            cond = out["condition"] = _str(rec.get("condition"), where, "condition", self.between)
+        if self.study.design.online.block_order == "latin-square" and rec.get("latin_row") not in (None, ""):
+            seen = condition_groups(self.groups, self.between, cond) if self.between else self.groups
+            row = out["latin_row"] = _num(rec["latin_row"], where, "latin_row", 0,
+                                          len(balanced_latin_square(len(seen))) - 1, integer=True)
         if kind == "answer":
             _need(rec, where, ANSWER)
-            trials = self.order(pid)
+            trials = self.order(pid, cond, row)
             t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
             want = trials[t - 1]
             got = {"stimulus": rec["stimulus"], "group": rec["group"],
@@ -316,13 +336,21 @@ class _Checker:
         elif kind == "start":
             _need(rec, where, ("n_trials", "order"))
             n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
-            order = " ".join(t.stimulus for t in self.order(pid))
-            if n != len(self.order(pid)) or rec["order"] != order:
+            order = " ".join(t.stimulus for t in self.order(pid, cond, row))
+            if n != len(self.order(pid, cond, row)) or rec["order"] != order:
                 raise WebImportError(f"{where}: the run's trial order is not this study's order for "
                                      f"{pid} (another design or trial-order rule)")
+            if self.study.design.online.block_order == "latin-square":
+                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond, row)))
+                if rec.get("block_order") != blocks:
+                    raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
+                                         f"Latin-square row ({blocks!r})")
             out.update(n_trials=n, refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000,
                                                    optional=True),
-                       participant_from=rec.get("participant_from"), user_agent=rec.get("user_agent"))
+                       participant_from=rec.get("participant_from"), user_agent=rec.get("user_agent"),
+                       consent=rec.get("consent"), window=rec.get("window"), block_order=rec.get("block_order"),
+                       screen_ok=None if rec.get("screen_ok") in (None, "") else
+                       _bool(rec["screen_ok"], where, "screen_ok"))
         return out
 
 
@@ -384,7 +412,7 @@ def _fmt(v):
     return str(v)
 
 
-def _tables(merged: dict, n_trials: int, columns=COLUMNS):
+def _tables(merged: dict, n_trials: int, columns=COLUMNS, recruit=(), part_columns=None):
     runs = {}
     for (run, *_), (r, _w, _f) in merged.items():
         runs.setdefault(run, {"participant": r["participant"], "run_started": r["run_started"],
@@ -421,10 +449,14 @@ def _tables(merged: dict, n_trials: int, columns=COLUMNS):
              "started": info["run_started"], "finished": last if done else None,
              "answered": len(run_answers), "n_trials": n_trials, "simulated": False, "complete": done,
              "run_id": run, "host": info["host"], "participant_from": start.get("participant_from"),
-             "refresh_hz": start.get("refresh_hz"), "user_agent": start.get("user_agent")}
+             "refresh_hz": start.get("refresh_hz"), "user_agent": start.get("user_agent"),
+             "consent": start.get("consent"), "window": start.get("window"), "screen_ok": start.get("screen_ok"),
+             "block_order": start.get("block_order"), "latin_row": start.get("latin_row"),
+             "condition": start.get("condition")}
+        p.update({k: v for k, v in start.items() if k in recruit})
         for f in DEMOGRAPHIC_FIELDS:
             p[f["name"]] = demo.get(f["name"])
-        parts.append({c: _fmt(p.get(c)) for c in WEB_PARTICIPANT_COLUMNS})
+        parts.append({c: _fmt(p.get(c)) for c in (part_columns or WEB_PARTICIPANT_COLUMNS)})
     return rows, parts
 
 
@@ -476,7 +508,8 @@ def import_web(study_dir, files) -> ImportResult:
     d = study.dir / WEB_DIR
     imports = d / IMPORTS
     checker = _Checker(study)
-    n_trials = len(checker.order("x")) if checker.groups else 0
+    # (between-subject conditions have as many trials each: the design checks it)
+    n_trials = len(checker.order("x", checker.between[0] if checker.between else None)) if checker.groups else 0
     kept_sha = {p.name.split("-", 1)[0]: p for p in _kept(d)}
     # files read before that added nothing (not kept): known by their hash in the ledger
     read_not_kept = {e.get("sha256") for e in (json.loads((d / LEDGER).read_text())
@@ -517,7 +550,11 @@ def import_web(study_dir, files) -> ImportResult:
                 new_files = [(s, b) for s, b in new_files if s != r["stored"]]
     styles = _manifest_styles(study.stimuli)
     columns = web_columns(any(g.task == "2afc" for g in study.design.groups), styles is not None)
-    rows, parts = _tables(merged, n_trials, columns)
+    # the recruiter's parameters that came with the records: columns of both tables
+    recruit = [k for k in checker.recruit if any(k in r for r, _w, _f in merged.values())]
+    columns = columns + recruit
+    part_columns = WEB_PARTICIPANT_COLUMNS + recruit
+    rows, parts = _tables(merged, n_trials, columns, recruit, part_columns)
     if styles is not None:                      # the stimulus's character style, as `export` has it
         for r in rows:
             r["style"] = styles.get(r["stimulus"], "")
@@ -541,8 +578,12 @@ def import_web(study_dir, files) -> ImportResult:
     atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
     out = d / "responses.csv"
     atomic_write_text(out, _table_text(columns, rows))
-    atomic_write_text(d / "participants.csv", _table_text(WEB_PARTICIPANT_COLUMNS, parts))
-    desc = write_dataset_description(d, study.dir, columns, source="web sessions", stimuli=study.stimuli)
+    atomic_write_text(d / "participants.csv", _table_text(part_columns, parts))
+    from ..psychds import write_data_files
+    write_data_files(d, study.design.name, "web", {"": _table_text(columns, rows),
+                                                   "participants": _table_text(part_columns, parts)})
+    desc = write_dataset_description(d, study.dir, list(dict.fromkeys(columns + part_columns)),
+                                     source="web sessions", stimuli=study.stimuli)
     return ImportResult(
         files=tuple({k: str(v) if isinstance(v, Path) else v for k, v in r.items()} for r in report),
         answers=len(rows), participants=len({p["participant"] for p in parts}), sessions=len(parts),

@@ -127,9 +127,43 @@ def order_groups(design, manifest: Iterable[Stimulus]) -> list[list]:
     return [[g, [row(r, g) for r in rows]] for g, rows in groups.items()]
 
 
+def balanced_latin_square(k: int) -> list[list[int]]:
+    """Williams' balanced Latin square of ``k`` blocks: every block once in every position
+    and, over the rows, every block right after every other the same number of times
+    (k rows for an even k; 2k for an odd k: each row and its mirror).
+
+    >>> balanced_latin_square(4)
+    [[0, 1, 3, 2], [1, 2, 0, 3], [2, 3, 1, 0], [3, 0, 2, 1]]
+    """
+    k = int(k)
+    step = [0] + [((j + 1) // 2 if j % 2 else k - j // 2) for j in range(1, k)]
+    rows = [[(r + s_) % k for s_ in step] for r in range(k)]
+    return rows + [row[::-1] for row in rows] if k % 2 else rows
+
+
+def latin_row(participant: str, k: int) -> int:
+    """The Latin-square row of a participant: FNV-1a of ``"flipstudy-latin:ID"`` modulo the
+    number of rows (a static host cannot count participants; the rows are equally likely)."""
+    return fnv1a32(f"flipstudy-latin:{participant}".encode()) % len(balanced_latin_square(k))
+
+
+def condition_groups(groups: list[list], between, condition: str | None) -> list[list]:
+    """The groups a participant in ``condition`` sees: every group not in ``between``,
+    and of those in it, only ``condition``."""
+    return [[g, rows] for g, rows in groups if g not in between or g == condition]
+
+
+def condition_by_hash(participant: str, between) -> str:
+    """A between-subject condition from the participant ID alone (a host that cannot count):
+    FNV-1a of ``"flipstudy-condition:ID"`` modulo the number of conditions."""
+    return list(between)[fnv1a32(f"flipstudy-condition:{participant}".encode()) % len(between)]
+
+
 def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
-                    participant: str) -> list[Trial]:
+                    participant: str, block_order: str = "interleaved", row: int | None = None) -> list[Trial]:
     """The participant's trials online (``groups`` from :func:`order_groups`).
+    ``block_order`` "latin-square": one block per group in the order of Latin-square row
+    ``row`` (None: :func:`latin_row` of the participant ID).
 
     >>> groups = [["a", [{"stimulus": f"a{i}", "clip": "c", "kind": "k", "level": i} for i in range(3)]],
     ...           ["b", [{"stimulus": f"b{i}", "clip": "c", "kind": "k", "level": i} for i in range(3)]]]
@@ -142,6 +176,25 @@ def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
     rng = Sfc32.from_key(order_key(design_seed, participant))
     n_stimuli = sum(len(rows) for _, rows in groups)
     trials: list[Trial] = []
+    if block_order == "latin-square":
+        # one block per group in the order of the participant's Latin-square row; within a
+        # block every repetition of the group's stimuli, shuffled, never one twice in a row
+        square = balanced_latin_square(len(groups))
+        row = square[latin_row(participant, len(groups)) if row is None else int(row)]
+        for gi in row:
+            g, rows = groups[gi]
+            for _ in range(100):
+                items = [(r, rep) for rep in range(1, int(repetitions) + 1) for r in rows]
+                rng.shuffle(items)
+                names = [r["stimulus"] for r, _ in items]
+                prev = [trials[-1].stimulus] if trials else []
+                seq = prev + names
+                if len(rows) == 1 or all(a != b for a, b in zip(seq, seq[1:])):
+                    break
+            for r, rep in items:
+                trials.append(Trial(len(trials) + 1, r["stimulus"], r["clip"], g, r["kind"], float(r["level"]),
+                                    rep, task=r.get("task", "yes-no"), original=r.get("original", "")))
+        return balance_first(trials, rng.shuffle, rng.random) if any(t.task == "2afc" for t in trials) else trials
     for rep in range(1, int(repetitions) + 1):
         for _ in range(100):
             block = _block(groups, rng)

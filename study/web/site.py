@@ -114,6 +114,64 @@ def _texts(study, n_trials: int) -> dict:
     return out
 
 
+def markdown_html(text: str) -> str:
+    r"""A consent or debrief text as HTML: a small Markdown subset (``#`` headings,
+    paragraphs split by blank lines, ``-``/``*`` lists, ``**bold**``, ``*italic*``),
+    everything else escaped (a text file is never HTML).
+
+    >>> markdown_html("# Consent\n\nYou may **stop** at any time.\n\n- a\n- b <i>")
+    '<h2>Consent</h2><p>You may <strong>stop</strong> at any time.</p><ul><li>a</li><li>b &lt;i&gt;</li></ul>'
+    """
+    import html
+    import re
+
+    def inline(t):
+        t = html.escape(t, quote=False)
+        t = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", t)
+        return re.sub(r"(?<![*\w])\*(?!\s)(.+?)(?<!\s)\*", r"<em>\1</em>", t)
+    out = []
+    for block in re.split(r"\n\s*\n", text.strip().replace("\r\n", "\n")):
+        lines = [ln.strip() for ln in block.splitlines() if ln.strip()]
+        if not lines:
+            continue
+        if all(re.match(r"[-*]\s", ln) for ln in lines):
+            out.append("<ul>" + "".join(f"<li>{inline(ln[2:].strip())}</li>" for ln in lines) + "</ul>")
+        elif lines[0].startswith("#"):
+            out.append(f"<h2>{inline(lines[0].lstrip('#').strip())}</h2>")
+            if lines[1:]:
+                out.append(f"<p>{inline(' '.join(lines[1:]))}</p>")
+        else:
+            out.append(f"<p>{inline(' '.join(lines))}</p>")
+    return "".join(out)
+
+
+def online_config(study) -> dict:
+    """The site's ``online`` settings from the design's ``[online]`` table: the recruiter's
+    URL parameters, the completion code and redirect, the consent and debrief texts (read
+    from their files beside the design, as HTML), the demographics form on or off, the
+    screen minimums and preloading."""
+    o = study.design.online
+    texts = {}
+    for key in ("consent", "debrief"):
+        name = getattr(o, key)
+        if not name:
+            texts[key] = ""
+            continue
+        path = study.dir / name
+        try:
+            texts[key] = markdown_html(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError) as e:
+            raise SiteError(f"{study.dir / 'design.toml'}: [online].{key} = {name!r}: cannot read {path} "
+                            f"({getattr(e, 'strerror', None) or e}); write the text (Markdown) there") from None
+        if not texts[key]:
+            raise SiteError(f"{path}: empty; [online].{key} names the text shown to participants")
+    return {"recruit_params": list(o.recruit_params), "completion_code": o.completion_code,
+            "redirect_url": o.redirect_url(), "consent_html": texts["consent"], "debrief_html": texts["debrief"],
+            "demographics": o.demographics, "min_refresh_hz": o.min_refresh_hz,
+            "min_width": o.min_width, "min_height": o.min_height, "preload": o.preload,
+            "block_order": o.block_order, "between": list(o.between)}
+
+
 def refuse_adaptive(design) -> None:
     """Raise :class:`SiteError` naming the first adaptive (QUEST+) group: the site runs
     constant-stimuli groups only; QUEST+ runs in the local session runner."""
@@ -163,6 +221,7 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
                        for r in study.references],
         "videos": vids, "demographic_fields": DEMOGRAPHIC_FIELDS, "texts": _texts(study, n),
         "jspsych_version": jsp.PACKAGES["jspsych"],
+        "online": online_config(study),
     }
     if not local_timeline.is_default(design):
         cfg.update(keys_2afc=dict(local_timeline.KEYS_2AFC), gap_ms=local_timeline.GAP_MS)

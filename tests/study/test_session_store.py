@@ -182,8 +182,9 @@ def test_export_long_format_and_participants(study_dir, tmp_path, capsys):
     answer(s, 6)
     export_responses(study_dir, out)
     assert len(read_csv(out)) == 6
-    assert sorted(p.name for p in out.parent.iterdir()) == ["dataset_description.json", "participants.csv",
-                                                            "responses.csv"]
+    assert sorted(p.name for p in out.parent.iterdir()) == ["data", "dataset_description.json",   # data/: Psych-DS
+                                                            "participants.csv", "responses.csv"]
+    assert not [p for p in (out.parent / "data").iterdir() if p.name.startswith(".")]
 
 
 def test_analysis_reads_the_export(study_dir, tmp_path):

@@ -69,11 +69,45 @@
     }
   }
 
+  // Williams' balanced Latin square of k blocks (k rows; 2k for an odd k: each row and its mirror)
+  function balancedLatinSquare(k) {
+    const step = [0];
+    for (let j = 1; j < k; j++) step.push(j % 2 ? (j + 1) >> 1 : k - (j >> 1));
+    const rows = [];
+    for (let r = 0; r < k; r++) rows.push(step.map((s) => (r + s) % k));
+    return k % 2 ? rows.concat(rows.map((row) => row.slice().reverse())) : rows;
+  }
+  function latinRow(participant, k) { return fnv1a32(utf8(`flipstudy-latin:${participant}`)) % balancedLatinSquare(k).length; }
+
   // groups: [[group, [{stimulus, clip, kind, level}, ...]], ...] (the site's config)
-  function webTrialOrder(groups, repetitions, designSeed, participant) {
+  function webTrialOrder(groups, repetitions, designSeed, participant, blockOrder, row) {
     const rng = Sfc32.fromKey(orderKey(designSeed, participant));
     const nStimuli = groups.reduce((n, [, rows]) => n + rows.length, 0);
     const trials = [];
+    const push = (row, g, rep) => {
+      const t = {trial: trials.length + 1, stimulus: row.stimulus, clip: row.clip, group: g,
+                 kind: row.kind, level: row.level, repetition: rep};
+      if (row.task === '2afc') Object.assign(t, {task: '2afc', first: '', original: row.original});
+      trials.push(t);
+    };
+    if (blockOrder === 'latin-square') {
+      const square = balancedLatinSquare(groups.length);
+      const order = square[row === undefined || row === null ? latinRow(participant, groups.length) : row];
+      for (const gi of order) {
+        const [g, rows] = groups[gi];
+        let items;
+        for (let k = 0; k < 100; k++) {
+          items = [];
+          for (let rep = 1; rep <= repetitions; rep++) for (const r of rows) items.push([r, rep]);
+          rng.shuffle(items);
+          const seq = (trials.length ? [trials[trials.length - 1].stimulus] : []).concat(items.map(([r]) => r.stimulus));
+          if (rows.length === 1 || seq.every((x, i) => i === 0 || x !== seq[i - 1])) break;
+        }
+        for (const [r, rep] of items) push(r, g, rep);
+      }
+      if (trials.some((t) => t.task === '2afc')) balanceFirst(trials, rng);
+      return trials;
+    }
     for (let rep = 1; rep <= repetitions; rep++) {
       let block;
       for (let k = 0; k < 100; k++) {
@@ -131,7 +165,12 @@
     return block;
   }
 
-  const api = {RULE, fnv1a32, orderKey, Sfc32, webTrialOrder, balanceFirst};
+  // a between-subject condition from the participant ID alone (hosts that cannot count)
+  function conditionByHash(participant, between) { return between[fnv1a32(utf8(`flipstudy-condition:${participant}`)) % between.length]; }
+  function conditionGroups(groups, between, condition) { return groups.filter(([g]) => !between.includes(g) || g === condition); }
+
+  const api = {RULE, fnv1a32, orderKey, Sfc32, webTrialOrder, balanceFirst, balancedLatinSquare, latinRow,
+               conditionByHash, conditionGroups};
   if (typeof module !== 'undefined' && module.exports) module.exports = api;
   else root.FlipstudyOrder = api;
 })(typeof window !== 'undefined' ? window : globalThis);

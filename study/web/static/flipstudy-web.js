@@ -129,6 +129,18 @@
         cp.save();
       }
     },
+    // least-filled first through JATOS's batch session (shared by every run of the batch):
+    // the counts are read, the smallest taken, and the set retried when another run wrote first
+    async assign(between, key = 'flipstudy-conditions') {
+      for (let i = 0; i < 50; i++) {
+        const counts = Object.assign({}, jatos.batchSession.get(key) || {});
+        let best = between[0];
+        for (const c of between) if ((counts[c] || 0) < (counts[best] || 0)) best = c;
+        counts[best] = (counts[best] || 0) + 1;
+        try { await jatos.batchSession.set(key, counts); return best; } catch (e) { await sleep(50 + 200 * Math.random()); }
+      }
+      throw new Error('JATOS batch session: no condition could be assigned');
+    },
     async finish(cp, answered) {
       if (typeof jatos.endStudyAjax === 'function') await jatos.endStudyAjax(true, `flipstudy: ${answered} answers`);
     },
@@ -170,13 +182,16 @@
   function makeSender(host, cp) {
     let running = null;
     let wait = 500;
+    const state = {failures: 0};                       // failed sends in a row (the end screen reads it)
     const loop = async () => {
       for (;;) {
         try {
           await host.send(cp);
           wait = 500;
+          state.failures = 0;
           if (cp.s.sent >= cp.records.length || C.host === 'static') return;
         } catch (e) {
+          state.failures += 1;
           console.warn('flipstudy: sending failed, retrying', e);
           await sleep(wait);
           wait = Math.min(wait * 2, 8000);
@@ -184,6 +199,7 @@
       }
     };
     return {
+      state,
       kick() { if (!running) running = loop().finally(() => { running = null; }); return running; },
       async flush() { while (C.host !== 'static' && cp.s.sent < cp.records.length) { await this.kick(); } },
     };
@@ -465,15 +481,70 @@
     ];
   }
 
+  // ---- consent and the screen check (plain pages before jsPsych's timeline: nothing is
+  // recorded before consent is given) ------------------------------------------------------
+  function consentScreen(html) {
+    return new Promise((resolve) => {
+      setScreen('consent', 'consent');
+      app().innerHTML = `<div class="fs-card fs-consent"><h1>Consent</h1><div class="fs-consent-text">${html}</div>
+        <div class="fs-actions"><button id="fs-consent-no" class="jspsych-btn">I do not agree</button>
+        <button id="fs-consent-yes" class="jspsych-btn fs-next">I agree to take part</button></div></div>`;
+      document.getElementById('fs-consent-yes').addEventListener('click', () => { app().innerHTML = ''; resolve(true); });
+      document.getElementById('fs-consent-no').addEventListener('click', () => resolve(false));
+    });
+  }
+
+  // the display against the design's minimums (refresh rate, window size in CSS pixels)
+  function screenCheck(refresh, O) {
+    const w = window.innerWidth, h = window.innerHeight;
+    const slow = O.min_refresh_hz > 0 && !(refresh >= O.min_refresh_hz);
+    const small = w < (O.min_width || 0) || h < (O.min_height || 0);
+    return {ok: !slow && !small, slow, small, window: `${w}x${h}`, refresh};
+  }
+
+  function screenTooSmall(sc, O) {
+    return new Promise((resolve) => {
+      setScreen('screen-check', 'screen-check');
+      const why = [];
+      if (sc.small) why.push(`This study needs a browser window of at least ${O.min_width} × ${O.min_height} pixels; yours is ${sc.window.replace('x', ' × ')}. Please make the window larger (or use a larger screen).`);
+      if (sc.slow) why.push(`This study needs a display refreshing at least ${O.min_refresh_hz} times a second; yours measured ${sc.refresh === null ? 'unknown' : sc.refresh + ' Hz'}. Please use another computer or display.`);
+      app().innerHTML = card('Your screen', why.concat(['Press "Check again" when you have changed it.'])) +
+        '<div class="fs-actions"><button id="fs-check-again" class="jspsych-btn fs-next">Check again</button></div>';
+      document.getElementById('fs-check-again').addEventListener('click', () => { app().innerHTML = ''; resolve(); });
+    });
+  }
+
   // ---- the exported site (static, jatos, pavlovia): the order and the records are the browser's
   async function runWeb(jsPsych) {
     const host = hosts[C.host];
     if (!host) throw new Error(`unknown host ${C.host}`);
     if (C.host === 'jatos') await host.init();
     const params = C.host === 'jatos' ? host.params() : new URLSearchParams(location.search);
+    const O = C.online || {};
     const who = participantFrom(params);
     const pid = who.id;
+    // the recruiter's URL parameters (Prolific's PROLIFIC_PID, STUDY_ID, SESSION_ID, ...),
+    // checked as the participant ID is, and kept on every record
+    const recruit = {};
+    for (const name of O.recruit_params || []) {
+      const v = params.get(name);
+      if (v === null || v === '') continue;
+      if (!PID_RE.test(v) && !/^[A-Za-z0-9_-]{1,64}$/.test(v)) throw new Error(`the link's ${name}=${v} is not valid: use 1-64 letters, digits, '_' or '-'`);
+      recruit[name] = v;
+    }
     const cp = new Checkpoint(pid);
+    const fresh = !cp.has('start');
+    // consent first: nothing is kept or sent before it is given
+    let consent = null;
+    if (fresh && O.consent_html) {
+      if (!(await consentScreen(O.consent_html))) {
+        setScreen('no-consent', 'end');
+        app().innerHTML = card('Thank you', ['You did not consent, so the study ends here. Nothing was recorded. You may close this page' +
+          (O.redirect_url ? ' and return your submission on the recruiting site.' : '.')]);
+        return;
+      }
+      consent = nowIso();
+    }
     if (!cp.s.run_id) {
       cp.s.run_id = randomId('r', 10);
       cp.s.run_started = nowIso();
@@ -481,23 +552,48 @@
     }
     if (C.host === 'pavlovia') await host.init(cp, pid);
     const sender = makeSender(host, cp);
-    const trials = ORDER.webTrialOrder(C.groups, C.repetitions, C.design_seed, pid);
+    // between-subject condition: kept in the checkpoint, so a reload keeps it
+    const between = O.between || [];
+    if (between.length && !cp.s.condition) {
+      cp.s.condition = host.assign ? await host.assign(between) : ORDER.conditionByHash(pid, between);
+      cp.save();
+    }
+    if (between.length) recruit.condition = cp.s.condition;
+    const groups = between.length ? ORDER.conditionGroups(C.groups, between, cp.s.condition) : C.groups;
+    // the Latin-square row: least-filled first on JATOS (its batch session), else the ID's hash
+    if (O.block_order === 'latin-square' && cp.s.latin_row === undefined) {
+      const rows = ORDER.balancedLatinSquare(groups.length).map((_, i) => String(i));
+      cp.s.latin_row = Number(host.assign ? await host.assign(rows, 'flipstudy-latin-rows') : ORDER.latinRow(pid, groups.length));
+      cp.save();
+    }
+    if (O.block_order === 'latin-square') recruit.latin_row = cp.s.latin_row;
+    const trials = ORDER.webTrialOrder(groups, C.repetitions, C.design_seed, pid, O.block_order, cp.s.latin_row);
     const n = trials.length;
-    const refresh = await measureRefresh(500);
-    const base = () => ({format: FORMAT, site_id: C.site_id, study: C.study, manifest_sha256: C.manifest_sha256,
-      host: C.host, participant: pid, run_id: cp.s.run_id, run_started: cp.s.run_started, timestamp: nowIso()});
+    // the groups in the order their blocks come (a Latin-square row), recorded with the start
+    const blockOrder = O.block_order === 'latin-square' ? [...new Set(trials.map((t) => t.group))].join(' ') : null;
+    let refresh = await measureRefresh(500);
+    const base = () => Object.assign({format: FORMAT, site_id: C.site_id, study: C.study, manifest_sha256: C.manifest_sha256,
+      host: C.host, participant: pid, run_id: cp.s.run_id, run_started: cp.s.run_started, timestamp: nowIso()}, recruit);
     const emit = (rec) => {
       cp.records.push(Object.assign(base(), rec));
       cp.save();
       sender.kick();
     };
-    if (!cp.has('start')) {
+    const screenOk = () => screenCheck(refresh, O);
+    if (fresh) {
+      const sc = screenOk();
       emit({record: 'start', n_trials: n, participant_from: who.from, order_rule: ORDER.RULE,
             order: trials.map((t) => t.stimulus).join(' '), jspsych_version: jsPsych.version(),
-            refresh_hz: refresh, user_agent: navigator.userAgent,
+            refresh_hz: refresh, user_agent: navigator.userAgent, consent, window: sc.window, screen_ok: sc.ok,
+            block_order: blockOrder,
             screen: `${screen.width}x${screen.height}@${window.devicePixelRatio}`});
     } else {
       sender.kick();                                   // whatever the last page did not send
+    }
+    // the screen check: below the design's minimum the participant is told so, and may fix it
+    for (let sc = screenOk(); !sc.ok; sc = screenOk()) {
+      await screenTooSmall(sc, O);
+      if (sc.slow) refresh = await measureRefresh(500);
     }
     window.flipstudyState = {participant: pid, trials, checkpoint: cp};   // for tests and debugging
     const env = {jsPsych, n, refresh, record: emit};
@@ -511,9 +607,16 @@
       return trials.filter((t) => flagged.has(t.trial) && !done.has(t.trial));
     };
     const tl = [];
+    if (O.preload) {
+      // every video of the session, fetched before the first trial, with a progress bar
+      const all = [...new Set(C.references.map((ex) => ex.video).concat(trials.slice(answered).map((t) => C.videos[t.stimulus].video)))];
+      tl.push({type: jsPsychPreload, video: all, auto_preload: false, show_progress_bar: true, continue_after_error: false,
+               message: `<p class="fs-muted">Loading the ${all.length} videos of this study…</p>`,
+               on_start: () => setScreen('preload', 'loading')});
+    }
     if (answered === 0) {
       tl.push(instructionsNode('instructions', C.texts.instructions_title, C.texts.instructions));
-      if (!cp.has('demographics')) tl.push(demographicsNode(C.texts.demographics_title, C.texts.demographics_text, env));
+      if (!cp.has('demographics') && O.demographics !== false) tl.push(demographicsNode(C.texts.demographics_title, C.texts.demographics_text, env));
       tl.push(...exampleNodes(C.references.map((ex) => ex.video), env));
     } else {
       const next = answered < n ? `The study continues with ${C.texts.noun || 'motion'} ${answered + 1} of ${n}.`
@@ -539,25 +642,49 @@
         tl.push({timeline: trialNodes(t, 1, env), conditional_function: () => dueRepeats().some((d) => d.trial === t.trial)});
       }
     }
+    const code = O.completion_code ? `<p class="fs-code">Your completion code: <strong id="fs-code">${esc(O.completion_code)}</strong></p>` : '';
     tl.push({type: jsPsychHtmlButtonResponse, choices: [],
-      stimulus: `<div class="fs-card"><h1>${esc(C.texts.end_title)}</h1><p id="fs-end-status">Saving your answers…</p>
+      stimulus: `<div class="fs-card"><h1>${esc(C.texts.end_title)}</h1>${O.debrief_html ? `<div class="fs-debrief">${O.debrief_html}</div>` : ''}
+                 <p id="fs-end-status">Saving your answers…</p>${code}
                  <p>${esc(C.texts.end_download)}</p>
                  <div class="fs-actions"><button id="fs-download" class="jspsych-btn fs-next">Download your answers</button>
                  ${C.host === 'jatos' ? '<button id="fs-finish" class="jspsych-btn fs-next" disabled>Finish</button>' : ''}</div></div>`,
       on_load: async () => {
         setScreen('end', 'end');
+        const st = document.getElementById('fs-end-status');
         document.getElementById('fs-download').addEventListener('click', () => download(cp, pid));
         if (!cp.has('end')) emit({record: 'end', answered: cp.firsts().length, repeats: cp.repeats().length, n_trials: n});
+        // the final save is retried with back-off; while it keeps failing the download is offered
+        const warn = setInterval(() => {
+          if (sender.state.failures >= 3) {
+            st.textContent = 'Your answers could not be sent yet; we keep trying. Please download them now ' +
+              'and keep the file, in case they cannot be sent. Do not close this page yet.';
+            app().dataset.sendFailing = '1';
+          }
+        }, 250);
         await sender.flush();
+        clearInterval(warn);
+        delete app().dataset.sendFailing;
         let msg = C.texts.end_saved;
         if (!cp.s.finished) {
           try { await host.finish(cp, cp.firsts().length); cp.s.finished = nowIso(); cp.save(); } catch (e) { console.warn(e); }
         }
         if (C.host === 'static') msg = C.texts.end_static;
-        const st = document.getElementById('fs-end-status');
         st.textContent = msg;
         app().dataset.saved = '1';
         const fin = document.getElementById('fs-finish');
+        if (O.redirect_url && C.host !== 'static') {
+          // the recruiter's completion link (Prolific: ...submissions/complete?cc=CODE)
+          st.textContent = `${msg} Returning you to the recruiting site…`;
+          if (fin) fin.remove();
+          app().dataset.redirect = O.redirect_url;
+          setTimeout(() => window.location.assign(O.redirect_url), 1500);
+        } else if (O.redirect_url) {
+          const a = document.createElement('a');
+          a.href = O.redirect_url; a.id = 'fs-complete'; a.className = 'jspsych-btn fs-next';
+          a.textContent = 'Download first, then return to the recruiting site';
+          st.parentNode.appendChild(a);
+        }
         if (fin) { fin.disabled = false; fin.addEventListener('click', () => jatos.endStudy(true)); }
       }});
     await jsPsych.run(tl);
