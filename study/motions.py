@@ -36,8 +36,8 @@ def _pick(clip, rng, label: str, spec: str):
 def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None, range_a=None, range_b=None,
            mirror_b: bool = False, mass: float = 70.0, rule=None, tm_a=None, tm_b=None, main_a=None,
            main_b=None, smoothing: str = "profile", baseline=None, plot=None, ghost=None,
-           ghost_interval: float = 0.15, ghost_margin: float = 0.4, ghost_view: str = "across-L"
-           ) -> MotionResult:
+           ghost_interval: float = 0.15, ghost_margin: float = 0.4, ghost_view: str = "across-L",
+           accept_unphysical: bool = False) -> MotionResult:
     """``flipstudy concat``: motions ``a_spec`` and ``b_spec`` (built-in names or BVH
     paths) joined with the angular momentum as the cue
     (:func:`flipstudy.stimuli.edit.concat.concatenate`), written to ``out_path``; with
@@ -49,8 +49,8 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None, range_a=
     from flipstudy.stimuli.edit.concat import concatenate, mirror, motion_graph_join
     from flipstudy.stimuli.loading import load_clip
     try:
-        a = _pick(load_clip(a_spec, scale, fps), range_a, "a", a_spec)
-        b = _pick(load_clip(b_spec, scale, fps), range_b, "b", b_spec)
+        a = _pick(load_clip(a_spec, scale, fps, accept_unphysical), range_a, "a", a_spec)
+        b = _pick(load_clip(b_spec, scale, fps, accept_unphysical), range_b, "b", b_spec)
         if mirror_b:
             b = mirror(b)
         body = analyse(a, total_mass=mass).body
@@ -143,10 +143,10 @@ def inspect(clip_spec: str, *, scale=None, fps=None, mass: float = 70.0, compare
     against it into ``plot``."""
     from flipstudy.stimuli import analyse
     from flipstudy.stimuli.loading import load_clip
-    clip = load_clip(clip_spec, scale, fps)
+    clip = load_clip(clip_spec, scale, fps, check=False)      # its findings are warnings here
     original = None
     if compare:
-        original = analyse(load_clip(compare, scale, fps), total_mass=mass,
+        original = analyse(load_clip(compare, scale, fps, check=False), total_mass=mass,
                            estimate=not prior_masses)
         # measure the stimulus with the original's body (same masses)
         a = analyse(clip, body=original.body, estimate=False)
@@ -198,7 +198,7 @@ def inspect(clip_spec: str, *, scale=None, fps=None, mass: float = 70.0, compare
 
 def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: float = 1.0,
          straighten=None, t_from=None, t_to=None, midpoint: bool = False, join_spec=None,
-         mass: float = 70.0, plot=None) -> MotionResult:
+         mass: float = 70.0, plot=None, accept_unphysical: bool = False) -> MotionResult:
     """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit with
     momentum repair (5.5), measured (:func:`flipstudy.stimuli.edit.pipeline.edit`),
     written to ``out``."""
@@ -208,8 +208,8 @@ def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: floa
     from flipstudy.stimuli.loading import load_clip
     if flips is None and not straighten and not join_spec:
         raise FlipstudyUsageError("nothing to do: give --flips N, --straighten legs|arms or --join OTHER")
-    clip = load_clip(clip_spec, scale, fps)
-    other = load_clip(join_spec, scale, fps) if join_spec else None
+    clip = load_clip(clip_spec, scale, fps, accept_unphysical)
+    other = load_clip(join_spec, scale, fps, accept_unphysical) if join_spec else None
     try:
         res = edit_clip(clip, flips=flips, k_ratio=k_ratio, straighten=straighten,
                    t_from=t_from, t_to=t_to, midpoint=midpoint, join=other,
@@ -316,15 +316,16 @@ def jump(to, out, *, scene="forward", air=None, windup=None, k="global-normal", 
 
 
 def figure(clip_spec: str, out, *, kind: str = "ghost", overlay=None, scale=None, fps=None,
-           size=(640, 480), style=None, interval=None, debug: bool = False) -> MotionResult:
+           size=(640, 480), style=None, interval=None, debug: bool = False,
+           accept_unphysical: bool = False) -> MotionResult:
     """``flipstudy figure``: one still of one clip into ``out``: ``kind`` ghost, trail,
     strip or composite (with ``debug`` gizmos), or overlay (the clip over ``overlay``)."""
     from flipstudy.render import figures as fg
     from flipstudy.render.staging import stage
     from flipstudy.stimuli.loading import load_clip
-    clips = [load_clip(clip_spec, scale, fps)]
+    clips = [load_clip(clip_spec, scale, fps, accept_unphysical)]
     if kind == "overlay":
-        clips.append(load_clip(overlay, scale, fps))
+        clips.append(load_clip(overlay, scale, fps, accept_unphysical))
     st = stage(clips, size=size, style=style)
     gizmos = ("com", "path", "L", "v", "support") if debug else ()
     if kind == "overlay":

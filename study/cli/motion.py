@@ -71,7 +71,8 @@ def cmd_edit(args) -> int:
     from flipstudy.study.motions import edit
     res = edit(args.clip, args.out, scale=args.scale, fps=args.fps, flips=args.flips,
                k_ratio=args.k_ratio, straighten=args.straighten, t_from=args.t_from, t_to=args.t_to,
-               midpoint=args.midpoint, join_spec=args.join, mass=args.mass, plot=args.plot)
+               midpoint=args.midpoint, join_spec=args.join, mass=args.mass, plot=args.plot,
+               accept_unphysical=args.accept_unphysical)
     print(res.summary())
     return 0
 
@@ -80,7 +81,7 @@ def add_commands(subparsers) -> None:
     p = subparsers.add_parser("inspect", help="flight analysis of one clip (units, gravity, momentum, masses)",
                        description="Find the flight, estimate segment masses, measure momentum and "
                                    "check units and frame time against gravity.")
-    add_clip_args(p)
+    add_clip_args(p, gate=False)
     add_json(p)
     p.add_argument("--plot", metavar="FILE.png", help="draw |L|(t), |p|(t) and COM height")
     add_mass(p)

@@ -31,7 +31,7 @@ def cmd_score(args) -> int:
         raise FlipstudyValueError(f"no clips found in {' '.join(args.clips)}")
     if args.figure and len(names) != 1:
         raise FlipstudyValueError("--figure draws one clip: give a single CLIP")
-    clips = [load_clip(n, args.scale, args.fps) for n in names]
+    clips = [load_clip(n, args.scale, args.fps, args.accept_unphysical) for n in names]
     res = score(clips, args.calibration, task=args.task, style=args.style)
     print(res.to_json(indent=2) if args.json else res.summary())
     if args.figure:
