@@ -13,10 +13,10 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None,
     default guessed) and ``fps`` (default: the header's) override the file.  A name
     that is neither raises :class:`~flipstudy.errors.FlipstudyFileNotFoundError`.
 
-    >>> from flipstudy.stimuli import load_clip
     Every clip then passes the one physics gate, :func:`checked_clip` (``check=False``
     skips it: ``inspect``, which reports the same findings as warnings).
 
+    >>> from flipstudy.stimuli import load_clip
     >>> load_clip("backflip", fps=60).fps
     60.0
     """
