@@ -269,6 +269,10 @@ def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_not
         notes.append(f"lower limit of the interval at the smallest tested level ({xmin:g} {unit}; "
                      f"the posterior reaches {lo:.1f})")
         lo = xmin
+    if lo > xmax:            # the whole posterior lies beyond the tested levels
+        notes.append(f"lower limit of the interval beyond the largest tested level ({xmax:g} {unit}; "
+                     f"the posterior starts at {lo:.1f})")
+        lo = xmax
     if hi > xmax:
         notes.append(f"upper limit of the interval open (beyond the largest tested level, at {hi:.1f})")
         hi = np.nan
