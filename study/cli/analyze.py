@@ -74,10 +74,13 @@ def _images(specs):
 
 def handler(args) -> int:
     """Run ``flipstudy analyze``; returns the exit code."""
+    from flipstudy.stimuli._progress import Heartbeat
     from flipstudy.study.pipeline import analyze
-    res = analyze(args.responses, args.out, correction=args.correction, images=_images(args.image),
-                  seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
-                  gee=not args.no_gee, figures=not args.no_figures,
-                  include_simulated=args.include_simulated, include_incomplete=args.include_incomplete)
+    with Heartbeat("analyze"):                     # a log hears from it now and then
+        res = analyze(args.responses, args.out, correction=args.correction,
+                      images=_images(args.image), seed=args.seed, n_boot=args.n_boot, ci=args.ci,
+                      psychometric=args.psychometric, gee=not args.no_gee,
+                      figures=not args.no_figures, include_simulated=args.include_simulated,
+                      include_incomplete=args.include_incomplete)
     print(json.dumps(res.report, indent=2, ensure_ascii=False) if args.json else res.summary())
     return 0
