@@ -134,6 +134,11 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     specs = quest_specs(load_design(design)) if design.is_file() else None
     if len(responses) > 1:
         src = combine_responses(responses)
+    if not images and Path(responses[0]).is_dir() and (src.parent / "manifest.csv").is_file():
+        from flipstudy.stimuli.contract import StimulusSet
+        from .reproduce import sheet_images        # the study's own ghosts and trails
+        images = sheet_images(StimulusSet.read(src.parent, files=False, design=False),
+                              src.parent / "render")
     res = _analyze(src, out, images=images or None, quest_specs=specs, **options)
     return AnalyzeResult(out=out, report=res.to_dict(), table_markdown=to_markdown(res.table))
 

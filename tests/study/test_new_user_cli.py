@@ -98,3 +98,11 @@ def test_an_angular_momentum_level_of_500_is_refused_by_the_design_check(capsys,
     with pytest.raises(DesignError, match=r"500 % is out of range: an increase of the angular "
                                           r"momentum must be below 500 %"):
         load_design(d)
+
+
+def test_version_is_the_installed_distribution_version(capsys):
+    from importlib.metadata import version
+    with pytest.raises(SystemExit) as e:
+        main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out == f"flipstudy {version('flipstudy')}\n"
