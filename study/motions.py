@@ -5,6 +5,8 @@ prints, ``summary()`` the text)."""
 from __future__ import annotations
 
 import json
+
+import numpy as np
 from pathlib import Path
 
 from flipstudy.errors import FlipstudyUsageError, FlipstudyValueError
@@ -188,6 +190,17 @@ def inspect(clip_spec: str, *, scale=None, fps=None, mass: float = 70.0, compare
     masses = d["segment_masses"]
     lines.append(f"  segment masses  (total {d['total_mass']:g} kg) " +
                  ", ".join(f"{k} {v:.1f}" for k, v in masses.items()))
+    if original is not None:
+        from flipstudy.stimuli.compare import l_change
+        ch = l_change(a, original)
+        lines.append(f"  against {compare}: " + (ch.summary() if ch is not None else
+                                                   "no flight in one of the two, nothing to compare"))
+        d["compare"] = None if ch is None else {
+            "original": str(compare), "L_mean": ch.L_mean_stim, "L_mean_original": ch.L_mean_orig,
+            "flight_s": ch.flight_s_stim, "flight_s_original": ch.flight_s_orig,
+            "L_change_pct_median": float(np.median(ch.pct)) if ch.pct.size else None,
+            "L_change_pct_min": float(ch.pct.min()) if ch.pct.size else None,
+            "L_change_pct_max": float(ch.pct.max()) if ch.pct.size else None}
     for w in d["warnings"]:
         lines.append(f"  warning: {w}")
     if plot:
@@ -263,7 +276,7 @@ def edit(clip_spec: str, out, *, scale=None, fps=None, flips=None, k_ratio: floa
         else:
             orig = res.analysis
             plot_compare(analyse(out_clip, body=orig.body, estimate=False), orig, plot,
-                         title=f"{Path(out).stem} over {Path(str(clip_spec)).stem}")
+                         title=f"{Path(out).stem} over {Path(str(clip_spec)).stem}", label="edited")
         lines.append(f"  plot                  {plot}")
     return MotionResult(command="edit", out=Path(out), report={"out": str(out),
                         "frames": out_clip.num_frames, "fps": float(out_clip.fps)}, lines=tuple(lines))

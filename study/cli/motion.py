@@ -18,8 +18,6 @@ PRESET_NAMES = ("flipping-with-physics-2007", "reitsma-pollard-2003", "reitsma-a
 
 def cmd_inspect(args) -> int:
     from flipstudy.study.motions import inspect
-    if args.compare and not args.plot:
-        print("flipstudy inspect: --compare draws into the --plot file; add --plot FILE.png", file=sys.stderr)
     res = inspect(args.clip, scale=args.scale, fps=args.fps, mass=args.mass, compare=args.compare,
                   prior_masses=args.prior_masses, plot=args.plot)
     print(json.dumps(res.report, indent=2) if args.json else res.summary())
@@ -88,7 +86,8 @@ def add_commands(subparsers) -> None:
     p.add_argument("--prior-masses", action="store_true",
                    help="use the de Leva table masses instead of estimating them from the flight")
     p.add_argument("--compare", metavar="ORIGINAL",
-                   help="plot |L|(t) of CLIP over ORIGINAL (a stimulus over its base clip) to --plot")
+                   help="measure CLIP against ORIGINAL (a stimulus against its base clip): flight |L| "
+                        "and time of both, |L| change while both fly; with --plot drawn")
     p.set_defaults(func=cmd_inspect)
 
     p = subparsers.add_parser("init", help="write a study design (TOML): the paper's design",
