@@ -1,0 +1,36 @@
+"""Issue 33: ghosts of an in-place back flip piled into one blob (time only by colour).
+With the default spread, successive ghosts stand GHOST_GAP apart along the travel, so time
+reads from position: measured on the rendered picture, early (yellow) ghosts lie left of
+late (blue) ones."""
+import numpy as np
+
+from flipstudy.render.figures import GHOST_GAP, _travel, auto_spread, ghost_image, key_times
+from flipstudy.render.geometry import poses_at
+from flipstudy.render.staging import stage
+from flipstudy.render.style import Style
+from flipstudy.stimuli import builtin
+from flipstudy.stimuli.physics import center_of_mass
+
+
+def test_successive_ghosts_of_an_in_place_flip_stand_a_gap_apart():
+    st = stage([builtin("backflip")], size=(160, 120))
+    c, b = st.clips[0], st.bodies[0]
+    ts, _ = key_times(c, b, st.takeoffs[0], st.landings[0])
+    along = center_of_mass(poses_at(c, ts), b) @ _travel(st)
+    assert np.diff(along).min() < GHOST_GAP               # in place: they would pile up
+    s = auto_spread(along)
+    placed = along + s * np.arange(len(ts))
+    assert np.diff(placed).min() >= GHOST_GAP - 1e-9
+    assert auto_spread(along + 2 * GHOST_GAP * np.arange(len(ts))) == 0.0   # travelling: as it is
+
+
+def test_rendered_ghosts_go_from_early_on_the_left_to_late_on_the_right():
+    style = Style.from_dict({"ground": False, "legend": False, "scale_bar": False})
+    img = ghost_image(stage([builtin("backflip")], size=(160, 120), style=style), None).astype(int)
+    r, g, b = img[..., 0], img[..., 1], img[..., 2]
+    bg = np.abs(img - img[0, 0]).sum(-1) > 30
+    early = bg & (r > b + 40) & (g > b + 40)              # yellow-green: the first ghosts
+    late = bg & (b > r + 40)                             # blue: the last ghosts
+    xs = np.arange(img.shape[1])[None, :].repeat(img.shape[0], 0)
+    assert early.sum() > 50 and late.sum() > 50
+    assert xs[early].mean() + 20 < xs[late].mean()
