@@ -34,3 +34,21 @@ def test_rendered_ghosts_go_from_early_on_the_left_to_late_on_the_right():
     xs = np.arange(img.shape[1])[None, :].repeat(img.shape[0], 0)
     assert early.sum() > 50 and late.sum() > 50
     assert xs[early].mean() + 20 < xs[late].mean()
+
+
+def test_a_white_legend_swatch_has_a_dark_ring_on_the_light_box():
+    """The point-light ghost's "after" entry (white) was drawn white on white."""
+    import pytest
+    from flipstudy.render.compose import draw_legend, find_font
+    if find_font() is None:
+        pytest.skip("no font file: the VTK legend is used")
+    img = np.zeros((80, 160, 3), np.uint8)
+    assert draw_legend(img, [("after", (255, 255, 255))], 14, loc="upper left")
+    box = img[:40, :40].astype(int)
+    white = (box == 255).all(-1)
+    dark = box.sum(-1) < 200
+    ys, xs = np.nonzero(white & (np.abs(np.arange(40)[None, :] - 10) < 12))
+    assert white.sum() > 10 and dark.sum() > 10          # the disc, and a ring around it
+    cy, cx = ys.mean(), xs.mean()
+    ring = [(int(round(cy)), x) for x in range(int(cx), 40) if not white[int(round(cy)), x]][0]
+    assert dark[ring]                                    # leaving the disc, the first pixel is dark
