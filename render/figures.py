@@ -130,6 +130,15 @@ def auto_spread(along, gap: float = GHOST_GAP) -> float:
     return float(round(max(0.0, gap - step.min()), 6)) if step.size else 0.0
 
 
+def _legend_room(st: Stage, n: int) -> float:
+    """The fraction of the height a legend of ``n`` entries takes at the top (as
+    :func:`~flipstudy.render.compose.draw_legend` sizes it), kept free of ghosts."""
+    H = st.size[1]
+    fs = max(9, int(round(st.style.font_size * 0.5 * H)))
+    pad = max(4, fs // 3)
+    return min(0.5, (2 * pad + int(round(fs * 1.3)) * n + pad) / H)
+
+
 def _travel(st: Stage) -> np.ndarray:
     """Horizontal unit vector of the travel: the camera's right, on the ground."""
     r = np.asarray(st.camera.basis()[0], float)
@@ -212,7 +221,9 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
     if not spread and len(ts) > 1:
         spread = auto_spread(center_of_mass(pc, b) @ _travel(st))
     shift = np.zeros((len(ts), 3))
-    if spread:
+    show = st.style.legend if legend is None else legend
+    room = _legend_room(st, len(ts)) if show and len(ts) > 1 else 0.0
+    if spread or (room and st.framing is not None):      # fitted again: spread, legend room
         shift = np.outer(np.arange(len(ts)) * spread, _travel(st))
         P = P + shift[:, None, :]
         fr = st.framing
@@ -220,7 +231,7 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
         st = st.with_camera(fit_camera(pts, _travel(st), st.size,
                                        view_angle=fr.view_angle if fr else st.camera.view_angle,
                                        elevation=fr.elevation if fr else 8.0,
-                                       margin=st.style.frame_margin))
+                                       margin=st.style.frame_margin, top=room))
     looks = []
     with scene_for(st, scene) as sc:
         looks = _ghost_looks(sc.style, len(ts))

@@ -52,3 +52,19 @@ def test_a_white_legend_swatch_has_a_dark_ring_on_the_light_box():
     cy, cx = ys.mean(), xs.mean()
     ring = [(int(round(cy)), x) for x in range(int(cx), 40) if not white[int(round(cy)), x]][0]
     assert dark[ring]                                    # leaving the disc, the first pixel is dark
+
+
+def test_the_legend_room_is_free_of_ghosts():
+    """`concat --ghost`'s first ghosts lay under the legend: the fitted camera keeps the
+    legend's rows (``top``) empty and still fits every point with its margins."""
+    from flipstudy.render.camera import fit_camera
+    from flipstudy.render.geometry import body_points
+    st = stage([builtin("backflip")], size=(320, 240))
+    pts = body_points(st.clips[0], st.bodies[0]).reshape(-1, 3)
+    for top in (0.0, 0.3):
+        cam = fit_camera(pts, _travel(st), (320, 240), margin=0.06, top=top)
+        px = cam.project(pts, (320, 240))
+        assert px[:, 1].min() >= (0.06 + top) * 240 - 1.0          # nothing in the room
+        assert px[:, 1].max() <= 0.94 * 240 + 1.0 and px[:, 0].min() >= 0.06 * 320 - 1.0
+        assert px[:, 1].max() - px[:, 1].min() >= (0.88 - top) * 240 - 2.0 or \
+            px[:, 0].max() - px[:, 0].min() >= 0.88 * 320 - 2.0      # and it still fills
