@@ -148,10 +148,8 @@ class ResponsesError(FlipstudyError, ValueError):
 
 class NeedsExport(ResponsesError):
     """A study folder without ``responses.csv``: a step to take first (``flipstudy export``),
-    reported without "error:" and with exit status 2."""
-
-    exit_status = 2
-    label = ""
+    reported as every user error is ("error:", exit status 1), the message naming the step
+    (issue 33: a log or CI reader needs the word and the status to see that it failed)."""
 
 
 # ---- study: sessions, storage, export, the web site, reproduce
@@ -307,3 +305,11 @@ class MotionFileError(FlipstudyValueError):
 
 
 __all__ += ["MotionFileError"]
+
+
+class UnphysicalClipError(FlipstudyError, ValueError):
+    """A CLIP that physics contradicts (apparent gravity, body height), refused by the
+    one loading gate (:func:`flipstudy.stimuli.loading.checked_clip`) with the fix."""
+
+
+__all__ += ["UnphysicalClipError"]

@@ -381,11 +381,16 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
 
 
 def _labelled(fig, label: str):
-    """The participants the figure shows, in small type under everything else
-    (legends below the axes included)."""
+    """The participants the figure shows, in small type: the title of a figure legend
+    (so it never lies over its entries), else under everything else."""
     from .figures import style
     with style():
-        fig.supxlabel(label, fontsize=7, color="#444444")
+        if fig.legends:
+            leg = fig.legends[0]
+            leg.set_title(label, prop={"size": 7})
+            leg.get_title().set_color("#444444")
+        else:
+            fig.supxlabel(label, fontsize=7, color="#444444")
     return fig
 
 

@@ -217,6 +217,20 @@ def pooled_magnitudes(sub: pd.DataFrame, kind=None):
     return xs.astype(float), k, n
 
 
+def shows_sensitivity(x, k, n) -> bool:
+    """Whether the answers grow with the error size at all: the n-weighted least-squares
+    slope of the share k/n against x is positive (a check that shares no assumption of
+    the fitted curve; answers alike at every level have slope 0 and no threshold).
+
+    >>> shows_sensitivity([0, 10, 20], [5, 5, 5], [5, 5, 5]), shows_sensitivity([0, 10, 20], [1, 3, 5], [5, 5, 5])
+    (False, True)
+    """
+    x, k, n = (np.asarray(a, float) for a in (x, k, n))
+    w = n / n.sum()
+    p = k / np.maximum(n, 1)
+    return bool(np.sum(w * (x - w @ x) * (p - w @ p)) > 1e-12)
+
+
 def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_note="", unit="%"):
     x_hat = float(detection_threshold(params["threshold"], params["width"], params["gamma"],
                                       params["lambda"]))
@@ -226,7 +240,11 @@ def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_not
     p_reached = float(np.mean(xs_samples <= xmax))
     notes = [extra_note] if extra_note else []
     xmin = float(x.min())
-    if np.isfinite(x_hat) and x_hat < xmin - 1e-9 * max(1.0, abs(xmin)):
+    if not shows_sensitivity(x, k, n):
+        thr = np.nan
+        notes.append("not reached: the data show no sensitivity (the share of 'incorrect' answers "
+                     "does not grow with the error size), so no level is a threshold")
+    elif np.isfinite(x_hat) and x_hat < xmin - 1e-9 * max(1.0, abs(xmin)):
         thr = np.nan
         notes.append(f"no threshold: P(incorrect) is above (1 + γ)/2 = {0.5 * (1 + params['gamma']):.2f} "
                      f"already at the smallest tested level ({xmin:g} {unit}; x* = {x_hat:.1f} by "
@@ -247,6 +265,17 @@ def _summarise_samples(group, method, x, k, n, params, xs_samples, ci, extra_not
         hi = np.nan
     if not np.isfinite(lo):
         lo = np.nan
+    if lo < xmin:            # an error size below the smallest tested one is an extrapolation
+        notes.append(f"lower limit of the interval at the smallest tested level ({xmin:g} {unit}; "
+                     f"the posterior reaches {lo:.1f})")
+        lo = xmin
+    if lo > xmax:            # the whole posterior lies beyond the tested levels
+        notes.append(f"lower limit of the interval beyond the largest tested level ({xmax:g} {unit}; "
+                     f"the posterior starts at {lo:.1f})")
+        lo = xmax
+    if hi > xmax:
+        notes.append(f"upper limit of the interval open (beyond the largest tested level, at {hi:.1f})")
+        hi = np.nan
     return PsychometricFit(group, method, x, k, n, params, thr, float(lo), float(hi), p_reached,
                            x_hat, "; ".join(notes), samples=xs_samples, unit=unit)
 

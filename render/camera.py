@@ -139,10 +139,11 @@ def view_basis(direction, elevation: float = 8.0) -> np.ndarray:
 
 
 def fit_camera(points, direction=(0.0, 0.0, 1.0), size=(640, 480), *, view_angle: float = 25.0,
-               elevation: float = 8.0, margin: float = 0.06) -> Camera:
+               elevation: float = 8.0, margin: float = 0.06, top: float = 0.0) -> Camera:
     """The camera looking across ``direction`` (side view: travel goes left to
     right), raised by ``elevation`` degrees, that keeps every point (N,3) inside
-    an image of ``size`` with ``margin`` (fraction of width/height) on each side.
+    an image of ``size`` with ``margin`` (fraction of width/height) on each side,
+    and ``top`` (a fraction of the height) more above them: room for a legend.
 
     Example
     -------
@@ -158,7 +159,8 @@ def fit_camera(points, direction=(0.0, 0.0, 1.0), size=(640, 480), *, view_angle
         raise ValueError("fit_camera: need finite points to frame")
     W, H = size
     right, up, back = view_basis(direction, elevation)
-    tv = np.tan(np.radians(view_angle) / 2.0) * (1.0 - 2.0 * margin)
+    t2 = np.tan(np.radians(view_angle) / 2.0)
+    tv = t2 * (1.0 - 2.0 * margin - float(top))
     th = np.tan(np.radians(view_angle) / 2.0) * (W / H) * (1.0 - 2.0 * margin)
     centre = 0.5 * (X.min(0) + X.max(0))
     a, b, w = (X - centre) @ right, (X - centre) @ up, (X - centre) @ back
@@ -175,6 +177,7 @@ def fit_camera(points, direction=(0.0, 0.0, 1.0), size=(640, 480), *, view_angle
         ac += dx * D
         bc += dy * D
     D = float(np.max(w + np.maximum(np.abs(a - ac) / th, np.abs(b - bc) / tv)))
+    bc += float(top) * t2 * D           # the points sit that much lower: the room is above
     focal = centre + ac * right + bc * up
     return Camera(focal + D * back, focal, tuple(UP), view_angle)
 

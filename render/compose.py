@@ -202,8 +202,10 @@ def draw_legend(img: np.ndarray, entries, font_size: int, *, loc: str = "auto",
     for i, (lab, col) in enumerate(entries):
         cy = y0 + pad + line * i + line // 2
         cx = x0 + pad + r
-        disc = (xx[cy - r - 1:cy + r + 2, cx - r - 1:cx + r + 2] - cx) ** 2 + \
-               (yy[cy - r - 1:cy + r + 2, cx - r - 1:cx + r + 2] - cy) ** 2 <= r * r
-        img[cy - r - 1:cy + r + 2, cx - r - 1:cx + r + 2, :3][disc] = np.asarray(col, np.uint8)[:3]
+        d2 = (xx[cy - r - 1:cy + r + 2, cx - r - 1:cx + r + 2] - cx) ** 2 + \
+            (yy[cy - r - 1:cy + r + 2, cx - r - 1:cx + r + 2] - cy) ** 2
+        patch = img[cy - r - 1:cy + r + 2, cx - r - 1:cx + r + 2, :3]
+        patch[d2 <= (r + 1) ** 2] = np.asarray(text_color, np.uint8)[:3]   # a ring: white shows too
+        patch[d2 <= (r - 0.5) ** 2] = np.asarray(col, np.uint8)[:3]
         draw_text(img, str(lab), cx + r + pad, cy + int(round(fs * 0.36)), fs, text_color)
     return True

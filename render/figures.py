@@ -114,6 +114,31 @@ def _ghost_looks(style, n: int) -> list[tuple]:
     return list(zip(cols, (float(o) for o in ops))) + [(style.body_color, style.ghost_last_opacity)]
 
 
+#: metres between successive ghosts' centres of mass along the travel (:func:`auto_spread`)
+GHOST_GAP = 0.45
+
+
+def auto_spread(along, gap: float = GHOST_GAP) -> float:
+    """The spread (metres per ghost) that puts successive ghosts' centres of mass,
+    at ``along`` (their positions along the travel, in time order), at least ``gap``
+    apart where the motion alone does not (0 for a motion that travels that far).
+
+    >>> auto_spread([0.0, 0.05, 0.1]), auto_spread([0.0, 0.6, 1.2])
+    (0.4, 0.0)
+    """
+    step = np.diff(np.asarray(along, float))
+    return float(round(max(0.0, gap - step.min()), 6)) if step.size else 0.0
+
+
+def _legend_room(st: Stage, n: int) -> float:
+    """The fraction of the height a legend of ``n`` entries takes at the top (as
+    :func:`~flipstudy.render.compose.draw_legend` sizes it), kept free of ghosts."""
+    H = st.size[1]
+    fs = max(9, int(round(st.style.font_size * 0.5 * H)))
+    pad = max(4, fs // 3)
+    return min(0.5, (2 * pad + int(round(fs * 1.3)) * n + pad) / H)
+
+
 def _travel(st: Stage) -> np.ndarray:
     """Horizontal unit vector of the travel: the camera's right, on the ground."""
     r = np.asarray(st.camera.basis()[0], float)
@@ -163,7 +188,10 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
     the last pose opaque in the body colour (Ooi, Fig. 4.2); transparency
     sorted by depth peeling.  ``spread`` (default ``style.ghost_spread``)
     metres moves each ghost that much further along the travel than the one
-    before (the camera fitted again to keep them all).  A legend (default
+    before (the camera fitted again to keep them all); 0 spreads a motion that
+    stays in place (a standing back flip) just enough that successive ghosts'
+    centres of mass lie :data:`GHOST_GAP` m apart along the travel, so time reads
+    from position as well as colour (:func:`auto_spread`).  A legend (default
     ``style.legend``) gives each colour's time and instant; a 1 m scale bar lies
     on the ground (``style.scale_bar``; the ground's checker tiles are
     ``style.ground_tile`` = 0.5 m).  ``what``: a
@@ -190,8 +218,12 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
         names = [""] * len(ts)
     R, P, pc = _fk(c, ts)
     spread = st.style.ghost_spread if spread is None else float(spread)
+    if not spread and len(ts) > 1:
+        spread = auto_spread(center_of_mass(pc, b) @ _travel(st))
     shift = np.zeros((len(ts), 3))
-    if spread:
+    show = st.style.legend if legend is None else legend
+    room = _legend_room(st, len(ts)) if show and len(ts) > 1 else 0.0
+    if spread or (room and st.framing is not None):      # fitted again: spread, legend room
         shift = np.outer(np.arange(len(ts)) * spread, _travel(st))
         P = P + shift[:, None, :]
         fr = st.framing
@@ -199,7 +231,7 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
         st = st.with_camera(fit_camera(pts, _travel(st), st.size,
                                        view_angle=fr.view_angle if fr else st.camera.view_angle,
                                        elevation=fr.elevation if fr else 8.0,
-                                       margin=st.style.frame_margin))
+                                       margin=st.style.frame_margin, top=room))
     looks = []
     with scene_for(st, scene) as sc:
         looks = _ghost_looks(sc.style, len(ts))

@@ -61,9 +61,12 @@ def plot_analysis(a, path, title: str | None = None) -> Path:
     return path
 
 
-def plot_compare(stim, original, path, title: str | None = None) -> Path:
+def plot_compare(stim, original, path, title: str | None = None, label: str = "stimulus") -> Path:
     """|L|(t) of a stimulus over its original, both from take-off (the paper's
-    Figure 3 view), with the ratio stimulus/original below."""
+    Figure 3 view), with the |L| change below over the span both are in the air
+    (:func:`flipstudy.stimuli.compare.l_change`); ``label``: what the stimulus is
+    called (``edit``: "edited")."""
+    from flipstudy.stimuli.lchange import l_change
     plt = _mpl()
     fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7.5, 5.5), sharex=True, constrained_layout=True,
                                   gridspec_kw={"height_ratios": [2, 1]})
@@ -71,21 +74,19 @@ def plot_compare(stim, original, path, title: str | None = None) -> Path:
     # frames before take-off are the original's, so both clocks start at the
     # original's take-off frame
     t0 = original.takeoff or 0
-    for a, label, colour in ((original, "original", "#E69F00"), (stim, "stimulus", "#009E9E")):
+    for a, name, colour in ((original, "original", "#E69F00"), (stim, label, "#009E9E")):
         t = (np.arange(a.clip.num_frames) - t0) / a.clip.fps
         L = np.linalg.norm(a.L, axis=1)
-        ax.plot(t, L, color=colour, lw=1.8, label=label)
+        ax.plot(t, L, color=colour, lw=1.8, label=name)
         if a.flight is not None:
             ax.axvspan((a.takeoff - t0) / a.clip.fps, (a.landing - t0) / a.clip.fps, color=colour,
                        alpha=0.12, lw=0)
         series.append((t, L))
-    (to, Lo), (ts, Ls) = series
-    if original.flight is not None and stim.flight is not None:
-        fr = stim.flight_frames
-        ratio = Ls[fr] / np.maximum(np.interp(ts[fr], to, Lo), 1e-9)
-        ax2.plot(ts[fr], 100 * (ratio - 1), color="#009E9E", lw=1.6)
+    ch = l_change(stim, original)
+    if ch is not None and ch.pct.size:
+        ax2.plot(ch.t, ch.pct, color="#009E9E", lw=1.6)
         ax2.axhline(0, color="k", lw=0.8)
-        ax2.set_ylabel("|L| change at the same\nclock time (%)")
+        ax2.set_ylabel(f"|L| {label} vs original\nwhile both fly (%)")
         ax2.grid(alpha=0.3)
     ax.set_ylabel("|L| (kg·m²/s)")
     ax.legend(loc="upper right")

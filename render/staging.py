@@ -279,6 +279,16 @@ def _prefix_key(clip: Clip, takeoff: int | None) -> str:
     return h.hexdigest()
 
 
+def nearest_axis(direction) -> np.ndarray:
+    """The horizontal axis (±X or ±Z) nearest to ``direction``.
+
+    >>> nearest_axis([0.3, 0.0, -0.9]).tolist()
+    [0.0, 0.0, -1.0]
+    """
+    axes = np.array([(1.0, 0, 0), (-1.0, 0, 0), (0, 0, 1.0), (0, 0, -1.0)])
+    return axes[int(np.argmax(axes @ np.asarray(direction, float)))].copy()
+
+
 def orient_yaws(clips, bodies, takeoffs, landings, direction) -> list[float]:
     """Degrees to turn each clip about the vertical so that it travels along
     ``direction``.  Clips with the same motion before take-off (one base clip
@@ -415,9 +425,14 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
         placed, offsets = align_takeoff(clips, takeoffs, bodies)
     else:
         placed, offsets = clips, np.zeros((len(clips), 3))
+    auto = direction is None
     if direction is None:
         direction = jump_direction(placed[0], bodies[0], takeoffs[0], landings[0])
     direction = np.asarray(direction, float)
+    if auto and orient and not boxes:
+        # travel along a ground axis, so the camera looks square at the (axis-aligned)
+        # ground and its far edge, the horizon, is level (issue 33: 87_03 travels diagonally)
+        direction = nearest_axis(direction)
     yaws = [0.0] * len(placed)
     if orient:
         yaws = orient_yaws(placed, bodies, takeoffs, landings, direction)

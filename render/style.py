@@ -121,7 +121,7 @@ class Style:
     frame_margin: float = 0.06                       # fraction of width/height left on each side
     ghost_ramp: tuple = ("#fde725", "#7ad151", "#22a884", "#2a788e")  # viridis, early → late ghosts
     ghost_late_opacity: float = 0.60                 # the ghost before the last; earlier ones down to ghost_opacity
-    ghost_spread: float = 0.0                        # metres between successive ghosts along the travel
+    ghost_spread: float = 0.0                        # metres between successive ghosts along the travel (0: just enough for a motion in place)
     scale_bar: bool = True                           # a 1 m bar on the ground of ghosts and trails
     # rendering
     anti_aliasing: str = "fxaa"                      # "fxaa", "ssaa" (slow, finest) or "none"

@@ -40,7 +40,7 @@ class Converted(StepResult):
 
 def convert(spec: str, out, force: bool = False, **load_options) -> Converted:
     """Read ``spec`` with :func:`~flipstudy.stimuli.loading.load_clip` (``load_options``:
-    ``scale``, ``fps``, ``layout``, ``up``, ``body_model``; the physics gate runs) and
+    ``scale``, ``fps``, ``accept_unphysical``, ``layout``, ``up``, ``body_model``; the physics gate runs) and
     write it as BVH in metres to ``out`` (refused when it exists, unless ``force``)."""
     from .motion import save_bvh
     out = Path(out)

@@ -11,7 +11,8 @@ from flipstudy.errors import FlipstudyFileNotFoundError
 POSITION_SUFFIXES = (".npy", ".npz")
 
 
-def load_clip(spec: str, scale: float | None = None, fps: float | None = None, *,
+def load_clip(spec: str, scale: float | None = None, fps: float | None = None,
+              accept_unphysical: bool = False, check: bool = True, *,
               layout=None, up: str | None = None, body_model=None, gate: bool = True):
     """A clip by name: a built-in name (backflip, frontflip, jump), a BVH path, a
     joint-position ``.npy``/``.npz`` (F, J, 3) or an AMASS/SMPL ``.npz``.
@@ -21,10 +22,16 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None, *
     ``body_model`` (the user's SMPL-family ``.npz``) are for the position and SMPL
     readers (see :func:`flipstudy.stimuli.motion.positions.load_positions`).
 
-    A position or SMPL clip passes the physics gate (``gate``; see :func:`physics_gate`):
-    its apparent gravity and body height must agree with physics, else a
-    :class:`~flipstudy.errors.MotionFileError` names the fix.  A name that is
-    nothing of the above raises :class:`~flipstudy.errors.FlipstudyFileNotFoundError`.
+    Every clip then passes the one physics gate: its apparent gravity and body height
+    must agree with physics, else an error names the fix (``--fps``, ``--scale``,
+    ``--up``) and ``accept_unphysical`` (``--accept-unphysical``), the way past it.
+    A BVH clip is judged by :func:`checked_clip`
+    (:class:`~flipstudy.errors.UnphysicalClipError`), a position or SMPL clip by
+    :func:`check_up_axis` and :func:`physics_gate`
+    (:class:`~flipstudy.errors.MotionFileError`).  ``check=False`` (or ``gate=False``)
+    skips the gate: ``inspect``, which reports the same findings as warnings, and a
+    design's clips, which the design's own gate judges.  A name that is nothing of
+    the above raises :class:`~flipstudy.errors.FlipstudyFileNotFoundError`.
 
     >>> from flipstudy.stimuli import load_clip
     >>> load_clip("backflip", fps=60).fps
@@ -36,26 +43,32 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None, *
         clip = builtin(spec, **({"fps": fps} if fps else {}))
         if scale not in (None, 1.0):
             clip = clip.scaled(scale)
-        return clip
+            return checked_clip(clip, spec, accept_unphysical) if check else clip
+        return clip                         # physically exact at any fps
     p = Path(spec)
     if not p.exists():
         raise FlipstudyFileNotFoundError(f"{spec}: neither a built-in clip ({', '.join(BUILTIN_NAMES)}) "
                                          f"nor an existing BVH, joint-position (.npy/.npz) or AMASS "
                                          f"(.npz) file")
+    check = check and gate
     if p.suffix.lower() in POSITION_SUFFIXES:
         from .motion.positions import load_positions
         clip = load_positions(p, scale=scale, fps=fps, layout=layout, up=up, body_model=body_model)
-        if gate:
-            physics_gate(clip)
+        if check:
+            check_up_axis(clip)                      # a body lying down: the wrong --up
+            if not accept_unphysical:
+                physics_gate(clip)
         return clip
-    return load_bvh(p, scale=scale, fps=fps)
+    clip = load_bvh(p, scale=scale, fps=fps)
+    return checked_clip(clip, spec, accept_unphysical) if check else clip
 
 
 def physics_gate(clip) -> None:
-    """Refuse a position or SMPL clip that physics contradicts, naming the fix as
-    options: a body lying along a horizontal axis (the up axis is wrong: ``--up``),
-    a body height outside an adult's, or an apparent gravity in flight that is not
-    9.81 m/s² (``--scale``, ``--fps``; see :func:`flipstudy.stimuli.analyse.physics_advice`)."""
+    """The gate of a position or SMPL clip: refuse one that physics contradicts, naming
+    the fix as options: a body lying along a horizontal axis (the up axis is wrong:
+    ``--up``), a body height outside an adult's, or an apparent gravity in flight that
+    is not 9.81 m/s² (``--scale``, ``--fps``; see
+    :func:`flipstudy.stimuli.analyse.physics_advice`), or ``--accept-unphysical``."""
     from flipstudy.errors import MotionFileError
     from .analyse import analyse, physics_advice
     check_up_axis(clip)
@@ -64,7 +77,8 @@ def physics_gate(clip) -> None:
     if adv is not None:
         fix = adv.options()
         where = clip.meta.get("path", clip.meta.get("name", "clip"))
-        raise MotionFileError(f"{where}: {adv.problem}" + (f" Rerun with {fix}." if fix else ""))
+        raise MotionFileError(f"{where}: {adv.problem}" + (f" Rerun with {fix}" if fix else "")
+                              + ("; or" if fix else "") + " pass --accept-unphysical to use it as it is.")
 
 
 def check_up_axis(clip) -> None:
@@ -82,3 +96,25 @@ def check_up_axis(clip) -> None:
             f"{extent[1]:.2f} m vertically but {max(extent[0], extent[2]):.2f} m horizontally: it lies "
             f"down, so the up axis is probably wrong; rerun with --up {other} (a design's source: "
             f"`flipstudy convert {where} --up {other} --out FILE.bvh` first)")
+
+
+def checked_clip(clip, spec: str, accept_unphysical: bool = False):
+    """The physics gate every command that takes a CLIP runs: ``clip`` itself, unless
+    physics contradicts it (the apparent gravity of its flight, or the body's height
+    from its skeleton; see :func:`flipstudy.stimuli.analyse.physics_advice`); then
+    :class:`~flipstudy.errors.UnphysicalClipError` names the options that fix it
+    (``--fps``/``--scale``) and ``--accept-unphysical``.
+
+    >>> from flipstudy.stimuli import builtin
+    >>> checked_clip(builtin("backflip"), "backflip").fps
+    120.0
+    """
+    if accept_unphysical:
+        return clip
+    from flipstudy.errors import UnphysicalClipError
+    from .analyse import analyse, gravity_warning
+    a = analyse(clip, estimate=False)
+    msg = gravity_warning(a.apparent_gravity, clip)
+    if msg is None:
+        return clip
+    raise UnphysicalClipError(f"{spec}: {msg.rstrip('.')}; or pass --accept-unphysical to use it as it is.")

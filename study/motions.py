@@ -5,6 +5,8 @@ prints, ``summary()`` the text)."""
 from __future__ import annotations
 
 import json
+
+import numpy as np
 from pathlib import Path
 
 from flipstudy.errors import FlipstudyUsageError, FlipstudyValueError
@@ -37,8 +39,8 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None,
            readers=None, range_a=None, range_b=None,
            mirror_b: bool = False, mass: float = 70.0, rule=None, tm_a=None, tm_b=None, main_a=None,
            main_b=None, smoothing: str = "profile", baseline=None, plot=None, ghost=None,
-           ghost_interval: float = 0.15, ghost_margin: float = 0.4, ghost_view: str = "across-L"
-           ) -> MotionResult:
+           ghost_interval: float = 0.15, ghost_margin: float = 0.4, ghost_view: str = "across-L",
+           accept_unphysical: bool = False) -> MotionResult:
     """``flipstudy concat``: motions ``a_spec`` and ``b_spec`` (built-in names or BVH
     paths) joined with the angular momentum as the cue
     (:func:`flipstudy.stimuli.edit.concat.concatenate`), written to ``out_path``; with
@@ -50,8 +52,8 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None,
     from flipstudy.stimuli.edit.concat import concatenate, mirror, motion_graph_join
     from flipstudy.stimuli.loading import load_clip
     try:
-        a = _pick(load_clip(a_spec, scale, fps, **(readers or {})), range_a, "a", a_spec)
-        b = _pick(load_clip(b_spec, scale, fps, **(readers or {})), range_b, "b", b_spec)
+        a = _pick(load_clip(a_spec, scale, fps, accept_unphysical, **(readers or {})), range_a, "a", a_spec)
+        b = _pick(load_clip(b_spec, scale, fps, accept_unphysical, **(readers or {})), range_b, "b", b_spec)
         if mirror_b:
             b = mirror(b)
         body = analyse(a, total_mass=mass).body
@@ -146,10 +148,10 @@ def inspect(clip_spec: str, *, scale=None, fps=None, readers=None, mass: float =
     :func:`~flipstudy.stimuli.loading.load_clip` (``layout``, ``up``, ``body_model``)."""
     from flipstudy.stimuli import analyse
     from flipstudy.stimuli.loading import load_clip
-    clip = load_clip(clip_spec, scale, fps, **(readers or {}))
+    clip = load_clip(clip_spec, scale, fps, check=False, **(readers or {}))      # its findings are warnings here
     original = None
     if compare:
-        original = analyse(load_clip(compare, scale, fps, **(readers or {})), total_mass=mass,
+        original = analyse(load_clip(compare, scale, fps, check=False, **(readers or {})), total_mass=mass,
                            estimate=not prior_masses)
         # measure the stimulus with the original's body (same masses)
         a = analyse(clip, body=original.body, estimate=False)
@@ -191,6 +193,17 @@ def inspect(clip_spec: str, *, scale=None, fps=None, readers=None, mass: float =
     masses = d["segment_masses"]
     lines.append(f"  segment masses  (total {d['total_mass']:g} kg) " +
                  ", ".join(f"{k} {v:.1f}" for k, v in masses.items()))
+    if original is not None:
+        from flipstudy.stimuli.lchange import l_change
+        ch = l_change(a, original)
+        lines.append(f"  against {compare}: " + (ch.summary() if ch is not None else
+                                                   "no flight in one of the two, nothing to compare"))
+        d["compare"] = None if ch is None else {
+            "original": str(compare), "L_mean": ch.L_mean_stim, "L_mean_original": ch.L_mean_orig,
+            "flight_s": ch.flight_s_stim, "flight_s_original": ch.flight_s_orig,
+            "L_change_pct_median": float(np.median(ch.pct)) if ch.pct.size else None,
+            "L_change_pct_min": float(ch.pct.min()) if ch.pct.size else None,
+            "L_change_pct_max": float(ch.pct.max()) if ch.pct.size else None}
     for w in d["warnings"]:
         lines.append(f"  warning: {w}")
     if plot:
@@ -201,7 +214,7 @@ def inspect(clip_spec: str, *, scale=None, fps=None, readers=None, mass: float =
 
 def edit(clip_spec: str, out, *, scale=None, fps=None, readers=None, flips=None, k_ratio: float = 1.0,
          straighten=None, t_from=None, t_to=None, midpoint: bool = False, join_spec=None,
-         mass: float = 70.0, plot=None) -> MotionResult:
+         mass: float = 70.0, plot=None, accept_unphysical: bool = False) -> MotionResult:
     """``flipstudy edit``: more flips (Section 5.2-5.4) and/or an animator edit with
     momentum repair (5.5), measured (:func:`flipstudy.stimuli.edit.pipeline.edit`),
     written to ``out``."""
@@ -211,8 +224,8 @@ def edit(clip_spec: str, out, *, scale=None, fps=None, readers=None, flips=None,
     from flipstudy.stimuli.loading import load_clip
     if flips is None and not straighten and not join_spec:
         raise FlipstudyUsageError("nothing to do: give --flips N, --straighten legs|arms or --join OTHER")
-    clip = load_clip(clip_spec, scale, fps, **(readers or {}))
-    other = load_clip(join_spec, scale, fps, **(readers or {})) if join_spec else None
+    clip = load_clip(clip_spec, scale, fps, accept_unphysical, **(readers or {}))
+    other = load_clip(join_spec, scale, fps, accept_unphysical, **(readers or {})) if join_spec else None
     try:
         res = edit_clip(clip, flips=flips, k_ratio=k_ratio, straighten=straighten,
                    t_from=t_from, t_to=t_to, midpoint=midpoint, join=other,
@@ -266,7 +279,7 @@ def edit(clip_spec: str, out, *, scale=None, fps=None, readers=None, flips=None,
         else:
             orig = res.analysis
             plot_compare(analyse(out_clip, body=orig.body, estimate=False), orig, plot,
-                         title=f"{Path(out).stem} over {Path(str(clip_spec)).stem}")
+                         title=f"{Path(out).stem} over {Path(str(clip_spec)).stem}", label="edited")
         lines.append(f"  plot                  {plot}")
     return MotionResult(command="edit", out=Path(out), report={"out": str(out),
                         "frames": out_clip.num_frames, "fps": float(out_clip.fps)}, lines=tuple(lines))
@@ -319,15 +332,16 @@ def jump(to, out, *, scene="forward", air=None, windup=None, k="global-normal", 
 
 
 def figure(clip_spec: str, out, *, kind: str = "ghost", overlay=None, scale=None, fps=None, readers=None,
-           size=(640, 480), style=None, interval=None, debug: bool = False) -> MotionResult:
+           size=(640, 480), style=None, interval=None, debug: bool = False,
+           accept_unphysical: bool = False) -> MotionResult:
     """``flipstudy figure``: one still of one clip into ``out``: ``kind`` ghost, trail,
     strip or composite (with ``debug`` gizmos), or overlay (the clip over ``overlay``)."""
     from flipstudy.render import figures as fg
     from flipstudy.render.staging import stage
     from flipstudy.stimuli.loading import load_clip
-    clips = [load_clip(clip_spec, scale, fps, **(readers or {}))]
+    clips = [load_clip(clip_spec, scale, fps, accept_unphysical, **(readers or {}))]
     if kind == "overlay":
-        clips.append(load_clip(overlay, scale, fps, **(readers or {})))
+        clips.append(load_clip(overlay, scale, fps, accept_unphysical, **(readers or {})))
     st = stage(clips, size=size, style=style)
     gizmos = ("com", "path", "L", "v", "support") if debug else ()
     if kind == "overlay":

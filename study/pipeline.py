@@ -139,6 +139,11 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     rules = d.exclusions.to_dict() if d is not None and not d.exclusions.is_default else None
     if len(responses) > 1:
         src = combine_responses(responses)
+    if not images and Path(responses[0]).is_dir() and (src.parent / "manifest.csv").is_file():
+        from flipstudy.stimuli.contract import StimulusSet
+        from .reproduce import sheet_images        # the study's own ghosts and trails
+        images = sheet_images(StimulusSet.read(src.parent, files=False, design=False),
+                              src.parent / "render")
     res = _analyze(src, out, images=images or None, quest_specs=specs, exclusions=rules, **options)
     return AnalyzeResult(out=out, report=res.to_dict(), table_markdown=to_markdown(res.table))
 

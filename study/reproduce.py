@@ -36,7 +36,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from flipstudy.stimuli._progress import Progress
+from flipstudy.stimuli._progress import Heartbeat, Progress
 from flipstudy.stimuli.contract import Stimulus, StimulusSet
 
 #: the original and its strongest error shown beside the curves on the sheet
@@ -65,6 +65,25 @@ def sheet_label(row: Stimulus) -> str:
     level = row.nominal_error_pct
     parts = [kind.replace("-", " ")] + ([row.profile] if row.profile else [])
     return f"{name}\n" + ", ".join(parts) + f", {'+' if level > 0 else '−'}{abs(level):g} %"
+
+
+def sheet_images(stimuli: StimulusSet, render_dir) -> dict:
+    """The figure sheet's images of a study (label → path): the ghost and trail composites of
+    an original (:data:`SHEET_ORIGINAL`, else the first reference or level-0 stimulus) and of
+    its clip's strongest error (:data:`SHEET_ERROR`, else the largest |nominal error|), those
+    of the pair that ``render_dir`` holds; ``analyze STUDY`` and ``reproduce`` show the same."""
+    rows = list(stimuli)
+    plain = [s for s in rows if s.kind == "reference" or not s.nominal_error_pct]
+    if SHEET_ORIGINAL in stimuli and SHEET_ERROR in stimuli:
+        pair = [stimuli[SHEET_ORIGINAL], stimuli[SHEET_ERROR]]
+    elif plain:
+        errs = [s for s in rows if s.clip == plain[0].clip and s.nominal_error_pct]
+        pair = plain[:1] + ([max(errs, key=lambda s: abs(s.nominal_error_pct))] if errs else [])
+    else:
+        return {}
+    out = {f"{what}s: {sheet_label(s)}": Path(render_dir) / f"{s.stimulus}_{what}.png"
+           for what in ("ghost", "trail") for s in pair}
+    return {k: p for k, p in out.items() if p.is_file()}
 
 
 def _say(quiet: bool, text: str) -> None:
@@ -158,10 +177,10 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
         t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
         render_dir = study / "render"
-        images = {f"{what}s: {sheet_label(stimuli[name])}": render_dir / f"{name}_{what}.png"
-                  for what in ("ghost", "trail") for name in (SHEET_ORIGINAL, SHEET_ERROR)}
-        result = analyze(exp.responses, work / "analysis", images=images, seed=seed,
-                         include_simulated=True)
+        images = sheet_images(stimuli, render_dir)
+        with Heartbeat("analysis", enabled=not quiet):
+            result = analyze(exp.responses, work / "analysis", images=images, seed=seed,
+                             include_simulated=True)
         seconds["analysis"] = time.perf_counter() - t
 
         # move into place: nothing half-written is ever at OUT

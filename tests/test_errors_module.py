@@ -104,12 +104,12 @@ def test_a_user_error_is_one_line_and_status_1(tmp_path, capsys):
     assert err == f"flipstudy status: error: {tmp_path} is not a study folder (no manifest.csv)\n"
 
 
-def test_needs_export_keeps_its_own_status_and_wording(tmp_path, capsys):
-    """A study folder without responses.csv: a step to take, exit 2, no "error:"."""
-    assert main(["analyze", str(tmp_path), "--no-figures"]) == 2
+def test_needs_export_is_an_error_that_names_the_step(tmp_path, capsys):
+    """A study folder without responses.csv (issue 33): "error:", status 1, the export named."""
+    assert main(["analyze", str(tmp_path), "--no-figures"]) == 1
     err = capsys.readouterr().err
-    assert err.startswith("flipstudy analyze: ") and "error:" not in err
-    assert "flipstudy export" in err and err.count("\n") == 1
+    assert err.startswith("flipstudy analyze: error: ")
+    assert f"flipstudy export {tmp_path} --out" in err and err.count("\n") == 1
 
 
 def test_a_bad_bvh_is_reported_by_main_with_file_and_line(tmp_path, capsys):

@@ -96,6 +96,9 @@ def plan(jumper: Jumper, course: Course, k, t_air: float, t_windup: float, g, ma
     d0 = (F1 - F0) * np.array([0.78, 1.0, 0.78]) - np.array([0.0, 0.08, 0.0])
     path = estimate_path(d0, t_air, t_windup, gv)
     v0 = path.v0
+    # |v0|² = |d|²/T² − d·g + |g|²T²/4 is least at T = √(2|d|/|g|): the cheapest air time
+    t_cheap = float(np.sqrt(2.0 * np.linalg.norm(d0) / np.linalg.norm(gv)))
+    cheapest = (t_cheap, kinetic_energy(m, estimate_path(d0, t_cheap, t_windup, gv).v0))
     # COM − pelvis of an extended take-off pose (standing legs, leaning into the jump)
     def takeoff_offset(v):
         d = v[[0, 2]] / max(np.hypot(*v[[0, 2]]), 1e-9)
@@ -107,7 +110,8 @@ def plan(jumper: Jumper, course: Course, k, t_air: float, t_windup: float, g, ma
     c_td = None
     for it in range(1, max_iter + 1):
         travel = 0.5 * v0 * t_windup
-        wc = choose(field_, k, kinetic_energy(m, v0), travel, takeoff_offset=takeoff_offset(v0))
+        wc = choose(field_, k, kinetic_energy(m, v0), travel, takeoff_offset=takeoff_offset(v0),
+                    cheapest=cheapest)
         p_c = F0 + wc.pelvis
         c_c = p_c + field_.balanced(k).com_bal[wc.index] - wc.pelvis      # balanced by the upper body
         c_to = c_c + travel

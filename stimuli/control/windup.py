@@ -92,12 +92,13 @@ def thrust_ok(field: SampleField, travel: np.ndarray, takeoff_offset=None, subse
 
 
 def choose(field: SampleField, k, required: float, travel=None, eps: float = EPSILON,
-           best_effort: bool = False, takeoff_offset=None) -> Choice:
+           best_effort: bool = False, takeoff_offset=None, cheapest=None) -> Choice:
     """The least-balance-error sample with E_k − E_el ≤ ε E_k (and room for a
     thrust of ``travel`` when given).  ``best_effort``: when no sample stores
     enough, take the most energetic one (landings that must dissipate the rest)
     of those the upper body balances within :data:`BEST_EFFORT_BALANCE`,
-    instead of raising ``ValueError``."""
+    instead of raising ``ValueError``.  ``cheapest``: ``(t_air, E_k)`` of the air time
+    that needs the least energy, named in the refusal."""
     E = field.energy(k)
     bal = field.balanced(k)
     base = field.ok & bal.inside
@@ -124,7 +125,10 @@ def choose(field: SampleField, k, required: float, travel=None, eps: float = EPS
                 f"target unreachable: the jump needs E_k = {required:.0f} J but the muscles "
                 f"(k = {', '.join(f'{v:g}' for v in np.asarray(k))}) store at most {emax:.0f} J in "
                 f"a balanced crouch; use stronger muscles (--k / --strength), a shorter jump, or an "
-                f"--air time nearer the cheapest one")
+                f"--air time nearer the cheapest one"
+                + ("" if cheapest is None else
+                   f" (--air {cheapest[0]:.2f}: E_k = {cheapest[1]:.0f} J"
+                   + (", within reach)" if cheapest[1] <= emax / (1 - eps) else ", still out of reach)")))
         if not pre.any():
             raise FlipstudyValueError(f"target unreachable: no balanced crouch stores {required:.0f} J")
         raise FlipstudyValueError(

@@ -255,7 +255,9 @@ def parse_motion(lines: list[str], start: int, n_channels: int, path):
     finite = np.isfinite(values)
     if not finite.all():
         f, c = np.argwhere(~finite)[0]
-        raise BVHError(path, first + int(f) + 1, f"non-finite value {values[f, c]!r} in frame "
+        toks = data_lines[f].split()                  # the value as the file writes it
+        shown = toks[c] if c < len(toks) else str(float(values[f, c]))
+        raise BVHError(path, first + int(f) + 1, f"non-finite value '{shown}' in frame "
                                                  f"{int(f) + 1}, channel {int(c) + 1} (NaN/inf "
                                                  f"are not valid motion data)")
     return n_frames, frame_time, val, values, first

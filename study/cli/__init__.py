@@ -32,6 +32,8 @@ def build_parser() -> argparse.ArgumentParser:
     import importlib
     ap = argparse.ArgumentParser(prog="flipstudy", description=(
         "Perception studies of ballistic character motion: stimuli, rendering, sessions, analysis."))
+    from flipstudy import __version__
+    ap.add_argument("--version", action="version", version=f"flipstudy {__version__}")
     sub = ap.add_subparsers(dest="command", metavar="COMMAND")
     for family in FAMILIES:
         importlib.import_module(f"{__name__}.{family}").add_commands(sub)

@@ -77,10 +77,13 @@ def handler(args) -> int:
     from .compare import analyze_comparison_cmd, wants_comparison
     if wants_comparison(args):                 # a study with [[sources]]: the ranking of the sources
         return analyze_comparison_cmd(args)
+    from flipstudy.stimuli._progress import Heartbeat
     from flipstudy.study.pipeline import analyze
-    res = analyze(args.responses, args.out, correction=args.correction, images=_images(args.image),
-                  seed=args.seed, n_boot=args.n_boot, ci=args.ci, psychometric=args.psychometric,
-                  gee=not args.no_gee, figures=not args.no_figures,
-                  include_simulated=args.include_simulated, include_incomplete=args.include_incomplete)
+    with Heartbeat("analyze"):                     # a log hears from it now and then
+        res = analyze(args.responses, args.out, correction=args.correction,
+                      images=_images(args.image), seed=args.seed, n_boot=args.n_boot, ci=args.ci,
+                      psychometric=args.psychometric, gee=not args.no_gee,
+                      figures=not args.no_figures, include_simulated=args.include_simulated,
+                      include_incomplete=args.include_incomplete)
     print(json.dumps(res.report, indent=2, ensure_ascii=False) if args.json else res.summary())
     return 0

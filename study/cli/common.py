@@ -20,10 +20,16 @@ def add_clip(p: argparse.ArgumentParser) -> None:
 
 def add_units(p: argparse.ArgumentParser, *,
               scale_help: str = "metres per file unit (default: guessed from the skeleton's size)",
-              fps_help: str = "the clip's frames per second, overriding the file's Frame Time") -> None:
-    """``--scale`` and ``--fps`` of the clips a command loads (see :func:`load_clip`)."""
+              fps_help: str = "the clip's frames per second, overriding the file's Frame Time",
+              gate: bool = True) -> None:
+    """``--scale`` and ``--fps`` of the clips a command loads (see :func:`load_clip`), and
+    with ``gate`` ``--accept-unphysical``, the way past the physics gate."""
     p.add_argument("--scale", type=float, default=None, help=scale_help)
     p.add_argument("--fps", type=float, default=None, help=fps_help)
+    if gate:
+        p.add_argument("--accept-unphysical", action="store_true",
+                       help="use a clip whose apparent gravity or body height contradicts physics "
+                            "as it is (default: refuse it, naming the --fps/--scale that fix it)")
     add_readers(p)
 
 
@@ -44,10 +50,10 @@ def reader_options(args) -> dict:
     return {k: getattr(args, k, None) for k in ("layout", "up", "body_model")}
 
 
-def add_clip_args(p: argparse.ArgumentParser) -> None:
-    """CLIP with ``--scale`` and ``--fps``."""
+def add_clip_args(p: argparse.ArgumentParser, gate: bool = True) -> None:
+    """CLIP with ``--scale`` and ``--fps`` (and ``--accept-unphysical`` with ``gate``)."""
     add_clip(p)
-    add_units(p)
+    add_units(p, gate=gate)
 
 
 def add_mass(p: argparse.ArgumentParser, default: float = 70.0, *, what: str = "total body mass") -> None:

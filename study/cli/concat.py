@@ -15,7 +15,7 @@ def cmd_concat(args) -> int:
                  tm_a=args.tm_a, tm_b=args.tm_b, main_a=args.main_a, main_b=args.main_b,
                  smoothing=args.smoothing, baseline=args.baseline, plot=args.plot, ghost=args.ghost,
                  ghost_interval=args.ghost_interval, ghost_margin=args.ghost_margin,
-                 ghost_view=args.ghost_view)
+                 ghost_view=args.ghost_view, accept_unphysical=args.accept_unphysical)
     print(json.dumps(res.report, indent=2) if args.json else res.summary())
     return 0
 

@@ -6,7 +6,8 @@ from .common import add_clip, add_out, add_units, reader_options
 
 def cmd_convert(args) -> int:
     from flipstudy.stimuli.convert import convert
-    r = convert(args.clip, args.out, force=args.force, scale=args.scale, fps=args.fps, **reader_options(args))
+    r = convert(args.clip, args.out, force=args.force, scale=args.scale, fps=args.fps,
+                accept_unphysical=args.accept_unphysical, **reader_options(args))
     print(r.summary())
     return 0
 

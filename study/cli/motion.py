@@ -18,8 +18,6 @@ PRESET_NAMES = ("flipping-with-physics-2007", "reitsma-pollard-2003", "reitsma-a
 
 def cmd_inspect(args) -> int:
     from flipstudy.study.motions import inspect
-    if args.compare and not args.plot:
-        print("flipstudy inspect: --compare draws into the --plot file; add --plot FILE.png", file=sys.stderr)
     res = inspect(args.clip, scale=args.scale, fps=args.fps,
                   readers=reader_options(args), mass=args.mass, compare=args.compare,
                   prior_masses=args.prior_masses, plot=args.plot)
@@ -73,7 +71,8 @@ def cmd_edit(args) -> int:
     res = edit(args.clip, args.out, scale=args.scale, fps=args.fps,
                readers=reader_options(args), flips=args.flips,
                k_ratio=args.k_ratio, straighten=args.straighten, t_from=args.t_from, t_to=args.t_to,
-               midpoint=args.midpoint, join_spec=args.join, mass=args.mass, plot=args.plot)
+               midpoint=args.midpoint, join_spec=args.join, mass=args.mass, plot=args.plot,
+               accept_unphysical=args.accept_unphysical)
     print(res.summary())
     return 0
 
@@ -82,14 +81,15 @@ def add_commands(subparsers) -> None:
     p = subparsers.add_parser("inspect", help="flight analysis of one clip (units, gravity, momentum, masses)",
                        description="Find the flight, estimate segment masses, measure momentum and "
                                    "check units and frame time against gravity.")
-    add_clip_args(p)
+    add_clip_args(p, gate=False)
     add_json(p)
     p.add_argument("--plot", metavar="FILE.png", help="draw |L|(t), |p|(t) and COM height")
     add_mass(p)
     p.add_argument("--prior-masses", action="store_true",
                    help="use the de Leva table masses instead of estimating them from the flight")
     p.add_argument("--compare", metavar="ORIGINAL",
-                   help="plot |L|(t) of CLIP over ORIGINAL (a stimulus over its base clip) to --plot")
+                   help="measure CLIP against ORIGINAL (a stimulus against its base clip): flight |L| "
+                        "and time of both, |L| change while both fly; with --plot drawn")
     p.set_defaults(func=cmd_inspect)
 
     p = subparsers.add_parser("init", help="write a study design (TOML): the paper's design",

@@ -48,9 +48,11 @@ def add_commands(subparsers) -> None:
 
 def handler(args) -> int:
     """Run ``flipstudy plan``; returns the exit code."""
+    from flipstudy.stimuli._progress import Heartbeat
     from flipstudy.study.pipeline import plan
-    res = plan(args.design, groups=args.group, task=args.task, target_width=args.target_width,
-               observers=args.observers, seed=args.seed, max_trials=args.max_trials,
-               threshold=args.threshold)
+    with Heartbeat("plan"):                        # a log hears from it now and then
+        res = plan(args.design, groups=args.group, task=args.task, target_width=args.target_width,
+                   observers=args.observers, seed=args.seed, max_trials=args.max_trials,
+                   threshold=args.threshold)
     print(json.dumps(list(res.rows), indent=2) if args.json else res.summary())
     return 0

@@ -88,7 +88,8 @@ def cmd_figure(args) -> int:
             else "composite" if args.composite else "ghost")
     res = figure(args.clip, args.out, kind=kind, overlay=args.overlay, scale=args.scale, fps=args.fps,
                  readers=reader_options(args),
-                 size=args.size, style=_style(args.style), interval=args.interval, debug=args.debug)
+                 size=args.size, style=_style(args.style), interval=args.interval, debug=args.debug,
+                 accept_unphysical=args.accept_unphysical)
     print(res.summary())
     return 0
 

@@ -31,7 +31,9 @@ def cmd_score(args) -> int:
         raise FlipstudyValueError(f"no clips found in {' '.join(args.clips)}")
     if args.figure and len(names) != 1:
         raise FlipstudyValueError("--figure draws one clip: give a single CLIP")
-    clips = [load_clip(n, args.scale, args.fps, **reader_options(args)) for n in names]
+    # score measures what is physically wrong (a gravity error included): the gate's findings are
+    # measured and reported, not refused
+    clips = [load_clip(n, args.scale, args.fps, check=False, **reader_options(args)) for n in names]
     res = score(clips, args.calibration, task=args.task, style=args.style)
     print(res.to_json(indent=2) if args.json else res.summary())
     if args.figure:
@@ -63,7 +65,7 @@ def add_commands(subparsers) -> None:
                      "measured, not scored."))
     p.add_argument("clips", metavar="CLIP", nargs="+",
                    help="built-in name, BVH path, a folder of BVH files, or a quoted glob")
-    add_units(p)
+    add_units(p, gate=False)             # score measures the physics findings it would refuse
     p.add_argument("--calibration", metavar="FILE", default=None,
                    help="a calibration file from `flipstudy calibrate` (default: the shipped one)")
     p.add_argument("--task", choices=("yes-no", "2afc"), default="yes-no",

@@ -44,3 +44,33 @@ def test_closed_early_the_summary_says_how_far_it_got():
     bar.step("sim001")
     bar.close()
     assert out.getvalue().startswith("participants: 1/5 in ")
+
+
+def test_non_tty_gets_periodic_lines_with_the_count_and_the_last_piece():
+    """Issue 33: a log, a notebook or CI hears from a long render now and then."""
+    out = io.StringIO()
+    bar = Progress(4, "render", stream=out, every=0.0)
+    for name in ("a", "b", "c", "d"):
+        bar.step(name)
+    lines = out.getvalue().splitlines()
+    assert [ln.split(" (")[0] for ln in lines[:3]] == ["render: 1/4", "render: 2/4", "render: 3/4"]
+    assert "(last: c)" in lines[2] and "s left" in lines[2]
+    assert re.fullmatch(r"render: 4/4 in \d+\.\d s", lines[3])
+
+
+def test_a_heartbeat_speaks_in_a_log_until_the_step_ends_and_not_on_a_terminal():
+    import time
+    from flipstudy.stimuli._progress import Heartbeat
+    out = io.StringIO()
+    with Heartbeat("analyze", stream=out, every=0.01):
+        deadline = time.monotonic() + 10
+        while "still working" not in out.getvalue() and time.monotonic() < deadline:
+            time.sleep(0.01)
+    n = out.getvalue().count("\n")
+    assert n >= 1 and out.getvalue().startswith("analyze: still working, ")
+    time.sleep(0.05)
+    assert out.getvalue().count("\n") == n          # stopped with the step
+    tty = _Tty()
+    with Heartbeat("plan", stream=tty, every=0.01):
+        time.sleep(0.05)
+    assert tty.getvalue() == ""

@@ -64,31 +64,16 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     m2_raw = motion_of(b, body, tm=tm_b, main=main_b)
     suggested = suggest_rule(m1, m2_raw)
     rule = rule or suggested
-    theta = align_angle(m1.main_L, m2_raw.main_L, rule)
-    m2r = transformed(m2_raw, theta, np.zeros(3))
+    theta, m2r, best, tried = _best_period(m1, m2_raw, rule, body, max_facing_deg)
     peak = max(m1.main_peak, m2_raw.main_peak)
     max_cost = peak ** 2 if max_cost is None else float(max_cost)
-    best = None
-    tried = []
-    for case, f1, f2 in blendable_periods(m1, m2r, rule):
-        try:
-            s1, s2, support = support_frames(m1, m2r, f1, f2)
-        except ConcatError as e:
-            tried.append(f"{case}: {e}")
-            continue
-        cosang = np.einsum("ia,ja->ij", m1.facing[s1], m2r.facing[s2])
-        allowed = cosang >= np.cos(np.radians(max_facing_deg))
-        if not allowed.any():
-            ang = np.degrees(np.arccos(np.clip(cosang.max(), -1, 1)))
-            tried.append(f"{case}: torso facing directions differ by at least {ang:.0f}° "
-                         f"(more than {max_facing_deg:g}°)")
-            continue
-        tmg = optimal_timing(m1.L, m2r.L, m1.arms, m2r.arms, body.mass, s1, s2,
-                             f_start=int(s1[0]), allowed=allowed)
-        if best is None or tmg.F < best[0].F:
-            best = (tmg, case, s1, s2, support, allowed)
     if best is None:
-        raise ConcatError(f"the motions cannot be concatenated under the {rule} rule: " + "; ".join(tried))
+        other = "forward" if rule == "reverse" else "reverse"
+        th, _, works, _ = _best_period(m1, m2_raw, other, body, max_facing_deg)
+        hint = (f"; --rule {other} works (θ = {np.degrees(th):.1f}°)" if works is not None else
+                f"; --rule {other} fails too (try --range-a/--range-b or --mirror-b)")
+        raise ConcatError(f"the motions cannot be concatenated under the {rule} rule: " + "; ".join(tried)
+                          + hint)
     tmg, case, s1, s2, support, allowed = best
     if tmg.F > max_cost:
         raise ConcatError(f"the motions are too different to blend: F = {tmg.F:.1f} at the best offset "
@@ -186,3 +171,29 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     one = flights[0] if len(flights) == 1 else {"takeoff": None, "landing": None}
     return Concatenation(out, one["takeoff"], one["landing"], report)
 
+
+def _best_period(m1, m2_raw, rule: str, body, max_facing_deg: float):
+    """(θ, motion 2 turned by θ, the least-cost blend ``(timing, case, s1, s2, support,
+    allowed)`` or None, why each blendable period failed) under ``rule``."""
+    theta = align_angle(m1.main_L, m2_raw.main_L, rule)
+    m2r = transformed(m2_raw, theta, np.zeros(3))
+    best = None
+    tried = []
+    for case, f1, f2 in blendable_periods(m1, m2r, rule):
+        try:
+            s1, s2, support = support_frames(m1, m2r, f1, f2)
+        except ConcatError as e:
+            tried.append(f"{case}: {e}")
+            continue
+        cosang = np.einsum("ia,ja->ij", m1.facing[s1], m2r.facing[s2])
+        allowed = cosang >= np.cos(np.radians(max_facing_deg))
+        if not allowed.any():
+            ang = np.degrees(np.arccos(np.clip(cosang.max(), -1, 1)))
+            tried.append(f"{case}: torso facing directions differ by at least {ang:.0f}° "
+                         f"(more than {max_facing_deg:g}°)")
+            continue
+        tmg = optimal_timing(m1.L, m2r.L, m1.arms, m2r.arms, body.mass, s1, s2,
+                             f_start=int(s1[0]), allowed=allowed)
+        if best is None or tmg.F < best[0].F:
+            best = (tmg, case, s1, s2, support, allowed)
+    return theta, m2r, best, tried
