@@ -43,6 +43,7 @@ from ..analyse import Analysis, analyse
 from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass
 from ..result import Result
+from . import quat
 from .flight_measures import FlipEditError, _jumps, flight_axis, standing_span, unwrapped_turn
 from .report import Report
 from .reposition import ballistic_path
@@ -197,9 +198,7 @@ def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
     t = np.flatnonzero(np.any(rotvec != 0, axis=1))
     if t.size:
         R = Rotation.from_rotvec(rotvec[t])
-        # (n, 1) shapes: scipy's vectorised backend, faster than its loop for products
-        rot[t, 0] = (Rotation.from_rotvec(rotvec[t, None]) *
-                     Rotation.from_quat(rot[t, :1])).as_quat()[:, 0]
+        rot[t, 0] = quat.mul(quat.from_rotvec(rotvec[t]), quat.normalized(rot[t, 0]))
         cc = com[s[t]]
         pos[t] = cc + R.apply(pos[t] - cc)
     return rot, pos
@@ -227,14 +226,12 @@ def _retimed(pre: "FlipSource", rot: np.ndarray, root_pos: np.ndarray, s_src: np
         # the others; then one batch q0 · exp(u · log) for all of them
         a = np.concatenate([rot[i0[fq], 0], rot[i0[ff]].reshape(-1, 4)])
         b = np.concatenate([rot[i1[fq], 0], rot[i1[ff]].reshape(-1, 4)])
-        ra = Rotation.from_quat(a[:, None])
-        log = (ra.inv() * Rotation.from_quat(b[:, None])).as_rotvec()[:, 0]
+        log = quat.relative(a, b)
         nq = fq.size * (J - 1)
         q0 = np.concatenate([rot[i0[fq], 1:].reshape(-1, 4), a])
         step = np.concatenate([pre.step[s_src[i0[fq]]].reshape(-1, 3), log])
         uu = np.concatenate([np.repeat(u[fq], J - 1), u[fq], np.repeat(u[ff], J)])
-        q = (Rotation.from_quat(q0[:, None]) * Rotation.from_rotvec((step * uu[:, None])[:, None])
-             ).as_quat()[:, 0]
+        q = quat.mul(quat.normalized(q0), quat.from_rotvec(step * uu[:, None]))
         out[fq, 1:] = q[:nq].reshape(fq.size, J - 1, 4)
         out[fq, 0] = q[nq:nq + fq.size]
         out[ff] = q[nq + fq.size:].reshape(ff.size, J, 4)
