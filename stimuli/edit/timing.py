@@ -18,7 +18,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.spatial.transform import Rotation
 
 from ..motion.clip import Clip
-from . import quat
+from ..motion import quat
 
 
 def sample(clip: Clip, src: np.ndarray) -> Clip:
@@ -66,7 +66,7 @@ def slerp(q0: np.ndarray, q1: np.ndarray, u) -> np.ndarray:
     """Spherical interpolation of quaternions (..., 4) (scipy's x, y, z, w) by
     ``u`` (broadcastable to their leading shape; 0 gives q0, 1 gives q1):
     q0 · exp(u · log(q0⁻¹ q1)).  Stacks of more than one leading axis (frames ×
-    joints) take :func:`flipstudy.stimuli.edit.quat.slerp`, the same arithmetic
+    joints) take :func:`flipstudy.stimuli.motion.quat.slerp`, the same arithmetic
     without the objects."""
     q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
     if q0.ndim >= 3 and q1.ndim >= 3:
