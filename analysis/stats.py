@@ -260,6 +260,65 @@ PSIGNIFIT_GRID = {"threshold": 30, "width": 25, "lambda": 12, "gamma": 15, "eta"
 PSIGNIFIT_MOVING = {"threshold": 10, "width": 10, "lambda": 5, "gamma": 5, "eta": 5}
 
 
+# psignifit evaluates its sigmoid and priors a few thousand times per fit (the grid,
+# then the simplex search), and its defaults reach the normal distribution through
+# scipy.stats: a generic argument check per call and, in the width prior, a frozen
+# distribution built on every call.  These are the same formulas on scipy.special's
+# ndtr/ndtri, the very functions scipy.stats.norm ends in, so every value comes out
+# bit for bit as before (tests/analysis/test_psignifit_calls.py compares them) at a
+# few microseconds a call instead of ~100.
+
+_NORM_PDF_C = np.sqrt(2 * np.pi)
+
+
+def _sigmoid(alpha: float = 0.05):
+    """psignifit's cumulative-normal sigmoid (``sigmoid="norm"``) with scipy.stats'
+    ``norm.ppf/cdf/pdf(x, loc, scale)`` evaluated directly: NaN where scale ≤ 0 (or
+    a probability outside [0, 1]), as scipy.stats returns."""
+    from psignifit.sigmoids import Gaussian
+
+    class NormalSigmoid(Gaussian):
+        def _ppf(self, x, loc=0, scale=1):
+            x, loc, scale = np.asarray(x), np.asarray(loc), np.asarray(scale)
+            ok = (scale > 0) & (loc == loc) & (x >= 0) & (x <= 1)
+            with np.errstate(invalid="ignore"):
+                return np.where(ok, ndtri(x) * scale + loc, np.nan)[()]
+
+        def _cdf(self, x, loc=0, scale=1):
+            scale = np.asarray(scale)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.where(scale > 0, ndtr((np.asarray(x) - loc) / scale), np.nan)[()]
+
+        def _pdf(self, x, loc=0, scale=1):
+            scale = np.asarray(scale)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = (np.asarray(x) - loc) / scale
+                return np.where(scale > 0, np.exp(-z ** 2 / 2.0) / _NORM_PDF_C / scale, np.nan)[()]
+
+    return NormalSigmoid(alpha=alpha)
+
+
+def _width_prior(levels, alpha: float = 0.05):
+    """psignifit's default width prior for ``levels`` (its ``width_prior`` with the
+    bounds ``psignifit()`` derives from the data: twice the least spacing of the
+    levels to their range, cosine fall-offs to the least spacing and to three
+    times the range), its normal quantiles computed once instead of per call."""
+    u = np.unique(np.asarray(levels, float))
+    wmin, wmax = np.diff(u).min(), u.max() - u.min()
+    r95, r_alpha = ndtri(.95) - ndtri(.05), ndtri(1 - alpha) - ndtri(alpha)
+
+    def prior(x):
+        y = x * r95 / r_alpha
+        p = np.zeros_like(x)
+        p[((2 * wmin) < y) & (y < wmax)] = 1.
+        left = (wmin <= y) & (y <= (2 * wmin))
+        p[left] = (1 - np.cos(np.pi * (y[left] - wmin) / wmin)) / 2
+        right = (wmax <= y) & (y <= (3 * wmax))
+        p[right] = (1 + np.cos(np.pi / 2 * (y[right] - wmax) / wmax)) / 2
+        return p
+    return prior
+
+
 def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-no",
                   unit="%") -> PsychometricFit:
     """Bayesian fit with psignifit 4 (see module doc).  ``task="2afc"``: ``k`` counts
@@ -275,9 +334,10 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
         kw = {"experiment_type": "yes/no", "bounds": {"gamma": (0.0, 0.9)},
               "priors": {"gamma": lambda v: np.ones_like(v)}}
         grid, moving = dict(PSIGNIFIT_GRID), dict(PSIGNIFIT_MOVING)
+    kw["priors"] = {**kw.get("priors", {}), "width": _width_prior(x)}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = psignifit.psignifit(data, sigmoid="norm", verbose=False, debug=True, grid_steps=grid,
+        res = psignifit.psignifit(data, sigmoid=_sigmoid(), verbose=False, debug=True, grid_steps=grid,
                                   steps_moving_bounds=moving, **kw)
     note = "95 % credible interval (psignifit posterior)"
     if task == "2afc":
