@@ -278,6 +278,15 @@ def _sigmoid(alpha: float = 0.05):
     from psignifit.sigmoids import Gaussian
 
     class NormalSigmoid(Gaussian):
+        _spread: tuple = (None, None)
+
+        def _standard_parameters(self, threshold, width):
+            # Gaussian's, with ppf(1 − α) − ppf(α) computed once per α, not per call
+            if self._spread[0] != self.alpha:
+                self._spread = (self.alpha, self._ppf(1 - self.alpha) - self._ppf(self.alpha))
+            scale = width / self._spread[1]
+            return [threshold - self._ppf(self._PC, 0, scale), scale]
+
         def _ppf(self, x, loc=0, scale=1):
             x, loc, scale = np.asarray(x), np.asarray(loc), np.asarray(scale)
             ok = (scale > 0) & (loc == loc) & (x >= 0) & (x <= 1)
@@ -319,6 +328,19 @@ def _width_prior(levels, alpha: float = 0.05):
     return prior
 
 
+def _posterior_samples(res, n: int, rng) -> dict:
+    """``res.posterior_samples(n, random_state=rng)``: the same draw from the same
+    generator, the grid indices unravelled instead of every grid point's
+    parameters built first (psignifit stacks the whole grid, about a million rows
+    of five, to pick ``n``)."""
+    values = res.parameter_values
+    p = res.debug["posteriors"]
+    shape = tuple(len(v) for v in values.values())
+    idx = rng.choice(np.arange(int(np.prod(shape))), size=(n,), replace=True, p=p.flatten())
+    where = np.unravel_index(idx, shape)
+    return {name: np.asarray(v)[i] for (name, v), i in zip(values.items(), where)}
+
+
 def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-no",
                   unit="%") -> PsychometricFit:
     """Bayesian fit with psignifit 4 (see module doc).  ``task="2afc"``: ``k`` counts
@@ -351,7 +373,7 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
         note += "; MAP outside the parameter bounds (degenerate data): posterior mean used"
     params = {"threshold": float(est["threshold"]), "width": float(est["width"]),
               "gamma": float(est["gamma"]), "lambda": float(est["lambda"]), "eta": float(est["eta"])}
-    s = res.posterior_samples(n_samples, random_state=np.random.default_rng(seed))
+    s = _posterior_samples(res, n_samples, np.random.default_rng(seed))
     gam = s["gamma"] if "gamma" in s else np.full_like(s["threshold"], params["gamma"])
     xs = detection_threshold(s["threshold"], s["width"], gam, s["lambda"])
     fit = _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note, unit)
