@@ -73,10 +73,11 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
     """
     from scipy.stats import norm
     try:
-        import statsmodels.api as sm
+        from statsmodels.genmod import cov_struct, families   # not statsmodels.api: all of it
+        from statsmodels.genmod.generalized_estimating_equations import GEE
         from statsmodels.stats.multitest import multipletests
     except ImportError:
-        sm = multipletests = None
+        GEE = multipletests = None
 
     zq = norm.ppf(0.5 + ci / 2)
     rows = []
@@ -90,7 +91,7 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
         def fail(msg):
             for lv in others:
                 rows.append((g, lv, np.nan, np.nan, np.nan, np.nan, msg))
-        if sm is None:
+        if GEE is None:
             fail("statsmodels is not installed (pip install statsmodels): no GEE")
             continue
         if 0.0 not in levels:
@@ -114,8 +115,8 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                model = sm.GEE(y, X, groups=sub["participant"].to_numpy(),
-                               family=sm.families.Binomial(), cov_struct=sm.cov_struct.Exchangeable())
+                model = GEE(y, X, groups=sub["participant"].to_numpy(),
+                            family=families.Binomial(), cov_struct=cov_struct.Exchangeable())
                 res = model.fit(cov_type=cov_type if n_clusters > X.shape[1] else "robust")
                 beta, se = np.asarray(res.params), np.asarray(res.bse)
                 p = np.asarray(res.pvalues)
@@ -341,6 +342,24 @@ def _posterior_samples(res, n: int, rng) -> dict:
     return {name: np.asarray(v)[i] for (name, v), i in zip(values.items(), where)}
 
 
+def _beta_prior(b: float):
+    """psignifit's default lapse (``b`` = 10) and overdispersion (``b`` = its
+    ``beta_prior``, 10) priors, ``scipy.stats.beta.pdf(x, 1, b)``: the density
+    scipy.stats evaluates (``beta._pdf``), zero outside [0, 1], NaN at NaN,
+    without the generic argument handling around it on every call."""
+    from scipy.stats import beta
+
+    def prior(x):
+        x = np.asarray(x, float)
+        inside = (0 <= x) & (x <= 1)
+        out = np.zeros(x.shape)
+        out[np.isnan(x)] = np.nan
+        if inside.any():
+            out[inside] = beta._pdf(x[inside], 1.0, float(b))
+        return out[()]
+    return prior
+
+
 def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-no",
                   unit="%") -> PsychometricFit:
     """Bayesian fit with psignifit 4 (see module doc).  ``task="2afc"``: ``k`` counts
@@ -356,7 +375,8 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
         kw = {"experiment_type": "yes/no", "bounds": {"gamma": (0.0, 0.9)},
               "priors": {"gamma": lambda v: np.ones_like(v)}}
         grid, moving = dict(PSIGNIFIT_GRID), dict(PSIGNIFIT_MOVING)
-    kw["priors"] = {**kw.get("priors", {}), "width": _width_prior(x)}
+    kw["priors"] = {**kw.get("priors", {}), "width": _width_prior(x), "lambda": _beta_prior(10),
+                    "eta": _beta_prior(10)}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = psignifit.psignifit(data, sigmoid=_sigmoid(), verbose=False, debug=True, grid_steps=grid,
