@@ -58,14 +58,24 @@ def _no_ligatures(fig: Figure) -> None:
 
 
 def save(fig: Figure, stem: Path, dpi: int = PNG_DPI) -> list[Path]:
-    """``stem.pdf`` and ``stem.png``; returns both paths."""
+    """``stem.pdf`` and ``stem.png``, laid out once for both; returns both paths."""
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     pdf, png = stem.with_suffix(".pdf"), stem.with_suffix(".png")
     _no_ligatures(fig)
-    with style():                         # savefig reads rcParams (font embedding, bbox)
-        fig.savefig(pdf, metadata={"CreationDate": None, "Creator": "flipstudy analysis", "Producer": None})
-        fig.savefig(png, dpi=dpi, metadata={"Software": "flipstudy analysis"})
+    with style():                         # savefig reads rcParams (font embedding)
+        # the constrained layout and the tight bounding box once for both files (a
+        # savefig with bbox "tight" lays out and measures the figure before drawing it)
+        fig.draw_without_rendering()
+        box = fig.get_tightbbox().padded(mpl.rcParams["savefig.pad_inches"])
+        engine = fig.get_layout_engine()
+        fig.set_layout_engine(None)       # keep the positions just computed
+        try:
+            fig.savefig(pdf, bbox_inches=box,
+                        metadata={"CreationDate": None, "Creator": "flipstudy analysis", "Producer": None})
+            fig.savefig(png, dpi=dpi, bbox_inches=box, metadata={"Software": "flipstudy analysis"})
+        finally:
+            fig.set_layout_engine(engine)
     return [pdf, png]
 
 
