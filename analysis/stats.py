@@ -282,11 +282,13 @@ def _sigmoid(alpha: float = 0.05):
         _spread: tuple = (None, None)
 
         def _standard_parameters(self, threshold, width):
-            # Gaussian's, with ppf(1 − α) − ppf(α) computed once per α, not per call
-            if self._spread[0] != self.alpha:
-                self._spread = (self.alpha, self._ppf(1 - self.alpha) - self._ppf(self.alpha))
-            scale = width / self._spread[1]
-            return [threshold - self._ppf(self._PC, 0, scale), scale]
+            # Gaussian's: scale = width / (ppf(1 − α) − ppf(α)), loc = threshold −
+            # ppf(PC, 0, scale), with the standard quantiles computed once per (α, PC)
+            if self._spread[0] != (self.alpha, self._PC):
+                self._spread = ((self.alpha, self._PC),
+                                self._ppf(1 - self.alpha) - self._ppf(self.alpha), ndtri(self._PC))
+            scale = np.asarray(width / self._spread[1])
+            return [threshold - np.where(scale > 0, self._spread[2] * scale + 0, np.nan)[()], scale[()]]
 
         def _ppf(self, x, loc=0, scale=1):
             x, loc, scale = np.asarray(x), np.asarray(loc), np.asarray(scale)
@@ -327,6 +329,12 @@ def _width_prior(levels, alpha: float = 0.05):
         p[right] = (1 + np.cos(np.pi / 2 * (y[right] - wmax) / wmax)) / 2
         return p
     return prior
+
+
+def _psignifit_calls(levels):
+    """The sigmoid and the priors handed to psignifit: its cumulative normal and its
+    default width, lapse and overdispersion priors, evaluated directly (above)."""
+    return _sigmoid(), {"width": _width_prior(levels), "lambda": _beta_prior(10), "eta": _beta_prior(10)}
 
 
 def _posterior_samples(res, n: int, rng) -> dict:
@@ -375,11 +383,11 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
         kw = {"experiment_type": "yes/no", "bounds": {"gamma": (0.0, 0.9)},
               "priors": {"gamma": lambda v: np.ones_like(v)}}
         grid, moving = dict(PSIGNIFIT_GRID), dict(PSIGNIFIT_MOVING)
-    kw["priors"] = {**kw.get("priors", {}), "width": _width_prior(x), "lambda": _beta_prior(10),
-                    "eta": _beta_prior(10)}
+    sigmoid, priors = _psignifit_calls(x)
+    kw["priors"] = {**kw.get("priors", {}), **priors}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = psignifit.psignifit(data, sigmoid=_sigmoid(), verbose=False, debug=True, grid_steps=grid,
+        res = psignifit.psignifit(data, sigmoid=sigmoid, verbose=False, debug=True, grid_steps=grid,
                                   steps_moving_bounds=moving, **kw)
     note = "95 % credible interval (psignifit posterior)"
     if task == "2afc":

@@ -48,6 +48,7 @@ def build_responses(work: Path) -> Path:
     from flipstudy.study.export import export_responses
     from flipstudy.study.reproduce import StimulusSet
     from flipstudy.study.simulate import simulate
+    work.mkdir(parents=True, exist_ok=True)
     (work / "design.toml").write_text(PAPER_DESIGN, encoding="utf-8")
     build_stimuli(load_design(work / "design.toml"), work / "study", progress=False)
     stimuli = StimulusSet.read(work / "study")
