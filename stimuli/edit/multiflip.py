@@ -41,10 +41,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..analyse import Analysis, analyse
+from ..motion import quat
 from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass
 from ..result import Result
-from ..motion import quat
 from .flight_measures import FlipEditError, _jumps, flight_axis, standing_span, unwrapped_turn
 from .report import Report
 from .reposition import ballistic_path
