@@ -49,7 +49,7 @@ def mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     z = pw * qz + qw * pz + (px * qy - py * qx)
     w = pw * qw - px * qx - py * qy - pz * qz
     n = np.sqrt(x * x + y * y + z * z + w * w)
-    return np.stack([x / n, y / n, z / n, w / n], axis=-1)
+    return np.stack([x, y, z, w], axis=-1) / n[..., None]
 
 
 def from_rotvec(v: np.ndarray) -> np.ndarray:
@@ -65,8 +65,12 @@ def from_rotvec(v: np.ndarray) -> np.ndarray:
 
 def as_rotvec(q: np.ndarray) -> np.ndarray:
     """log: unit quaternions (..., 4) to rotation vectors (..., 3), angle in [0, π]."""
-    w, x, y, z = q[..., 3], q[..., 0], q[..., 1], q[..., 2]
-    flip = (w < 0) | ((w == 0) & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
+    w = q[..., 3]
+    flip = w < 0                # scipy's canonical sign; w = 0: the first non-zero of x, y, z
+    zero = w == 0
+    if zero.any():
+        x, y, z = q[..., 0], q[..., 1], q[..., 2]
+        flip = flip | (zero & ((x < 0) | ((x == 0) & ((y < 0) | ((y == 0) & (z < 0))))))
     q = np.where(flip[..., None], -q, q)
     angle = 2 * np.arctan2(norm(q[..., :3]), q[..., 3][..., None])
     small = angle <= 1e-3
