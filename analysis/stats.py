@@ -73,10 +73,11 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
     """
     from scipy.stats import norm
     try:
-        import statsmodels.api as sm
+        from statsmodels.genmod import cov_struct, families   # not statsmodels.api: all of it
+        from statsmodels.genmod.generalized_estimating_equations import GEE
         from statsmodels.stats.multitest import multipletests
     except ImportError:
-        sm = multipletests = None
+        GEE = multipletests = None
 
     zq = norm.ppf(0.5 + ci / 2)
     rows = []
@@ -90,7 +91,7 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
         def fail(msg):
             for lv in others:
                 rows.append((g, lv, np.nan, np.nan, np.nan, np.nan, msg))
-        if sm is None:
+        if GEE is None:
             fail("statsmodels is not installed (pip install statsmodels): no GEE")
             continue
         if 0.0 not in levels:
@@ -114,8 +115,8 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
-                model = sm.GEE(y, X, groups=sub["participant"].to_numpy(),
-                               family=sm.families.Binomial(), cov_struct=sm.cov_struct.Exchangeable())
+                model = GEE(y, X, groups=sub["participant"].to_numpy(),
+                            family=families.Binomial(), cov_struct=cov_struct.Exchangeable())
                 res = model.fit(cov_type=cov_type if n_clusters > X.shape[1] else "robust")
                 beta, se = np.asarray(res.params), np.asarray(res.bse)
                 p = np.asarray(res.pvalues)
@@ -289,6 +290,113 @@ PSIGNIFIT_GRID = {"threshold": 30, "width": 25, "lambda": 12, "gamma": 15, "eta"
 PSIGNIFIT_MOVING = {"threshold": 10, "width": 10, "lambda": 5, "gamma": 5, "eta": 5}
 
 
+# psignifit evaluates its sigmoid and priors a few thousand times per fit (the grid,
+# then the simplex search), and its defaults reach the normal distribution through
+# scipy.stats: a generic argument check per call and, in the width prior, a frozen
+# distribution built on every call.  These are the same formulas on scipy.special's
+# ndtr/ndtri, the very functions scipy.stats.norm ends in, so every value comes out
+# bit for bit as before (tests/analysis/test_psignifit_calls.py compares them) at a
+# few microseconds a call instead of ~100.
+
+_NORM_PDF_C = np.sqrt(2 * np.pi)
+
+
+def _sigmoid(alpha: float = 0.05):
+    """psignifit's cumulative-normal sigmoid (``sigmoid="norm"``) with scipy.stats'
+    ``norm.ppf/cdf/pdf(x, loc, scale)`` evaluated directly: NaN where scale ≤ 0 (or
+    a probability outside [0, 1]), as scipy.stats returns."""
+    from psignifit.sigmoids import Gaussian
+
+    class NormalSigmoid(Gaussian):
+        _spread: tuple = (None, None)
+
+        def _standard_parameters(self, threshold, width):
+            # Gaussian's: scale = width / (ppf(1 − α) − ppf(α)), loc = threshold −
+            # ppf(PC, 0, scale), with the standard quantiles computed once per (α, PC)
+            if self._spread[0] != (self.alpha, self._PC):
+                self._spread = ((self.alpha, self._PC),
+                                self._ppf(1 - self.alpha) - self._ppf(self.alpha), ndtri(self._PC))
+            scale = np.asarray(width / self._spread[1])
+            return [threshold - np.where(scale > 0, self._spread[2] * scale + 0, np.nan)[()], scale[()]]
+
+        def _ppf(self, x, loc=0, scale=1):
+            x, loc, scale = np.asarray(x), np.asarray(loc), np.asarray(scale)
+            ok = (scale > 0) & (loc == loc) & (x >= 0) & (x <= 1)
+            with np.errstate(invalid="ignore"):
+                return np.where(ok, ndtri(x) * scale + loc, np.nan)[()]
+
+        def _cdf(self, x, loc=0, scale=1):
+            scale = np.asarray(scale)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.where(scale > 0, ndtr((np.asarray(x) - loc) / scale), np.nan)[()]
+
+        def _pdf(self, x, loc=0, scale=1):
+            scale = np.asarray(scale)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                z = (np.asarray(x) - loc) / scale
+                return np.where(scale > 0, np.exp(-z ** 2 / 2.0) / _NORM_PDF_C / scale, np.nan)[()]
+
+    return NormalSigmoid(alpha=alpha)
+
+
+def _width_prior(levels, alpha: float = 0.05):
+    """psignifit's default width prior for ``levels`` (its ``width_prior`` with the
+    bounds ``psignifit()`` derives from the data: twice the least spacing of the
+    levels to their range, cosine fall-offs to the least spacing and to three
+    times the range), its normal quantiles computed once instead of per call."""
+    u = np.unique(np.asarray(levels, float))
+    wmin, wmax = np.diff(u).min(), u.max() - u.min()
+    r95, r_alpha = ndtri(.95) - ndtri(.05), ndtri(1 - alpha) - ndtri(alpha)
+
+    def prior(x):
+        y = x * r95 / r_alpha
+        p = np.zeros_like(x)
+        p[((2 * wmin) < y) & (y < wmax)] = 1.
+        left = (wmin <= y) & (y <= (2 * wmin))
+        p[left] = (1 - np.cos(np.pi * (y[left] - wmin) / wmin)) / 2
+        right = (wmax <= y) & (y <= (3 * wmax))
+        p[right] = (1 + np.cos(np.pi / 2 * (y[right] - wmax) / wmax)) / 2
+        return p
+    return prior
+
+
+def _psignifit_calls(levels):
+    """The sigmoid and the priors handed to psignifit: its cumulative normal and its
+    default width, lapse and overdispersion priors, evaluated directly (above)."""
+    return _sigmoid(), {"width": _width_prior(levels), "lambda": _beta_prior(10), "eta": _beta_prior(10)}
+
+
+def _posterior_samples(res, n: int, rng) -> dict:
+    """``res.posterior_samples(n, random_state=rng)``: the same draw from the same
+    generator, the grid indices unravelled instead of every grid point's
+    parameters built first (psignifit stacks the whole grid, about a million rows
+    of five, to pick ``n``)."""
+    values = res.parameter_values
+    p = res.debug["posteriors"]
+    shape = tuple(len(v) for v in values.values())
+    idx = rng.choice(np.arange(int(np.prod(shape))), size=(n,), replace=True, p=p.flatten())
+    where = np.unravel_index(idx, shape)
+    return {name: np.asarray(v)[i] for (name, v), i in zip(values.items(), where)}
+
+
+def _beta_prior(b: float):
+    """psignifit's default lapse (``b`` = 10) and overdispersion (``b`` = its
+    ``beta_prior``, 10) priors, ``scipy.stats.beta.pdf(x, 1, b)``: the density
+    scipy.stats evaluates (``beta._pdf``), zero outside [0, 1], NaN at NaN,
+    without the generic argument handling around it on every call."""
+    from scipy.stats import beta
+
+    def prior(x):
+        x = np.asarray(x, float)
+        inside = (0 <= x) & (x <= 1)
+        out = np.zeros(x.shape)
+        out[np.isnan(x)] = np.nan
+        if inside.any():
+            out[inside] = beta._pdf(x[inside], 1.0, float(b))
+        return out[()]
+    return prior
+
+
 def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-no",
                   unit="%") -> PsychometricFit:
     """Bayesian fit with psignifit 4 (see module doc).  ``task="2afc"``: ``k`` counts
@@ -304,9 +412,11 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
         kw = {"experiment_type": "yes/no", "bounds": {"gamma": (0.0, 0.9)},
               "priors": {"gamma": lambda v: np.ones_like(v)}}
         grid, moving = dict(PSIGNIFIT_GRID), dict(PSIGNIFIT_MOVING)
+    sigmoid, priors = _psignifit_calls(x)
+    kw["priors"] = {**kw.get("priors", {}), **priors}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = psignifit.psignifit(data, sigmoid="norm", verbose=False, debug=True, grid_steps=grid,
+        res = psignifit.psignifit(data, sigmoid=sigmoid, verbose=False, debug=True, grid_steps=grid,
                                   steps_moving_bounds=moving, **kw)
     note = "95 % credible interval (psignifit posterior)"
     if task == "2afc":
@@ -320,7 +430,7 @@ def fit_psignifit(group, x, k, n, *, ci=0.95, seed=0, n_samples=4000, task="yes-
         note += "; MAP outside the parameter bounds (degenerate data): posterior mean used"
     params = {"threshold": float(est["threshold"]), "width": float(est["width"]),
               "gamma": float(est["gamma"]), "lambda": float(est["lambda"]), "eta": float(est["eta"])}
-    s = res.posterior_samples(n_samples, random_state=np.random.default_rng(seed))
+    s = _posterior_samples(res, n_samples, np.random.default_rng(seed))
     gam = s["gamma"] if "gamma" in s else np.full_like(s["threshold"], params["gamma"])
     xs = detection_threshold(s["threshold"], s["width"], gam, s["lambda"])
     fit = _summarise_samples(group, "psignifit", x, k, n, params, xs, ci, note, unit)

@@ -30,3 +30,16 @@ def best_s(fn, n: int, *, warmup: bool = False) -> float:
 def median_s(fn, n: int, *, warmup: bool = False) -> float:
     """The median of ``n`` calls of ``fn``, in seconds."""
     return statistics.median(wall_times(fn, n, warmup=warmup)[0])
+
+
+def cpu_times(fn, n: int, *, warmup: bool = False):
+    """The CPU times in seconds (``time.process_time``: this process, every
+    thread) of ``n`` calls of ``fn``; ``warmup``: one untimed call first."""
+    if warmup:
+        fn()
+    times = []
+    for _ in range(n):
+        t = time.process_time()
+        fn()
+        times.append(time.process_time() - t)
+    return times

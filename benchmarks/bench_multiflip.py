@@ -11,6 +11,11 @@ the all-pairs distance table the search reads, the root's turn, standing
 frames, COM).  The table also prints ``flip_source`` + run time, i.e. the cost when
 the distance table is counted as part of the run-time search instead.
 
+Times are CPU time (``time.process_time``, median of repeated calls), so other
+work on a shared machine inflates them less than wall time; the paper's figures
+are wall time on its 2007 machine.  Target (issue 34): two flips in at most half
+the paper's 3.69 ms.
+
 Run: python benchmarks/bench_multiflip.py        (paper target: under 1 ms for two flips)
 """
 from __future__ import annotations
@@ -22,12 +27,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from _common import median_s  # noqa: E402
+import statistics  # noqa: E402
+
+from _common import cpu_times  # noqa: E402
 PAPER_MS = {2: 3.69, 3: 4.60, 4: 5.09}
 
 
 def median_ms(fn, n=15):
-    return 1000 * median_s(fn, n, warmup=True)
+    """Median CPU milliseconds of ``n`` calls (after one untimed call)."""
+    return 1000 * statistics.median(cpu_times(fn, n, warmup=True))
 
 
 def naive_distances(feat):
@@ -63,24 +71,27 @@ def main() -> int:
     u = flight_axis(a)
     feat = pose_features(a.clip, a.body, u, np.arange(a.takeoff, a.landing + 1))
     t_vec = median_ms(lambda: distance_matrix(feat), 20)
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     Dn = naive_distances(feat)
-    t_naive = 1000 * (time.perf_counter() - t0)
+    t_naive = 1000 * (time.process_time() - t0)
     assert np.allclose(Dn, distance_matrix(feat)[0], atol=1e-9)
     print(f"built-in backflip, 120 fps, flight {feat.frames.size} frames; pre-processing: "
           f"analyse {t_pre:.0f} ms, flip_source {t_prep:.1f} ms")
     print(f"all-pairs distance (in flip_source): vectorised {t_vec:.2f} ms, naive pair loop "
           f"{t_naive:.0f} ms ({t_naive / t_vec:.0f}x), same values")
-    print(f"{'flips':>5s} {'ours ms':>8s} {'paper ms':>9s} {'ours/paper':>11s} {'flip_source+ours ms':>16s}")
+    print(f"{'flips':>5s} {'ours CPU ms':>11s} {'paper ms':>9s} {'ours/paper':>11s} {'flip_source+ours ms':>16s}")
     run = {}
     for n in (2, 3, 4):
-        run[n] = t = median_ms(lambda: multiflip(pre, n, k_ratio=1.0))
+        run[n] = t = median_ms(lambda: multiflip(pre, n, k_ratio=1.0), 41)
         t_all = median_ms(lambda: multiflip(a, n, k_ratio=1.0), 7)
-        print(f"{n:5d} {t:8.2f} {PAPER_MS[n]:9.2f} {t / PAPER_MS[n]:10.2f}x {t_all:16.1f}")
+        print(f"{n:5d} {t:11.2f} {PAPER_MS[n]:9.2f} {t / PAPER_MS[n]:10.2f}x {t_all:16.1f}")
     print("ours: multiflip(flip_source(analysis), n) — search (on the prepared distance table) +")
-    print("sequencing + slerp joins + retiming + repositioning + momentum report; median of 15")
+    print("sequencing + slerp joins + retiming + repositioning + momentum report; CPU ms, median of 41")
+    half = 0.5 * PAPER_MS[2]
+    print(f"issue 34, two flips in at most half the paper's time ({half:.3g} ms CPU): "
+          f"{'met' if run[2] <= half else 'missed'} ({run[2]:.2f} ms = {run[2] / PAPER_MS[2]:.2f}x the paper)")
     met = "met" if run[2] < 1.0 else "missed"
-    print(f"target under 1 ms for two flips: {met} ({run[2]:.2f} ms)")
+    print(f"the paper's target, under 1 ms for two flips: {met} ({run[2]:.2f} ms)")
     return 0
 
 

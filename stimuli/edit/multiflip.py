@@ -33,6 +33,7 @@ analyser (:func:`~flipstudy.stimuli.edit.flight_measures.measure`).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -40,6 +41,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from ..analyse import Analysis, analyse
+from ..motion import quat
 from ..motion.clip import Clip, derived_meta
 from ..physics import center_of_mass
 from ..result import Result
@@ -70,13 +72,23 @@ class SelfLoop:
     distance: float
 
 
+@functools.lru_cache(maxsize=16)
+def _pairs(n: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.triu_indices(n, k)``, read-only and kept: the search asks for the same
+    flight's pairs at every edit."""
+    i, j = np.triu_indices(n, k=k)
+    i.setflags(write=False)
+    j.setflags(write=False)
+    return i, j
+
+
 def find_self_loop(D: np.ndarray, phi: np.ndarray, frames: np.ndarray, fps: float, *,
                    min_turn_deg: float = 45.0, max_turn_deg: float = 300.0,
                    min_seconds: float = 0.05) -> SelfLoop:
     """The pair (m, n), m < n, of least distance whose turn φ (about the axis, in
     the flip's direction) lies in [min_turn, max_turn]; ties go to the larger φ.
     Raises :class:`FlipEditError` when no pair qualifies."""
-    i, j = np.triu_indices(D.shape[0], k=max(1, int(round(min_seconds * fps))))
+    i, j = _pairs(D.shape[0], max(1, int(round(min_seconds * fps))))
     # unwrap: the turn from i to j, counted along the flip (positive), can exceed π
     turn = np.mod(phi[i, j], 2.0 * np.pi)
     ok = (turn >= np.radians(min_turn_deg)) & (turn <= np.radians(max_turn_deg))
@@ -155,7 +167,8 @@ class FlipSource:
     ``stand`` the last standing frame before take-off and the first after landing;
     ``com`` the source's COM per frame; ``path`` the flight's COM parabola;
     ``step`` (F−1, J−1, 3) the rotation vector log(q_f⁻¹ q_f+1) of every joint but
-    the root from each frame to the next (what a slerp between them needs)."""
+    the root from each frame to the next (what a slerp between them needs), ``unit``
+    (F, J−1, 4) those joints' quaternions normalised as the slerp takes them."""
 
     analysis: Analysis
     axis: np.ndarray
@@ -167,6 +180,7 @@ class FlipSource:
     com: np.ndarray
     path: np.ndarray
     step: np.ndarray
+    unit: np.ndarray
 
 
 def flip_source(source: Clip | Analysis) -> FlipSource:
@@ -185,7 +199,7 @@ def flip_source(source: Clip | Analysis) -> FlipSource:
     q0 = Rotation.from_quat(q[:-1])
     step = (q0.inv() * Rotation.from_quat(q[1:])).as_rotvec()
     return FlipSource(a, u, frames, D, phi, theta, standing_span(clip, body, to, ld),
-                      center_of_mass(clip, body), a.path, step)
+                      center_of_mass(clip, body), a.path, step, quat.normalized(q))
 
 
 def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
@@ -198,9 +212,7 @@ def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
     t = np.flatnonzero(np.any(rotvec != 0, axis=1))
     if t.size:
         R = Rotation.from_rotvec(rotvec[t])
-        # (n, 1) shapes: scipy's vectorised backend, faster than its loop for products
-        rot[t, 0] = (Rotation.from_rotvec(rotvec[t, None]) *
-                     Rotation.from_quat(rot[t, :1])).as_quat()[:, 0]
+        rot[t, 0] = quat.mul(quat.from_rotvec(rotvec[t]), quat.normalized(rot[t, 0]))
         cc = com[s[t]]
         pos[t] = cc + R.apply(pos[t] - cc)
     return rot, pos
@@ -226,16 +238,15 @@ def _retimed(pre: "FlipSource", rot: np.ndarray, root_pos: np.ndarray, s_src: np
     if f.size:
         # log(q0⁻¹ q1) from scratch for the root of the quick frames and every joint of
         # the others; then one batch q0 · exp(u · log) for all of them
-        a = np.concatenate([rot[i0[fq], 0], rot[i0[ff]].reshape(-1, 4)])
-        b = np.concatenate([rot[i1[fq], 0], rot[i1[ff]].reshape(-1, 4)])
-        ra = Rotation.from_quat(a[:, None])
-        log = (ra.inv() * Rotation.from_quat(b[:, None])).as_rotvec()[:, 0]
+        a = quat.normalized(np.concatenate([rot[i0[fq], 0], rot[i0[ff]].reshape(-1, 4)]))
+        b = quat.normalized(np.concatenate([rot[i1[fq], 0], rot[i1[ff]].reshape(-1, 4)]))
+        log = quat.as_rotvec(quat.mul(quat.inv(a), b))
         nq = fq.size * (J - 1)
-        q0 = np.concatenate([rot[i0[fq], 1:].reshape(-1, 4), a])
-        step = np.concatenate([pre.step[s_src[i0[fq]]].reshape(-1, 3), log])
+        s0 = s_src[i0[fq]]           # a plain frame's joints below the root are its source's
+        q0 = np.concatenate([pre.unit[s0].reshape(-1, 4), a])
+        step = np.concatenate([pre.step[s0].reshape(-1, 3), log])
         uu = np.concatenate([np.repeat(u[fq], J - 1), u[fq], np.repeat(u[ff], J)])
-        q = (Rotation.from_quat(q0[:, None]) * Rotation.from_rotvec((step * uu[:, None])[:, None])
-             ).as_quat()[:, 0]
+        q = quat.mul(q0, quat.from_rotvec(step * uu[:, None]))
         out[fq, 1:] = q[:nq].reshape(fq.size, J - 1, 4)
         out[fq, 0] = q[nq:nq + fq.size]
         out[ff] = q[nq + fq.size:].reshape(ff.size, J, 4)
@@ -402,8 +413,8 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     out_src = piecewise_source([0, p0, to, ld_seq, p1, N - 1], [1.0, k_fl, k_fl, kL, 1.0])
     out_src = np.clip(out_src, 0.0, N - 1)
     rot_n, root_n = _retimed(pre, rot, root_pos, s_src, alpha == 0, out_src)
-    to_n = int(np.flatnonzero(np.isclose(out_src, to))[0])
-    ld_n = int(np.flatnonzero(np.isclose(out_src, ld_seq))[0])
+    to_n = int(np.flatnonzero(_close(out_src, to))[0])
+    ld_n = int(np.flatnonzero(_close(out_src, ld_seq))[0])
 
     # 4. repositioning: the exact parabola, then everything after follows on; the COM
     # is needed from a frame before take-off to a frame after landing only
@@ -438,6 +449,12 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
         # the output's COM: the new frames' moved by the raise and the repositioning
         **_jumps(com_new + raise_before + shift, fps, body.total_mass, to_n, ld_n))
     return MultiFlip(out, to_n, ld_n, report, flips=flips)
+
+
+def _close(x: np.ndarray, v: float) -> np.ndarray:
+    """``np.isclose(x, v)`` for finite ``x`` and ``v`` (its default tolerances), without
+    its general-case overhead."""
+    return np.abs(x - v) <= 1e-8 + 1e-5 * abs(v)
 
 
 def piecewise_source(bounds, rates) -> np.ndarray:

@@ -18,6 +18,7 @@ from scipy.integrate import cumulative_trapezoid
 from scipy.spatial.transform import Rotation
 
 from ..motion.clip import Clip
+from ..motion import quat
 
 
 def sample(clip: Clip, src: np.ndarray) -> Clip:
@@ -64,7 +65,12 @@ def _sample_arrays(rotations: np.ndarray, root_pos: np.ndarray, joint_pos: np.nd
 def slerp(q0: np.ndarray, q1: np.ndarray, u) -> np.ndarray:
     """Spherical interpolation of quaternions (..., 4) (scipy's x, y, z, w) by
     ``u`` (broadcastable to their leading shape; 0 gives q0, 1 gives q1):
-    q0 · exp(u · log(q0⁻¹ q1))."""
+    q0 · exp(u · log(q0⁻¹ q1)).  Stacks of more than one leading axis (frames ×
+    joints) take :func:`flipstudy.stimuli.motion.quat.slerp`, the same arithmetic
+    without the objects."""
+    q0, q1 = np.asarray(q0, float), np.asarray(q1, float)
+    if q0.ndim >= 3 and q1.ndim >= 3:
+        return quat.slerp(q0, q1, u)
     a = Rotation.from_quat(q0)
     rel = (a.inv() * Rotation.from_quat(q1)).as_rotvec()
     return (a * Rotation.from_rotvec(rel * np.asarray(u, float)[..., None])).as_quat()
