@@ -14,8 +14,8 @@ from __future__ import annotations
 class FlipstudyError(Exception):
     """Base of every flipstudy user error (see :mod:`flipstudy.errors`).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import FlipstudyError, load_bvh
     >>> try:
     ...     load_bvh("no-such-file.bvh")

@@ -81,8 +81,8 @@ def split_by_style(df: pd.DataFrame, table: pd.DataFrame):
     than one value: the table gains a ``style`` column, ordered by style, and a
     note says which groups each style has.  Otherwise the table is unchanged.
 
-    Example
-    -------
+    Examples
+    --------
     >>> df = pd.DataFrame({"group": ["a", "b"], "style": ["stick", "mannequin"]})
     >>> t, note = split_by_style(df, pd.DataFrame({"group": ["a", "b"], "level": [0, 0]}))
     >>> t["style"].tolist(), note

@@ -26,8 +26,8 @@ class Camera:
     """A perspective camera (VTK conventions: ``view_angle`` is the vertical
     field of view in degrees).
 
-    Example
-    -------
+    Examples
+    --------
     >>> cam = Camera((0, 1, 6), (0, 1, 0), (0, 1, 0), 25.0)
     >>> Camera.from_json(cam.to_json()) == cam
     True
@@ -144,8 +144,8 @@ def fit_camera(points, direction=(0.0, 0.0, 1.0), size=(640, 480), *, view_angle
     right), raised by ``elevation`` degrees, that keeps every point (N,3) inside
     an image of ``size`` with ``margin`` (fraction of width/height) on each side.
 
-    Example
-    -------
+    Examples
+    --------
     >>> import numpy as np
     >>> pts = np.random.default_rng(0).random((100, 3))
     >>> cam = fit_camera(pts, size=(320, 240))

@@ -62,8 +62,8 @@ def key_times(clip: Clip, body: Body, takeoff, landing, *, between: int = 1,
     s after it (dropped when ``margin`` is 0).  Without a flight: ``2·between + 3``
     instants evenly over the clip, unnamed.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import Body, builtin
     >>> clip = builtin("backflip")
     >>> ts, names = key_times(clip, Body.from_clip(clip), 157, 237)
@@ -169,8 +169,8 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
     ``style.ground_tile`` = 0.5 m).  ``what``: a
     :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage
     >>> img = ghost_image(stage([builtin("backflip")], size=(160, 120)), None)  # a path writes a PNG
@@ -259,8 +259,8 @@ def trail_image(what, path=None, *, joints=TRAIL_JOINTS, rate: float | None = No
     translucent.  ``what``: a :class:`~flipstudy.render.staging.Stage` of one
     clip, or a clip.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage
     >>> img = trail_image(stage([builtin("backflip")], size=(160, 120)), None,
@@ -353,8 +353,8 @@ def strip_image(what, path=None, *, every: int | None = None, dt: float | None =
     one clip (its camera fitted again for the panels, its boxes drawn with the
     ground), or a clip.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> img = strip_image(builtin("backflip"), None, dt=0.15, panel_size=(80, 120), columns=4)
     >>> img.shape                                     # 4 × 2 panels of 80 × 120, 4 px apart
@@ -412,8 +412,8 @@ def composite_image(what, path=None, *, interval: float = 0.2, span="flight", ma
     are part of the background plate.  ``what``: a
     :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage
     >>> img = composite_image(stage([builtin("backflip")], size=(160, 120)), None, interval=0.15)
@@ -453,8 +453,8 @@ def overlay_image(what, path=None, *, interval: float = 0.2, span="flight", marg
     :class:`~flipstudy.render.staging.Stage` of the two clips, or the two clips
     (staged together: same take-off spot).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import analyse, builtin
     >>> from flipstudy.render.staging import stage
     >>> from flipstudy.stimuli.injection import inject_angular_momentum

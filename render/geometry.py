@@ -118,8 +118,8 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
     translations linear (no uneven frame dropping).  The result has ``fps``
     frames per second.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> clip = builtin("backflip")                    # 120 fps
     >>> v = resample(clip, 60.0)
@@ -165,8 +165,8 @@ class BodyMesh:
     ``inflate`` (metres) pushes the surface out along its normals, so a second
     character drawn over an identical pose covers it cleanly (no z-fighting).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import Body, builtin
     >>> clip = builtin("backflip")
     >>> bm = BodyMesh(Body.from_clip(clip))

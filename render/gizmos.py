@@ -19,8 +19,8 @@ class Gizmos:
     """Debug quantities of a clip at any time: COM, its velocity, the angular
     momentum about it, and the support polygon of the effectors in contact.
 
-    Example
-    -------
+    Examples
+    --------
     >>> import numpy as np
     >>> from flipstudy import Body, builtin
     >>> clip = builtin("backflip")

@@ -37,8 +37,8 @@ BOX_COLOR = "#cdb793"
 class Scene:
     """An offscreen plotter with a ground, lights and posable characters.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import Body, builtin
     >>> from flipstudy.render.staging import stage
     >>> clip = builtin("backflip")

@@ -90,8 +90,8 @@ class Stage:
     ``direction`` the camera looks across; ``framing`` (:class:`Framing`) is how
     the camera was fitted, ``None`` for a camera that was given.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> st = stage([builtin("backflip"), builtin("frontflip")], size=(320, 240))
     >>> one = st.only(1)                                  # the front flip, same camera
@@ -164,8 +164,8 @@ class Stage:
         the union of that clip's stimuli (see :func:`base_clip_groups`), so
         each base clip's action is centred and fills the frame.
 
-        Example
-        -------
+        Examples
+        --------
         >>> from flipstudy import builtin
         >>> st = stage([builtin("backflip"), builtin("frontflip")], size=(320, 240))
         >>> st.refit(0).camera == st.camera, st.refit(0).clips[0] is st.clips[0]
@@ -321,8 +321,8 @@ def base_clip_groups(clips, takeoffs, names=None) -> dict:
     motion before take-off (stimuli made from one base clip by editing the
     flight share it).  Returns ``{key: [indices]}`` in first-seen order.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> a, b = builtin("backflip"), builtin("frontflip")
     >>> list(base_clip_groups([a, b, a], [157, 157, 157]).values())
@@ -385,8 +385,8 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
     (x0, x1, z0, z1) are given.  ``boxes`` (``[(lo, hi), ...]``, axis-aligned, in
     the first clip's coordinates) are moved with it.
 
-    Example
-    -------
+    Examples
+    --------
     A back flip and a front flip (built to travel opposite ways) under one camera:
 
     >>> from flipstudy import builtin

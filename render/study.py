@@ -130,8 +130,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     stimulus, so an interrupted render loses at most the outputs in flight, and
     those never appear under their final names.
 
-    Example
-    -------
+    Examples
+    --------
     A study of two stimuli (``flipstudy stimuli`` of a two-level design), their
     ghost images at a small size, then the same call again:
 

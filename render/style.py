@@ -57,8 +57,8 @@ class Style:
     ...
     flipstudy.errors.StyleError: Style.trail_rate: expected more than 0 and at most 240 (markers per second), got 0
 
-    Example
-    -------
+    Examples
+    --------
     >>> s = Style.from_dict({"background": "white", "ghost_opacity": 0.25})
     >>> s.ghost_opacity, Style.from_dict(s.to_dict()) == s
     (0.25, True)

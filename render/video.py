@@ -84,8 +84,8 @@ def render_video(what, path, *, fps: float = 60.0, scene=None, debug=(), frames_
     :class:`~flipstudy.render.scene.Scene` to reuse (e.g. one per worker);
     ``debug``: gizmos (see :mod:`flipstudy.render.gizmos`).
 
-    Example
-    -------
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage

@@ -51,8 +51,8 @@ def builtin(name: str, **params) -> "Clip":
     or ``"jump"`` (see :mod:`flipstudy.stimuli.synth`; keyword parameters such as
     ``fps`` go to :func:`flipstudy.stimuli.synth.builtin`).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> clip = builtin("backflip", fps=60)
     >>> clip.fps, clip.skeleton.joint_names[0]

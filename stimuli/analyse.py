@@ -120,7 +120,7 @@ class Analysis:
 
     @property
     def L_cv_pct(self) -> float | None:
-        """Coefficient of variation of |L| in flight, percent."""
+        """Coefficient of variation of ``|L|`` in flight, percent."""
         if self.flight is None:
             return None
         x = self.L_norm[self.flight_frames]
@@ -338,8 +338,8 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
     W : regularisation weight of the mass fit, W‖m − m⁰‖² (m²/kg²; see
         ``flipstudy.stimuli.massfit.DEFAULT_W``).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import analyse, builtin
     >>> a = analyse(builtin("backflip"))
     >>> a.takeoff, a.landing, round(a.takeoff_angle)            # frames inside the flight, degrees

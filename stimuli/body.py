@@ -169,8 +169,8 @@ class Body:
     frame, ``radius`` (P,) short semi-axis, ``segment`` (P,) index into
     ``segment_names``.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> body = Body.from_skeleton(builtin("backflip").skeleton, total_mass=70)
     >>> round(sum(body.segment_masses().values()), 6)

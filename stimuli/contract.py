@@ -9,8 +9,8 @@ takes the typed :class:`StimulusSet` instead of parsing the manifest again.
 :meth:`StimulusSet.write` writes the manifest byte for byte as the build always
 has (floats with six decimals, ``nan`` for a missing value, ``true``/``false``).
 
-Example
--------
+Examples
+--------
 >>> import tempfile
 >>> from pathlib import Path
 >>> from flipstudy.stimuli.contract import Stimulus, StimulusSet

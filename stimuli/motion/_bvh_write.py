@@ -116,8 +116,8 @@ def save_bvh(clip: Clip, path, scale: float = 1.0) -> Path:
     the skeleton's; the root OFFSET is zero and its channels absolute (a root without
     position channels must stand still: its position is written as its OFFSET).
 
-    Example
-    -------
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> from flipstudy import builtin, save_bvh
     >>> with tempfile.TemporaryDirectory() as tmp:

@@ -184,8 +184,8 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     drop_tpose : ``"auto"`` drops a calibration T-pose first frame (raw CMU);
         ``True`` always drops frame 0, ``False`` never.
 
-    Example
-    -------
+    Examples
+    --------
     A built-in flip written in centimetres and read back, the unit guessed:
 
     >>> import tempfile, pathlib

@@ -30,8 +30,8 @@ from .skeleton import Skeleton
 class Clip:
     """Motion of a skeleton over ``F`` frames at ``fps`` frames per second.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> clip = builtin("backflip")
     >>> P = clip.joint_positions()      # (F, J, 3) metres

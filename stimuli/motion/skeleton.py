@@ -28,8 +28,8 @@ POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
 class Skeleton:
     """A joint hierarchy.
 
-    Example
-    -------
+    Examples
+    --------
     >>> sk = Skeleton(["Hips", "Spine"], [-1, 0], [[0, 0, 0], [0, 0.1, 0]])
     >>> sk.num_joints, sk.index("Spine")
     (2, 1)
