@@ -83,7 +83,31 @@ class CalibrationError(FlipstudyValueError):
 
 
 class BVHError(FlipstudyError, ValueError):
-    """A malformed BVH file: the message names the file, the line and what was expected."""
+    """A malformed BVH file: the message names the file, the line and what was expected.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    line : int or None
+        Its line (1-based), or None when the problem is the whole file.
+    message : str
+        What was found and what was expected.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from flipstudy import load_bvh
+    >>> from flipstudy.errors import BVHError
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     bad = pathlib.Path(tmp) / "bad.bvh"
+    ...     _ = bad.write_text("HIERARCHY\\nROOT Hips\\n")
+    ...     try:
+    ...         load_bvh(bad)
+    ...     except BVHError as e:
+    ...         print(e.line is not None, isinstance(e, ValueError))
+    True True
+    """
 
     def __init__(self, path, line: int | None, message: str):
         self.path = str(path)

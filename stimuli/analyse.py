@@ -27,7 +27,38 @@ GRAVITY_TOLERANCE = 0.25
 
 @dataclass
 class Analysis:
-    """What :func:`analyse` found.  Arrays have frames first."""
+    """What :func:`analyse` found.  Arrays have frames first.
+
+    Attributes
+    ----------
+    clip : Clip
+        The clip analysed.
+    body : Body
+        The segment model the momenta were computed with (with the masses
+        estimated from the flight when :func:`analyse` was asked to).
+    com : ndarray, shape (F, 3)
+        Centre of mass, metres.
+    p : ndarray, shape (F, 3)
+        Linear momentum, kg·m/s.
+    L : ndarray, shape (F, 3)
+        Angular momentum about the centre of mass, kg·m²/s.
+    flights : list
+        The ballistic phases found (``takeoff``, ``landing``, ``takeoff_time``
+        and ``landing_time`` describe the first).
+    mass_fit : MassFit or None
+        The mass estimate, when one was made.
+    warnings : list of str
+        Sentences about what the clip contradicts (e.g. its frame time).
+
+    Examples
+    --------
+    >>> from flipstudy import analyse, builtin
+    >>> a = analyse(builtin("jump"))
+    >>> a.takeoff < a.landing, a.flight_s > 0
+    (True, True)
+    >>> a.warnings
+    []
+    """
 
     clip: Clip
     body: Body

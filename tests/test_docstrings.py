@@ -22,8 +22,6 @@ PARTS = ("flipstudy.stimuli", "flipstudy.render", "flipstudy.study", "flipstudy.
 
 # the names still without a numpydoc docstring with examples (issue 35); may only shrink
 KNOWN_GAP = {
-    "flipstudy.Body",
-    "flipstudy.Clip",
     "flipstudy.analysis.NeedsExport",
     "flipstudy.analysis.PsychometricFit",
     "flipstudy.analysis.ResponsesError",
@@ -48,7 +46,6 @@ KNOWN_GAP = {
     "flipstudy.analysis.to_latex",
     "flipstudy.analysis.to_markdown",
     "flipstudy.analysis.z",
-    "flipstudy.builtin",
     "flipstudy.render.BodyMesh",
     "flipstudy.render.Camera",
     "flipstudy.render.Framing",
@@ -77,17 +74,6 @@ KNOWN_GAP = {
     "flipstudy.render.trail_image",
     "flipstudy.render.translate",
     "flipstudy.render.write_png",
-    "flipstudy.save_bvh",
-    "flipstudy.stimuli.Analysis",
-    "flipstudy.stimuli.BVHError",
-    "flipstudy.stimuli.Body",
-    "flipstudy.stimuli.Clip",
-    "flipstudy.stimuli.Skeleton",
-    "flipstudy.stimuli.Stimulus",
-    "flipstudy.stimuli.StimulusSet",
-    "flipstudy.stimuli.builtin",
-    "flipstudy.stimuli.load_clip",
-    "flipstudy.stimuli.save_bvh",
 }
 
 
