@@ -362,12 +362,25 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
 
     Parameters
     ----------
-    body : the segment model; default ``Body.from_clip(clip, total_mass)`` (trunk and
+    clip : Clip
+        The motion, in metres.
+    body : Body, optional
+        The segment model; default ``Body.from_clip(clip, total_mass)`` (trunk and
         head measured on the clip's poses).
-    estimate : estimate segment masses from the flight (Section 4.2) and use them
-        for the momenta; with ``False`` the given/table masses are used.
-    W : regularisation weight of the mass fit, W‖m − m⁰‖² (m²/kg²; see
+    total_mass : float, default 70.0
+        Kilograms, for the default body.
+    estimate : bool, default True
+        Estimate segment masses from the flight (Section 4.2) and use them for
+        the momenta; with ``False`` the given/table masses are used.
+    W : float
+        Regularisation weight of the mass fit, W‖m − m⁰‖² (m²/kg²; see
         ``flipstudy.stimuli.massfit.DEFAULT_W``).
+
+    Returns
+    -------
+    Analysis
+        Centre of mass, momenta and the flight phases (``takeoff``, ``landing``,
+        ``takeoff_time``, ``landing_time``, ``takeoff_angle``).
 
     Examples
     --------
