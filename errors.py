@@ -167,12 +167,35 @@ class StaleRenderError(StudyRenderError):
 
 
 class ResponsesError(FlipstudyError, ValueError):
-    """A response table that cannot be analysed; the message says where and what was expected."""
+    """A response table that cannot be analysed; the message says where and what was expected.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> from flipstudy.analysis import ResponsesError, load_responses
+    >>> try:
+    ...     load_responses(pd.DataFrame({"participant": ["P01"], "group": ["g"]}))
+    ... except ResponsesError as e:
+    ...     print(type(e).__name__)
+    ResponsesError
+    """
 
 
 class NeedsExport(ResponsesError):
     """A study folder without ``responses.csv``: a step to take first (``flipstudy export``),
-    reported without "error:" and with exit status 2."""
+    reported without "error:" and with exit status 2.
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import NeedsExport, load_responses
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     try:
+    ...         load_responses(tmp)
+    ...     except NeedsExport as e:
+    ...         print("flipstudy export" in str(e))
+    True
+    """
 
     exit_status = 2
     label = ""
