@@ -144,6 +144,8 @@ def rates(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear"):
     Returns ``(H, F, corrected)``: arrays broadcast to a common shape;
     ``corrected`` is True where a rate was changed.
 
+    Parameters
+    ----------
     hits : int or array_like
         Modified motions judged incorrect.
     n_signal : int or array_like
@@ -197,6 +199,8 @@ def dprime(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear")
     Negative values (modified motions judged *more* correct than the original)
     are returned as they are.
 
+    Parameters
+    ----------
     hits : int or array_like
         Modified motions judged incorrect.
     n_signal : int or array_like
@@ -226,6 +230,8 @@ def dprime(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear")
 def criterion(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear"):
     """Criterion ``c = −(z(H) + z(F)) / 2`` from counts (same correction as :func:`dprime`).
 
+    Parameters
+    ----------
     hits : int or array_like
         Modified motions judged incorrect.
     n_signal : int or array_like

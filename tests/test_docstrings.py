@@ -22,9 +22,6 @@ PARTS = ("flipstudy.stimuli", "flipstudy.render", "flipstudy.study", "flipstudy.
 
 # the names still without a numpydoc docstring with examples (issue 35); may only shrink
 KNOWN_GAP = {
-    "flipstudy.analysis.criterion",
-    "flipstudy.analysis.dprime",
-    "flipstudy.analysis.rates",
     "flipstudy.render.BodyMesh",
     "flipstudy.render.Camera",
     "flipstudy.render.Framing",
