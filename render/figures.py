@@ -169,6 +169,27 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
     ``style.ground_tile`` = 0.5 m).  ``what``: a
     :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
 
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
     Examples
     --------
     >>> from flipstudy import builtin
@@ -258,6 +279,27 @@ def trail_image(what, path=None, *, joints=TRAIL_JOINTS, rate: float | None = No
     and the character at time ``at`` (default the last marker) drawn
     translucent.  ``what``: a :class:`~flipstudy.render.staging.Stage` of one
     clip, or a clip.
+
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
 
     Examples
     --------
@@ -353,6 +395,27 @@ def strip_image(what, path=None, *, every: int | None = None, dt: float | None =
     one clip (its camera fitted again for the panels, its boxes drawn with the
     ground), or a clip.
 
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
     Examples
     --------
     >>> from flipstudy import builtin
@@ -412,6 +475,27 @@ def composite_image(what, path=None, *, interval: float = 0.2, span="flight", ma
     are part of the background plate.  ``what``: a
     :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
 
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
     Examples
     --------
     >>> from flipstudy import builtin
@@ -452,6 +536,27 @@ def overlay_image(what, path=None, *, interval: float = 0.2, span="flight", marg
     Fig. 4), under one camera; the last pose of each is opaque.  ``what``: a
     :class:`~flipstudy.render.staging.Stage` of the two clips, or the two clips
     (staged together: same take-off spot).
+
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
+    -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
 
     Examples
     --------

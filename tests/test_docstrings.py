@@ -22,34 +22,15 @@ PARTS = ("flipstudy.stimuli", "flipstudy.render", "flipstudy.study", "flipstudy.
 
 # the names still without a numpydoc docstring with examples (issue 35); may only shrink
 KNOWN_GAP = {
-    "flipstudy.render.BodyMesh",
-    "flipstudy.render.Camera",
-    "flipstudy.render.Framing",
     "flipstudy.render.Gizmos",
     "flipstudy.render.Scene",
     "flipstudy.render.Stage",
     "flipstudy.render.Style",
-    "flipstudy.render.align_takeoff",
-    "flipstudy.render.body_points",
     "flipstudy.render.check_rendered",
-    "flipstudy.render.composite_image",
-    "flipstudy.render.fit_camera",
-    "flipstudy.render.ghost_image",
     "flipstudy.render.iter_frames",
-    "flipstudy.render.jump_direction",
-    "flipstudy.render.orient_yaws",
-    "flipstudy.render.overlay_image",
-    "flipstudy.render.place",
-    "flipstudy.render.poses_at",
-    "flipstudy.render.read_image",
     "flipstudy.render.render_study",
     "flipstudy.render.render_video",
-    "flipstudy.render.resample",
     "flipstudy.render.stage",
-    "flipstudy.render.strip_image",
-    "flipstudy.render.trail_image",
-    "flipstudy.render.translate",
-    "flipstudy.render.write_png",
 }
 
 
