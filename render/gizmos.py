@@ -19,6 +19,14 @@ class Gizmos:
     """Debug quantities of a clip at any time: COM, its velocity, the angular
     momentum about it, and the support polygon of the effectors in contact.
 
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+        The segment model the momenta are computed with.
+    what : sequence of str
+        Which gizmos to draw: ``"com"``, ``"path"``, ``"L"``, ``"v"``, ``"support"``.
+
     Examples
     --------
     >>> import numpy as np

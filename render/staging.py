@@ -107,6 +107,23 @@ class Stage:
     ``direction`` the camera looks across; ``framing`` (:class:`Framing`) is how
     the camera was fitted, ``None`` for a camera that was given.
 
+    Parameters
+    ----------
+    clips, bodies : list
+        The placed clips and the bodies drawn.
+    takeoffs, landings : list of int or None
+    camera : Camera
+    size : tuple of int
+        (width, height) in pixels.
+    style : Style, optional
+    ground : tuple of float, optional
+        (x0, x1, z0, z1) metres.
+    boxes : list of (lo, hi)
+    offsets : ndarray, shape (K, 3), optional
+    yaws : list of float, optional
+    direction : ndarray, shape (3,), optional
+    framing : Framing, optional
+
     Examples
     --------
     >>> from flipstudy import builtin
@@ -520,6 +537,31 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
     are drawn; its ``ground_margin`` sizes the ground, unless ``ground_bounds``
     (x0, x1, z0, z1) are given.  ``boxes`` (``[(lo, hi), ...]``, axis-aligned, in
     the first clip's coordinates) are moved with it.
+
+    Parameters
+    ----------
+    clips : sequence of Clip
+    takeoffs, landings : sequence of int or None, optional
+        Default: what :func:`flipstudy.analyse` finds.
+    bodies : sequence of Body, optional
+    camera : Camera, optional
+        Given: the clips are drawn where they are.
+    size : tuple of int
+        (width, height) in pixels.
+    style : Style, optional
+    ground_bounds : tuple of float, optional
+    boxes : sequence of (lo, hi)
+    direction : array_like, shape (3,), optional
+    view_angle, elevation : float
+        Degrees.
+    margin : float, optional
+        Default: the style's ``frame_margin``.
+    align, orient : bool
+        Move the take-off COM to the origin; turn the other base clips.
+
+    Returns
+    -------
+    Stage
 
     Examples
     --------
