@@ -1,6 +1,6 @@
 """Sphinx extension: the file formats' reference tables, generated from the code.
 
-``.. flipstudy-format:: NAME`` (in MyST: a ```` ```{flipstudy-format} NAME ```` block)
+A ```` ```{flipstudy-format} NAME ```` block in a MyST (Markdown) page
 draws the table of one format from the definitions the code itself uses, so the
 documentation cannot drift from what is read and written:
 
@@ -41,7 +41,7 @@ def _comments(cls) -> dict[str, str]:
 
 def _default(f) -> str:
     if f.default is not dataclasses.MISSING:
-        return "(required)" if f.default is ... else f"``{f.default!r}``"
+        return "(required)" if f.default is ... else f"`{f.default!r}`"
     if f.default_factory is not dataclasses.MISSING:
         return "(see below)"
     return "(required)"
@@ -51,12 +51,16 @@ def _esc(text: str) -> str:
     return text.replace("|", "\\|").replace("*", "\\*").replace("`", "'")
 
 
+def _code(text) -> str:
+    return f"`{text}`"
+
+
 def _dataclass_rows(cls, names=None):
     notes = _comments(cls)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     for name in names or fields:
         f = fields[name]
-        yield [f"``{name}``", f"``{f.type}``", _default(f), _esc(notes.get(name, ""))]
+        yield [_code(name), _code(f.type).replace("|", "\\|"), _default(f), _esc(notes.get(name, ""))]
 
 
 def _rows(name):
@@ -65,8 +69,8 @@ def _rows(name):
     if name == "design-study":
         notes = _comments(design.Design)
         for key, (typ, default, _check) in design.STUDY_FIELDS.items():
-            d = "(required)" if default is ... else f"``{default!r}``"
-            yield [f"``{key}``", f"``{typ.__name__}``", d, _esc(notes.get(key, ""))]
+            d = "(required)" if default is ... else _code(repr(default))
+            yield [_code(key), _code(typ.__name__), d, _esc(notes.get(key, ""))]
         return
     if name == "design-clips":
         yield from _dataclass_rows(design.ClipSpec)
@@ -87,7 +91,7 @@ def _rows(name):
             "participants": export.PARTICIPANT_COLUMNS, "simulated-truth": export.TRUTH_COLUMNS}
     if name in cols:
         for i, c in enumerate(cols[name], 1):
-            yield [str(i), f"``{c}``"]
+            yield [str(i), _code(c)]
         return
     raise ValueError(f"flipstudy-format: unknown format {name!r}; known: design-study, design-clips, "
                      f"design-groups, design-session, manifest, manifest-ballistic, "
@@ -107,18 +111,17 @@ class FormatTable(Directive):
             return self._calibration()
         rows = list(_rows(name))
         header = _HEADERS[len(rows[0])]
-        lines = [f".. list-table::", "   :header-rows: 1", "   :class: flipstudy-format", ""]
-        for row in [header] + rows:
-            lines.append(f"   * - {row[0]}")
-            lines += [f"     - {cell or ' '}" for cell in row[1:]]
+        # the pages are MyST Markdown: the table is a Markdown pipe table
+        lines = ["| " + " | ".join(header) + " |", "|" + "|".join([":---"] * len(header)) + "|"]
+        lines += ["| " + " | ".join(cell or " " for cell in row) + " |" for row in rows]
         return self._parse(lines)
 
     def _calibration(self):
         from flipstudy.stimuli import calibration
         doc = inspect.getdoc(calibration)
         schema = doc.split("Schema::", 1)[1].split("\n\n", 2)[1]
-        lines = [f"Format tag ``{calibration.FORMAT}``; tasks {', '.join(calibration.TASKS)}.", "",
-                 ".. code-block:: text", ""] + ["   " + ln for ln in schema.splitlines()]
+        lines = [f"Format tag `{calibration.FORMAT}`; tasks {', '.join(calibration.TASKS)}.", "",
+                 "```text"] + [ln[4:] if ln.startswith("    ") else ln for ln in schema.splitlines()] + ["```"]
         return self._parse(lines)
 
     def _parse(self, lines):

@@ -15,8 +15,8 @@ from flipstudy import builtin
 from flipstudy.render import ghost_image, stage, trail_image
 
 st = stage([builtin("backflip")], size=(160, 120))
-ghost = ghost_image(st)
-trail = trail_image(st)
+ghost = ghost_image(st, legend=False)     # at this size a legend would hide the body
+trail = trail_image(st, legend=False)
 
 fig, axes = plt.subplots(1, 2, figsize=(6.4, 2.6))
 for ax, img, title in zip(axes, (ghost, trail), ("ghost", "marker trails")):
