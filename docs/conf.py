@@ -66,3 +66,38 @@ html_theme_options = {
     "navbar_end": ["theme-switcher", "navbar-icon-links"],
 }
 html_show_sourcelink = False
+
+
+# --- the API page lists every public name: written at each build from the code ---------
+STABLE = ["load_bvh", "save_bvh", "builtin", "analyse", "Clip", "Body", "FlipstudyError"]
+PARTS = [("flipstudy", "Stable entry points", STABLE),
+         ("flipstudy.stimuli", "Stimuli: motion in, stimuli out", None),
+         ("flipstudy.render", "Render: offscreen PyVista", None),
+         ("flipstudy.analysis", "Analysis: ratings, d′, psychometric fits", None)]
+
+
+def write_api_page(app, config=None):
+    """docs/reference/api.rst from the stable entry points and each part's ``__all__``
+    (a name the root already lists is listed once), so a new public name appears
+    without editing the docs."""
+    import importlib
+    out = ["API reference", "=============", "",
+           "Generated from the docstrings (numpydoc). The stable entry points are at the",
+           "package root; each part exports the names in its ``__all__`` (the stable",
+           "entry points that :mod:`flipstudy.stimuli` also exports are listed once, at the root).",
+           ""]
+    for mod, title, names in PARTS:
+        m = importlib.import_module(mod)
+        names = names or [n for n in m.__all__ if n not in STABLE]
+        out += [title, "-" * len(title), "", f".. currentmodule:: {mod}", "",
+                ".. autosummary::", "   :toctree: generated", "   :nosignatures:", ""]
+        out += [f"   {n}" for n in names] + [""]
+    page = Path(app.srcdir) / "reference" / "api.rst"
+    text = "\n".join(out)
+    if not page.is_file() or page.read_text() != text:
+        page.write_text(text)
+
+
+def setup(app):
+    # before the source files are found and autosummary generates the stub pages from it
+    app.connect("config-inited", write_api_page)
