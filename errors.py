@@ -14,8 +14,8 @@ from __future__ import annotations
 class FlipstudyError(Exception):
     """Base of every flipstudy user error (see :mod:`flipstudy.errors`).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import FlipstudyError, load_bvh
     >>> try:
     ...     load_bvh("no-such-file.bvh")
@@ -83,7 +83,31 @@ class CalibrationError(FlipstudyValueError):
 
 
 class BVHError(FlipstudyError, ValueError):
-    """A malformed BVH file: the message names the file, the line and what was expected."""
+    """A malformed BVH file: the message names the file, the line and what was expected.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    line : int or None
+        Its line (1-based), or None when the problem is the whole file.
+    message : str
+        What was found and what was expected.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from flipstudy import load_bvh
+    >>> from flipstudy.errors import BVHError
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     bad = pathlib.Path(tmp) / "bad.bvh"
+    ...     _ = bad.write_text("HIERARCHY\\nROOT Hips\\n")
+    ...     try:
+    ...         load_bvh(bad)
+    ...     except BVHError as e:
+    ...         print(e.line is not None, isinstance(e, ValueError))
+    True True
+    """
 
     def __init__(self, path, line: int | None, message: str):
         self.path = str(path)
@@ -143,13 +167,36 @@ class StaleRenderError(StudyRenderError):
 
 
 class ResponsesError(FlipstudyError, ValueError):
-    """A response table that cannot be analysed; the message says where and what was expected."""
+    """A response table that cannot be analysed; the message says where and what was expected.
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> from flipstudy.analysis import ResponsesError, load_responses
+    >>> try:
+    ...     load_responses(pd.DataFrame({"participant": ["P01"], "group": ["g"]}))
+    ... except ResponsesError as e:
+    ...     print(type(e).__name__)
+    ResponsesError
+    """
 
 
 class NeedsExport(ResponsesError):
     """A study folder without ``responses.csv``: a step to take first (``flipstudy export``),
     reported as every user error is ("error:", exit status 1), the message naming the step
-    (issue 33: a log or CI reader needs the word and the status to see that it failed)."""
+    (issue 33: a log or CI reader needs the word and the status to see that it failed).
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import NeedsExport, load_responses
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     try:
+    ...         load_responses(tmp)
+    ...     except NeedsExport as e:
+    ...         print("flipstudy export" in str(e))
+    True
+    """
 
 
 # ---- study: sessions, storage, export, the web site, reproduce

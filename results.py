@@ -8,8 +8,8 @@ returns one frozen dataclass of this module: its fields are what the step did
 :mod:`flipstudy.errors`, the module sits at the package root and imports none of
 the four parts, so every part can return its step's result.
 
-Example
--------
+Examples
+--------
 >>> import tempfile, pathlib
 >>> r = ExportResult(responses=pathlib.Path("s/responses.csv"),
 ...                  participants=pathlib.Path("s/participants.csv"), truth=None, rows=88,

@@ -40,7 +40,26 @@ class Counts:
 
 
 def count_cells(df: pd.DataFrame) -> Counts:
-    """Counts per participant × (group, level) of a checked response table."""
+    """Counts per participant × (group, level) of a checked response table.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A checked response table (:func:`load_responses`).
+
+    Returns
+    -------
+    Counts
+        Trials and answers "incorrect" per participant (rows) and cell (columns).
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import count_cells, load_responses
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> cnt = count_cells(load_responses(paper_panel(4, seed=0)))
+    >>> cnt.n.shape[0]                                  # participants
+    4
+    """
     groups = group_order(df["group"].unique())
     cells = []
     for g in groups:
@@ -73,7 +92,26 @@ def _dprime_c(kh, nh, kf, nf, correction):
 
 def participant_dprimes(cnt: Counts, correction: str) -> np.ndarray:
     """(P, K) d′ of each participant in each cell (NaN where a participant lacks
-    the cell or its original)."""
+    the cell or its original).
+
+    Parameters
+    ----------
+    cnt : Counts
+        From :func:`count_cells`.
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+
+    Returns
+    -------
+    ndarray, shape (P, K)
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import count_cells, load_responses, participant_dprimes
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> cnt = count_cells(load_responses(paper_panel(4, seed=0)))
+    >>> participant_dprimes(cnt, "loglinear").shape == cnt.n.shape
+    True
+    """
     has = cnt.orig >= 0
     o = np.where(has, cnt.orig, 0)
     d, _, _ = _dprime_c(cnt.k, cnt.n, cnt.k[:, o], cnt.n[:, o], correction)
@@ -134,6 +172,31 @@ def summarize(df: pd.DataFrame, correction: str = "loglinear", n_boot: int = 200
     (mean of the participants' own d′), ``dprime_ci_low/high`` (bootstrap CI of
     that mean), ``n_participants_dprime``, ``correction`` (the rule in force)
     and ``corrected`` (whether it changed this row's pooled rates).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A checked response table (:func:`load_responses`).
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+    n_boot : int, default 2000
+        Bootstrap resamples over participants.
+    seed : int
+    ci : float, default 0.95
+
+    Returns
+    -------
+    table : pandas.DataFrame
+    participants : pandas.DataFrame
+    notes : list of str
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import load_responses, summarize
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> table, per_participant, notes = summarize(load_responses(paper_panel(19, seed=0)), n_boot=100)
+    >>> row = table.iloc[0]
+    >>> row["group"], float(row["level"]), int(row["n"])
+    ('smooth-increase', 0.0, 76)
     """
     correction = normalise_correction(correction)
     if not 0 < ci < 1:

@@ -55,6 +55,32 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
     ``repeat`` = 1, see :func:`use_repeats`) is left out: the repeat stands in its
     place.  Raises :class:`ResponsesError` naming the file, the line and what
     was expected.
+
+    Parameters
+    ----------
+    source : pandas.DataFrame, str or pathlib.Path
+        A table, a CSV file or a study folder.
+    name : str, optional
+        How errors name a DataFrame source.
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Raises
+    ------
+    ResponsesError
+        Naming the file, line and column.
+    NeedsExport
+        For a study folder without ``responses.csv``.
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import load_responses
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> df = load_responses(paper_panel(2, seed=0))
+    >>> df["incorrect"].dtype.kind, sorted(df["participant"].unique())
+    ('i', ['P01', 'P02'])
     """
     if isinstance(source, pd.DataFrame):
         df = source.copy()

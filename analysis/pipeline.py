@@ -40,6 +40,21 @@ class Result:
     layout as strings; ``files``: name → path of every file written;
     ``notes``: sentences worth reading (corrections, thresholds not reached,
     missing images...).
+
+    Attributes
+    ----------
+    table, participants, gee, thresholds, paper : pandas.DataFrame
+    fits : list of PsychometricFit
+    notes : list of str
+    files : dict of str to pathlib.Path
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import analyze
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> r = analyze(paper_panel(19, seed=1), None, psychometric="none", gee=False, n_boot=100)
+    >>> type(r).__name__, r.files
+    ('Result', {})
     """
     table: pd.DataFrame
     participants: pd.DataFrame
@@ -85,8 +100,8 @@ def split_by_style(df: pd.DataFrame, table: pd.DataFrame):
     than one value: the table gains a ``style`` column, ordered by style, and a
     note says which groups each style has.  Otherwise the table is unchanged.
 
-    Example
-    -------
+    Examples
+    --------
     >>> df = pd.DataFrame({"group": ["a", "b"], "style": ["stick", "mannequin"]})
     >>> t, note = split_by_style(df, pd.DataFrame({"group": ["a", "b"], "level": [0, 0]}))
     >>> t["style"].tolist(), note
@@ -164,6 +179,29 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     ``summary.json`` and the figures ``ratings``, ``dprime``,
     ``psychometric``, ``sheet`` (``.pdf`` + ``.png``).
 
+    Parameters
+    ----------
+    responses : pandas.DataFrame, str or pathlib.Path
+        A table, a responses CSV or a study folder.
+    out_dir : str or pathlib.Path, optional
+        Where to write; None computes only.
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+    psychometric : {"psignifit", "none"}
+    gee, figures : bool
+        Fit the GEE odds ratios; draw the figures.
+    include_simulated, include_incomplete : bool
+        Analyse simulated or unfinished sessions too.
+
+    Returns
+    -------
+    Result
+
+    Raises
+    ------
+    ResponsesError
+
+    Examples
+    --------
     >>> from flipstudy.analysis.simulate import paper_panel
     >>> r = analyze(paper_panel(19, seed=1), None, psychometric="none", gee=False, n_boot=200)
     >>> list(r.table.columns[:5])

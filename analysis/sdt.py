@@ -75,7 +75,23 @@ def _out(a):
 
 
 def z(p):
-    """Standard normal quantile, ``scipy.stats.norm.ppf`` (``ndtri``)."""
+    """Standard normal quantile, ``scipy.stats.norm.ppf`` (``ndtri``).
+
+    Parameters
+    ----------
+    p : float or array_like
+        Probabilities in (0, 1).
+
+    Returns
+    -------
+    float or ndarray
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import z
+    >>> round(float(z(0.975)), 4), float(z(0.5))
+    (1.96, 0.0)
+    """
     return ndtri(np.asarray(p, dtype=float))
 
 
@@ -97,6 +113,18 @@ def corrected_rate(k, n, correction: str = "loglinear"):
     (→ ``1 − 1/(2N)``).  *When* the log-linear formula is applied is decided by
     :func:`rates`; this function is the formula.
 
+    Parameters
+    ----------
+    k, n : int or array_like
+        Count and number of trials.
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+
+    Returns
+    -------
+    float or ndarray
+
+    Examples
+    --------
     >>> corrected_rate(0, 20, "loglinear"), corrected_rate(20, 20, "loglinear")  # 0.5/21, 20.5/21
     (0.023809523809523808, 0.9761904761904762)
     >>> corrected_rate(0, 20, "1/(2N)"), corrected_rate(20, 20, "1/(2N)")        # 1/40, 39/40
@@ -115,6 +143,32 @@ def rates(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear"):
 
     Returns ``(H, F, corrected)``: arrays broadcast to a common shape;
     ``corrected`` is True where a rate was changed.
+
+    Parameters
+    ----------
+    hits : int or array_like
+        Modified motions judged incorrect.
+    n_signal : int or array_like
+        Trials of modified motions.
+    false_alarms : int or array_like
+        Originals judged incorrect.
+    n_noise : int or array_like
+        Trials of originals.
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+        How rates of 0 or 1 are corrected (see :func:`rates`).
+
+    Returns
+    -------
+    H, F : ndarray
+        Hit and false-alarm rates.
+    corrected : ndarray of bool
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import rates
+    >>> H, F, corrected = rates(20, 20, 5, 20)             # a hit rate of 1: corrected
+    >>> float(H), float(F), bool(corrected)
+    (0.9761904761904762, 0.2619047619047619, True)
     """
     c = normalise_correction(correction)
     kh, nh = _counts(hits, n_signal)
@@ -145,6 +199,26 @@ def dprime(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear")
     Negative values (modified motions judged *more* correct than the original)
     are returned as they are.
 
+    Parameters
+    ----------
+    hits : int or array_like
+        Modified motions judged incorrect.
+    n_signal : int or array_like
+        Trials of modified motions.
+    false_alarms : int or array_like
+        Originals judged incorrect.
+    n_noise : int or array_like
+        Trials of originals.
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+        How rates of 0 or 1 are corrected (see :func:`rates`).
+
+    Returns
+    -------
+    float or ndarray
+        d′ (judged incorrect | modified against | original).
+
+    Examples
+    --------
     >>> from scipy.stats import norm
     >>> bool(np.isclose(dprime(59, 100, 28, 100), norm.ppf(.59) - norm.ppf(.28)))
     True
@@ -154,7 +228,32 @@ def dprime(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear")
 
 
 def criterion(hits, n_signal, false_alarms, n_noise, correction: str = "loglinear"):
-    """Criterion ``c = −(z(H) + z(F)) / 2`` from counts (same correction as :func:`dprime`)."""
+    """Criterion ``c = −(z(H) + z(F)) / 2`` from counts (same correction as :func:`dprime`).
+
+    Parameters
+    ----------
+    hits : int or array_like
+        Modified motions judged incorrect.
+    n_signal : int or array_like
+        Trials of modified motions.
+    false_alarms : int or array_like
+        Originals judged incorrect.
+    n_noise : int or array_like
+        Trials of originals.
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+        How rates of 0 or 1 are corrected (see :func:`rates`).
+
+    Returns
+    -------
+    float or ndarray
+        ``c``; positive: a bias towards answering "correct".
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import criterion
+    >>> round(float(criterion(30, 100, 30, 100)), 4)      # H = F = 0.3: c = -z(0.3)
+    0.5244
+    """
     H, F, _ = rates(hits, n_signal, false_alarms, n_noise, correction)
     return _out(-(z(H) + z(F)) / 2.0)
 
@@ -174,6 +273,21 @@ def dprime_2afc(k_correct, n, correction: str = "loglinear"):
     ``"loglinear"`` corrects a proportion of 0 or 1 to ``(k + 0.5)/(n + 1)``,
     ``"loglinear-all"`` every proportion, ``"1/(2N)"`` moves 0 and 1 by ``1/(2N)``.
 
+    Parameters
+    ----------
+    k_correct : int or array_like
+        Correct choices.
+    n : int or array_like
+        Trials.
+    correction : {"loglinear", "loglinear-all", "1/(2N)"}
+
+    Returns
+    -------
+    dprime : ndarray
+    corrected : ndarray of bool
+
+    Examples
+    --------
     >>> d, corrected = dprime_2afc(76, 100)            # 76 % correct
     >>> round(float(d), 4), bool(corrected)
     (0.9989, False)

@@ -70,6 +70,26 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
     fitted (no original, one level, a single participant, a singular design)
     gets NaN with the reason in ``gee_note``; this function does not raise on
     such data.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A checked response table (:func:`load_responses`).
+    ci : float, default 0.95
+    cov_type : str
+        statsmodels' covariance of the GEE fit.
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import gee_levels, load_responses
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> g = gee_levels(load_responses(paper_panel(12, seed=3)))
+    >>> list(g.columns[:4]), len(g) > 0
+    (['group', 'level', 'gee_or', 'gee_ci_low'], True)
     """
     from scipy.stats import norm
     try:
@@ -151,13 +171,54 @@ def gee_levels(df: pd.DataFrame, ci: float = 0.95, cov_type: str = "bias_reduced
 # ------------------------------------------------------------- psychometric functions
 
 def psychometric_curve(x, threshold, width, gamma, lam):
-    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w)."""
+    """``γ + (1 − γ − λ) Φ((x − m)/s)`` with psignifit's (threshold m, width w).
+
+    Parameters
+    ----------
+    x : float or array_like
+        Error magnitudes.
+    threshold, width : float
+        psignifit's threshold m and width w.
+    gamma, lam : float
+        Guess and lapse rates.
+
+    Returns
+    -------
+    ndarray
+        P(judged incorrect | x).
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import psychometric_curve
+    >>> p = psychometric_curve([0.0, 30.0, 1e3], 30.0, 20.0, 0.2, 0.05)
+    >>> [round(float(v), 3) for v in p]
+    [0.2, 0.575, 0.95]
+    """
     s = np.asarray(width, float) / _WSCALE
     return gamma + (1 - gamma - lam) * ndtr((np.asarray(x, float) - threshold) / s)
 
 
 def detection_threshold(threshold, width, gamma, lam):
-    """``x*`` where P(incorrect) = (1 + γ)/2 (vectorised; +inf where never reached)."""
+    """``x*`` where P(incorrect) = (1 + γ)/2 (vectorised; +inf where never reached).
+
+    Parameters
+    ----------
+    threshold, width : float or array_like
+        psignifit's threshold m and width w (``w = 3.29 s``).
+    gamma, lam : float or array_like
+        Guess and lapse rates.
+
+    Returns
+    -------
+    float or ndarray
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import detection_threshold, psychometric_curve
+    >>> x = detection_threshold(30.0, 20.0, 0.2, 0.0)
+    >>> round(float(psychometric_curve(x, 30.0, 20.0, 0.2, 0.0)), 6)    # (1 + 0.2) / 2
+    0.6
+    """
     threshold, width, gamma, lam = np.broadcast_arrays(*(np.asarray(a, float)
                                                           for a in (threshold, width, gamma, lam)))
     amp = 1 - gamma - lam
@@ -169,7 +230,32 @@ def detection_threshold(threshold, width, gamma, lam):
 
 @dataclass
 class PsychometricFit:
-    """One group's fitted psychometric function and detection threshold."""
+    """One group's fitted psychometric function and detection threshold.
+
+    Attributes
+    ----------
+    group : str
+        The error group.
+    method : str
+        ``"psignifit"``.
+    x, k, n : ndarray
+        Magnitudes, answers "incorrect" and trials per magnitude.
+    params : dict
+        threshold, width, gamma, lambda (MAP).
+    threshold, ci_low, ci_high : float
+        The detection threshold x* and its credible interval.
+    unit : str
+        Of ``x`` (``"%"``, or ``"ms"`` for pose-rate groups).
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import fit_psychometric, load_responses
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> df = load_responses(paper_panel(19, seed=1))
+    >>> fits, notes = fit_psychometric(df[df["group"] == "abrupt-decrease"])
+    >>> fits[0].group, fits[0].unit, bool(0 < fits[0].threshold < 60)
+    ('abrupt-decrease', '%', True)
+    """
     group: str
     method: str
     x: np.ndarray                    # tested |levels|
@@ -447,7 +533,32 @@ def fit_psychometric(df: pd.DataFrame, method: str = "psignifit", *, ci=0.95,
     ``method``: ``"psignifit"`` or ``"none"`` (no fits).  ``task="2afc"``: the
     answers are 2AFC (correct choices counted from column ``detected``), γ = ½.
     A ``pose-rate`` group (column ``kind``) is fitted against its hold time
-    ``1000/N`` ms (:mod:`.units`; its fit's ``unit`` is ``"ms"``)."""
+    ``1000/N`` ms (:mod:`.units`; its fit's ``unit`` is ``"ms"``).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A checked response table (:func:`load_responses`).
+    method : {"psignifit", "none"}
+    ci : float, default 0.95
+        Level of the credible intervals.
+    seed : int
+        Of the posterior samples.
+    task : {"yes-no", "2afc"}
+
+    Returns
+    -------
+    fits : list of PsychometricFit
+    notes : list of str
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import fit_psychometric, load_responses
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> fits, notes = fit_psychometric(load_responses(paper_panel(8, seed=2)), "none")
+    >>> fits
+    []
+    """
     method = method.lower()
     if method not in METHODS:
         hint = " (the own maximum-likelihood fit was removed: psignifit is the one fit)" \

@@ -22,7 +22,23 @@ MISSING = "—"
 
 
 def fmt_dprime(d: float, minus: str = "-") -> str:
-    """Two decimals, no leading zero, sign kept: 0.05 → ".05", −0.22 → "-.22", 1.4 → "1.40"."""
+    """Two decimals, no leading zero, sign kept: 0.05 → ".05", −0.22 → "-.22", 1.4 → "1.40".
+
+    Parameters
+    ----------
+    d : float
+    minus : str
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import fmt_dprime
+    >>> fmt_dprime(0.05), fmt_dprime(-0.22), fmt_dprime(1.4)
+    ('.05', '-.22', '1.40')
+    """
     if d is None or not math.isfinite(d):
         return MISSING
     r = round(float(d), 2)
@@ -35,7 +51,27 @@ def fmt_dprime(d: float, minus: str = "-") -> str:
 
 
 def fmt_cell(rating: float, d: float, minus: str = "-") -> str:
-    """``"72 (.00)"``: the rating rounded to a whole percent, then d′."""
+    """``"72 (.00)"``: the rating rounded to a whole percent, then d′.
+
+    Parameters
+    ----------
+    rating : float
+        Percent of answers "correct".
+    d : float
+        d′.
+    minus : str
+        The minus sign to write.
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import fmt_cell
+    >>> fmt_cell(71.6, -0.22, "−")
+    '72 (−.22)'
+    """
     if rating is None or not math.isfinite(rating):
         return MISSING
     return f"{int(math.floor(rating + 0.5))} ({fmt_dprime(d, minus)})"
@@ -69,7 +105,29 @@ def paper_layout(table: pd.DataFrame, minus: str = "-", kinds: dict | None = Non
     """Wide table, one row per group, one column per level (union of all
     levels, sorted by magnitude; percent levels first, then those of pose-rate
     groups in poses/s); cells ``"72 (.00)"``, empty where a group did not test a
-    level."""
+    level.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The long table of :func:`summarize` (columns group, level, rating_pct, dprime).
+    minus : str
+        The minus sign to write.
+    kinds : dict, optional
+        Group → error kind (pose-rate levels are poses/s).
+
+    Returns
+    -------
+    pandas.DataFrame
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import load_responses, paper_layout, summarize
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> table, _, _ = summarize(load_responses(paper_panel(19, seed=0)), n_boot=100)
+    >>> paper_layout(table).set_index("group").loc["abrupt-decrease", "0 %"]
+    '66 (.00)'
+    """
     kinds = kinds or {}
     groups = group_order(table["group"].unique())
     unit = {g: level_unit(kinds.get(g)) for g in groups}
@@ -96,7 +154,27 @@ def _block_rows(table, levels, groups, minus):
 
 
 def to_markdown(table: pd.DataFrame, caption: str = "", kinds: dict | None = None) -> str:
-    """GitHub Markdown, one table per block of groups sharing their levels."""
+    """GitHub Markdown, one table per block of groups sharing their levels.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The long table of :func:`summarize` (columns group, level, rating_pct, dprime).
+    caption : str
+    kinds : dict, optional
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import load_responses, summarize, to_markdown
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> table, _, _ = summarize(load_responses(paper_panel(19, seed=0)), n_boot=100)
+    >>> print(to_markdown(table).splitlines()[0])
+    | group | 0 % | 17 % | 25 % | 37 % | 50 % |
+    """
     parts = []
     kinds = kinds or {}
     if caption:
@@ -143,7 +221,29 @@ def to_latex(table: pd.DataFrame, caption: str = "", label: str = "tab:ratings",
              kinds: dict | None = None) -> str:
     """A LaTeX table, one header row per block of groups sharing their levels, as in the
     paper.  Pure ASCII; it compiles with pdflatex and no package, and uses booktabs' rules
-    when the document loads ``\\usepackage{booktabs}`` (plain ``\\hline`` otherwise)."""
+    when the document loads ``\\usepackage{booktabs}`` (plain ``\\hline`` otherwise).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        The long table of :func:`summarize` (columns group, level, rating_pct, dprime).
+    caption : str
+    label : str
+    kinds : dict, optional
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from flipstudy.analysis import load_responses, summarize, to_latex
+    >>> from flipstudy.analysis.simulate import paper_panel
+    >>> table, _, _ = summarize(load_responses(paper_panel(19, seed=0)), n_boot=100)
+    >>> tex = to_latex(table)
+    >>> tex.isascii(), "tabular" in tex
+    (True, True)
+    """
     kinds = kinds or {}
     bl = blocks(table, kinds)
     ncol = max(len(levels) for levels, _ in bl)

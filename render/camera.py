@@ -26,8 +26,17 @@ class Camera:
     """A perspective camera (VTK conventions: ``view_angle`` is the vertical
     field of view in degrees).
 
-    Example
-    -------
+    Parameters
+    ----------
+    position, focal_point : tuple of float
+        Where the camera is and what it looks at, metres.
+    view_up : tuple of float
+        The picture's up direction.
+    view_angle : float
+        Vertical field of view, degrees.
+
+    Examples
+    --------
     >>> cam = Camera((0, 1, 6), (0, 1, 0), (0, 1, 0), 25.0)
     >>> Camera.from_json(cam.to_json()) == cam
     True
@@ -145,8 +154,25 @@ def fit_camera(points, direction=(0.0, 0.0, 1.0), size=(640, 480), *, view_angle
     an image of ``size`` with ``margin`` (fraction of width/height) on each side,
     and ``top`` (a fraction of the height) more above them: room for a legend.
 
-    Example
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+        What must be in the picture, metres.
+    direction : array_like, shape (3,)
+        The horizontal direction of travel.
+    size : tuple of int
+        The image's (width, height) in pixels.
+    view_angle, elevation : float
+        Degrees.
+    margin : float
+        Fraction of the width and height kept free on each side.
+
+    Returns
     -------
+    Camera
+
+    Examples
+    --------
     >>> import numpy as np
     >>> pts = np.random.default_rng(0).random((100, 3))
     >>> cam = fit_camera(pts, size=(320, 240))

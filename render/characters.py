@@ -425,8 +425,8 @@ def character_mesh(body: Body, style, inflate: float = 0.0):
     """The posable mesh of ``body`` in ``style.character`` (a BodyMesh or a
     SkinnedMesh: ``.mesh``, ``.pose(R, P)``, ``.side``).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import Body, builtin
     >>> from flipstudy.render.style import Style
     >>> clip = builtin("jump")

@@ -60,7 +60,28 @@ def from_buf(buf: oiio.ImageBuf) -> np.ndarray:
 
 def write_png(path, img) -> Path:
     """Write an image array (or ImageBuf) as PNG with OpenImageIO; parent folders
-    are created.  Returns the path."""
+    are created.  Returns the path.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+    img : ndarray, shape (H, W, C), or OpenImageIO.ImageBuf
+
+    Returns
+    -------
+    pathlib.Path
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> import numpy as np
+    >>> from flipstudy.render import read_image, write_png
+    >>> img = np.arange(24, dtype=np.uint8).reshape(2, 4, 3)
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     back = read_image(write_png(pathlib.Path(tmp) / "sub" / "a.png", img))
+    >>> bool((back == img).all())
+    True
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     buf = img if isinstance(img, oiio.ImageBuf) else to_buf(img)
@@ -72,7 +93,27 @@ def write_png(path, img) -> Path:
 
 
 def read_image(path) -> np.ndarray:
-    """An image file as a uint8 array (H,W,C)."""
+    """An image file as a uint8 array (H,W,C).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        Any image file OpenImageIO reads.
+
+    Returns
+    -------
+    ndarray, shape (H, W, C), uint8
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> import numpy as np
+    >>> from flipstudy.render import read_image, write_png
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     img = read_image(write_png(pathlib.Path(tmp) / "a.png", np.zeros((3, 5, 3), np.uint8)))
+    >>> img.shape, img.dtype.name
+    ((3, 5, 3), 'uint8')
+    """
     buf = oiio.ImageBuf(str(path))
     if buf.has_error:
         raise FlipstudyOSError(f"{path}: cannot read image: {buf.geterror()}")

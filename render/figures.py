@@ -62,8 +62,8 @@ def key_times(clip: Clip, body: Body, takeoff, landing, *, between: int = 1,
     s after it (dropped when ``margin`` is 0).  Without a flight: ``2·between + 3``
     instants evenly over the clip, unnamed.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import Body, builtin
     >>> clip = builtin("backflip")
     >>> ts, names = key_times(clip, Body.from_clip(clip), 157, 237)
@@ -197,8 +197,29 @@ def ghost_image(what, path=None, *, interval: float | None = None, span="flight"
     ``style.ground_tile`` = 0.5 m).  ``what``: a
     :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
 
-    Example
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
     -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage
     >>> img = ghost_image(stage([builtin("backflip")], size=(160, 120)), None)  # a path writes a PNG
@@ -291,8 +312,29 @@ def trail_image(what, path=None, *, joints=TRAIL_JOINTS, rate: float | None = No
     translucent.  ``what``: a :class:`~flipstudy.render.staging.Stage` of one
     clip, or a clip.
 
-    Example
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
     -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage
     >>> img = trail_image(stage([builtin("backflip")], size=(160, 120)), None,
@@ -385,8 +427,29 @@ def strip_image(what, path=None, *, every: int | None = None, dt: float | None =
     one clip (its camera fitted again for the panels, its boxes drawn with the
     ground), or a clip.
 
-    Example
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
     -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> img = strip_image(builtin("backflip"), None, dt=0.15, panel_size=(80, 120), columns=4)
     >>> img.shape                                     # 4 × 2 panels of 80 × 120, 4 px apart
@@ -444,8 +507,29 @@ def composite_image(what, path=None, *, interval: float = 0.2, span="flight", ma
     are part of the background plate.  ``what``: a
     :class:`~flipstudy.render.staging.Stage` of one clip, or a clip.
 
-    Example
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
     -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage
     >>> img = composite_image(stage([builtin("backflip")], size=(160, 120)), None, interval=0.15)
@@ -485,8 +569,29 @@ def overlay_image(what, path=None, *, interval: float = 0.2, span="flight", marg
     :class:`~flipstudy.render.staging.Stage` of the two clips, or the two clips
     (staged together: same take-off spot).
 
-    Example
+    Parameters
+    ----------
+    what : Stage or Clip
+        A stage of one clip, or a clip (staged with the defaults).
+    path : str or pathlib.Path, optional
+        Where to write the PNG (None: only return the image).
+    span : str or tuple of float
+        ``"flight"`` (the flight ± ``margin`` s), ``"clip"`` (all of it) or
+        ``(t0, t1)`` seconds: the part of the motion drawn.
+    margin : float
+        Seconds drawn before the take-off and after the landing.
+    scene : Scene, optional
+        A scene to draw in (default: the stage's).
+    debug : sequence of str
+        Debug gizmos to add (:data:`~flipstudy.render.gizmos.DEBUG_ALL`).
+
+    Returns
     -------
+    ndarray, shape (H, W, 3)
+        The image, uint8.
+
+    Examples
+    --------
     >>> from flipstudy import analyse, builtin
     >>> from flipstudy.render.staging import stage
     >>> from flipstudy.stimuli.injection import inject_angular_momentum

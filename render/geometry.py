@@ -118,8 +118,20 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
     translations linear (no uneven frame dropping).  The result has ``fps``
     frames per second.
 
-    Example
+    Parameters
+    ----------
+    clip : Clip
+    fps : float
+        The new frame rate.
+    start, stop : float
+        Seconds (``stop`` None: the clip's end).
+
+    Returns
     -------
+    Clip
+
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> clip = builtin("backflip")                    # 120 fps
     >>> v = resample(clip, 60.0)
@@ -143,7 +155,29 @@ def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = No
 
 def poses_at(clip: Clip, times) -> Clip:
     """A clip whose frames are ``clip`` at the given times (seconds, any order),
-    interpolated as in :func:`resample`."""
+    interpolated as in :func:`resample`.
+
+    Parameters
+    ----------
+    clip : Clip
+    times : array_like
+        Seconds.
+
+    Returns
+    -------
+    Clip
+        One frame per time.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render import poses_at
+    >>> clip = builtin("jump")
+    >>> two = poses_at(clip, [0.5, 0.0])
+    >>> two.num_frames, bool(np.allclose(two.joint_positions()[1], clip.joint_positions()[0]))
+    (2, True)
+    """
     from flipstudy.stimuli.edit.timing import sample
     t = np.atleast_1d(np.asarray(times, dtype=float))
     return sample(clip, np.clip(t * clip.fps, 0, clip.num_frames - 1))
@@ -151,7 +185,30 @@ def poses_at(clip: Clip, times) -> Clip:
 
 def body_points(clip: Clip, body: Body, resolution=(8, 5), frames=slice(None)) -> np.ndarray:
     """(F, P·V, 3) world points of the body's ellipsoids (a coarse template) in
-    every frame: what a camera must keep in view."""
+    every frame: what a camera must keep in view.
+
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+    resolution : tuple of int
+        Of the coarse ellipsoid template.
+    frames : slice
+        The frames to take.
+
+    Returns
+    -------
+    ndarray, shape (F, P·V, 3)
+
+    Examples
+    --------
+    >>> from flipstudy import Body, builtin
+    >>> from flipstudy.render import body_points
+    >>> clip = builtin("jump")
+    >>> pts = body_points(clip, Body.from_clip(clip), frames=slice(0, 2))
+    >>> pts.shape[0], pts.shape[2]
+    (2, 3)
+    """
     joint, pts, _, _ = piece_templates(body, resolution)
     R = clip.joint_rotations()[frames][:, joint]               # (F,P,3,3)
     P = clip.joint_positions()[frames][:, joint]               # (F,P,3)
@@ -165,8 +222,17 @@ class BodyMesh:
     ``inflate`` (metres) pushes the surface out along its normals, so a second
     character drawn over an identical pose covers it cleanly (no z-fighting).
 
-    Example
-    -------
+    Parameters
+    ----------
+    body : Body
+        The segment model to draw.
+    resolution : tuple of int
+        Ellipsoid resolution (around, along).
+    inflate : float
+        Metres added to every semi-axis.
+
+    Examples
+    --------
     >>> from flipstudy import Body, builtin
     >>> clip = builtin("backflip")
     >>> bm = BodyMesh(Body.from_clip(clip))

@@ -19,8 +19,16 @@ class Gizmos:
     """Debug quantities of a clip at any time: COM, its velocity, the angular
     momentum about it, and the support polygon of the effectors in contact.
 
-    Example
-    -------
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+        The segment model the momenta are computed with.
+    what : sequence of str
+        Which gizmos to draw: ``"com"``, ``"path"``, ``"L"``, ``"v"``, ``"support"``.
+
+    Examples
+    --------
     >>> import numpy as np
     >>> from flipstudy import Body, builtin
     >>> clip = builtin("backflip")

@@ -18,8 +18,8 @@ def _mpl():
 def plot_analysis(a, path, title: str | None = None) -> Path:
     """Write a three-panel PNG (or PDF, by suffix) of an :class:`~flipstudy.stimuli.analyse.Analysis`.
 
-    Example
-    -------
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> from flipstudy import analyse, builtin
     >>> with tempfile.TemporaryDirectory() as tmp:
@@ -133,8 +133,8 @@ def plot_concat(result, body, path, baseline=None, sources=(), title: str | None
     drawn thin for reference.  ``result`` and ``baseline`` are
     :class:`flipstudy.stimuli.edit.concat.Concatenation` objects.
 
-    Example
-    -------
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> from flipstudy import Body, builtin
     >>> from flipstudy.stimuli.edit.concat import concatenate, motion_graph_join

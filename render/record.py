@@ -98,7 +98,38 @@ def check_rendered(stimuli, kind: str = "video", hash_files: bool = True) -> dic
     """Check that every stimulus of a study (a :class:`~flipstudy.stimuli.contract.StimulusSet`,
     or its folder) has its ``kind`` output, made from the stimulus as it is now,
     intact, and all with one settings record.  Returns that settings record;
-    raises :class:`StaleRenderError` naming the offending files and the fix."""
+    raises :class:`StaleRenderError` naming the offending files and the fix.
+
+    Parameters
+    ----------
+    stimuli : StimulusSet or str or pathlib.Path
+    kind : str
+        The output to check (``video``, ``ghost``, ...).
+    hash_files : bool
+        Check each file's sha256 too (not only its size).
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    StaleRenderError
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from flipstudy.errors import StaleRenderError
+    >>> from flipstudy.render import check_rendered
+    >>> from flipstudy.stimuli import Stimulus, StimulusSet
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     s = StimulusSet(tmp, [Stimulus("bf_0", "backflip", "original", "angular-momentum")])
+    ...     try:
+    ...         check_rendered(s)
+    ...     except StaleRenderError as e:
+    ...         print("flipstudy render" in str(e))
+    True
+    """
     if not isinstance(stimuli, StimulusSet):
         stimuli = StimulusSet.read(stimuli, files=False, design=False)
     study_dir = stimuli.folder

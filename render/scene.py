@@ -37,8 +37,20 @@ BOX_COLOR = "#cdb793"
 class Scene:
     """An offscreen plotter with a ground, lights and posable characters.
 
-    Example
-    -------
+    Parameters
+    ----------
+    body : Body, optional
+        The character's segment model.
+    style : Style, optional
+        Default :data:`~flipstudy.render.style.DEFAULT_STYLE`.
+    size : tuple of int
+        (width, height) in pixels.
+    camera : Camera, optional
+    ground_bounds : tuple of float, optional
+        (x0, x1, z0, z1) metres; None: no ground until set.
+
+    Examples
+    --------
     >>> from flipstudy import Body, builtin
     >>> from flipstudy.render.staging import stage
     >>> clip = builtin("backflip")

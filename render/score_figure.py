@@ -18,8 +18,8 @@ def score_figure(clip, scored, path, *, strip: bool = True, panel_size=(120, 170
     around the worst moment (``strip``; needs the renderer).  ``scored``: a
     :class:`~flipstudy.stimuli.score.ClipScore` of ``clip``.
 
-    Example
-    -------
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> from flipstudy import builtin
     >>> from flipstudy.stimuli.score import score

@@ -27,8 +27,8 @@ _BODY_WORDS = ("hip", "knee", "ankle", "foot", "toe", "shoulder", "elbow", "wris
 def joint_side(name: str) -> int:
     """0 (no side), 1 (left) or 2 (right) from a joint's name.
 
-    Example
-    -------
+    Examples
+    --------
     >>> [joint_side(n) for n in ("LeftUpLeg", "RHipJoint", "lhip", "mixamorig:RightArm",
     ...                          "thigh_l", "Hips", "LowerBack", "Neck")]
     [1, 2, 1, 2, 1, 0, 0, 0]
@@ -114,8 +114,8 @@ def side_tones(color, lightness: float = 20.0) -> np.ndarray:
     the colour itself, left ``lightness`` CIE L* lighter and right as much
     darker (both moved together to stay within 0..100).
 
-    Example
-    -------
+    Examples
+    --------
     >>> t = side_tones("#3d6a9e")
     >>> bool(delta_e(t[1], t[2]) >= 15), bool(rgb_to_lab(t[1])[0] > rgb_to_lab(t[2])[0])
     (True, True)

@@ -42,7 +42,24 @@ class Framing:
     of ``view_angle`` degrees, and keeps ``points`` (N,3) inside the picture with
     ``margin`` (a fraction of the width and height) on each side.  A stage keeps
     its framing so that another image size gets the camera fitted again, to the
-    same points (see :meth:`Stage.resized`)."""
+    same points (see :meth:`Stage.resized`).
+
+    Parameters
+    ----------
+    points : ndarray, shape (N, 3)
+    direction : ndarray, shape (3,)
+    view_angle, elevation : float
+        Degrees.
+    margin : float
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from flipstudy.render import Framing
+    >>> f = Framing(np.zeros((1, 3)), np.array([0.0, 0.0, 1.0]))
+    >>> f.view_angle, f.elevation
+    (25.0, 8.0)
+    """
 
     points: np.ndarray = field(repr=False)
     direction: np.ndarray
@@ -90,8 +107,25 @@ class Stage:
     ``direction`` the camera looks across; ``framing`` (:class:`Framing`) is how
     the camera was fitted, ``None`` for a camera that was given.
 
-    Example
-    -------
+    Parameters
+    ----------
+    clips, bodies : list
+        The placed clips and the bodies drawn.
+    takeoffs, landings : list of int or None
+    camera : Camera
+    size : tuple of int
+        (width, height) in pixels.
+    style : Style, optional
+    ground : tuple of float, optional
+        (x0, x1, z0, z1) metres.
+    boxes : list of (lo, hi)
+    offsets : ndarray, shape (K, 3), optional
+    yaws : list of float, optional
+    direction : ndarray, shape (3,), optional
+    framing : Framing, optional
+
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> st = stage([builtin("backflip"), builtin("frontflip")], size=(320, 240))
     >>> one = st.only(1)                                  # the front flip, same camera
@@ -164,8 +198,8 @@ class Stage:
         the union of that clip's stimuli (see :func:`base_clip_groups`), so
         each base clip's action is centred and fills the frame.
 
-        Example
-        -------
+        Examples
+        --------
         >>> from flipstudy import builtin
         >>> st = stage([builtin("backflip"), builtin("frontflip")], size=(320, 240))
         >>> st.refit(0).camera == st.camera, st.refit(0).clips[0] is st.clips[0]
@@ -206,7 +240,27 @@ class Stage:
 
 
 def translate(clip: Clip, offset) -> Clip:
-    """The clip moved by ``offset`` (3,) metres."""
+    """The clip moved by ``offset`` (3,) metres.
+
+    Parameters
+    ----------
+    clip : Clip
+    offset : array_like, shape (3,)
+        Metres.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render import translate
+    >>> clip = builtin("jump")
+    >>> moved = translate(clip, (1.0, 0.0, 0.0))
+    >>> (moved.joint_positions() - clip.joint_positions())[0, 0].round(6).tolist()
+    [1.0, 0.0, 0.0]
+    """
     o = np.asarray(offset, float)
     if not np.any(o):
         return clip
@@ -215,7 +269,33 @@ def translate(clip: Clip, offset) -> Clip:
 
 def place(clip: Clip, offset, yaw_deg: float = 0.0) -> Clip:
     """The clip moved by ``offset`` (3,), then turned by ``yaw_deg`` degrees
-    about the vertical axis through the origin (the study's take-off spot)."""
+    about the vertical axis through the origin (the study's take-off spot).
+
+    Parameters
+    ----------
+    clip : Clip
+    offset : array_like, shape (3,)
+        Metres.
+    yaw_deg : float
+        Degrees about the vertical axis through the origin.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render import place
+    >>> clip = builtin("jump")
+    >>> turned = place(clip, (0.0, 0.0, 0.0), 90.0)
+    >>> P, Q = clip.joint_positions(), turned.joint_positions()
+    >>> bool(np.allclose(P[..., 1], Q[..., 1]))                     # heights kept
+    True
+    >>> bool(np.allclose(np.hypot(P[..., 0], P[..., 2]), np.hypot(Q[..., 0], Q[..., 2])))
+    True
+    """
     clip = translate(clip, offset)
     if yaw_deg:
         from scipy.spatial.transform import Rotation
@@ -235,7 +315,31 @@ def takeoff_com(clip: Clip, body: Body, takeoff: int | None) -> np.ndarray:
 def align_takeoff(clips, takeoffs, bodies=None) -> tuple[list, np.ndarray]:
     """Clips moved horizontally so each take-off COM (:func:`takeoff_com`) is at
     x = z = 0 (heights are kept: the ground stays at its level).  Returns
-    (clips, offsets (K,3))."""
+    (clips, offsets (K,3)).
+
+    Parameters
+    ----------
+    clips : list of Clip
+    takeoffs : list of int or None
+        Each clip's first airborne frame.
+    bodies : list of Body, optional
+        Default: each clip's ``Body.from_clip``.
+
+    Returns
+    -------
+    clips : list of Clip
+    offsets : ndarray, shape (K, 3)
+
+    Examples
+    --------
+    >>> from flipstudy import Body, analyse, builtin
+    >>> clip = builtin("jump")
+    >>> a = analyse(clip)
+    >>> from flipstudy.render import align_takeoff
+    >>> moved, offsets = align_takeoff([clip], [a.takeoff])
+    >>> offsets.shape, float(offsets[0, 1])              # heights are kept
+    ((1, 3), 0.0)
+    """
     bodies = bodies or [Body.from_clip(c) for c in clips]
     out, offs = [], []
     for c, t, b in zip(clips, takeoffs, bodies):
@@ -262,7 +366,32 @@ def travel_direction(clip: Clip, body: Body, takeoff: int | None, landing: int |
 def jump_direction(clip: Clip, body: Body, takeoff: int | None, landing: int | None,
                    tiny: float = 0.05) -> np.ndarray:
     """Horizontal unit direction of the COM's travel from take-off to landing;
-    +Z when the travel is under ``tiny`` metres or there is no flight."""
+    +Z when the travel is under ``tiny`` metres or there is no flight.
+
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+    takeoff, landing : int or None
+        The flight's frames (None: no flight).
+    tiny : float
+        Metres of travel below which the direction is +Z.
+
+    Returns
+    -------
+    ndarray, shape (3,)
+        A horizontal unit vector.
+
+    Examples
+    --------
+    >>> from flipstudy import Body, analyse, builtin
+    >>> clip = builtin("jump")
+    >>> a = analyse(clip)
+    >>> from flipstudy.render import jump_direction
+    >>> d = jump_direction(clip, a.body, a.takeoff, a.landing)
+    >>> round(float(d @ d), 6), float(d[1])
+    (1.0, 0.0)
+    """
     d = travel_direction(clip, body, takeoff, landing, tiny)
     return np.array([0.0, 0.0, 1.0]) if d is None else d
 
@@ -293,7 +422,31 @@ def orient_yaws(clips, bodies, takeoffs, landings, direction) -> list[float]:
     """Degrees to turn each clip about the vertical so that it travels along
     ``direction``.  Clips with the same motion before take-off (one base clip
     and its edits) get one angle, from the first of them, so they stay
-    identical before take-off; clips that hardly travel are not turned."""
+    identical before take-off; clips that hardly travel are not turned.
+
+    Parameters
+    ----------
+    clips, bodies : list
+        The clips and their bodies.
+    takeoffs, landings : list of int or None
+    direction : array_like, shape (3,)
+        The horizontal direction to travel along.
+
+    Returns
+    -------
+    list of float
+        Degrees, one per clip.
+
+    Examples
+    --------
+    >>> from flipstudy import Body, analyse, builtin
+    >>> clip = builtin("jump")
+    >>> a = analyse(clip)
+    >>> from flipstudy.render import orient_yaws
+    >>> yaws = orient_yaws([clip, clip], [a.body, a.body], [a.takeoff] * 2, [a.landing] * 2, (0, 0, 1))
+    >>> len(yaws), yaws[0] == yaws[1]                   # the same motion: one angle
+    (2, True)
+    """
     target = np.asarray(direction, float)
     yaw_of: dict = {}
     out = []
@@ -331,8 +484,8 @@ def base_clip_groups(clips, takeoffs, names=None) -> dict:
     motion before take-off (stimuli made from one base clip by editing the
     flight share it).  Returns ``{key: [indices]}`` in first-seen order.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> a, b = builtin("backflip"), builtin("frontflip")
     >>> list(base_clip_groups([a, b, a], [157, 157, 157]).values())
@@ -395,8 +548,33 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
     (x0, x1, z0, z1) are given.  ``boxes`` (``[(lo, hi), ...]``, axis-aligned, in
     the first clip's coordinates) are moved with it.
 
-    Example
+    Parameters
+    ----------
+    clips : sequence of Clip
+    takeoffs, landings : sequence of int or None, optional
+        Default: what :func:`flipstudy.analyse` finds.
+    bodies : sequence of Body, optional
+    camera : Camera, optional
+        Given: the clips are drawn where they are.
+    size : tuple of int
+        (width, height) in pixels.
+    style : Style, optional
+    ground_bounds : tuple of float, optional
+    boxes : sequence of (lo, hi)
+    direction : array_like, shape (3,), optional
+    view_angle, elevation : float
+        Degrees.
+    margin : float, optional
+        Default: the style's ``frame_margin``.
+    align, orient : bool
+        Move the take-off COM to the origin; turn the other base clips.
+
+    Returns
     -------
+    Stage
+
+    Examples
+    --------
     A back flip and a front flip (built to travel opposite ways) under one camera:
 
     >>> from flipstudy import builtin

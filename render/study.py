@@ -130,8 +130,32 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     stimulus, so an interrupted render loses at most the outputs in flight, and
     those never appear under their final names.
 
-    Example
+    Parameters
+    ----------
+    study_dir : str, pathlib.Path or StimulusSet
+    what : sequence of str
+        Outputs: ``video``, ``ghost``, ``trail``, ``strip``, ``composite``, ``overlay``.
+    size : tuple of int
+        (width, height) in pixels.
+    jobs : int, optional
+        Local worker processes.
+    fps : float
+        Display frames per second of the videos.
+    style : Style, optional
+    out : str or pathlib.Path, optional
+    frames, progress, orient, force : bool
+    cluster : Cluster, optional
+
+    Returns
     -------
+    RenderResult
+
+    Raises
+    ------
+    StudyRenderError
+
+    Examples
+    --------
     A study of two stimuli (``flipstudy stimuli`` of a two-level design), their
     ghost images at a small size, then the same call again:
 

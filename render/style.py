@@ -57,8 +57,30 @@ class Style:
     ...
     flipstudy.errors.StyleError: Style.trail_rate: expected more than 0 and at most 240 (markers per second), got 0
 
-    Example
-    -------
+    Parameters
+    ----------
+    background, body_color, label_color : str
+        Colours (names or ``#rrggbb``).
+    ground, ground_colors, ground_tile, ground_height, ground_margin : various
+        The checkered ground: drawn or not, its two colours, tile size, height and
+        margin (metres).
+    character, sided, side_lightness, side_colors : various
+        The character style (:data:`~flipstudy.render.characters.CHARACTER_STYLES`)
+        and its left/right tones.
+    ghost_color, ghost_opacity, ghost_last_opacity, ghost_ramp, ghost_late_opacity, ghost_spread : various
+        The ghost composites.
+    trail_palette, trail_rate, marker_size, trail_line, trail_line_width, trail_com_color, trail_body_color, trail_body_opacity : various
+        The marker trails.
+    legend, legend_size, font_size, scale_bar : various
+        Labels on the pictures.
+    ambient, diffuse, specular, specular_power, lighting, anti_aliasing, depth_peels, ellipsoid_resolution : various
+        Shading and quality.
+    **others
+        Every other field (overlay, gizmo and point-light settings), each checked
+        against :data:`STYLE_RANGES`.
+
+    Examples
+    --------
     >>> s = Style.from_dict({"background": "white", "ghost_opacity": 0.25})
     >>> s.ghost_opacity, Style.from_dict(s.to_dict()) == s
     (0.25, True)

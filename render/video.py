@@ -44,7 +44,35 @@ def iter_frames(clip: Clip, scene, fps: float = 60.0, *, other: Clip | None = No
     scene set up for it (camera and ground set, e.g. by
     :func:`~flipstudy.render.scene.scene_for`).  The same buffer is reused: copy a
     frame to keep it.  ``other`` draws a second clip (overlay) in
-    ``colors[1]``, over ``clip`` in ``colors[0]``."""
+    ``colors[1]``, over ``clip`` in ``colors[0]``.
+
+    Parameters
+    ----------
+    clip : Clip
+    scene : Scene
+        Set up for the clip (camera and ground).
+    fps : float
+    other : Clip, optional
+        A second clip drawn over the first.
+    body, other_body : Body, optional
+    gizmos : Gizmos, optional
+    colors : tuple, optional
+
+    Yields
+    ------
+    ndarray, shape (H, W, 3), uint8
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render import iter_frames, stage
+    >>> from flipstudy.render.scene import scene_for
+    >>> st = stage([builtin("jump")], size=(64, 48))
+    >>> with scene_for(st) as sc:
+    ...     shapes = {f.shape for f in iter_frames(st.clips[0], sc, fps=5, body=st.bodies[0])}
+    >>> shapes
+    {(48, 64, 3)}
+    """
     st = scene.style
     v = resample(clip, fps)
     R, P = v.joint_rotations(), v.joint_positions()
@@ -84,8 +112,25 @@ def render_video(what, path, *, fps: float = 60.0, scene=None, debug=(), frames_
     :class:`~flipstudy.render.scene.Scene` to reuse (e.g. one per worker);
     ``debug``: gizmos (see :mod:`flipstudy.render.gizmos`).
 
-    Example
+    Parameters
+    ----------
+    what : Stage or Clip
+    path : str or pathlib.Path
+        The ``.mp4`` to write.
+    fps : float
+        Display frames per second.
+    scene : Scene, optional
+    debug : sequence of str
+    frames_dir : str or pathlib.Path, optional
+    crf : int
+        H.264 quality (lower: better, larger).
+
+    Returns
     -------
+    pathlib.Path
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> from flipstudy import builtin
     >>> from flipstudy.render.staging import stage

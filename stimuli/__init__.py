@@ -51,8 +51,25 @@ def builtin(name: str, **params) -> "Clip":
     or ``"jump"`` (see :mod:`flipstudy.stimuli.synth`; keyword parameters such as
     ``fps`` go to :func:`flipstudy.stimuli.synth.builtin`).
 
-    Example
+    Parameters
+    ----------
+    name : str
+        ``"backflip"``, ``"frontflip"`` or ``"jump"``.
+    **params
+        The clip's parameters, e.g. ``fps`` (frames per second, default 120).
+
+    Returns
     -------
+    Clip
+        In metres, Y up; ``clip.meta`` holds the exact flight's frames.
+
+    Raises
+    ------
+    FlipstudyError
+        For an unknown name (the message lists the valid ones).
+
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> clip = builtin("backflip", fps=60)
     >>> clip.fps, clip.skeleton.joint_names[0]

@@ -27,7 +27,38 @@ GRAVITY_TOLERANCE = 0.25
 
 @dataclass
 class Analysis:
-    """What :func:`analyse` found.  Arrays have frames first."""
+    """What :func:`analyse` found.  Arrays have frames first.
+
+    Attributes
+    ----------
+    clip : Clip
+        The clip analysed.
+    body : Body
+        The segment model the momenta were computed with (with the masses
+        estimated from the flight when :func:`analyse` was asked to).
+    com : ndarray, shape (F, 3)
+        Centre of mass, metres.
+    p : ndarray, shape (F, 3)
+        Linear momentum, kg·m/s.
+    L : ndarray, shape (F, 3)
+        Angular momentum about the centre of mass, kg·m²/s.
+    flights : list
+        The ballistic phases found (``takeoff``, ``landing``, ``takeoff_time``
+        and ``landing_time`` describe the first).
+    mass_fit : MassFit or None
+        The mass estimate, when one was made.
+    warnings : list of str
+        Sentences about what the clip contradicts (e.g. its frame time).
+
+    Examples
+    --------
+    >>> from flipstudy import analyse, builtin
+    >>> a = analyse(builtin("jump"))
+    >>> a.takeoff < a.landing, a.flight_s > 0
+    (True, True)
+    >>> a.warnings
+    []
+    """
 
     clip: Clip
     body: Body
@@ -120,7 +151,7 @@ class Analysis:
 
     @property
     def L_cv_pct(self) -> float | None:
-        """Coefficient of variation of |L| in flight, percent."""
+        """Coefficient of variation of ``|L|`` in flight, percent."""
         if self.flight is None:
             return None
         x = self.L_norm[self.flight_frames]
@@ -331,15 +362,28 @@ def analyse(clip: Clip, body: Body | None = None, total_mass: float = 70.0,
 
     Parameters
     ----------
-    body : the segment model; default ``Body.from_clip(clip, total_mass)`` (trunk and
+    clip : Clip
+        The motion, in metres.
+    body : Body, optional
+        The segment model; default ``Body.from_clip(clip, total_mass)`` (trunk and
         head measured on the clip's poses).
-    estimate : estimate segment masses from the flight (Section 4.2) and use them
-        for the momenta; with ``False`` the given/table masses are used.
-    W : regularisation weight of the mass fit, W‖m − m⁰‖² (m²/kg²; see
+    total_mass : float, default 70.0
+        Kilograms, for the default body.
+    estimate : bool, default True
+        Estimate segment masses from the flight (Section 4.2) and use them for
+        the momenta; with ``False`` the given/table masses are used.
+    W : float
+        Regularisation weight of the mass fit, W‖m − m⁰‖² (m²/kg²; see
         ``flipstudy.stimuli.massfit.DEFAULT_W``).
 
-    Example
+    Returns
     -------
+    Analysis
+        Centre of mass, momenta and the flight phases (``takeoff``, ``landing``,
+        ``takeoff_time``, ``landing_time``, ``takeoff_angle``).
+
+    Examples
+    --------
     >>> from flipstudy import analyse, builtin
     >>> a = analyse(builtin("backflip"))
     >>> a.takeoff, a.landing, round(a.takeoff_angle)            # frames inside the flight, degrees

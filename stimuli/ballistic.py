@@ -266,8 +266,8 @@ def inject_gravity(a: Analysis, error: float, policy: str) -> Injected:
     """The flight under ``g' = (1 + error)·g`` (``g`` the original's own); what
     stays is ``policy`` (see the module's table).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import analyse, builtin
     >>> a = analyse(builtin("jump"))
     >>> s = inject_gravity(a, -0.2, "flight-time")
@@ -345,8 +345,8 @@ def inject_time_scale(a: Analysis, error: float, span: str = "flight") -> Inject
     """The flight (``span = "flight"``) or the whole clip (``"whole"``) played at
     ``1 + error`` speed at the same frame rate.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import analyse, builtin
     >>> a = analyse(builtin("backflip"))
     >>> s = inject_time_scale(a, 0.25, "whole")

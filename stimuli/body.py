@@ -169,8 +169,20 @@ class Body:
     frame, ``radius`` (P,) short semi-axis, ``segment`` (P,) index into
     ``segment_names``.
 
-    Example
-    -------
+    Build one with :meth:`from_clip` (trunk and head measured on the clip's
+    poses) or :meth:`from_skeleton` (anthropometric tables only).
+
+    Attributes
+    ----------
+    skeleton : Skeleton
+        The skeleton the pieces hang on.
+    total_mass : float
+        Kilograms; the pieces' masses sum to it.
+    segment_names : list of str
+        The segments, in the order ``segment`` indexes.
+
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> body = Body.from_skeleton(builtin("backflip").skeleton, total_mass=70)
     >>> round(sum(body.segment_masses().values()), 6)

@@ -9,8 +9,8 @@ takes the typed :class:`StimulusSet` instead of parsing the manifest again.
 :meth:`StimulusSet.write` writes the manifest byte for byte as the build always
 has (floats with six decimals, ``nan`` for a missing value, ``true``/``false``).
 
-Example
--------
+Examples
+--------
 >>> import tempfile
 >>> from pathlib import Path
 >>> from flipstudy.stimuli.contract import Stimulus, StimulusSet
@@ -222,6 +222,31 @@ class Stimulus(_Record):
     the first and last frame strictly inside the flight, ``takeoff_time`` /
     ``landing_time`` the contact instants.  ``original`` is the stimulus its d′
     compares with ("" for reference rows and groups without a level 0).
+
+    Parameters
+    ----------
+    stimulus : str
+        Its name (a plain file name: letters, digits, ``_``, ``.``, ``-``).
+    clip, group, kind : str
+        Its base clip, error group and error kind.
+    **columns
+        One keyword per manifest column (see the Formats page, or
+        :data:`MANIFEST_COLUMNS`), each converted to its field's type.
+
+    Raises
+    ------
+    TypeError
+        For a value that is not of its column's type.
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import Stimulus
+    >>> s = Stimulus("bf_abrupt_inc_50", clip="backflip", group="abrupt-increase",
+    ...              kind="angular-momentum", level=50, frames=397, fps=120)
+    >>> s.level, str(s.bvh), round(s.duration_s, 3)
+    (50.0, 'bf_abrupt_inc_50.bvh', 3.308)
+    >>> s.as_dict()["group"]
+    'abrupt-increase'
     """
     stimulus: str
     clip: str
@@ -339,7 +364,34 @@ class StimulusSet:
     folder has no ``design.toml`` or it was not asked for), its stimuli in
     manifest order, and the sha256 of its ``manifest.csv`` (what sessions record).
 
-    Iterating gives the stimuli; ``set[name]`` one by name."""
+    Iterating gives the stimuli; ``set[name]`` one by name.  Read one with
+    :meth:`read` (every problem a ``ManifestError`` naming file and line), write it
+    with :meth:`write` (byte-identical to what was read).
+
+    Parameters
+    ----------
+    folder : str or pathlib.Path
+        The stimulus set's folder (where ``manifest.csv`` is).
+    stimuli : sequence of Stimulus
+        The rows, in manifest order; names must be unique.
+    design : Design, optional
+        The study's design, when known.
+    manifest_sha256 : str, optional
+        The sha256 of the manifest it was read from.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from flipstudy.stimuli import Stimulus, StimulusSet
+    >>> rows = [Stimulus("bf_0", "backflip", "original", "angular-momentum", level=0),
+    ...         Stimulus("bf_50", "backflip", "abrupt-increase", "angular-momentum", level=50)]
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     s = StimulusSet(tmp, rows)
+    ...     _ = s.write()
+    ...     back = StimulusSet.read(tmp, files=False)
+    >>> back.names, back["bf_50"].level, len(back)
+    (['bf_0', 'bf_50'], 50.0, 2)
+    """
     folder: Path
     stimuli: tuple[Stimulus, ...]
     design: object = None

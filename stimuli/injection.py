@@ -111,8 +111,8 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
     its COM is an exact parabola from the take-off instant, so the COM velocity
     changes only there and at the new touchdown.
 
-    Example
-    -------
+    Examples
+    --------
     >>> import numpy as np
     >>> from flipstudy import analyse, builtin
     >>> from flipstudy.stimuli.physics import momentum

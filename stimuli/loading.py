@@ -33,6 +33,28 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None,
     design's clips, which the design's own gate judges.  A name that is nothing of
     the above raises :class:`~flipstudy.errors.FlipstudyFileNotFoundError`.
 
+    Parameters
+    ----------
+    spec : str
+        A built-in name or the path of a BVH file.
+    scale : float, optional
+        Metres per file unit; default: guessed from the flight (BVH) or 1.0.
+    fps : float, optional
+        Frames per second, overriding the file's.
+
+    Returns
+    -------
+    Clip
+
+    Raises
+    ------
+    FlipstudyFileNotFoundError
+        When ``spec`` is neither a built-in name nor an existing file.
+    BVHError
+        For a malformed BVH file (naming its line).
+
+    Examples
+    --------
     >>> from flipstudy.stimuli import load_clip
     >>> load_clip("backflip", fps=60).fps
     60.0

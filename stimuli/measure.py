@@ -305,8 +305,8 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
     ``analysis``: the clip's own analysis, when already made (its body is used;
     default :func:`analyse` with the table masses, ``estimate=False``).
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy import builtin
     >>> m = measure(builtin("backflip"))
     >>> [p[0] for p in m.phases]

@@ -55,8 +55,8 @@ def momentum(clip: Clip, body: Body, breaks=()) -> Momentum:
     within each phase only (one-sided at its ends), so no stencil reaches across
     a contact.  A break leaving a phase of one frame is ignored.
 
-    Example
-    -------
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> from flipstudy.stimuli.body import Body
     >>> clip = builtin("backflip")

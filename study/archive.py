@@ -8,8 +8,8 @@ any exported or imported response table in the folder (a ``*.csv`` with
 ``simulated`` true, or ``input`` = ``simulated`` in tables exported before that
 column existed).  A database that cannot be read counts as holding real answers.
 
-Example
--------
+Examples
+--------
 A tiny study with two simulated participants:
 
 >>> import tempfile, pathlib

@@ -2,8 +2,8 @@
 the format of :mod:`flipstudy.stimuli.stimset` and small placeholder videos (a moving
 square; H.264, yuv420p) — no motion data or renderer needed.
 
-Example
--------
+Examples
+--------
 >>> import tempfile, pathlib
 >>> tmp = tempfile.TemporaryDirectory()
 >>> study = make_demo_study(pathlib.Path(tmp.name) / "tiny")

@@ -12,8 +12,8 @@ touched).  From then on:
   has the recorded hash, and ``status`` flags it on every call
   (:func:`design_change` names the file and the keys that changed).
 
-Example
--------
+Examples
+--------
 >>> import tempfile, pathlib
 >>> from flipstudy.study.demo import make_demo_study
 >>> from flipstudy.study.simulate import simulate

@@ -6,8 +6,8 @@ URL, since when).  A second ``run`` for the same participant is refused at once
 with that information.  The kernel releases a ``flock`` when its holder dies,
 even by SIGKILL, so a lock left by a dead server is simply taken over.
 
-Example
--------
+Examples
+--------
 >>> import tempfile
 >>> study = tempfile.TemporaryDirectory()                  # stands for a study folder
 >>> lock = ParticipantLock(study.name, "P01").acquire()

@@ -36,8 +36,8 @@ from the design seed and the participant ID through SHA-256
 (:func:`participant_seed`), never Python's ``hash()``, so the same participant
 always gets the same order; the order is stored before the first trial anyway.
 
-Example
--------
+Examples
+--------
 A tiny study's design and manifest (two groups of two levels, shown twice):
 
 >>> import tempfile, pathlib

@@ -17,8 +17,8 @@ A *study folder* is a folder with ``manifest.csv`` and ``design.toml`` (what
 ``analysis/`` and any other name are the user's: ``analyze`` and ``figure`` write
 there freely.
 
-Example
--------
+Examples
+--------
 >>> import tempfile, pathlib
 >>> from flipstudy.study.demo import make_demo_study
 >>> tmp = tempfile.TemporaryDirectory()

@@ -5,8 +5,8 @@ folders, options, a cluster address) and returns a result of
 ``flipstudy`` prints — and ``save_json``/``load_json``).  The CLI
 (:mod:`flipstudy.study.cli`) parses, calls one step and prints its summary.
 
-Example
--------
+Examples
+--------
 >>> import tempfile, pathlib
 >>> from flipstudy.study import pipeline
 >>> from flipstudy.study.demo import make_demo_study

@@ -96,8 +96,8 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     """Run the whole pipeline into ``out``; returns a :class:`~flipstudy.results.ReproduceResult`
     (the files, the seconds per stage, the counts, the table as Markdown, the thresholds).
 
-    Example
-    -------
+    Examples
+    --------
     Not run with the doctests: the whole pipeline (52 stimuli rendered) takes
     about two minutes; ``tests/study/test_reproduce.py`` runs it.
 

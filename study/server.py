@@ -27,8 +27,8 @@ anything but ``application/json`` bodies of at most 8 KiB.  One server per
 participant: :mod:`flipstudy.study.lock`.  It serves only videos that ``render.json``
 says were made from the current stimuli with one set of settings.
 
-Example
--------
+Examples
+--------
 ``serve`` runs until it is stopped (Ctrl-C), so it is not run here:
 
 >>> serve("study/", "P01", open_browser=False)        # doctest: +SKIP

@@ -15,8 +15,8 @@ same posterior and next level.  When a group's ``stop_width`` is reached its
 remaining slots are skipped.  A 2AFC answer is "first" or "second" (the motion
 judged physically correct); yes/no answers are "correct" or "incorrect".
 
-Example
--------
+Examples
+--------
 On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
 
 >>> import tempfile, pathlib

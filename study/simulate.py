@@ -46,8 +46,8 @@ on how many others are simulated.  Every answer goes as JSON bytes through the
 calls the server's POST handler makes (:func:`flipstudy.study.validate.parse_json_object`,
 then :func:`flipstudy.study.session.submit_answer`), so it is validated and stored alike.
 
-Example
--------
+Examples
+--------
 On a tiny study (:func:`flipstudy.study.demo.make_demo_study`: 8 trials):
 
 >>> import tempfile, pathlib

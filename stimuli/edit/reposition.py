@@ -17,8 +17,8 @@ def move_com(clip: Clip, body: Body, frames: slice, new_com: np.ndarray,
     ``carry`` every later frame is offset by the shift of the last one, so the
     motion continues from where the flight now ends.
 
-    Example
-    -------
+    Examples
+    --------
     The flight of the built-in back flip 10 cm lower:
 
     >>> import numpy as np

@@ -26,8 +26,8 @@ def sample(clip: Clip, src: np.ndarray) -> Clip:
     (clamped to the clip).  Same fps and ``meta`` (provenance only: the source
     frames are ``src``, clamped, and not stored in it).
 
-    Example
-    -------
+    Examples
+    --------
     >>> import numpy as np
     >>> from flipstudy import builtin
     >>> clip = builtin("backflip")

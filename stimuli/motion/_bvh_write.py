@@ -116,8 +116,22 @@ def save_bvh(clip: Clip, path, scale: float = 1.0) -> Path:
     the skeleton's; the root OFFSET is zero and its channels absolute (a root without
     position channels must stand still: its position is written as its OFFSET).
 
-    Example
+    Parameters
+    ----------
+    clip : Clip
+        The motion to write.
+    path : str or pathlib.Path
+        The file to write (replaced atomically: never left half-written).
+    scale : float, default 1.0
+        Metres per file unit.
+
+    Returns
     -------
+    pathlib.Path
+        The path written.
+
+    Examples
+    --------
     >>> import tempfile, pathlib
     >>> from flipstudy import builtin, save_bvh
     >>> with tempfile.TemporaryDirectory() as tmp:

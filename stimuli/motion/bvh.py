@@ -178,14 +178,28 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
 
     Parameters
     ----------
-    path : file path.
-    scale : metres per file unit; ``None`` guesses it from the skeleton's size.
-    fps : frames per second, overriding the header's Frame Time.
-    drop_tpose : ``"auto"`` drops a calibration T-pose first frame (raw CMU);
-        ``True`` always drops frame 0, ``False`` never.
+    path : str or pathlib.Path
+        The BVH file.
+    scale : float or None
+        Metres per file unit; ``None`` guesses it from the skeleton's size.
+    fps : float, optional
+        Frames per second, overriding the header's Frame Time.
+    drop_tpose : {"auto", True, False}
+        ``"auto"`` drops a calibration T-pose first frame (raw CMU); ``True``
+        always drops frame 0, ``False`` never.
 
-    Example
+    Returns
     -------
+    Clip
+        In metres; ``clip.meta`` records the scale used and any warnings.
+
+    Raises
+    ------
+    BVHError
+        For a malformed file, naming its line and what was expected.
+
+    Examples
+    --------
     A built-in flip written in centimetres and read back, the unit guessed:
 
     >>> import tempfile, pathlib

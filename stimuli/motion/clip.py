@@ -31,8 +31,33 @@ from . import quat
 class Clip:
     """Motion of a skeleton over ``F`` frames at ``fps`` frames per second.
 
-    Example
-    -------
+    Immutable in spirit: editing operations return new clips.  Units are metres,
+    seconds and radians, Y up.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        The joint hierarchy (``J`` joints).
+    fps : float
+        Frames per second (positive).
+    root_pos : array_like, shape (F, 3)
+        Root translation per frame, metres.
+    rotations : array_like, shape (F, J, 4)
+        Local joint rotations as unit quaternions (x, y, z, w; normalised on
+        construction).
+    joint_pos : array_like, shape (F, J, 3), optional
+        Per-frame local joint positions, for formats that animate them.
+    meta : dict, optional
+        Free-form facts about the clip (its name, source, warnings).
+
+    Raises
+    ------
+    ValueError
+        For arrays of the wrong shape, a non-finite value, a zero quaternion or
+        a frame rate that is not positive.
+
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> clip = builtin("backflip")
     >>> P = clip.joint_positions()      # (F, J, 3) metres

@@ -28,8 +28,22 @@ POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
 class Skeleton:
     """A joint hierarchy.
 
-    Example
-    -------
+    Parameters
+    ----------
+    joint_names : list of str
+        Unique joint names, parents before children.
+    parents : array_like of int, shape (J,)
+        Parent index of each joint (-1 for the root).
+    offsets : array_like, shape (J, 3)
+        Rest offset of each joint from its parent, metres.
+    channels : list of tuple of str, optional
+        Each joint's BVH channels as read (default: root position and rotation,
+        rotations elsewhere).
+    end_sites : list of (int, ndarray)
+        BVH end sites: the joint and the offset of its end.
+
+    Examples
+    --------
     >>> sk = Skeleton(["Hips", "Spine"], [-1, 0], [[0, 0, 0], [0, 0.1, 0]])
     >>> sk.num_joints, sk.index("Spine")
     (2, 1)

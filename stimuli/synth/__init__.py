@@ -97,8 +97,8 @@ def builtin(name: str, fps: float = 120, total_mass: float = 70.0,
     ones) or a value out of range, and :class:`SynthError` (a ``ValueError``)
     for parameters with no consistent motion.
 
-    Example
-    -------
+    Examples
+    --------
     >>> clip = builtin("frontflip", fps=60, tuck=0.8)
     >>> clip.meta["L_flight"][0] > 0          # forward rotation
     True

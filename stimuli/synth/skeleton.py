@@ -52,8 +52,8 @@ def make_skeleton(height: float = 1.75) -> Skeleton:
     Site), the same Right*.  Other joints have channels Zrotation Yrotation
     Xrotation.
 
-    Example
-    -------
+    Examples
+    --------
     >>> sk = make_skeleton(1.75)
     >>> round(sk.rest_height(), 3)
     1.75

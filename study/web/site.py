@@ -23,8 +23,8 @@ end).  The dropped-frame threshold is the design's ``[session] max_dropped_pct``
 every answer; with ``[session] repeat_dropped = true`` the trials flagged by it are
 shown once more after the last trial (their records carry ``repeat = 1``).
 
-Example
--------
+Examples
+--------
 >>> import tempfile, pathlib
 >>> from flipstudy.study.demo import make_demo_study
 >>> tmp = pathlib.Path(tempfile.mkdtemp())
