@@ -1,0 +1,116 @@
+"""FXAA on the read-back frame, in numpy: the anti-aliasing of ``Style.anti_aliasing = "fxaa"``.
+
+Every frame is read back into a numpy array anyway (:meth:`Scene.grab
+<flipstudy.render.scene.Scene.grab>`), so the anti-aliasing runs there instead
+of in VTK's FXAA filter, whose full-screen pass on Mesa llvmpipe costs about
+twice the rest of the frame (``benchmarks/bench_render_ceiling.py --aa``).
+The algorithm is the one VTK's filter runs, Lottes' FXAA 3.11 (the "quality"
+form, with VTK's default options, :data:`OPTIONS`): a pixel is an edge when
+the luma range of it and its four neighbours exceeds a hard and a relative
+threshold; its edge runs along the axis of the smaller luma curvature; the
+edge is followed both ways (unit steps, at most ``endpoint_search_iterations``)
+to where the luma leaves the edge's; the pixel is blended towards its neighbour
+across the edge by its distance to the nearer end (the coverage of a straight
+edge through the span), or by the sub-pixel estimate (luma of the 3x3
+neighbourhood against the pixel's) when that is larger.  Only the edge
+pixels, a few per cent of a stimulus frame, are computed; every other pixel is
+returned as it is, as the shader returns it.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+#: VTK's ``vtkFXAAOptions`` defaults (the filter the project used before)
+OPTIONS = {"relative_contrast_threshold": 1 / 8, "hard_contrast_threshold": 1 / 16,
+           "subpixel_blend_limit": 3 / 4, "subpixel_contrast_threshold": 1 / 4,
+           "endpoint_search_iterations": 12}
+
+_LUMA = np.array([0.299, 0.587, 0.114], np.float32)
+
+
+def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """The frame ``img`` ((H, W, 3) uint8 RGB) anti-aliased by FXAA 3.11,
+    written to ``out`` (may be ``img`` itself; a new array when ``None``) and
+    returned.
+
+    >>> img = np.zeros((16, 16, 3), np.uint8)
+    >>> img[np.arange(16)[:, None] > np.arange(16)[None, :] // 4] = 255   # a staircase edge
+    >>> sm = fxaa(img)
+    >>> bool(((sm > 0) & (sm < 255)).any()), np.array_equal(sm[12:, :4], img[12:, :4])
+    (True, True)
+    """
+    o = OPTIONS
+    H, W = img.shape[:2]
+    if out is None:
+        out = img.copy()
+    elif out is not img:
+        np.copyto(out, img)
+    if H < 3 or W < 3:
+        return out
+    # luma of every pixel (0..1), padded by one edge pixel: P[y + 1, x + 1] is pixel (y, x)
+    P = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge") @ (_LUMA / np.float32(255))
+    M = P[1:-1, 1:-1]
+    N, S, Wl, E = P[:-2, 1:-1], P[2:, 1:-1], P[1:-1, :-2], P[1:-1, 2:]
+    hi = np.maximum(np.maximum(np.maximum(N, S), np.maximum(Wl, E)), M)
+    lo = np.minimum(np.minimum(np.minimum(N, S), np.minimum(Wl, E)), M)
+    rng = hi - lo
+    ys, xs = np.nonzero(rng >= np.maximum(o["hard_contrast_threshold"],
+                                          hi * o["relative_contrast_threshold"]))
+    if not len(ys):
+        return out
+    py, px = ys + 1, xs + 1                                    # in P
+    m, n, s, w, e = P[py, px], P[py - 1, px], P[py + 1, px], P[py, px - 1], P[py, px + 1]
+    nw, ne, sw, se = P[py - 1, px - 1], P[py - 1, px + 1], P[py + 1, px - 1], P[py + 1, px + 1]
+    r = rng[ys, xs]
+    # sub-pixel aliasing: the 3x3 low-pass against the pixel, over the local range
+    ll = (2 * (n + s + w + e) + (nw + ne + sw + se)) / 12
+    sub = np.clip(np.abs(ll - m) / r, 0, 1)
+    sub_f = np.where(sub >= o["subpixel_contrast_threshold"],
+                     ((-2 * sub + 3) * sub * sub) ** 2 * o["subpixel_blend_limit"], 0)
+    # the edge's direction: horizontal when the luma curves more across rows than columns
+    horz = (np.abs(nw - 2 * w + sw) + 2 * np.abs(n - 2 * m + s) + np.abs(ne - 2 * e + se)) >= \
+           (np.abs(nw - 2 * n + ne) + 2 * np.abs(w - 2 * m + e) + np.abs(sw - 2 * s + se))
+    a = np.where(horz, n, w)                                   # the two neighbours across the edge
+    b = np.where(horz, s, e)
+    pair_a = np.abs(a - m) >= np.abs(b - m)
+    grad = np.maximum(np.abs(a - m), np.abs(b - m))
+    side = np.where(pair_a, a, b)
+    sign = np.where(pair_a, -1, 1)                             # towards the steeper neighbour
+    # unit step along the edge (ay, ax) and one to the chosen side (qy, qx)
+    ay, ax = (~horz).astype(np.int64), horz.astype(np.int64)
+    qy, qx = np.where(horz, sign, 0), np.where(horz, 0, sign)
+    half = 0.5 * (side + m)                                    # the edge's mid luma
+    thr = 0.25 * grad
+    m_below = (m - half) < 0
+
+    def luma_at(k):
+        """Luma half a pixel to the chosen side of the pixel k steps along the edge."""
+        y, x = np.clip(py + k * ay, 0, H + 1), np.clip(px + k * ax, 0, W + 1)
+        y2, x2 = np.clip(y + qy, 0, H + 1), np.clip(x + qx, 0, W + 1)
+        return 0.5 * (P[y, x] + P[y2, x2]) - half
+
+    kn, kp = -np.ones(len(ys), np.int64), np.ones(len(ys), np.int64)
+    en, ep = luma_at(kn), luma_at(kp)
+    done_n, done_p = np.abs(en) >= thr, np.abs(ep) >= thr
+    for _ in range(int(o["endpoint_search_iterations"]) - 1):
+        if done_n.all() and done_p.all():
+            break
+        kn = np.where(done_n, kn, kn - 1)
+        kp = np.where(done_p, kp, kp + 1)
+        en = np.where(done_n, en, luma_at(kn))
+        ep = np.where(done_p, ep, luma_at(kp))
+        done_n |= np.abs(en) >= thr
+        done_p |= np.abs(ep) >= thr
+    dn, dp = -kn, kp                                           # distances to the two ends
+    nearer_n = dn < dp
+    good = np.where(nearer_n, (en < 0) != m_below, (ep < 0) != m_below)
+    off = np.where(good, 0.5 - np.minimum(dn, dp) / (dn + dp), 0.0)
+    off = np.maximum(off, sub_f)[:, None].astype(np.float32)
+    # blend towards the neighbour across the edge (a bilinear tap off the pixel centre)
+    c0 = img[ys, xs].astype(np.float32)
+    c1 = img[np.clip(ys + qy, 0, H - 1), np.clip(xs + qx, 0, W - 1)].astype(np.float32)
+    out[ys, xs] = np.rint(c0 + (c1 - c0) * off).astype(np.uint8)
+    return out
+
+
+__all__ = ["fxaa", "OPTIONS"]
