@@ -25,7 +25,7 @@ OPTIONS = {"relative_contrast_threshold": 1 / 8, "hard_contrast_threshold": 1 / 
            "subpixel_blend_limit": 3 / 4, "subpixel_contrast_threshold": 1 / 4,
            "endpoint_search_iterations": 12}
 
-_LUMA = np.array([0.299, 0.587, 0.114], np.float32)
+_W8 = np.array([77, 150, 29], np.uint16)        # Rec. 601 luma in 1/256 steps (sums to 256)
 
 
 def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -47,24 +47,33 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         np.copyto(out, img)
     if H < 3 or W < 3:
         return out
-    # luma of every pixel (0..1), padded by one edge pixel: P[y + 1, x + 1] is pixel (y, x)
-    P = np.pad(img, ((1, 1), (1, 1), (0, 0)), mode="edge") @ (_LUMA / np.float32(255))
-    M = P[1:-1, 1:-1]
-    N, S, Wl, E = P[:-2, 1:-1], P[2:, 1:-1], P[1:-1, :-2], P[1:-1, 2:]
+    # luma of every pixel in 1/255 (uint8: the whole-frame work stays on bytes), padded by
+    # the longest endpoint search so no index leaves it: Lp[y + R, x + R] is pixel (y, x)
+    R = int(o["endpoint_search_iterations"]) + 1
+    lum = ((img[..., 0] * _W8[0] + img[..., 1] * _W8[1] + img[..., 2] * _W8[2]) >> 8).astype(np.uint8)
+    Lp = np.pad(lum, R, mode="edge")
+    Wp = W + 2 * R
+    M = lum
+    N, S = Lp[R - 1:R - 1 + H, R:R + W], Lp[R + 1:R + 1 + H, R:R + W]
+    Wl, E = Lp[R:R + H, R - 1:R - 1 + W], Lp[R:R + H, R + 1:R + 1 + W]
     hi = np.maximum(np.maximum(np.maximum(N, S), np.maximum(Wl, E)), M)
     lo = np.minimum(np.minimum(np.minimum(N, S), np.minimum(Wl, E)), M)
-    rng = hi - lo
-    ys, xs = np.nonzero(rng >= np.maximum(o["hard_contrast_threshold"],
-                                          hi * o["relative_contrast_threshold"]))
+    thr_hi = np.maximum(hi >> 3, np.uint8(round(255 * o["hard_contrast_threshold"]))) \
+        if o["relative_contrast_threshold"] == 1 / 8 else \
+        np.maximum((hi * o["relative_contrast_threshold"]).astype(np.uint8),
+                   np.uint8(round(255 * o["hard_contrast_threshold"])))
+    ys, xs = np.nonzero(hi - lo >= thr_hi)
     if not len(ys):
         return out
-    py, px = ys + 1, xs + 1                                    # in P
-    m, n, s, w, e = P[py, px], P[py - 1, px], P[py + 1, px], P[py, px - 1], P[py, px + 1]
-    nw, ne, sw, se = P[py - 1, px - 1], P[py - 1, px + 1], P[py + 1, px - 1], P[py + 1, px + 1]
-    r = rng[ys, xs]
+    flat = Lp.ravel().astype(np.float32) / np.float32(255)
+    c = (ys + R) * Wp + (xs + R)                               # flat index in Lp
+    m, n, s, w, e = flat[c], flat[c - Wp], flat[c + Wp], flat[c - 1], flat[c + 1]
+    nw, ne, sw, se = flat[c - Wp - 1], flat[c - Wp + 1], flat[c + Wp - 1], flat[c + Wp + 1]
+    r = np.maximum(np.maximum(np.maximum(n, s), np.maximum(w, e)), m) - \
+        np.minimum(np.minimum(np.minimum(n, s), np.minimum(w, e)), m)
     # sub-pixel aliasing: the 3x3 low-pass against the pixel, over the local range
     ll = (2 * (n + s + w + e) + (nw + ne + sw + se)) / 12
-    sub = np.clip(np.abs(ll - m) / r, 0, 1)
+    sub = np.clip(np.abs(ll - m) / np.maximum(r, 1e-6), 0, 1)
     sub_f = np.where(sub >= o["subpixel_contrast_threshold"],
                      ((-2 * sub + 3) * sub * sub) ** 2 * o["subpixel_blend_limit"], 0)
     # the edge's direction: horizontal when the luma curves more across rows than columns
@@ -76,23 +85,23 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     grad = np.maximum(np.abs(a - m), np.abs(b - m))
     side = np.where(pair_a, a, b)
     sign = np.where(pair_a, -1, 1)                             # towards the steeper neighbour
-    # unit step along the edge (ay, ax) and one to the chosen side (qy, qx)
-    ay, ax = (~horz).astype(np.int64), horz.astype(np.int64)
+    # unit step along the edge and one to the chosen side, as flat offsets (and as rows, columns)
     qy, qx = np.where(horz, sign, 0), np.where(horz, 0, sign)
+    along = np.where(horz, 1, Wp)
+    across = qy * Wp + qx
     half = 0.5 * (side + m)                                    # the edge's mid luma
     thr = 0.25 * grad
     m_below = (m - half) < 0
 
     def luma_at(k):
         """Luma half a pixel to the chosen side of the pixel k steps along the edge."""
-        y, x = np.clip(py + k * ay, 0, H + 1), np.clip(px + k * ax, 0, W + 1)
-        y2, x2 = np.clip(y + qy, 0, H + 1), np.clip(x + qx, 0, W + 1)
-        return 0.5 * (P[y, x] + P[y2, x2]) - half
+        i = c + k * along
+        return 0.5 * (flat[i] + flat[i + across]) - half
 
     kn, kp = -np.ones(len(ys), np.int64), np.ones(len(ys), np.int64)
     en, ep = luma_at(kn), luma_at(kp)
     done_n, done_p = np.abs(en) >= thr, np.abs(ep) >= thr
-    for _ in range(int(o["endpoint_search_iterations"]) - 1):
+    for _ in range(R - 2):
         if done_n.all() and done_p.all():
             break
         kn = np.where(done_n, kn, kn - 1)
