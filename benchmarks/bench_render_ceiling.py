@@ -8,9 +8,10 @@ default look (FXAA, depth peeling, the style's ground and lights):
   ``render_study``'s workers run per frame (pose the character, render, read
   back into the reused frame, flipped upright), without encoding;
 * **ceiling**: bare VTK calls on the very scene our renderer builds (the same
-  merged character mesh, ground, lights and FXAA): only ``Render()`` and the
-  read-back of the pixels (``GetPixelData`` into a reused array, viewed as
-  numpy) — no geometry update, as little Python as there can be;
+  merged character mesh, ground, lights and anti-aliasing): only ``Render()``
+  and the read-back of the pixels (``GetPixelData`` into a reused array, viewed
+  as numpy; then, for the default ``fxaa``, the FXAA of ``render.antialias`` on
+  it, as ours runs) — no geometry update, as little Python as there can be;
 * **ceiling + upload**: the same, but a pose computed in advance is first
   copied into the point and normal arrays and marked modified (VTK then
   uploads the mesh again, as any animation must): the limit of a renderer that
@@ -35,6 +36,16 @@ With ``--aa`` it also measures the ceiling and ours (ellipsoids, the first
 ``--aa-frames`` frames) for each anti-aliasing a style offers (``none``,
 ``fxaa``, ``ssaa``), as a frame's cost relative to ``none``.
 
+Then (unless ``--no-minimal``; needs moderngl, ``pip install '.[bench]'``) a
+**minimal-OpenGL ceiling** below VTK: the same posed mesh, ground, two camera
+lights and size drawn by :class:`MinimalGL` (moderngl on its own EGL context,
+one Lambert shader, the pose uploaded every frame, read back to numpy), without
+and with a simple FXAA post pass (the classic compact FXAA, 9 bilinear taps a
+pixel), interleaved frame by frame with ours and bare VTK, for the style
+without anti-aliasing and with the default one.  Frames per CPU-second there
+are ``time.process_time`` spans: the CPU time of every thread of this process,
+Mesa llvmpipe's raster threads included (both GL contexts live in it).
+
 With ``--hashes`` it prints, per style, the SHA-256 of all frames of
 ``iter_frames`` (a speed-up must keep them).
 
@@ -57,6 +68,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from flipstudy.render._pv import pv  # noqa: E402  (EGL offscreen before anything else)
+from flipstudy.render.antialias import fxaa  # noqa: E402
 from flipstudy.render.geometry import resample  # noqa: E402
 from flipstudy.render.scene import scene_for  # noqa: E402
 from flipstudy.render.staging import stage  # noqa: E402
@@ -276,6 +288,7 @@ def interleaved(st, fps=FPS, frames: int | None = None, minimal: bool = False):
         w, h = rw.GetSize()
         buf = vtkUnsignedCharArray()
         vpts, vnrm = mesh.GetPoints(), mesh.GetPointData().GetNormals()
+        post = sc.style.anti_aliasing == "fxaa"     # ours runs FXAA on the read-back frame: so does the ceiling
         if minimal:
             import pyvista as pv_
             gl = MinimalGL(sc, mesh, pv_.wrap(sc.ground_actor.GetMapper().GetInput()))
@@ -286,7 +299,9 @@ def interleaved(st, fps=FPS, frames: int | None = None, minimal: bool = False):
             with ceil:
                 rw.Render()
                 rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
-                vtk_to_numpy(buf)
+                px = vtk_to_numpy(buf)
+                if post:
+                    fxaa(px.reshape(h, w, 3), px.reshape(h, w, 3))
             with upl:
                 a, b = poses[k % len(poses)]
                 np.copyto(pts, a)
@@ -296,7 +311,9 @@ def interleaved(st, fps=FPS, frames: int | None = None, minimal: bool = False):
                 mesh.Modified()
                 rw.Render()
                 rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
-                vtk_to_numpy(buf)
+                px = vtk_to_numpy(buf)
+                if post:
+                    fxaa(px.reshape(h, w, 3), px.reshape(h, w, 3))
             if gl is not None:
                 with mgl:
                     gl.frame(*poses[k % len(poses)])
