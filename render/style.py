@@ -35,12 +35,12 @@ OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2",
 #: The anti-aliasing a :class:`Style` can ask for (offscreen EGL, Mesa llvmpipe;
 #: costs measured by ``benchmarks/bench_render_ceiling.py --aa`` at 640x480, per
 #: CPU-second): ``"fxaa"`` (the default: FXAA 3.11 on the read-back frame,
-#: :mod:`flipstudy.render.antialias`; a frame costs about 1.5x what it costs with
+#: :mod:`flipstudy.render.antialias`; a frame costs about 1.3x what it costs with
 #: ``"none"``; the error on the character's edges, against a supersampled
 #: reference, falls as with VTK's filter — ``tests/render/test_render.py``),
 #: ``"vtk-fxaa"`` (VTK's FXAA filter, the same algorithm on llvmpipe: about 3x,
 #: the default before), ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos
-#: filter: about 7x, edges a little finer than FXAA's) and ``"none"``.  MSAA is
+#: filter: about 8x, edges a little finer than FXAA's) and ``"none"``.  MSAA is
 #: not offered: under depth peeling it drops every translucent surface (ghosts),
 #: and on llvmpipe it costs more than VTK's FXAA.
 ANTI_ALIASING = ("fxaa", "ssaa", "none", "vtk-fxaa")
