@@ -93,24 +93,22 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     thr = 0.25 * grad
     m_below = (m - half) < 0
 
-    def luma_at(k):
-        """Luma half a pixel to the chosen side of the pixel k steps along the edge."""
-        i = c + k * along
-        return 0.5 * (flat[i] + flat[i + across]) - half
+    # follow the edge both ways, every step at once: the luma half a pixel to the chosen
+    # side at 1..K steps along it; each way ends at its first step whose luma left the
+    # edge's (or at K): FXAA's search loop, as (pixels, K) arrays
+    K = R - 1
+    steps = np.arange(1, K + 1)
+    rows = np.arange(len(ys))
 
-    kn, kp = -np.ones(len(ys), np.int64), np.ones(len(ys), np.int64)
-    en, ep = luma_at(kn), luma_at(kp)
-    done_n, done_p = np.abs(en) >= thr, np.abs(ep) >= thr
-    for _ in range(R - 2):
-        if done_n.all() and done_p.all():
-            break
-        kn = np.where(done_n, kn, kn - 1)
-        kp = np.where(done_p, kp, kp + 1)
-        en = np.where(done_n, en, luma_at(kn))
-        ep = np.where(done_p, ep, luma_at(kp))
-        done_n |= np.abs(en) >= thr
-        done_p |= np.abs(ep) >= thr
-    dn, dp = -kn, kp                                           # distances to the two ends
+    def search(direction: int):
+        i = c[:, None] + direction * steps[None, :] * along[:, None]
+        lum_e = 0.5 * (flat[i] + flat[i + across[:, None]]) - half[:, None]
+        done = np.abs(lum_e) >= thr[:, None]
+        j = np.where(done.any(1), done.argmax(1), K - 1)
+        return j + 1, lum_e[rows, j]
+
+    dn, en = search(-1)                                        # distances to the two ends
+    dp, ep = search(1)
     nearer_n = dn < dp
     good = np.where(nearer_n, (en < 0) != m_below, (ep < 0) != m_below)
     off = np.where(good, 0.5 - np.minimum(dn, dp) / (dn + dp), 0.0)
