@@ -98,14 +98,20 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     # edge's (or at K): FXAA's search loop, as (pixels, K) arrays
     K = R - 1
     steps = np.arange(1, K + 1)
-    rows = np.arange(len(ys))
 
     def search(direction: int):
-        i = c[:, None] + direction * steps[None, :] * along[:, None]
-        lum_e = 0.5 * (flat[i] + flat[i + across[:, None]]) - half[:, None]
-        done = np.abs(lum_e) >= thr[:, None]
-        j = np.where(done.any(1), done.argmax(1), K - 1)
-        return j + 1, lum_e[rows, j]
+        i = c + direction * along                              # the first step, every pixel
+        lum_e = 0.5 * (flat[i] + flat[i + across]) - half
+        dist = np.ones(len(ys), np.int64)
+        todo = np.nonzero(np.abs(lum_e) < thr)[0]              # still on the edge: steps 2..K
+        if len(todo):
+            i = c[todo, None] + direction * steps[None, 1:] * along[todo, None]
+            far = 0.5 * (flat[i] + flat[i + across[todo, None]]) - half[todo, None]
+            done = np.abs(far) >= thr[todo, None]
+            j = np.where(done.any(1), done.argmax(1), K - 2)
+            dist[todo] = j + 2
+            lum_e[todo] = far[np.arange(len(todo)), j]
+        return dist, lum_e
 
     dn, en = search(-1)                                        # distances to the two ends
     dp, ep = search(1)
