@@ -8,9 +8,10 @@ default look (FXAA, depth peeling, the style's ground and lights):
   ``render_study``'s workers run per frame (pose the character, render, read
   back into the reused frame, flipped upright), without encoding;
 * **ceiling**: bare VTK calls on the very scene our renderer builds (the same
-  merged character mesh, ground, lights and FXAA): only ``Render()`` and the
-  read-back of the pixels (``GetPixelData`` into a reused array, viewed as
-  numpy) — no geometry update, as little Python as there can be;
+  merged character mesh, ground, lights and anti-aliasing): only ``Render()``
+  and the read-back of the pixels (``GetPixelData`` into a reused array, viewed
+  as numpy; then, for the default ``fxaa``, the FXAA of ``render.antialias`` on
+  it, as ours runs) — no geometry update, as little Python as there can be;
 * **ceiling + upload**: the same, but a pose computed in advance is first
   copied into the point and normal arrays and marked modified (VTK then
   uploads the mesh again, as any animation must): the limit of a renderer that
@@ -35,6 +36,16 @@ With ``--aa`` it also measures the ceiling and ours (ellipsoids, the first
 ``--aa-frames`` frames) for each anti-aliasing a style offers (``none``,
 ``fxaa``, ``ssaa``), as a frame's cost relative to ``none``.
 
+Then (unless ``--no-minimal``; needs moderngl, ``pip install '.[bench]'``) a
+**minimal-OpenGL ceiling** below VTK: the same posed mesh, ground, two camera
+lights and size drawn by :class:`MinimalGL` (moderngl on its own EGL context,
+one Lambert shader, the pose uploaded every frame, read back to numpy), without
+and with a simple FXAA post pass (the classic compact FXAA, 9 bilinear taps a
+pixel), interleaved frame by frame with ours and bare VTK, for the style
+without anti-aliasing and with the default one.  Frames per CPU-second there
+are ``time.process_time`` spans: the CPU time of every thread of this process,
+Mesa llvmpipe's raster threads included (both GL contexts live in it).
+
 With ``--hashes`` it prints, per style, the SHA-256 of all frames of
 ``iter_frames`` (a speed-up must keep them).
 
@@ -57,6 +68,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from flipstudy.render._pv import pv  # noqa: E402  (EGL offscreen before anything else)
+from flipstudy.render.antialias import fxaa  # noqa: E402
 from flipstudy.render.geometry import resample  # noqa: E402
 from flipstudy.render.scene import scene_for  # noqa: E402
 from flipstudy.render.staging import stage  # noqa: E402
@@ -121,17 +133,145 @@ class Clock:
         return self.n / self.cpu
 
 
-def interleaved(st, fps=FPS, frames: int | None = None):
+# ------------------------------------------------------- the minimal-OpenGL ceiling
+_VS = """
+#version 330
+uniform mat4 mvp; uniform mat3 nrm_mat;
+in vec3 pos; in vec3 nrm; in vec3 col;
+out vec3 v_n; out vec3 v_c;
+void main() { gl_Position = mvp * vec4(pos, 1.0); v_n = nrm_mat * nrm; v_c = col; }
+"""
+_FS = """
+#version 330
+uniform vec3 key; uniform vec3 fill; uniform vec2 amb_dif;
+in vec3 v_n; in vec3 v_c; out vec4 f;
+void main() {
+    vec3 n = normalize(v_n);
+    float d = 0.85 * abs(dot(n, key)) + 0.35 * abs(dot(n, fill));   // two-sided, as VTK's lights
+    f = vec4(v_c * (amb_dif.x + amb_dif.y * d), 1.0);
+}
+"""
+# the classic FXAA of Lottes (the compact "FXAA 3 console" form of the common GLSL ports)
+_QUAD_VS = """
+#version 330
+in vec2 p; out vec2 uv;
+void main() { uv = p * 0.5 + 0.5; gl_Position = vec4(p, 0.0, 1.0); }
+"""
+_FXAA_FS = """
+#version 330
+uniform sampler2D tex; uniform vec2 px; in vec2 uv; out vec4 f;
+void main() {
+    const vec3 w = vec3(0.299, 0.587, 0.114);
+    float nw = dot(texture(tex, uv + vec2(-1.0, -1.0) * px).rgb, w);
+    float ne = dot(texture(tex, uv + vec2( 1.0, -1.0) * px).rgb, w);
+    float sw = dot(texture(tex, uv + vec2(-1.0,  1.0) * px).rgb, w);
+    float se = dot(texture(tex, uv + vec2( 1.0,  1.0) * px).rgb, w);
+    vec3 cm = texture(tex, uv).rgb; float m = dot(cm, w);
+    float lo = min(m, min(min(nw, ne), min(sw, se))), hi = max(m, max(max(nw, ne), max(sw, se)));
+    vec2 dir = vec2(-((nw + ne) - (sw + se)), (nw + sw) - (ne + se));
+    float red = max((nw + ne + sw + se) * (0.25 / 8.0), 1.0 / 128.0);
+    dir = clamp(dir / (min(abs(dir.x), abs(dir.y)) + red), -8.0, 8.0) * px;
+    vec3 a = 0.5 * (texture(tex, uv + dir * (1.0 / 3.0 - 0.5)).rgb + texture(tex, uv + dir * (2.0 / 3.0 - 0.5)).rgb);
+    vec3 b = a * 0.5 + 0.25 * (texture(tex, uv - dir * 0.5).rgb + texture(tex, uv + dir * 0.5).rgb);
+    float lb = dot(b, w);
+    f = vec4((lb < lo || lb > hi) ? a : b, 1.0);
+}
+"""
+
+
+class MinimalGL:
+    """The same posed character mesh and ground drawn by as little OpenGL as
+    there can be (moderngl on its own EGL context): one Lambert shader with the
+    scene's two camera lights, the character's points and normals uploaded
+    every frame, the frame read back into a reused numpy array; ``aa`` adds a
+    second pass, the classic FXAA over the frame in a texture."""
+
+    def __init__(self, sc, mesh, ground):
+        import moderngl
+        self.ctx = ctx = moderngl.create_standalone_context(backend="egl")
+        w, h = sc.size
+        self.size = (w, h)
+        prog = ctx.program(vertex_shader=_VS, fragment_shader=_FS)
+        cam = sc.plotter.renderer.GetActiveCamera()
+        mv = _m4(cam.GetModelViewTransformMatrix())                   # VTK's own camera
+        pr = _m4(cam.GetCompositeProjectionTransformMatrix(w / h, -1, 1))
+        prog["mvp"].write(pr.T.astype("f4").tobytes())            # projection x view, column-major
+        prog["nrm_mat"].write(np.ascontiguousarray(mv[:3, :3]).T.astype("f4").tobytes())
+        for name, p in (("key", (-0.6, 1.2, 1.0)), ("fill", (0.8, 0.3, 0.6))):
+            prog[name].value = tuple(np.asarray(p) / np.linalg.norm(p))
+        self.prog = prog
+        # the character: points and normals rewritten each frame, colours and triangles once
+        self.n = mesh.n_points
+        self.vpos = ctx.buffer(reserve=self.n * 12)
+        self.vnrm = ctx.buffer(reserve=self.n * 12)
+        vcol = ctx.buffer((np.asarray(mesh.point_data["rgb"], "f4") / 255.0).astype("f4").tobytes())
+        ibo = ctx.buffer(np.asarray(mesh.regular_faces, "i4").tobytes())
+        self.char = ctx.vertex_array(prog, [(self.vpos, "3f", "pos"), (self.vnrm, "3f", "nrm"),
+                                            (vcol, "3f", "col")], index_buffer=ibo)
+        # the ground: its triangles unshared, each with its tile's colour
+        tri = np.asarray(ground.regular_faces)
+        gp = np.asarray(ground.points, "f4")[tri].reshape(-1, 3)
+        gc = np.repeat(np.asarray(ground.cell_data["rgb"], "f4") / 255.0, 3, axis=0)
+        gn = np.tile(np.array([0, 1, 0], "f4"), (len(gp), 1))
+        self.ground = ctx.vertex_array(prog, [(ctx.buffer(gp.tobytes()), "3f", "pos"),
+                                              (ctx.buffer(gn.tobytes()), "3f", "nrm"),
+                                              (ctx.buffer(gc.astype("f4").tobytes()), "3f", "col")])
+        self.bg = tuple(sc.plotter.renderer.GetBackground())
+        self.fbo = ctx.framebuffer([ctx.texture((w, h), 4)], ctx.depth_renderbuffer((w, h)))
+        self.fbo_aa = ctx.simple_framebuffer((w, h))
+        self.fxaa = ctx.program(vertex_shader=_QUAD_VS, fragment_shader=_FXAA_FS)
+        self.fxaa["px"].value = (1.0 / w, 1.0 / h)
+        quad = ctx.buffer(np.array([-1, -1, 1, -1, -1, 1, 1, 1], "f4").tobytes())
+        self.quad = ctx.vertex_array(self.fxaa, [(quad, "2f", "p")])
+        self.out = np.empty((h, w, 3), np.uint8)
+
+    def frame(self, pts, nrm, aa: bool = False) -> np.ndarray:
+        """Upload a pose, draw, (FXAA,) read back: the (H, W, 3) uint8 frame (bottom row first)."""
+        import moderngl
+        ctx = self.ctx
+        with ctx:                                   # VTK's context is current otherwise
+            self.vpos.write(pts.astype("f4"))
+            self.vnrm.write(nrm.astype("f4"))
+            self.fbo.use()
+            ctx.enable(moderngl.DEPTH_TEST)
+            self.fbo.clear(*self.bg, 1.0, depth=1.0)
+            self.prog["amb_dif"].value = (0.5, 0.5)
+            self.ground.render()
+            self.prog["amb_dif"].value = (0.3, 0.75)
+            self.char.render()
+            src = self.fbo
+            if aa:
+                ctx.disable(moderngl.DEPTH_TEST)
+                self.fbo_aa.use()
+                self.fbo.color_attachments[0].use(0)
+                self.quad.render(moderngl.TRIANGLE_STRIP)
+                src = self.fbo_aa
+            src.read_into(self.out, components=3)
+        return self.out
+
+    def release(self) -> None:
+        self.ctx.release()
+
+
+def _m4(m) -> np.ndarray:
+    """A vtkMatrix4x4 as a (4, 4) numpy array."""
+    return np.array([[m.GetElement(i, j) for j in range(4)] for i in range(4)])
+
+
+def interleaved(st, fps=FPS, frames: int | None = None, minimal: bool = False):
     """Ours, the ceiling and the ceiling with upload, frame by frame in turn in
     one scene (so the three see the same machine load): per display frame one
     ``next()`` of ``iter_frames`` (ours: pose, render, read back, flip), then
     a bare ``Render()`` + ``GetPixelData`` of the geometry as it stands
     (ceiling: nothing to upload), then a precomputed pose copied in and marked
-    modified before the same bare render (ceiling + upload).  Returns the
-    three :class:`Clock` objects (``frames``: only the first ones)."""
+    modified before the same bare render (ceiling + upload); with ``minimal``
+    then the same pose drawn by :class:`MinimalGL` without and with its FXAA
+    pass.  Returns the :class:`Clock` objects ``[ours, ceiling, upload]``
+    (``+ [minimal, minimal_aa]``; ``frames``: only the first ones)."""
     from vtkmodules.util.numpy_support import vtk_to_numpy
     from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
-    ours, ceil, upl = Clock(), Clock(), Clock()
+    ours, ceil, upl, mgl, mgl_aa = Clock(), Clock(), Clock(), Clock(), Clock()
+    gl = None
     with scene_for(st) as sc:
         it = iter_frames(st.clips[0], sc, fps, body=st.bodies[0])
         next(it)                                    # shaders compiled, the character built
@@ -148,13 +288,20 @@ def interleaved(st, fps=FPS, frames: int | None = None):
         w, h = rw.GetSize()
         buf = vtkUnsignedCharArray()
         vpts, vnrm = mesh.GetPoints(), mesh.GetPointData().GetNormals()
+        post = sc.style.anti_aliasing == "fxaa"     # ours runs FXAA on the read-back frame: so does the ceiling
+        if minimal:
+            import pyvista as pv_
+            gl = MinimalGL(sc, mesh, pv_.wrap(sc.ground_actor.GetMapper().GetInput()))
+            gl.frame(*poses[0], aa=True)            # shaders compiled
         for k in range(min(len(R) - 1, frames or len(R))):
             with ours:
                 next(it)
             with ceil:
                 rw.Render()
                 rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
-                vtk_to_numpy(buf)
+                px = vtk_to_numpy(buf)
+                if post:
+                    fxaa(px.reshape(h, w, 3), px.reshape(h, w, 3))
             with upl:
                 a, b = poses[k % len(poses)]
                 np.copyto(pts, a)
@@ -164,8 +311,17 @@ def interleaved(st, fps=FPS, frames: int | None = None):
                 mesh.Modified()
                 rw.Render()
                 rw.GetPixelData(0, 0, w - 1, h - 1, 1, buf, 0)
-                vtk_to_numpy(buf)
-    return ours, ceil, upl
+                px = vtk_to_numpy(buf)
+                if post:
+                    fxaa(px.reshape(h, w, 3), px.reshape(h, w, 3))
+            if gl is not None:
+                with mgl:
+                    gl.frame(*poses[k % len(poses)])
+                with mgl_aa:
+                    gl.frame(*poses[k % len(poses)], aa=True)
+        if gl is not None:
+            gl.release()
+    return [ours, ceil, upl] + ([mgl, mgl_aa] if gl is not None else [])
 
 
 def ours_frames(st, fps=FPS, hashes: bool = False):
@@ -234,6 +390,8 @@ def main(argv=None):
     ap.add_argument("--no-video", action="store_true", help="frames only (no encoder, no video)")
     ap.add_argument("--aa", action="store_true", help="also time each anti-aliasing (ellipsoids)")
     ap.add_argument("--aa-frames", type=int, default=60, help="frames per anti-aliasing (default 60)")
+    ap.add_argument("--no-minimal", action="store_true",
+                    help="leave out the minimal-OpenGL ceiling (needs moderngl: pip install '.[bench]')")
     args = ap.parse_args(argv)
     size = tuple(int(v) for v in args.size.lower().split("x"))
     clip = builtin("backflip")
@@ -256,7 +414,7 @@ def main(argv=None):
         c, cu, o, e, vi, hashes = [], [], [], [], [], set()
         frames = None
         for _ in range(args.repeat):
-            oc_, c_, u_ = interleaved(st)
+            oc_, c_, u_ = interleaved(st)[:3]
             o.append(oc_)
             c.append(c_)
             cu.append(u_)
@@ -297,6 +455,32 @@ def main(argv=None):
             base = base or oc
             print(f"{aa:>6} {cf:8.1f} {cc:6.1f} {of:6.1f} {oc:6.1f} {base / oc:4.1f}×", flush=True)
             rows[f"aa-{aa}"] = {"ceiling": (cf, cc), "ours": (of, oc)}
+    if not args.no_minimal:
+        rows.update(minimal_table(clip, size, args.repeat, args.aa_frames))
+    return rows
+
+
+def minimal_table(clip, size, repeat: int, frames: int) -> dict:
+    """Ours, bare VTK and the minimal-OpenGL ceiling without and with its FXAA
+    pass, interleaved frame by frame in one run, for the style without
+    anti-aliasing and with the default one (ellipsoids); frames per CPU-second."""
+    try:
+        import moderngl  # noqa: F401
+    except ImportError:
+        print("minimal-OpenGL ceiling: skipped, moderngl is not installed (pip install '.[bench]')")
+        return {}
+    print(f"minimal-OpenGL ceiling (moderngl on EGL, Lambert, the pose uploaded each frame, read back;"
+          f" ellipsoids, {frames} frames), frames per CPU-second (time.process_time: every thread of "
+          f"this process, llvmpipe's raster threads included):")
+    print(f"{'style AA':>9} {'ours':>6} {'bare VTK':>8} {'minimal':>8} {'min+FXAA':>9} "
+          f"{'ours/min':>8} {'ours/min+FXAA':>13}")
+    rows = {}
+    for aa in ("none", "fxaa"):
+        st = stage([clip], size=size, style=Style(anti_aliasing=aa))
+        runs = [interleaved(st, frames=frames, minimal=True) for _ in range(repeat)]
+        o, c, m, ma = (best([r[i] for r in runs])[1] for i in (0, 1, 3, 4))
+        print(f"{aa:>9} {o:6.1f} {c:8.1f} {m:8.1f} {ma:9.1f} {o / m:8.0%} {o / ma:13.0%}", flush=True)
+        rows[f"minimal-{aa}"] = {"ours": o, "vtk": c, "minimal": m, "minimal_aa": ma}
     return rows
 
 

@@ -34,7 +34,9 @@ def versions() -> dict:
     """Versions of what renders (recorded in render.json)."""
     import imageio_ffmpeg
     import OpenImageIO as oiio
-    import vtk
+    # the one VTK module pyvista has loaded already: `import vtk` would load all of
+    # VTK's Python modules, about a CPU-second in every render worker
+    from vtkmodules.vtkCommonCore import vtkVersion
 
     from ._pv import pv
     try:
@@ -47,7 +49,7 @@ def versions() -> dict:
     except Exception:  # noqa: BLE001
         ff = None
     return {"flipstudy": fs, "python": sys.version.split()[0], "numpy": np.__version__,
-            "pyvista": pv.__version__, "vtk": vtk.vtkVersion.GetVTKVersion(),
+            "pyvista": pv.__version__, "vtk": vtkVersion.GetVTKVersion(),
             "openimageio": oiio.__version__, "imageio_ffmpeg": imageio_ffmpeg.__version__,
             "ffmpeg": ff}
 

@@ -11,9 +11,11 @@ sets one up for a :class:`~flipstudy.render.staging.Stage`.
 
 Rendering notes (VTK 9.7, Mesa llvmpipe through EGL): depth peeling is on for
 correct transparency; MSAA breaks depth peeling there (translucent surfaces
-vanish), so the anti-aliasing (``Style.anti_aliasing``) is VTK's FXAA filter
-(the renderer's ``UseFXAA``, which PyVista refuses on EGL and replaces by SSAA)
-or its SSAA pass.
+vanish), so the anti-aliasing (``Style.anti_aliasing``) is FXAA: by default
+run on the read-back frame (:mod:`flipstudy.render.antialias`, the same
+algorithm as VTK's filter at a fraction of its cost on llvmpipe), or VTK's FXAA
+filter (``"vtk-fxaa"``: the renderer's ``UseFXAA``, which PyVista refuses on
+EGL and replaces by SSAA), or VTK's SSAA pass.
 """
 from __future__ import annotations
 
@@ -78,7 +80,7 @@ class Scene:
             pl.add_light(key)
             pl.add_light(fill)
         pl.enable_depth_peeling(number_of_peels=self.style.depth_peels, occlusion_ratio=0.0)
-        if self.style.anti_aliasing == "fxaa":
+        if self.style.anti_aliasing == "vtk-fxaa":
             pl.renderer.SetUseFXAA(True)          # works offscreen on EGL/llvmpipe, with depth peeling
         elif self.style.anti_aliasing == "ssaa":
             import warnings
@@ -363,6 +365,11 @@ class Scene:
             ren.SetBackground(0.0, 0.0, 0.0)
             ren.SetBackgroundAlpha(0.0)
             pl.render_window.SetAlphaBitPlanes(1)
+        # "fxaa": FXAA on the read-back frame (render.antialias), a fraction of the cost
+        # of VTK's filter; frames read with alpha (premultiplied layers) keep VTK's
+        fxaa = self.style.anti_aliasing == "fxaa" and not alpha
+        ren.SetUseFXAA(self.style.anti_aliasing == "vtk-fxaa" or
+                       (self.style.anti_aliasing == "fxaa" and alpha))
         self._clip_range()
         if self._overlay is not None:
             self._overlay.SetActiveCamera(ren.GetActiveCamera())
@@ -384,8 +391,12 @@ class Scene:
             ren.SetBackground(*bg)
             ren.SetBackgroundAlpha(1.0)
         if out is None:
-            return arr[::-1].copy()
-        np.copyto(out, arr[::-1])
+            out = arr[::-1].copy()
+        else:
+            np.copyto(out, arr[::-1])
+        if fxaa:
+            from .antialias import fxaa as fxaa_
+            fxaa_(out, out)
         return out
 
     def close(self) -> None:

@@ -107,6 +107,16 @@ def _character(row: Stimulus, style, study_dir) -> str:
     return name
 
 
+def _methods(style) -> dict:
+    """How the pixels and the videos were made, as ``render.json`` records it: the
+    anti-aliasing actually run (not only the style's name for it) and the encoder."""
+    from .style import ANTI_ALIASING_METHODS
+    from .video import ENCODER
+    return {"anti_aliasing": {"style": style.anti_aliasing,
+                              "method": ANTI_ALIASING_METHODS[style.anti_aliasing]},
+            "encoder": dict(ENCODER)}
+
+
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
@@ -224,7 +234,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     # what changes pixels, once for the whole study (one camera per base clip)
     pixel = {"size": list(size), "fps": float(fps), "style": style.to_dict(),
              "cameras": cameras, "ground_bounds": [float(v) for v in st.ground_bounds],
-             "versions": vers}
+             "versions": vers, **_methods(style)}
     pixel = json.loads(json.dumps(pixel))             # the form it has when read back
     sid = canonical_id(pixel)
     settings = {"style": style.to_dict(), "camera": camera_of[0], "size": list(size),
@@ -301,7 +311,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
                                                               "(takeoff - 1); heights unchanged"},
             "direction": [float(v) for v in st.direction],
             "ground_bounds": settings["ground_bounds"],
-            "versions": vers,
+            "versions": vers, **_methods(style),
             "seconds": round(time.perf_counter() - t_start, 2),
             "made": made[0], "up_to_date": n_kept, "settings_id": sid,
             "stimuli": {n: {**v, "files": files[n]} for n, v in info.items()},

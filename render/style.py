@@ -34,13 +34,25 @@ OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2",
 
 #: The anti-aliasing a :class:`Style` can ask for (offscreen EGL, Mesa llvmpipe;
 #: costs measured by ``benchmarks/bench_render_ceiling.py --aa`` at 640x480, per
-#: CPU-second): ``"fxaa"`` (VTK's FXAA filter, the default: a frame costs about
-#: 2.5x what it costs with ``"none"``; the error on the character's edges,
-#: against a supersampled reference, halves — ``tests/render/test_render.py``),
-#: ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos filter: about 7x,
-#: edges a little finer than FXAA's) and ``"none"``.  MSAA is not offered: under
-#: depth peeling it drops every translucent surface (ghosts).
-ANTI_ALIASING = ("fxaa", "ssaa", "none")
+#: CPU-second): ``"fxaa"`` (the default: FXAA 3.11 on the read-back frame,
+#: :mod:`flipstudy.render.antialias`; a frame costs about 1.3x what it costs with
+#: ``"none"``; the error on the character's edges, against a supersampled
+#: reference, falls as with VTK's filter — ``tests/render/test_render.py``),
+#: ``"vtk-fxaa"`` (VTK's FXAA filter, the same algorithm on llvmpipe: about 3x,
+#: the default before), ``"ssaa"`` (VTK's SSAA pass, 5x the pixels and a Lanczos
+#: filter: about 8x, edges a little finer than FXAA's) and ``"none"``.  MSAA is
+#: not offered: under depth peeling it drops every translucent surface (ghosts),
+#: and on llvmpipe it costs more than VTK's FXAA.
+ANTI_ALIASING = ("fxaa", "ssaa", "none", "vtk-fxaa")
+
+#: What each anti-aliasing is, as ``render.json`` records it (``anti_aliasing``)
+ANTI_ALIASING_METHODS = {
+    "fxaa": "FXAA 3.11 on the read-back frame (flipstudy.render.antialias, numpy, VTK's default "
+            "options); VTK's FXAA filter for frames read with alpha",
+    "vtk-fxaa": "VTK's FXAA filter (vtkOpenGLFXAAFilter, default options)",
+    "ssaa": "VTK's SSAA pass",
+    "none": "none",
+}
 
 
 @dataclass(frozen=True)
@@ -146,7 +158,7 @@ class Style:
     ghost_spread: float = 0.0                        # metres between successive ghosts along the travel (0: just enough for a motion in place)
     scale_bar: bool = True                           # a 1 m bar on the ground of ghosts and trails
     # rendering
-    anti_aliasing: str = "fxaa"                      # "fxaa", "ssaa" (slow, finest) or "none"
+    anti_aliasing: str = "fxaa"                      # "fxaa", "ssaa" (slow, finest), "none" or "vtk-fxaa"
     depth_peels: int = 8
     lighting: str = "key-fill"                       # "key-fill" or "light kit"
 
@@ -400,4 +412,4 @@ def _normalised(style: "Style") -> dict:
                          f"ground_tile or a smaller margin)", key="ground_margin")
     return out
 DEFAULT_STYLE = Style()
-__all__ = ["Style", "DEFAULT_STYLE", "ANTI_ALIASING", "TOL_MUTED", "OKABE_ITO", "rgb", "rgb8"]
+__all__ = ["Style", "DEFAULT_STYLE", "ANTI_ALIASING", "ANTI_ALIASING_METHODS", "TOL_MUTED", "OKABE_ITO", "rgb", "rgb8"]

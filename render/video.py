@@ -20,10 +20,20 @@ from flipstudy.stimuli.motion.clip import Clip
 from .geometry import resample
 
 
-def h264_writer(path, size, fps: float, *, crf: int = 18, preset: str = "medium"):
+#: The encoder settings of every video (recorded in ``render.json``).  The preset
+#: was chosen by ``benchmarks/bench_encoder.py`` on real stimuli at 640x480: at
+#: CRF 18 ``veryfast`` costs about two thirds of ``medium``'s CPU per frame for
+#: files within a few per cent of the size and PSNR/SSIM as good (README, Benchmarks).
+ENCODER = {"codec": "libx264", "crf": 18, "preset": "veryfast", "profile": "high",
+           "pix_fmt": "yuv420p"}
+
+
+def h264_writer(path, size, fps: float, *, crf: int = ENCODER["crf"],
+                preset: str = ENCODER["preset"]):
     """A primed imageio-ffmpeg generator writing ``path``: H.264 High in MP4,
-    yuv420p (plays in browsers), ``+faststart``; send it (H, W, 3) uint8 RGB frames,
-    then ``close()`` it.  Width and height must be even (yuv420p)."""
+    yuv420p (plays in browsers), ``+faststart``, the settings of :data:`ENCODER`;
+    send it (H, W, 3) uint8 RGB frames, then ``close()`` it.  Width and height
+    must be even (yuv420p)."""
     import imageio_ffmpeg
     W, H = int(size[0]), int(size[1])
     if W % 2 or H % 2:
@@ -102,7 +112,7 @@ def iter_frames(clip: Clip, scene, fps: float = 60.0, *, other: Clip | None = No
 
 
 def render_video(what, path, *, fps: float = 60.0, scene=None, debug=(), frames_dir=None,
-                 crf: int = 18) -> Path:
+                 crf: int = ENCODER["crf"]) -> Path:
     """Render a stimulus video of a :class:`~flipstudy.render.staging.Stage` (or a
     clip, staged with the defaults): its clip sampled at ``fps`` display
     frames per second (rotations slerped, root linear), at the stage's size,
@@ -176,4 +186,4 @@ def render_video(what, path, *, fps: float = 60.0, scene=None, debug=(), frames_
     return path
 
 
-__all__ = ["h264_writer", "iter_frames", "render_video"]
+__all__ = ["ENCODER", "h264_writer", "iter_frames", "render_video"]

@@ -539,7 +539,7 @@ def _posed_frame(style, size, k=40):
                 return img.astype(float)
 
 
-@pytest.mark.parametrize("aa", ["fxaa", "ssaa"])
+@pytest.mark.parametrize("aa", ["fxaa", "vtk-fxaa", "ssaa"])
 def test_anti_aliasing_smooths_the_edges_offscreen(aa):
     """Each offered anti-aliasing works on this EGL/llvmpipe setup: the
     character's edges come closer to a 4x4-supersampled reference than without
