@@ -42,25 +42,55 @@ def inv(q: np.ndarray) -> np.ndarray:
 def mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """The product p·q (apply q, then p), normalised: ``(Rotation(p) * Rotation(q)).as_quat()``
     for unit ``p`` and ``q`` (broadcast)."""
+    if p.ndim == 1 and q.ndim == 1:            # one product: the in-place steps need arrays
+        return mul(p[None], q[None])[0]
     px, py, pz, pw = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
     qx, qy, qz, qw = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    x = pw * qx + qw * px + (py * qz - pz * qy)
-    y = pw * qy + qw * py + (pz * qx - px * qz)
-    z = pw * qz + qw * pz + (px * qy - py * qx)
-    w = pw * qw - px * qx - py * qy - pz * qz
-    n = np.sqrt(x * x + y * y + z * z + w * w)
-    return np.stack([x, y, z, w], axis=-1) / n[..., None]
+    # scipy's expressions, evaluated in the same order, in place: fewer temporaries
+    # x = pw * qx + qw * px + (py * qz - pz * qy)
+    x = pw * qx
+    x += qw * px
+    t = py * qz
+    t -= pz * qy
+    x += t
+    y = pw * qy                                # pw * qy + qw * py + (pz * qx - px * qz)
+    y += qw * py
+    np.multiply(pz, qx, out=t)
+    t -= px * qz
+    y += t
+    z = pw * qz                                # pw * qz + qw * pz + (px * qy - py * qx)
+    z += qw * pz
+    np.multiply(px, qy, out=t)
+    t -= py * qx
+    z += t
+    w = pw * qw                                # pw * qw - px * qx - py * qy - pz * qz
+    w -= px * qx
+    w -= py * qy
+    w -= pz * qz
+    n = np.multiply(x, x, out=t)               # sqrt(x * x + y * y + z * z + w * w)
+    n += y * y
+    n += z * z
+    n += w * w
+    np.sqrt(n, out=n)
+    out = np.empty(x.shape + (4,))
+    for i, c in enumerate((x, y, z, w)):
+        np.divide(c, n, out=out[..., i])
+    return out
 
 
 def from_rotvec(v: np.ndarray) -> np.ndarray:
     """exp: rotation vectors (..., 3) to unit quaternions (..., 4)."""
     angle = norm(v)
     small = angle <= 1e-3
-    scale = np.sin(angle / 2) / (angle + small.astype(angle.dtype))
+    h = angle / 2
+    scale = np.sin(h) / (angle + small.astype(angle.dtype))
     if small.any():             # the series near 0 (computed only when it is used)
         angle2 = angle ** 2
         scale = np.where(small, 0.5 - angle2 / 48 + angle2 ** 2 / 3840, scale)
-    return np.concatenate([v * scale, np.cos(angle / 2)], axis=-1)
+    out = np.empty(v.shape[:-1] + (4,))
+    np.multiply(v, scale, out=out[..., :3])
+    np.cos(h, out=out[..., 3:])
+    return out
 
 
 def as_rotvec(q: np.ndarray) -> np.ndarray:
