@@ -211,10 +211,10 @@ def _turned(clip: Clip, com: np.ndarray, s: np.ndarray, rotvec: np.ndarray):
     pos = clip.root_pos[s]
     t = np.flatnonzero(np.any(rotvec != 0, axis=1))
     if t.size:
-        R = Rotation.from_rotvec(rotvec[t])
-        rot[t, 0] = quat.mul(quat.from_rotvec(rotvec[t]), quat.normalized(rot[t, 0]))
+        turn = quat.from_rotvec(rotvec[t])
+        rot[t, 0] = quat.mul(turn, quat.normalized(rot[t, 0]))
         cc = com[s[t]]
-        pos[t] = cc + R.apply(pos[t] - cc)
+        pos[t] = cc + quat.apply(turn, pos[t] - cc)
     return rot, pos
 
 

@@ -111,6 +111,38 @@ def as_rotvec(q: np.ndarray) -> np.ndarray:
     return scale * q[..., :3]
 
 
+def matrix_entries(x, y, z, w):
+    """The rotation matrix of unit quaternions given by their components (arrays of
+    any one shape), as ``[[m00, m01, m02], [m10, m11, m12], [m20, m21, m22]]``:
+    scipy's ``Rotation.as_matrix`` expressions, so the same bits."""
+    x2, y2, z2, w2 = x * x, y * y, z * z, w * w
+    xy, zw, xz, yw, yz, xw = x * y, z * w, x * z, y * w, y * z, x * w
+    return [[x2 - y2 - z2 + w2, 2 * (xy - zw), 2 * (xz + yw)],
+            [2 * (xy + zw), -x2 + y2 - z2 + w2, 2 * (yz - xw)],
+            [2 * (xz - yw), 2 * (yz + xw), -x2 - y2 + z2 + w2]]
+
+
+def as_matrix(q: np.ndarray) -> np.ndarray:
+    """Unit quaternions (..., 4) to rotation matrices (..., 3, 3):
+    ``Rotation.from_quat(q).as_matrix()`` for unit ``q``."""
+    m = matrix_entries(q[..., 0], q[..., 1], q[..., 2], q[..., 3])
+    out = np.empty(q.shape[:-1] + (3, 3))
+    for a in range(3):
+        for b in range(3):
+            out[..., a, b] = m[a][b]
+    return out
+
+
+def apply(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Vectors ``v`` (n, 3) rotated by unit quaternions ``q`` (n, 4):
+    ``Rotation.from_quat(q).apply(v)`` (its matrix, then the product scipy forms: one
+    rotation by a matrix product, more by an einsum)."""
+    m = as_matrix(q)
+    if len(q) == 1:
+        return np.dot(v, m[0].T)
+    return np.einsum("ijk,ik->ij", m, v)
+
+
 def relative(q0: np.ndarray, q1: np.ndarray) -> np.ndarray:
     """log(q0⁻¹ q1): the rotation vector from ``q0`` to ``q1`` (unit or not)."""
     return as_rotvec(mul(inv(normalized(q0)), normalized(q1)))
