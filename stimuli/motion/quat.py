@@ -21,10 +21,11 @@ def norm(x: np.ndarray) -> np.ndarray:
     """Euclidean norm over the last axis, kept: numpy's ``linalg.norm``
     (``sqrt(add.reduce(x·x))``, which adds the squares in order), written out
     per component, about seven times faster on (n, 4) arrays."""
-    s = x[..., 0] * x[..., 0]
-    for i in range(1, x.shape[-1]):
-        s = s + x[..., i] * x[..., i]
-    return np.sqrt(s)[..., None]
+    sq = x * x                  # the squares in one pass, then added in order, in place
+    s = sq[..., 0] + sq[..., 1]
+    for i in range(2, x.shape[-1]):
+        s += sq[..., i]
+    return np.sqrt(s, out=s)[..., None]
 
 
 def normalized(q: np.ndarray) -> np.ndarray:
