@@ -99,7 +99,7 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     Lb = Lp.ravel()
 
     def lum_at(i):
-        return _LUMA[Lb[i]]
+        return _LUMA.take(Lb.take(i))
     m, n, s, w, e = lum_at(c), lum_at(c - Wp), lum_at(c + Wp), lum_at(c - 1), lum_at(c + 1)
     nw, ne, sw, se = lum_at(c - Wp - 1), lum_at(c - Wp + 1), lum_at(c + Wp - 1), lum_at(c + Wp + 1)
     r = np.maximum(np.maximum(np.maximum(n, s), np.maximum(w, e)), m) - \
@@ -165,8 +165,8 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     off = np.where(good, 0.5 - np.minimum(dn, dp) / (dn + dp), 0.0)
     off = np.maximum(off, sub_f)[:, None].astype(np.float32)
     # blend towards the neighbour across the edge (a bilinear tap off the pixel centre)
-    c0 = img[ys, xs].astype(np.float32)
-    c1 = img[np.clip(ys + qy, 0, H - 1), np.clip(xs + qx, 0, W - 1)].astype(np.float32)
+    c0 = px.take(k, axis=0).astype(np.float32)
+    c1 = px.take(np.clip(ys + qy, 0, H - 1) * W + np.clip(xs + qx, 0, W - 1), axis=0).astype(np.float32)
     out[ys, xs] = np.rint(c0 + (c1 - c0) * off).astype(np.uint8)
     return out
 
