@@ -475,8 +475,15 @@ def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict 
         if present:
             ncol_img = 2 if len(present) > 1 else 1
             nrow_img = int(np.ceil(len(present) / ncol_img))
-            fig = Figure(figsize=(3.0 * ncol_img + 4.2, max(3.6, 2.3 * nrow_img)), layout="constrained")
-            sf_img, sf_curve = fig.subfigures(1, 2, width_ratios=[3.0 * ncol_img, 4.2])
+            # each image at least at its own pixel size in the PNG (PNG_DPI): the legends
+            # drawn into the ghosts and trails stay as readable as in the images themselves
+            # (issue 33: at 2.3 inches a row, a 640x480 ghost's legend was 7 px high)
+            iw = max(img.shape[1] for _, img in present)
+            ih = max(img.shape[0] for _, img in present)
+            pw = max(3.0, 1.06 * iw / PNG_DPI)                # + the padding around it
+            ph = pw * ih / iw + 0.6                           # + a two-line title
+            fig = Figure(figsize=(pw * ncol_img + 4.2, max(3.6, ph * nrow_img)), layout="constrained")
+            sf_img, sf_curve = fig.subfigures(1, 2, width_ratios=[pw * ncol_img, 4.2])
             axes = sf_img.subplots(nrow_img, ncol_img, squeeze=False)
             for ax in axes.flat:
                 ax.axis("off")

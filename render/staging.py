@@ -30,7 +30,7 @@ from flipstudy.errors import FlipstudyValueError
 from flipstudy.stimuli.motion.clip import Clip
 from flipstudy.stimuli.physics import center_of_mass
 
-from .camera import UP, Camera, fit_camera, view_basis
+from .camera import UP, Camera, fit_camera, recentre, view_basis
 from .geometry import body_points
 from .style import DEFAULT_STYLE, Style
 
@@ -66,11 +66,19 @@ class Framing:
     view_angle: float = 25.0
     elevation: float = 8.0
     margin: float = 0.06
+    #: points per motion (``points`` is their concatenation, in order): given, the
+    #: camera fitted to the union is moved to centre the motions as a family
+    #: (:func:`~flipstudy.render.camera.recentre`, keeping a third of ``margin``)
+    parts: tuple = ()
 
     def camera(self, size) -> Camera:
         """The camera of this framing for an image of ``size`` (w, h)."""
-        return fit_camera(self.points, self.direction, size, view_angle=self.view_angle,
-                          elevation=self.elevation, margin=self.margin)
+        cam = fit_camera(self.points, self.direction, size, view_angle=self.view_angle,
+                         elevation=self.elevation, margin=self.margin)
+        if len(self.parts) > 1:
+            groups = np.split(self.points, np.cumsum(self.parts)[:-1])
+            cam = recentre(cam, groups, size, floor=self.margin / 3.0)
+        return cam
 
     def ground(self, camera: Camera, margin: float) -> tuple:
         """Ground bounds (x0, x1, z0, z1): the framed points, ``margin`` metres
@@ -209,9 +217,10 @@ class Stage:
             raise FlipstudyValueError("Stage.refit: the stage's camera was given, not fitted")
         one = self.only(*which)
         basis = view_basis(self.framing.direction, self.framing.elevation)
-        pts = np.concatenate([_extremes(body_points(c, b), basis).reshape(-1, 3)
-                              for c, b in zip(one.clips, one.bodies)])
-        framing = replace(self.framing, points=pts)
+        each = [_extremes(body_points(c, b), basis).reshape(-1, 3)
+                for c, b in zip(one.clips, one.bodies)]
+        framing = replace(self.framing, points=np.concatenate(each),
+                          parts=tuple(len(p) for p in each))
         return replace(one, camera=framing.camera(self.size), framing=framing)
 
     def resized(self, size) -> "Stage":

@@ -36,11 +36,23 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None,
     Parameters
     ----------
     spec : str
-        A built-in name or the path of a BVH file.
+        A built-in name, or the path of a BVH, joint-position or AMASS/SMPL file.
     scale : float, optional
         Metres per file unit; default: guessed from the flight (BVH) or 1.0.
     fps : float, optional
         Frames per second, overriding the file's.
+    accept_unphysical : bool, default False
+        Use a clip the physics gate would refuse as it is (``--accept-unphysical``).
+    check : bool, default True
+        Run the physics gate; False reports nothing and refuses nothing.
+    layout : str, optional
+        A position array's joints: a layout name (``humanml3d-22``) or a layout file.
+    up : {"y", "z"}, optional
+        The up axis of a position or AMASS file.
+    body_model : str or pathlib.Path, optional
+        The user's SMPL-family body model (``.npz``), needed for an AMASS file.
+    gate : bool, default True
+        The same as ``check`` (both must be true for the gate to run).
 
     Returns
     -------
@@ -52,6 +64,11 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None,
         When ``spec`` is neither a built-in name nor an existing file.
     BVHError
         For a malformed BVH file (naming its line).
+    MotionFileError
+        For a position or AMASS file that is not what its reader expects, or that
+        physics contradicts (naming the fix).
+    UnphysicalClipError
+        For a BVH or built-in clip that physics contradicts (naming the fix).
 
     Examples
     --------

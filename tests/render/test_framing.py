@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from _silhouettes import box, silhouette_union, video_frames as _frames
 from flipstudy.render.compose import read_image
 from flipstudy.render.style import Style, rgb8
 
@@ -13,21 +14,10 @@ SIZE = (128, 96)
 NO_GROUND = {"ground": False, "anti_aliasing": "none"}
 
 
-def _frames(mp4) -> np.ndarray:
-    import imageio_ffmpeg
-    rd = imageio_ffmpeg.read_frames(str(mp4))
-    meta = next(rd)
-    W, H = meta["size"]
-    return np.stack([np.frombuffer(f, np.uint8).reshape(H, W, 3) for f in rd])
-
-
 def _character_box(frames: np.ndarray, background) -> tuple:
     """(x0, x1, y0, y1) pixels of everything that differs from the background
     in any frame (the ground is off: only the character is drawn)."""
-    diff = np.abs(frames.astype(int) - np.asarray(background, int)).max(-1) > 40
-    any_ = diff.any(0)
-    ys, xs = np.nonzero(any_)
-    return xs.min(), xs.max() + 1, ys.min(), ys.max() + 1
+    return box(silhouette_union(frames, background))
 
 
 @pytest.fixture(scope="module")
