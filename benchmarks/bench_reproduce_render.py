@@ -34,9 +34,12 @@ study, out, n, size, jobs = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv
 s = StimulusSet.read(study)
 s = StimulusSet(s.folder, s.stimuli[:n] if n > 0 else s.stimuli, s.design, s.manifest_sha256)
 w, h = (int(v) for v in size.split("x"))
-rec = render_study(s, what=("video", "ghost", "trail"), size=(w, h), jobs=jobs, style=STYLE,
+res = render_study(s, what=("video", "ghost", "trail"), size=(w, h), jobs=jobs, style=STYLE,
                    progress=False, out=out)
-print(rec["made"], rec.get("anti_aliasing", {}).get("method", "(not recorded)"),
+# a RenderResult (its render.json record in .record) since issue 29, a dict before it
+rec = getattr(res, "record", res)
+made = res.made if hasattr(res, "made") else res["made"]
+print(made, rec.get("anti_aliasing", {}).get("method", "(not recorded)"),
       rec.get("encoder", {}).get("preset", "(not recorded: medium)"))
 """
 

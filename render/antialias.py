@@ -18,6 +18,8 @@ returned as it is, as the shader returns it.
 """
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 #: VTK's ``vtkFXAAOptions`` defaults (the filter the project used before)
@@ -26,6 +28,7 @@ OPTIONS = {"relative_contrast_threshold": 1 / 8, "hard_contrast_threshold": 1 / 
            "endpoint_search_iterations": 12}
 
 _W8 = np.array([77, 150, 29], np.uint16)        # Rec. 601 luma in 1/256 steps (sums to 256)
+_LUMA = np.arange(256, dtype=np.float32) / np.float32(255)   # a luma byte in [0, 1]
 
 
 def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -47,28 +50,58 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         np.copyto(out, img)
     if H < 3 or W < 3:
         return out
-    # luma of every pixel in 1/255 (uint8: the whole-frame work stays on bytes), padded by
-    # the longest endpoint search so no index leaves it: Lp[y + R, x + R] is pixel (y, x)
+    # luma of every pixel in 1/255 (uint8: the whole-frame work stays on bytes), written
+    # straight into a frame padded by the longest endpoint search (edge mode) so no index
+    # leaves it: Lp[y + R, x + R] is pixel (y, x).  The whole-frame passes are the cost of
+    # a frame with few edges: a handful of byte operations, no float copy of the frame.
     R = int(o["endpoint_search_iterations"]) + 1
-    lum = ((img[..., 0] * _W8[0] + img[..., 1] * _W8[1] + img[..., 2] * _W8[2]) >> 8).astype(np.uint8)
-    Lp = np.pad(lum, R, mode="edge")
     Wp = W + 2 * R
-    M = lum
+    # every whole-frame array is a scratch buffer kept for the next frame of the same size:
+    # a fresh 300 kB array costs more in page faults than the byte operation filling it
+    Lp, acc, tmp, hi, lo, thr_hi, edge = _scratch(H, W, R)
+    px = img.reshape(-1, 3) if img.flags.c_contiguous else np.ascontiguousarray(img).reshape(-1, 3)
+    np.multiply(px[:, 0], _W8[0], out=acc)
+    np.multiply(px[:, 1], _W8[1], out=tmp)
+    acc += tmp
+    np.multiply(px[:, 2], _W8[2], out=tmp)
+    acc += tmp
+    acc >>= 8
+    M = Lp[R:R + H, R:R + W]
+    M[...] = acc.reshape(H, W)
+    Lp[R:R + H, :R] = M[:, :1]
+    Lp[R:R + H, R + W:] = M[:, -1:]
+    Lp[:R] = Lp[R]
+    Lp[R + H:] = Lp[R + H - 1]
     N, S = Lp[R - 1:R - 1 + H, R:R + W], Lp[R + 1:R + 1 + H, R:R + W]
     Wl, E = Lp[R:R + H, R - 1:R - 1 + W], Lp[R:R + H, R + 1:R + 1 + W]
-    hi = np.maximum(np.maximum(np.maximum(N, S), np.maximum(Wl, E)), M)
-    lo = np.minimum(np.minimum(np.minimum(N, S), np.minimum(Wl, E)), M)
-    thr_hi = np.maximum(hi >> 3, np.uint8(round(255 * o["hard_contrast_threshold"]))) \
-        if o["relative_contrast_threshold"] == 1 / 8 else \
-        np.maximum((hi * o["relative_contrast_threshold"]).astype(np.uint8),
-                   np.uint8(round(255 * o["hard_contrast_threshold"])))
-    ys, xs = np.nonzero(hi - lo >= thr_hi)
-    if not len(ys):
+    np.maximum(N, S, out=hi)
+    np.maximum(hi, Wl, out=hi)
+    np.maximum(hi, E, out=hi)
+    np.maximum(hi, M, out=hi)
+    np.minimum(N, S, out=lo)
+    np.minimum(lo, Wl, out=lo)
+    np.minimum(lo, E, out=lo)
+    np.minimum(lo, M, out=lo)
+    if o["relative_contrast_threshold"] == 1 / 8:
+        np.right_shift(hi, 3, out=thr_hi)
+    else:
+        thr_hi[...] = hi * o["relative_contrast_threshold"]
+    np.maximum(thr_hi, np.uint8(round(255 * o["hard_contrast_threshold"])), out=thr_hi)
+    np.subtract(hi, lo, out=hi)
+    np.greater_equal(hi, thr_hi, out=edge)
+    k = np.flatnonzero(edge)                                   # edge pixels, flat in the frame
+    if not len(k):
         return out
-    flat = Lp.ravel().astype(np.float32) / np.float32(255)
-    c = (ys + R) * Wp + (xs + R)                               # flat index in Lp
-    m, n, s, w, e = flat[c], flat[c - Wp], flat[c + Wp], flat[c - 1], flat[c + 1]
-    nw, ne, sw, se = flat[c - Wp - 1], flat[c - Wp + 1], flat[c + Wp - 1], flat[c + Wp + 1]
+    ys = k // W
+    xs = k - ys * W
+    c = k + ys * (2 * R) + (R * Wp + R)                        # flat index in Lp
+    # the luma in [0, 1] only where it is read: the bytes gathered, then a 256-entry table
+    Lb = Lp.ravel()
+
+    def lum_at(i):
+        return _LUMA.take(Lb.take(i))
+    m, n, s, w, e = lum_at(c), lum_at(c - Wp), lum_at(c + Wp), lum_at(c - 1), lum_at(c + 1)
+    nw, ne, sw, se = lum_at(c - Wp - 1), lum_at(c - Wp + 1), lum_at(c + Wp - 1), lum_at(c + Wp + 1)
     r = np.maximum(np.maximum(np.maximum(n, s), np.maximum(w, e)), m) - \
         np.minimum(np.minimum(np.minimum(n, s), np.minimum(w, e)), m)
     # sub-pixel aliasing: the 3x3 low-pass against the pixel, over the local range
@@ -101,16 +134,28 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
 
     def search(direction: int):
         i = c + direction * along                              # the first step, every pixel
-        lum_e = 0.5 * (flat[i] + flat[i + across]) - half
+        lum_e = 0.5 * (lum_at(i) + lum_at(i + across)) - half
         dist = np.ones(len(ys), np.int64)
         todo = np.nonzero(np.abs(lum_e) < thr)[0]              # still on the edge: steps 2..K
-        if len(todo):
-            i = c[todo, None] + direction * steps[None, 1:] * along[todo, None]
-            far = 0.5 * (flat[i] + flat[i + across[todo, None]]) - half[todo, None]
+        step = direction * along
+        # steps 2..4 for every such pixel, then 5..K for those still on it: most edges end
+        # within a few steps, the rest run the whole way (same values as all steps at once)
+        for first, last in _chunks(K):
+            if not len(todo):
+                break
+            st = steps[first - 1:last]
+            i = c[todo, None] + st[None, :] * step[todo, None]
+            far = 0.5 * (lum_at(i) + lum_at(i + across[todo, None])) - half[todo, None]
             done = np.abs(far) >= thr[todo, None]
-            j = np.where(done.any(1), done.argmax(1), K - 2)
-            dist[todo] = j + 2
-            lum_e[todo] = far[np.arange(len(todo)), j]
+            ended = done.any(1)
+            j = done.argmax(1)
+            if last == K:                                      # never left it: ends at step K
+                j[~ended] = K - first
+                ended[:] = True
+            got = todo[ended]
+            dist[got] = j[ended] + first
+            lum_e[got] = far[np.nonzero(ended)[0], j[ended]]
+            todo = todo[~ended]
         return dist, lum_e
 
     dn, en = search(-1)                                        # distances to the two ends
@@ -120,10 +165,32 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     off = np.where(good, 0.5 - np.minimum(dn, dp) / (dn + dp), 0.0)
     off = np.maximum(off, sub_f)[:, None].astype(np.float32)
     # blend towards the neighbour across the edge (a bilinear tap off the pixel centre)
-    c0 = img[ys, xs].astype(np.float32)
-    c1 = img[np.clip(ys + qy, 0, H - 1), np.clip(xs + qx, 0, W - 1)].astype(np.float32)
+    c0 = px.take(k, axis=0).astype(np.float32)
+    c1 = px.take(np.clip(ys + qy, 0, H - 1) * W + np.clip(xs + qx, 0, W - 1), axis=0).astype(np.float32)
     out[ys, xs] = np.rint(c0 + (c1 - c0) * off).astype(np.uint8)
     return out
+
+
+_SCRATCH = threading.local()
+
+
+def _scratch(H: int, W: int, R: int):
+    """This thread's whole-frame buffers for (H, W) frames padded by R: the padded luma,
+    two uint16 accumulators, high, low, threshold (uint8) and the edge mask."""
+    key = (H, W, R)
+    got = getattr(_SCRATCH, "bufs", None)
+    if got is None or got[0] != key:
+        n = H * W
+        got = _SCRATCH.bufs = (key, (np.empty((H + 2 * R, W + 2 * R), np.uint8),
+                                     np.empty(n, np.uint16), np.empty(n, np.uint16),
+                                     np.empty((H, W), np.uint8), np.empty((H, W), np.uint8),
+                                     np.empty((H, W), np.uint8), np.empty((H, W), bool)))
+    return got[1]
+
+
+def _chunks(K: int):
+    """The endpoint search's steps in two runs, (first, last) inclusive: 2..4, 5..K."""
+    return ((2, 4), (5, K)) if K > 4 else ((2, K),) if K >= 2 else ()
 
 
 __all__ = ["fxaa", "OPTIONS"]

@@ -165,9 +165,14 @@ class Clip:
             return self._cache["fk"]
         sk = self.skeleton
         F, J = self.num_frames, sk.num_joints
-        local = Rotation.from_quat(self.rotations.reshape(-1, 4)).as_matrix()
-        L = local.reshape(F, J, 3, 3).transpose(2, 3, 1, 0).copy()          # (3,3,J,F)
-        del local      # (arrays are freed as soon as they are done with: less memory to map)
+        # the local matrices straight into that layout: Rotation.from_quat(q).as_matrix()'s
+        # arithmetic (normalise, then scipy's expressions), the same bits, no transpose
+        qc = quat.normalized(self.rotations).transpose(2, 1, 0).copy()       # (4,J,F)
+        L = np.empty((3, 3, J, F))
+        for a, row in enumerate(quat.matrix_entries(*qc)):
+            for b, m in enumerate(row):
+                L[a, b] = m
+        del qc         # (arrays are freed as soon as they are done with: less memory to map)
         if self.joint_pos is not None:
             trans = np.where(sk.has_position[None, :, None], self.joint_pos, sk.offsets[None])
             T = trans.transpose(2, 1, 0).copy()                               # (3,J,F)

@@ -84,6 +84,28 @@ def test_exp_equals_scipys_bits(v):
     _same(quat.from_rotvec(v), _scipy("from_rotvec")(v))
 
 
+@settings(max_examples=150, deadline=None)
+@given(quats, vecs)
+def test_matrices_and_applied_vectors_equal_scipys_bits(q, v):
+    """as_matrix and apply against the (n, 4) Rotation calls the old forward kinematics
+    and turns made (scipy's compiled path for one leading axis), bit for bit."""
+    n = min(len(q), len(v))
+    q, v = q[:n], v[:n]
+    _same(quat.as_matrix(quat.normalized(q)), Rotation.from_quat(q).as_matrix())
+    _same(quat.apply(quat.normalized(q), v), Rotation.from_quat(q).apply(v))
+    rv = np.roll(v, 1, axis=0)
+    _same(quat.apply(quat.from_rotvec(rv), v), Rotation.from_rotvec(rv).apply(v))
+
+
+def test_forward_kinematics_local_matrices_are_scipys():
+    """Clip._fk's local matrices (built in its component-major layout) are the ones
+    Rotation.from_quat(...).as_matrix() gives: the root's world rotation is its local one."""
+    from flipstudy import load_bvh
+    clip = load_bvh(shared_file("88_01.bvh"))
+    _same(np.ascontiguousarray(clip.joint_rotations()[:, 0]),
+          Rotation.from_quat(clip.rotations[:, 0]).as_matrix())
+
+
 def test_logs_of_the_canonical_sign_cases():
     """w = 0 with leading zeros: scipy's canonical sign rule, case by case."""
     q = np.array([[-1.0, 0, 0, 0], [0, -1.0, 0, 0], [0, 0, -1.0, 0], [0, 0, 0, -1.0],
