@@ -89,6 +89,8 @@ def _rows_in_db(study_dir):
         conn.close()
 
 
+@pytest.mark.slow             # ~35 s of three browser sessions; tests/study/test_session_browser.py and
+# test_frontend_errors.py drive the same site by default
 def test_local_jatos_and_pavlovia_sessions_drive_the_same_site(page, study, tmp_path, jspsych_dir):  # noqa: F811
     resp, how = plan(8)
     blocked, loaded = [], {}
