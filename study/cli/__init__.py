@@ -107,6 +107,8 @@ def main(argv: list[str] | None = None) -> int:
     except FlipstudyError as e:                     # a user error: one line, no traceback
         print(f"flipstudy {args.command}: {e.label}{e}", file=sys.stderr)
         return e.exit_status
+    except BrokenPipeError:                         # the reader left (`| head`): stop quietly
+        return _broken_pipe()
     except OSError as e:
         if e.filename is None or e.errno not in _ENVIRONMENT_ERRNOS:
             return _bug(args, e)
@@ -116,6 +118,16 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except Exception as e:                          # a bug: the traceback, and ask for a report
         return _bug(args, e)
+
+
+def _broken_pipe() -> int:
+    """The program reading our output closed the pipe (``flipstudy … | head``): nothing
+    is wrong and nothing more can be said; stdout goes to /dev/null so the interpreter's
+    final flush stays quiet, and the status is a shell's for SIGPIPE, 128 + 13."""
+    import os
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())
+    return 141
 
 
 def _bug(args, e: BaseException) -> int:

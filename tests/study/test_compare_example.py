@@ -1,4 +1,4 @@
-"""The README's comparison example on the real CMU takes: examples/compare_models.py
+"""The README's comparison example on the real CMU takes: docs/examples/compare_models.py
 makes the ground truth as HumanML3D-layout joint positions with SOURCES.md's fixes
 (60 Hz, no T-pose) and two degraded sources, and the design builds into a
 comparison study through the loading rule's position reader."""
@@ -16,7 +16,7 @@ from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli.design import Design
 from flipstudy.stimuli.stimset import build_stimuli
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "compare_models.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "docs" / "examples" / "compare_models.py"
 pytestmark = pytest.mark.shared
 
 

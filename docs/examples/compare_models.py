@@ -1,12 +1,12 @@
 """Make a comparison study's sources: ground truth from real CMU clips as joint
 positions, two degraded "model" outputs, and the design that compares them.
 
-    python examples/compare_models.py --out /tmp/cmp [--mocap ../shared/mocap]
+    python docs/examples/compare_models.py --out /tmp/cmp [--mocap ../shared/mocap]
 
 writes ``/tmp/cmp/{gt,jitter,floaty}/ITEM.npz`` (joint positions in the HumanML3D
 layout: the 22 SMPL body joints in SMPL order, Y up, metres, with the take's frame
 rate as ``fps``) and ``/tmp/cmp/design.toml`` (three ``[[sources]]``, 2AFC against
-``gt``).  The README's "Comparing given motions" section runs the rest: build,
+``gt``).  The user guide's "Comparing given motions" section runs the rest: build,
 render, simulated panel, ranking.
 
 * ``gt``: the CMU takes, read with the fixes ``../shared/mocap/SOURCES.md`` asks
@@ -102,7 +102,7 @@ def make_sources(out: Path, mocap: Path, seed: int = 31) -> Path:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", required=True, type=Path, help="folder for the sources and the design")
-    ap.add_argument("--mocap", type=Path, default=Path(__file__).resolve().parents[1] / ".." / "shared" / "mocap",
+    ap.add_argument("--mocap", type=Path, default=Path(__file__).resolve().parents[2] / ".." / "shared" / "mocap",
                     help="the CMU clips (default ../shared/mocap beside the checkout)")
     ap.add_argument("--seed", type=int, default=31)
     a = ap.parse_args()
