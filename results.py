@@ -22,6 +22,7 @@ True
 """
 from __future__ import annotations
 
+import abc
 import dataclasses
 import json
 import types
@@ -62,14 +63,14 @@ def _from_json(hint, value):
 
 
 @dataclass(frozen=True)
-class StepResult:
+class StepResult(abc.ABC):
     """Base of the step results: ``to_dict``/``from_dict``, ``save_json``/``load_json``
     and ``summary()``.  Fields hold JSON-ready values (numbers, strings, paths,
     tuples of them, and JSON documents as dicts)."""
 
+    @abc.abstractmethod
     def summary(self) -> str:
-        """The text ``flipstudy`` prints for this step."""
-        raise NotImplementedError
+        """The text ``flipstudy`` prints for this step (each step's result defines it)."""
 
     def to_dict(self) -> dict:
         """The fields as a JSON-ready dict (paths as strings, tuples as lists)."""

@@ -116,6 +116,9 @@ def test_a_long_but_landing_flight_is_still_built(tmp_path):
     p = design(tmp_path, 'kind = "gravity"\nsign = -1\npolicy = "takeoff-velocity"\nlevels = [0, 60]')
     rows = build_stimuli(load_design(p), tmp_path / "out", progress=False).rows
     assert 1.5 < float(rows[-1]["flight_s"]) < MAX_FLIGHT_S
+    # the flight it was built with is the closed form's (checked against the COM parabola above)
+    planned = planned_flight(analyse(builtin("backflip")), "gravity", -0.6, "takeoff-velocity")[0]
+    assert float(rows[-1]["flight_s"]) == pytest.approx(planned, abs=1.01 / 120)
 
 
 # ------------------------------------------------------------ case 6: tracebacks

@@ -60,6 +60,9 @@ def test_sigterm_of_render_stops_its_workers_and_leaves_only_recorded_videos(tmp
     rec = json.loads((study / "render" / "render.json").read_text())
     made = set(rec["outputs"])
     assert 1 <= len(made) < n, "the render was not stopped mid-way"
+    from flipstudy.stimuli.contract import file_sha256
+    for name, entry in rec["outputs"].items():               # each recorded file is whole
+        assert file_sha256(study / "render" / name) == entry["sha256"], name
     assert {p.name for p in (study / "render").iterdir()} == made | {"render.json"}
     assert _leftovers(tmp_path, "study") == []
     assert not any(p.name.endswith((".lock", ".tmp")) or ".tmp-" in p.name

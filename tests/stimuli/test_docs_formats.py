@@ -8,7 +8,7 @@ import pytest
 
 pytest.importorskip("docutils", reason="the docs extra (sphinx, docutils) is not installed")
 
-EXT = Path(__file__).resolve().parents[1] / "docs" / "_ext" / "flipstudy_formats.py"
+EXT = Path(__file__).resolve().parents[2] / "docs" / "_ext" / "flipstudy_formats.py"
 
 
 @pytest.fixture(scope="module")

@@ -13,7 +13,7 @@ import flipstudy.errors as errors
 from flipstudy.errors import FlipstudyError
 from flipstudy.study.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PARTS = ("stimuli", "render", "study", "analysis")
 # every built-in exception but KeyboardInterrupt: the CLI's SIGTERM (``Terminated``) is a
 # signal raised where Ctrl-C is, not an error
