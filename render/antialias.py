@@ -171,21 +171,53 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     return out
 
 
+#: how far (pixels, either axis) a pixel's FXAA result reads from it: the endpoint
+#: search's steps along the edge, one pixel across it, and the 3x3 neighbourhood
+REACH = int(OPTIONS["endpoint_search_iterations"]) + 1
+
+
+def fxaa_update(smooth: np.ndarray, raw: np.ndarray, box) -> np.ndarray:
+    """``smooth`` (the FXAA of a frame) made the FXAA of ``raw``, a frame that
+    differs from that one only inside ``box`` (row and column slices): only
+    the pixels within :data:`REACH` of the box are recomputed, from the pixels
+    within twice that; every other pixel reads nothing that changed.
+
+    >>> rng = np.random.default_rng(1)
+    >>> a = rng.integers(0, 256, (40, 50, 3), dtype=np.uint8)
+    >>> b = a.copy(); b[10:20, 5:15] = 255
+    >>> sm = fxaa_update(fxaa(a), b, (slice(10, 20), slice(5, 15)))
+    >>> np.array_equal(sm, fxaa(b))
+    True
+    """
+    H, W = raw.shape[:2]
+    ys, xs = box
+    m = REACH + 1
+    cy, cx = slice(max(0, ys.start - 2 * m), min(H, ys.stop + 2 * m)), \
+        slice(max(0, xs.start - 2 * m), min(W, xs.stop + 2 * m))
+    iy, ix = slice(max(0, ys.start - m), min(H, ys.stop + m)), slice(max(0, xs.start - m), min(W, xs.stop + m))
+    part = fxaa(raw[cy, cx])
+    smooth[iy, ix] = part[iy.start - cy.start:iy.stop - cy.start, ix.start - cx.start:ix.stop - cx.start]
+    return smooth
+
+
 _SCRATCH = threading.local()
 
 
 def _scratch(H: int, W: int, R: int):
     """This thread's whole-frame buffers for (H, W) frames padded by R: the padded luma,
-    two uint16 accumulators, high, low, threshold (uint8) and the edge mask."""
-    key = (H, W, R)
+    two uint16 accumulators, high, low, threshold (uint8) and the edge mask; views of
+    buffers kept between calls and grown when a frame needs more (frames of one video
+    are one size; the parts :func:`fxaa_update` redoes vary)."""
+    n, npad = H * W, (H + 2 * R) * (W + 2 * R)
     got = getattr(_SCRATCH, "bufs", None)
-    if got is None or got[0] != key:
-        n = H * W
-        got = _SCRATCH.bufs = (key, (np.empty((H + 2 * R, W + 2 * R), np.uint8),
-                                     np.empty(n, np.uint16), np.empty(n, np.uint16),
-                                     np.empty((H, W), np.uint8), np.empty((H, W), np.uint8),
-                                     np.empty((H, W), np.uint8), np.empty((H, W), bool)))
-    return got[1]
+    if got is None or got[0] < n or got[1] < npad:
+        n_, npad_ = max(n, got[0] if got else 0), max(npad, got[1] if got else 0)
+        got = _SCRATCH.bufs = (n_, npad_, np.empty(npad_, np.uint8), np.empty(n_, np.uint16),
+                               np.empty(n_, np.uint16), np.empty(n_, np.uint8), np.empty(n_, np.uint8),
+                               np.empty(n_, np.uint8), np.empty(n_, bool))
+    lp, acc, tmp, hi, lo, thr, edge = got[2:]
+    return (lp[:npad].reshape(H + 2 * R, W + 2 * R), acc[:n], tmp[:n], hi[:n].reshape(H, W),
+            lo[:n].reshape(H, W), thr[:n].reshape(H, W), edge[:n].reshape(H, W))
 
 
 def _chunks(K: int):
@@ -193,4 +225,4 @@ def _chunks(K: int):
     return ((2, 4), (5, K)) if K > 4 else ((2, K),) if K >= 2 else ()
 
 
-__all__ = ["fxaa", "OPTIONS"]
+__all__ = ["fxaa", "fxaa_update", "OPTIONS", "REACH"]

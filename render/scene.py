@@ -20,6 +20,7 @@ EGL and replaces by SSAA), or VTK's SSAA pass.
 from __future__ import annotations
 
 import contextlib
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -34,6 +35,17 @@ from .style import DEFAULT_STYLE, Style, rgb
 
 #: colour of the boxes of :meth:`Scene.set_boxes` (light wood)
 BOX_COLOR = "#cdb793"
+
+
+@dataclass
+class Plate:
+    """The still part of a frame (:meth:`Scene.plate`): ``rgb`` (H, W, 3) uint8
+    and ``depth`` (H, W) float32, rows top-down, the camera, ground and size
+    they hold for, and (made on first use) the FXAA of ``rgb``."""
+    key: tuple
+    rgb: np.ndarray
+    depth: np.ndarray
+    smooth: np.ndarray | None = None
 
 
 class Scene:
@@ -351,11 +363,111 @@ class Scene:
             self.boxes_actor.SetVisibility(bool(visible))
 
     # --------------------------------------------------------------- output
-    def grab(self, alpha: bool = False, out: np.ndarray | None = None) -> np.ndarray:
+    def plate(self) -> "Plate | None":
+        """What stays still while the characters move: the frame of the ground
+        and background alone, with its depth, for :meth:`grab`'s ``plate``.
+        ``None`` when the scene holds more than the ground and opaque
+        characters (boxes, markers, lines, arrows, labels, an overlay layer, a
+        translucent body): those frames are rendered whole."""
+        from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
+        if self.style.anti_aliasing not in ("fxaa", "none") or self.ground_actor is None \
+                or not self.ground_actor.GetVisibility() or self.boxes_actor is not None or self._overlay is not None or self._legend:
+            return None
+        others = [v.actor for d in (self._markers, self._lines, self._arrows) for v in d.values()]
+        if any(a.GetVisibility() for a in others) or any(t.GetVisibility() for t in self._texts.values()):
+            return None
+        shown = [c for c in self._chars.values() if c.visible]
+        if any(c.actor.prop.opacity < 1.0 for c in shown):
+            return None
+        for c in shown:
+            c.visible = False
+        try:
+            self._render_raw()
+            rw = self.plotter.render_window
+            w, h = rw.GetSize()
+            rgb_, z = vtkUnsignedCharArray(), vtkFloatArray()
+            rw.GetPixelData(0, 0, w - 1, h - 1, 1, rgb_, 0)
+            rw.GetZbufferData(0, 0, w - 1, h - 1, z)
+        finally:
+            for c in shown:
+                c.visible = True
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+        return Plate(self._plate_key(), vtk_to_numpy(rgb_).reshape(h, w, 3)[::-1].copy(),
+                     vtk_to_numpy(z).reshape(h, w)[::-1].copy())
+
+    def _plate_key(self) -> tuple:
+        cam = self.plotter.renderer.GetActiveCamera()
+        return (self.size, self._ground_key, cam.GetPosition(), cam.GetFocalPoint(),
+                cam.GetViewUp(), cam.GetViewAngle())
+
+    def _render_raw(self) -> None:
+        """Render without VTK's anti-aliasing (the read-back frame's own FXAA
+        runs after the plate is composited)."""
+        ren = self.plotter.renderer
+        ren.SetUseFXAA(False)
+        self._clip_range()
+        if self._overlay is not None:
+            self._overlay.SetActiveCamera(ren.GetActiveCamera())
+        self.plotter.render_window.Render()
+
+    def _grab_on_plate(self, plate: "Plate", out: np.ndarray | None) -> np.ndarray:
+        # the characters rendered alone, then put on the still ground where they
+        # are nearer than it (less or equal: VTK's depth test, the ground drawn
+        # first): the frame the whole scene renders to, without drawing the
+        # ground on every frame (its lit, full-screen fill is half a frame's cost);
+        # the FXAA of the plate is kept, and redone only around the characters
+        from vtkmodules.util.numpy_support import vtk_to_numpy
+        from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
+        from .antialias import fxaa, fxaa_update
+        if plate.key != self._plate_key():
+            raise ValueError("Scene.grab: the plate is of another camera, ground or size")
+        ga = self.ground_actor
+        ga.SetVisibility(False)
+        try:
+            self._render_raw()
+        finally:
+            ga.SetVisibility(True)
+        rw = self.plotter.render_window
+        w, h = rw.GetSize()
+        bufs = self._readback.get("plate")
+        if bufs is None or bufs[2].shape != (h, w, 3):
+            bufs = self._readback["plate"] = (vtkUnsignedCharArray(), vtkFloatArray(),
+                                              np.empty((h, w, 3), np.uint8))
+        rw.GetPixelData(0, 0, w - 1, h - 1, 1, bufs[0], 0)
+        rw.GetZbufferData(0, 0, w - 1, h - 1, bufs[1])
+        rgb_ = vtk_to_numpy(bufs[0]).reshape(h, w, 3)[::-1]          # rows top-down
+        z = vtk_to_numpy(bufs[1]).reshape(h, w)[::-1]
+        near = z <= plate.depth
+        near &= z < 1.0                                     # drawn on (not the far plane)
+        aa = self.style.anti_aliasing == "fxaa"
+        if aa and plate.smooth is None:
+            plate.smooth = fxaa(plate.rgb)
+        if out is None:
+            out = np.empty((h, w, 3), np.uint8)
+        np.copyto(out, plate.smooth if aa else plate.rgb)
+        rows, cols = np.flatnonzero(near.any(1)), np.flatnonzero(near.any(0))
+        if not len(rows):
+            return out
+        box = (slice(rows[0], rows[-1] + 1), slice(cols[0], cols[-1] + 1))
+        raw = bufs[2] if aa else out
+        if aa:
+            np.copyto(raw, plate.rgb)
+        np.copyto(raw[box], rgb_[box], where=near[box][..., None])
+        if aa:
+            fxaa_update(out, raw, box)
+        return out
+
+    def grab(self, alpha: bool = False, out: np.ndarray | None = None,
+             plate: "Plate | None" = None) -> np.ndarray:
         """Render and read the frame: (H, W, 3) uint8, or (H, W, 4) with
         ``alpha=True`` (transparent background: the alpha channel is the matte,
-        colours premultiplied).  ``out`` receives the pixels when given."""
+        colours premultiplied).  ``out`` receives the pixels when given.
+        ``plate`` (from :meth:`plate`, same camera, ground and size): the
+        characters are rendered alone and put on it, the same frame at a
+        fraction of the cost."""
         from vtkmodules.util.numpy_support import vtk_to_numpy
+        if plate is not None and not alpha:
+            return self._grab_on_plate(plate, out)
         pl = self.plotter
         ren = pl.renderer
         if alpha:
@@ -455,4 +567,4 @@ def scene_for(stage, scene: Scene | None = None, size=None):
         scene.hide_all()
 
 
-__all__ = ["Scene", "scene_for", "BOX_COLOR"]
+__all__ = ["Scene", "Plate", "scene_for", "BOX_COLOR"]

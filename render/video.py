@@ -100,6 +100,8 @@ def iter_frames(clip: Clip, scene, fps: float = 60.0, *, other: Clip | None = No
         ch.look(st.body_color, 1.0)
         scene.hide("other")
     buf = np.empty((scene.size[1], scene.size[0], 3), np.uint8)
+    # one character on a still ground: the ground rendered once (Scene.plate)
+    plate = scene.plate() if other is None and gizmos is None else None
     for k in range(n):
         i = min(k, v.num_frames - 1)
         ch.pose(R[i], P[i])
@@ -108,7 +110,7 @@ def iter_frames(clip: Clip, scene, fps: float = 60.0, *, other: Clip | None = No
             ch2.pose(R2[j], P2[j])
         if gizmos is not None:
             gizmos.draw(scene, i / fps, (0.0, i / fps), st.ground_height)
-        yield scene.grab(out=buf)
+        yield scene.grab(out=buf, plate=plate)
 
 
 def render_video(what, path, *, fps: float = 60.0, scene=None, debug=(), frames_dir=None,
