@@ -80,10 +80,16 @@ def compare(old: Path, new: Path) -> list[str]:
             continue
         if f.endswith(".csv"):
             a, b = pd.read_csv(old / f), pd.read_csv(new / f)
-            num = [c for c in a.columns if np.issubdtype(a[c].dtype, np.number)]
-            diff = {c: float(np.nanmax(np.abs(a[c] - b[c]))) for c in num
-                    if not np.allclose(a[c], b[c], equal_nan=True)}
-            lines.append(f"{f}: differs, largest changes {diff}")
+            if list(a.columns) != list(b.columns) or len(a) != len(b):
+                lines.append(f"{f}: differs in shape: columns {list(a.columns)} -> {list(b.columns)}, "
+                             f"rows {len(a)} -> {len(b)}")
+                continue
+            num = pd.api.types.is_numeric_dtype
+            diff = {c: float(np.nanmax(np.abs(a[c] - b[c]))) for c in a.columns
+                    if num(a[c]) and num(b[c]) and not np.allclose(a[c], b[c], equal_nan=True)}
+            text = [c for c in a.columns if not (num(a[c]) and num(b[c]))
+                    and not a[c].astype(str).equals(b[c].astype(str))]
+            lines.append(f"{f}: differs, largest numeric changes {diff}; other columns changed: {text}")
         else:
             lines.append(f"{f}: differs")
     return lines

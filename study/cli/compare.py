@@ -8,10 +8,12 @@ from pathlib import Path
 
 
 def wants_comparison(args) -> bool:
-    """Does ``flipstudy analyze`` get one study folder of a comparison study?"""
+    """Does ``flipstudy analyze`` get one study folder of a comparison study?
+    (Answers given as a table are not: nothing of the comparison is imported.)"""
+    if len(args.responses) != 1 or not Path(args.responses[0]).is_dir():
+        return False
     from ..compare import is_comparison_study
-    return len(args.responses) == 1 and Path(args.responses[0]).is_dir() \
-        and is_comparison_study(args.responses[0])
+    return is_comparison_study(args.responses[0])
 
 
 def analyze_comparison_cmd(args) -> int:
