@@ -655,6 +655,8 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
         yaws = orient_yaws(placed, bodies, takeoffs, landings, direction)
         if auto and not boxes:
             turn = THREE_QUARTER_DEG if turn is None else float(turn)
+            if not np.isfinite(turn):
+                raise FlipstudyValueError(f"stage: turn must be a finite number of degrees, got {turn}")
             yaws = [_half_open(y + turn) for y in yaws]
         placed = [place(c, np.zeros(3), y) for c, y in zip(placed, yaws)]
     if boxes and yaws[0]:

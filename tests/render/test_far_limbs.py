@@ -84,6 +84,12 @@ def test_an_explicit_direction_and_orient_false_are_not_turned():
     assert given.yaws == [0.0, 180.0]
 
 
+def test_a_turn_that_is_not_a_number_is_refused():
+    from flipstudy.errors import FlipstudyValueError
+    with pytest.raises(FlipstudyValueError, match="turn must be a finite number"):
+        stage([builtin("backflip")], size=SIZE, turn=float("nan"))
+
+
 def test_the_horizon_stays_level_in_the_three_quarter_view():
     from test_horizon_level import horizon_tilt_deg
     from flipstudy.render.scene import scene_for
