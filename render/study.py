@@ -117,10 +117,19 @@ def _methods(style) -> dict:
             "encoder": dict(ENCODER)}
 
 
+#: how :func:`render_study` fits its cameras: ``"clip"``, one camera per base clip
+#: fitted to all its stimuli (the paper's rule: the character's size on screen is the
+#: same in every stimulus of a clip, so it cannot give the condition away; a lower
+#: flight fills less of the frame); ``"stimulus"``, one camera per stimulus fitted to
+#: it alone (every video centred and filling the frame; the character's size on
+#: screen then differs between the stimuli of one clip)
+FRAMINGS = ("clip", "stimulus")
+
+
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
-                 cluster=None) -> RenderResult:
+                 cluster=None, framing: str = "clip") -> RenderResult:
     """Render the stimuli of a study (``study_dir``: its folder or its
     :class:`~flipstudy.stimuli.contract.StimulusSet`) with one style, one take-off spot and one
     camera per base clip (fitted to all its stimuli; ``cameras`` in the record,
@@ -128,6 +137,10 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     :class:`~flipstudy.results.RenderResult` (its ``record``).  With
     ``orient`` base clips that travel in other directions are turned about the
     vertical to travel like the first one (see :func:`flipstudy.render.staging.stage`).
+    ``framing`` (:data:`FRAMINGS`): ``"clip"`` (default) one camera per base clip,
+    ``"stimulus"`` one camera per stimulus, fitted to it alone (same view direction,
+    elevation and margins, centred), at the cost of the character's size on screen
+    differing between the stimuli of one clip.
 
     Resumable: ``render.json`` records for every output what it was made from
     (the stimulus's sha256, its placement, the settings that change pixels and
@@ -155,6 +168,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     out : str or pathlib.Path, optional
     frames, progress, orient, force : bool
     cluster : Cluster, optional
+    framing : str
+        ``"clip"`` or ``"stimulus"`` (see :data:`FRAMINGS`).
 
     Returns
     -------
@@ -208,6 +223,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
                                f"(H.264 yuv420p)")
     if not (math.isfinite(fps) and fps > 0):
         raise StudyRenderError(f"fps must be a positive number, got {fps!r}")
+    if framing not in FRAMINGS:
+        raise StudyRenderError(f"framing {framing!r}: choose {' or '.join(FRAMINGS)}")
     style = style if isinstance(style, Style) else Style.from_dict(style)
     out = Path(out) if out is not None else study_dir / "render"
     out.mkdir(parents=True, exist_ok=True)
@@ -223,17 +240,22 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     landings = [r.landing for r in rows]
     st = stage(clips, takeoffs, landings, bodies=body_list, size=size, style=style, orient=orient)
     # one camera per base clip, fitted to the union of its stimuli over every frame
-    groups = base_clip_groups(st.clips, takeoffs, [r.clip for r in rows])
+    # (framing "clip"), or per stimulus, fitted to it alone (framing "stimulus")
+    if framing == "clip":
+        groups = base_clip_groups(st.clips, takeoffs, [r.clip for r in rows])
+    else:
+        groups = {r.stimulus: [k] for k, r in enumerate(rows)}
     cameras, camera_of = {}, [None] * len(rows)
     for key, ks in groups.items():
         cam = st.refit(*ks).camera.to_dict()
-        cameras[rows.stimuli[ks[0]].clip or rows.stimuli[ks[0]].stimulus] = cam
+        cameras[key if framing == "stimulus" else
+                rows.stimuli[ks[0]].clip or rows.stimuli[ks[0]].stimulus] = cam
         for k in ks:
             camera_of[k] = cam
     vers = versions()
     # what changes pixels, once for the whole study (one camera per base clip)
     pixel = {"size": list(size), "fps": float(fps), "style": style.to_dict(),
-             "cameras": cameras, "ground_bounds": [float(v) for v in st.ground_bounds],
+             "framing": framing, "cameras": cameras, "ground_bounds": [float(v) for v in st.ground_bounds],
              "versions": vers, **_methods(style)}
     pixel = json.loads(json.dumps(pixel))             # the form it has when read back
     sid = canonical_id(pixel)
@@ -305,7 +327,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
         return {
             "study": str(study_dir.resolve()),
             "what": what, "size": list(size), "fps": float(fps), "jobs": jobs,
-            "orient": bool(orient), "camera": camera_of[0], "cameras": cameras,
+            "orient": bool(orient), "framing": framing, "camera": camera_of[0], "cameras": cameras,
             "style": style.to_dict(),
             "takeoff_spot": {"x": 0.0, "z": 0.0, "anchor": "COM in the last frame on the ground "
                                                               "(takeoff - 1); heights unchanged"},
@@ -358,5 +380,5 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
                         record_path=out / "render.json", record=rec)
 
 
-__all__ = ["RENDER_KINDS", "StudyRenderError", "parse_size", "parse_what", "load_stimuli",
+__all__ = ["RENDER_KINDS", "FRAMINGS", "StudyRenderError", "parse_size", "parse_what", "load_stimuli",
            "render_study"]

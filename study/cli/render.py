@@ -4,7 +4,8 @@
     add_commands(subparsers)          # adds `render` and `figure`
 
 ``flipstudy render STUDY_DIR [--what video,ghost,trail,strip,composite,overlay]
-[--size WxH] [--jobs N] [--video-fps 60] [--style NAME|STYLE.toml] [--frames] [--force] [--quiet]``
+[--size WxH] [--jobs N] [--video-fps 60] [--style NAME|STYLE.toml] [--frames] [--force] [--quiet]
+[--framing clip|stimulus]``
 (resumable: only what is missing or stale is made; Ctrl-C stops the workers at once)
 
 ``flipstudy figure CLIP [--ghost|--trail|--strip|--composite|--overlay OTHER]
@@ -76,7 +77,8 @@ def cmd_render(args) -> int:
     from flipstudy.study.pipeline import render
     res = render(args.study_dir, cluster=args.cluster, what=parse_what(args.what), size=args.size,
                  jobs=args.jobs, fps=args.video_fps, style=_style(args.style), frames=args.frames,
-                 progress=not args.quiet, orient=not args.no_orient, force=args.force)
+                 progress=not args.quiet, orient=not args.no_orient, force=args.force,
+                 framing=args.framing)
     print(res.summary())
     return 0
 
@@ -128,6 +130,10 @@ def add_commands(subparsers) -> None:
                    help="make every output again (default: only what is missing or stale, i.e. "
                         "made from another stimulus file or with other settings)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--framing", choices=("clip", "stimulus"), default="clip",
+                   help="clip (default): one camera per base clip, so the character's size on "
+                        "screen is the same in all its stimuli; stimulus: one camera per stimulus, "
+                        "each video centred and filling the frame (the size then differs)")
     add_cluster(p)
     p.set_defaults(func=cmd_render)
 

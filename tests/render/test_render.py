@@ -195,7 +195,7 @@ def test_stage_orients_other_base_clips_but_not_edits():
     turn = Rotation.from_rotvec([0, np.radians(120), 0])
     other = rotate(jumper(flip=3.0)[0], turn, np.zeros(3))         # another clip, another way
     other_edit = edited(other, t0)                                 # and an edit of it
-    st = stage([a, other, other_edit], [t0] * 3, [t1] * 3, size=(160, 120))
+    st = stage([a, other, other_edit], [t0] * 3, [t1] * 3, size=(160, 120), turn=0)
     assert st.yaws[0] == 0.0
     assert st.yaws[1] == pytest.approx(-120.0, abs=1e-6) and st.yaws[2] == st.yaws[1]
     from flipstudy.stimuli.physics import center_of_mass
@@ -233,7 +233,9 @@ def test_character_pixels_are_where_the_camera_projects_the_com():
 # ------------------------------------------------------------- ghosts, trails
 def test_ghosts_are_separate_silhouettes():
     clip = walker(seconds=1.0, speed=5.0)                     # 1 m between ghosts 0.2 s apart
-    img = ghost_image(stage([clip], [0], [clip.num_frames - 1], size=(320, 120), style=PLAIN), None,
+    # square side view (turn=0): the arms point at the camera, the silhouette stays compact
+    img = ghost_image(stage([clip], [0], [clip.num_frames - 1], size=(320, 120), style=PLAIN, turn=0),
+                      None,
                       interval=0.2, span="clip", legend=False)     # the legend box would join them
     mask = ndimage.binary_dilation(nonwhite(img), iterations=2)   # close 1-pixel joints
     _, n = ndimage.label(mask, structure=np.ones((3, 3)))
@@ -558,7 +560,8 @@ def test_fxaa_keeps_translucent_ghosts():
     """FXAA goes with depth peeling (MSAA does not here: translucent surfaces
     vanish): the ghosts of the default style are drawn."""
     clip = walker(seconds=1.0, speed=5.0)
-    st = stage([clip], [0], [clip.num_frames - 1], size=(320, 120), style=PLAIN.replace(anti_aliasing="fxaa"))
+    st = stage([clip], [0], [clip.num_frames - 1], size=(320, 120), turn=0,        # compact: square
+               style=PLAIN.replace(anti_aliasing="fxaa"))
     img = ghost_image(st, None, interval=0.2, span="clip", legend=False)   # the legend box would join them
     mask = ndimage.binary_dilation(nonwhite(img), iterations=2)
     assert ndimage.label(mask, structure=np.ones((3, 3)))[1] == 6
