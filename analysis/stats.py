@@ -405,24 +405,6 @@ def _sigmoid(alpha: float = 0.05):
             scale = np.asarray(width / self._spread[1])
             return [threshold - np.where(scale > 0, self._spread[2] * scale + 0, np.nan)[()], scale[()]]
 
-        def __call__(self, stimulus_level, threshold, width, gamma=0, lambd=0):
-            # psignifit's simplex search asks for one point at a time, level by level
-            # (about 15,000 calls an analysis), as arrays of one element: there, the
-            # same operations in the same order on floats, without the array round trips
-            one = _one_point(stimulus_level, threshold, width, gamma, lambd)
-            if one is None or self.negative:
-                return super().__call__(stimulus_level, threshold, width, gamma=gamma, lambd=lambd)
-            x, t, w, g, lam, shape = one
-            if self._spread[0] != (self.alpha, self._PC):
-                self._standard_parameters(t, w)
-            scale = w / float(self._spread[1])
-            if scale > 0:
-                loc = t - (float(self._spread[2]) * scale + 0)
-                v = g + (1.0 - lam - g) * float(ndtr((x - loc) / scale))
-            else:
-                v = float("nan")
-            return np.full(shape, v) if shape else v
-
         def _ppf(self, x, loc=0, scale=1):
             x, loc, scale = np.asarray(x), np.asarray(loc), np.asarray(scale)
             ok = (scale > 0) & (loc == loc) & (x >= 0) & (x <= 1)
@@ -441,23 +423,6 @@ def _sigmoid(alpha: float = 0.05):
                 return np.where(scale > 0, np.exp(-z ** 2 / 2.0) / _NORM_PDF_C / scale, np.nan)[()]
 
     return NormalSigmoid(alpha=alpha)
-
-
-def _one_point(*args):
-    """``args`` as floats and their broadcast shape, when every one is a number or an
-    array of one element (one point of psignifit's parameter space); else ``None``."""
-    vals, nd = [], 0
-    for a in args:
-        if isinstance(a, np.ndarray):
-            if a.size != 1:
-                return None
-            nd = max(nd, a.ndim)
-            vals.append(float(a.reshape(-1)[0]))
-        elif isinstance(a, (float, int, np.floating, np.integer)):
-            vals.append(float(a))
-        else:
-            return None
-    return (*vals, (1,) * nd)
 
 
 def _width_prior(levels, alpha: float = 0.05):

@@ -90,23 +90,3 @@ def test_fits_are_the_librarys_bit_for_bit(x, k, n, task, monkeypatch):
     lib = S.fit_psignifit("g", x, k, n, seed=3, n_samples=500, task=task)
     _same(_fit_values(ours), _fit_values(lib))
     assert ours.note == lib.note
-
-
-@pytest.mark.filterwarnings("ignore::RuntimeWarning")
-def test_one_point_sigmoid_equals_psignifits_gaussian():
-    # the simplex search's calls: one point of the parameter space as one-element arrays
-    # of the meshgrid's shape, or plain numbers; the values must be psignifit's bit for bit
-    from psignifit.sigmoids import sigmoid_by_name
-    ref, sig = sigmoid_by_name("norm", PC=0.5, alpha=0.05), S._sigmoid()
-    rng = np.random.default_rng(3)
-    for _ in range(300):
-        level = float(rng.choice([0.0, 17.0, 25.0, 37.0, 50.0]))
-        th, w = rng.normal(30, 20), rng.choice([rng.uniform(0.01, 90), 0.0, -3.0])
-        g, lam = rng.uniform(0, 0.9), rng.uniform(0, 0.5)
-        one = [np.full((1, 1, 1, 1, 1), v) for v in (th, w, g, lam)]
-        got, want = sig(level, *one[:2], gamma=one[2], lambd=one[3]), \
-            ref(level, *one[:2], gamma=one[2], lambd=one[3])
-        assert np.shape(got) == np.shape(want) == (1, 1, 1, 1, 1)
-        _same(got, want)
-        _same(sig(level, float(th), float(w), gamma=float(g), lambd=float(lam)),
-              ref(level, float(th), float(w), gamma=float(g), lambd=float(lam)))
