@@ -58,22 +58,38 @@ def _no_ligatures(fig: Figure) -> None:
 
 
 def save(fig: Figure, stem: Path, dpi: int = PNG_DPI) -> list[Path]:
-    """``stem.pdf`` and ``stem.png``, laid out once for both; returns both paths."""
+    """``stem.pdf`` and ``stem.png``, laid out once for both; returns both paths.
+
+    The figure is drawn twice, not three times: once by Agg at the PNG's
+    resolution (which lays it out and measures its tight box), the PNG being
+    that drawing cropped to the box, then once by the PDF writer in the same
+    layout."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.image import imsave
     stem = Path(stem)
     stem.parent.mkdir(parents=True, exist_ok=True)
     pdf, png = stem.with_suffix(".pdf"), stem.with_suffix(".png")
     _no_ligatures(fig)
     with style():                         # savefig reads rcParams (font embedding)
-        # the constrained layout and the tight bounding box once for both files (a
-        # savefig with bbox "tight" lays out and measures the figure before drawing it)
-        fig.draw_without_rendering()
-        box = fig.get_tightbbox().padded(mpl.rcParams["savefig.pad_inches"])
+        old_dpi, old_canvas = fig.dpi, fig.canvas
+        canvas = FigureCanvasAgg(fig)
+        fig.dpi = dpi
+        try:
+            canvas.draw()                 # the constrained layout, and the PNG's pixels
+            box = fig.get_tightbbox(canvas.get_renderer()).padded(mpl.rcParams["savefig.pad_inches"])
+            H = canvas.get_renderer().height
+            x0, x1 = int(np.floor(box.x0 * dpi)), int(np.ceil(box.x1 * dpi))
+            y0, y1 = int(np.floor(H - box.y1 * dpi)), int(np.ceil(H - box.y0 * dpi))
+            rgba = np.asarray(canvas.buffer_rgba())[max(y0, 0):y1, max(x0, 0):x1]
+            imsave(png, rgba, format="png", dpi=dpi, metadata={"Software": "flipstudy analysis"})
+        finally:
+            fig.dpi = old_dpi
+            fig.set_canvas(old_canvas)
         engine = fig.get_layout_engine()
         fig.set_layout_engine(None)       # keep the positions just computed
         try:
             fig.savefig(pdf, bbox_inches=box,
                         metadata={"CreationDate": None, "Creator": "flipstudy analysis", "Producer": None})
-            fig.savefig(png, dpi=dpi, bbox_inches=box, metadata={"Software": "flipstudy analysis"})
         finally:
             fig.set_layout_engine(engine)
     return [pdf, png]
@@ -210,7 +226,7 @@ def dprime_figure(table: pd.DataFrame, ci_label: str = "95% CI", kinds: dict | N
             ax.errorbar(x + step, dm, yerr=_yerr(dm, sub["dprime_ci_low"], sub["dprime_ci_high"]),
                         color=c, marker=m, ms=5, mfc="white", mec=c, mew=1.1, lw=0, elinewidth=0.9,
                         label="mean of participants' d′", zorder=3)
-            ax.set_title(g, color=c, fontweight="bold")
+            ax.set_title(g, color=c, fontsize=10.5)
             _level_axis(ax, x)
             ax.set_ylim(lo, hi)
         _label_panels(axes, len(groups), "sensitivity d′", "error level (%)")
@@ -313,7 +329,7 @@ def psychometric_figure(fits: list[PsychometricFit], table: pd.DataFrame | None 
             ax = axes.flat[i]
             c, m = sty.get(f.group, (OKABE_ITO[0], "o"))
             _draw_fit(ax, f, c, m, table)
-            ax.set_title(f.group, color=c, fontweight="bold")
+            ax.set_title(f.group, color=c, fontsize=10.5)
             _level_axis(ax, np.r_[0.0, f.x], f.unit)
             ax.set_ylim(0, 1)
         _label_panels(axes, len(fits), ylabel, "error magnitude |level| (%)")

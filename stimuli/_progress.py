@@ -9,8 +9,6 @@ from __future__ import annotations
 import sys
 import time
 
-from tqdm import tqdm
-
 
 #: seconds between two progress lines when the output is not a terminal
 EVERY_S = 15.0
@@ -29,6 +27,7 @@ class Progress:
         self._bar = None
         self._closed = False
         if enabled and self.stream.isatty():
+            from tqdm import tqdm         # only for a terminal (an import of 20 ms)
             self._bar = tqdm(total=self.total, desc=label, file=self.stream, unit=unit,
                              leave=True)
 
