@@ -405,6 +405,24 @@ def _sigmoid(alpha: float = 0.05):
             scale = np.asarray(width / self._spread[1])
             return [threshold - np.where(scale > 0, self._spread[2] * scale + 0, np.nan)[()], scale[()]]
 
+        def __call__(self, stimulus_level, threshold, width, gamma=0, lambd=0):
+            # psignifit's simplex search asks for one point at a time, level by level
+            # (about 15,000 calls an analysis), as arrays of one element: there, the
+            # same operations in the same order on floats, without the array round trips
+            one = _one_point(stimulus_level, threshold, width, gamma, lambd)
+            if one is None or self.negative:
+                return super().__call__(stimulus_level, threshold, width, gamma=gamma, lambd=lambd)
+            x, t, w, g, lam, shape = one
+            if self._spread[0] != (self.alpha, self._PC):
+                self._standard_parameters(t, w)
+            scale = w / float(self._spread[1])
+            if scale > 0:
+                loc = t - (float(self._spread[2]) * scale + 0)
+                v = g + (1.0 - lam - g) * float(ndtr((x - loc) / scale))
+            else:
+                v = float("nan")
+            return np.full(shape, v) if shape else v
+
         def _ppf(self, x, loc=0, scale=1):
             x, loc, scale = np.asarray(x), np.asarray(loc), np.asarray(scale)
             ok = (scale > 0) & (loc == loc) & (x >= 0) & (x <= 1)
@@ -425,6 +443,23 @@ def _sigmoid(alpha: float = 0.05):
     return NormalSigmoid(alpha=alpha)
 
 
+def _one_point(*args):
+    """``args`` as floats and their broadcast shape, when every one is a number or an
+    array of one element (one point of psignifit's parameter space); else ``None``."""
+    vals, nd = [], 0
+    for a in args:
+        if isinstance(a, np.ndarray):
+            if a.size != 1:
+                return None
+            nd = max(nd, a.ndim)
+            vals.append(float(a.reshape(-1)[0]))
+        elif isinstance(a, (float, int, np.floating, np.integer)):
+            vals.append(float(a))
+        else:
+            return None
+    return (*vals, (1,) * nd)
+
+
 def _width_prior(levels, alpha: float = 0.05):
     """psignifit's default width prior for ``levels`` (its ``width_prior`` with the
     bounds ``psignifit()`` derives from the data: twice the least spacing of the
@@ -435,6 +470,8 @@ def _width_prior(levels, alpha: float = 0.05):
     r95, r_alpha = ndtri(.95) - ndtri(.05), ndtri(1 - alpha) - ndtri(alpha)
 
     def prior(x):
+        if isinstance(x, np.ndarray) and x.size == 1:          # the simplex search's one point
+            return np.full(x.shape, one(x.reshape(-1)[0]))
         y = x * r95 / r_alpha
         p = np.zeros_like(x)
         p[((2 * wmin) < y) & (y < wmax)] = 1.
@@ -443,6 +480,15 @@ def _width_prior(levels, alpha: float = 0.05):
         right = (wmax <= y) & (y <= (3 * wmax))
         p[right] = (1 + np.cos(np.pi / 2 * (y[right] - wmax) / wmax)) / 2
         return p
+
+    def one(v):
+        # the masks above for one value, the later assignment winning where they overlap
+        y = v * r95 / r_alpha
+        if wmax <= y <= 3 * wmax:
+            return (1 + np.cos(np.pi / 2 * (y - wmax) / wmax)) / 2
+        if wmin <= y <= 2 * wmin:
+            return (1 - np.cos(np.pi * (y - wmin) / wmin)) / 2
+        return 1.0 if 2 * wmin < y < wmax else 0.0
     return prior
 
 
@@ -474,6 +520,11 @@ def _beta_prior(b: float):
 
     def prior(x):
         x = np.asarray(x, float)
+        if x.size == 1:                                        # the simplex search's one point
+            v = x.reshape(-1)[0]
+            if not 0 <= v <= 1:
+                return np.full(x.shape, np.nan if v != v else 0.0)[()]
+            return np.full(x.shape, beta._pdf(x.reshape(1), 1.0, float(b))[0])[()]
         inside = (0 <= x) & (x <= 1)
         out = np.zeros(x.shape)
         out[np.isnan(x)] = np.nan

@@ -90,3 +90,42 @@ def test_fits_are_the_librarys_bit_for_bit(x, k, n, task, monkeypatch):
     lib = S.fit_psignifit("g", x, k, n, seed=3, n_samples=500, task=task)
     _same(_fit_values(ours), _fit_values(lib))
     assert ours.note == lib.note
+
+
+@pytest.mark.filterwarnings("ignore::RuntimeWarning")
+def test_one_point_sigmoid_equals_psignifits_gaussian():
+    # the simplex search's calls: one point of the parameter space as one-element arrays
+    # of the meshgrid's shape, or plain numbers; the values must be psignifit's bit for bit
+    from psignifit.sigmoids import sigmoid_by_name
+    ref, sig = sigmoid_by_name("norm", PC=0.5, alpha=0.05), S._sigmoid()
+    rng = np.random.default_rng(3)
+    for _ in range(300):
+        level = float(rng.choice([0.0, 17.0, 25.0, 37.0, 50.0]))
+        th, w = rng.normal(30, 20), rng.choice([rng.uniform(0.01, 90), 0.0, -3.0])
+        g, lam = rng.uniform(0, 0.9), rng.uniform(0, 0.5)
+        one = [np.full((1, 1, 1, 1, 1), v) for v in (th, w, g, lam)]
+        got, want = sig(level, *one[:2], gamma=one[2], lambd=one[3]), \
+            ref(level, *one[:2], gamma=one[2], lambd=one[3])
+        assert np.shape(got) == np.shape(want) == (1, 1, 1, 1, 1)
+        _same(got, want)
+        _same(sig(level, float(th), float(w), gamma=float(g), lambd=float(lam)),
+              ref(level, float(th), float(w), gamma=float(g), lambd=float(lam)))
+
+
+@pytest.mark.parametrize("levels", [[0.0, 17.0, 25.0, 37.0, 50.0],
+                                    [0.0, 50.0]])          # here the two fall-offs overlap
+def test_one_point_priors_equal_their_array_values(levels):
+    # the simplex search's one-element arrays take a shortcut; every value, boundaries of
+    # the cosine fall-offs included, must be what the whole-array path gives
+    u = np.unique(levels)
+    wmin, wmax = np.diff(u).min(), u.max() - u.min()
+    edges = np.array([wmin, 2 * wmin, wmax, 3 * wmax])     # alpha = .05: y = x
+    xs = np.concatenate([edges, np.nextafter(edges, np.inf), np.nextafter(edges, -np.inf),
+                         np.random.default_rng(2).uniform(-10, 200, 300), [0.0, -1.0, np.nan]])
+    width = S._width_prior(np.asarray(levels))
+    beta = S._beta_prior(10)
+    bx = np.concatenate([xs / 150, [0.0, 1.0, np.nextafter(1.0, 2.0), -0.0, np.nan]])
+    for prior, values in ((width, xs), (beta, bx)):
+        whole = prior(np.r_[values, 0.5])[:-1]        # the array path (more than one element)
+        one = np.array([prior(np.full((1, 1, 1, 1, 1), v)).reshape(-1)[0] for v in values])
+        _same(one, whole)
