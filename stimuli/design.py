@@ -142,7 +142,10 @@ MAX_SEED = 2 ** 63 - 1
 FPS_RANGE = (10.0, 1000.0)
 REPETITIONS_MAX = 20
 MASS_RANGE = (20.0, 200.0)            # kg
-TOLERANCE_MAX = 50.0                  # percent; the lower bound 0 is excluded
+TOLERANCE_MAX = 50.0                  # percent
+#: percentage points: a measured error is exact to about 1e-9 points on a built-in (its
+#: floating-point arithmetic), so a smaller tolerance refuses exact stimuli
+TOLERANCE_MIN = 1e-6
 BREAK_EVERY_MAX = 10000
 SCALE_RANGE = (1e-4, 100.0)           # metres per file unit (mm is 0.001, m is 1)
 TRIALS_MAX = 3000                     # test trials per participant (repetitions × stimuli, quest+ trials)
@@ -459,8 +462,9 @@ STUDY_FIELDS = {
     "repetitions": (int, 2, _between(1, REPETITIONS_MAX, " presentations of each motion")),
     "total_mass": (float, 70.0, _between(*MASS_RANGE, " kg")),
     "com_policy": (str, "angle", _one_of(COM_POLICIES)),
-    "tolerance_pct": (float, 1.0, lambda v: None if 0 < v <= TOLERANCE_MAX else
-                      f"expected more than 0 and at most {TOLERANCE_MAX:g} (percent)"),
+    "tolerance_pct": (float, 1.0, lambda v: None if TOLERANCE_MIN <= v <= TOLERANCE_MAX else
+                      f"expected {TOLERANCE_MIN:g} to {TOLERANCE_MAX:g} percentage points (below "
+                      f"{TOLERANCE_MIN:g} even an exact stimulus misses by its arithmetic)"),
     "original": (str, "shared", _one_of(ORIGINAL_MODES)),
     "style": (str, None, None),                  # checked by _style_ok (defined below)
     "task": (str, "yes-no", _one_of(TASKS)),

@@ -352,9 +352,11 @@ def _fit(com: np.ndarray, fps: float) -> np.ndarray:
     return fit_path(com, fps)
 
 
-def check(measured: dict, inj: Injected, tol_pct: float, name: str = "stimulus") -> None:
+def check(measured: dict, inj: Injected, tol_pct: float, name: str = "stimulus",
+          tolerance_is: str = "the tolerance") -> None:
     """Refuse a stimulus whose measured error misses the nominal by more than
-    ``tol_pct`` percentage points."""
+    ``tol_pct`` percentage points (``tolerance_is``: what the refusal calls the
+    tolerance, e.g. the design field that set it)."""
     dev, floor = measured.get("air_acc_dev"), measured.get("air_acc_dev_original")
     if dev is not None and floor is not None and np.isfinite(dev) and np.isfinite(floor) \
             and dev > floor + AIR_MARGIN:
@@ -368,5 +370,5 @@ def check(measured: dict, inj: Injected, tol_pct: float, name: str = "stimulus")
     if not np.isfinite(got) or abs(got - nominal) > tol_pct:
         raise StimulusError(
             f"{name}: measured {inj.kind} error {got:+.2f} % misses the nominal {nominal:+.2f} % by "
-            f"more than {tol_pct:g} points; not written (raise the tolerance for noisy data, or "
+            f"more than {tol_pct:g} points; not written (raise {tolerance_is} for noisy data, or "
             f"check the clip's flight)")

@@ -388,10 +388,10 @@ def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
         m["measured_error_pct"] = 0.0
     elif inj.kind in BALLISTIC_KINDS:
         m = measure_ballistic(a, inj)
-        check(m, inj, design.tolerance_pct, name)
+        check(m, inj, design.tolerance_pct, name, "[study] tolerance_pct")
     else:
         m = measure(a, inj)
-        check(m, inj, design.tolerance_pct, name)
+        check(m, inj, design.tolerance_pct, name, "[study] tolerance_pct")
     if extended and inj.kind not in BALLISTIC_KINDS:
         m = {**measure_ballistic(a, inj), **m}
         m["nominal_value"], m["measured_value"] = (group.sign * level if group else 0.0), \

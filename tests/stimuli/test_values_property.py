@@ -31,7 +31,7 @@ HOSTILE = [float("nan"), float("inf"), float("-inf"), 1e308, -1e308, 1e-308, -1,
 #: plausible values of each design key (valid or at a bound)
 VALID = {"name": ["s", "g2"], "seed": [0, 7, 2 ** 63 - 1], "fps": [10, 60, 1000, 119.5],
          "repetitions": [1, 20], "total_mass": [20, 200, 70.5], "com_policy": ["angle", "landing"],
-         "tolerance_pct": [50, 1e-9], "original": ["shared", "per-group", "own"],
+         "tolerance_pct": [50, 1e-6], "original": ["shared", "per-group", "own"],
          "style": ["stick", "point-light", "capsules"], "task": ["2afc", "yes-no"],
          "replay": [True], "break_every": [1, 10000], "max_dropped_pct": [0, 100],
          "repeat_dropped": [True], "source": ["backflip", "frontflip", "nofile.bvh"],
