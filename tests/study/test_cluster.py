@@ -258,7 +258,7 @@ def test_cli_cluster_option_builds_and_names_a_bad_address(tmp_path, capsys, clu
 
 def test_a_failing_stimulus_fails_the_cluster_build_as_locally(tmp_path, cluster):
     from flipstudy.errors import StimulusError
-    d = parse_design(DESIGN.format(levels="25").replace("seed = 11", "seed = 11\ntolerance_pct = 1e-9"))
+    d = parse_design(DESIGN.format(levels="25").replace("seed = 11", "seed = 11\ntolerance_pct = 1e-6"))
     with pytest.raises(StimulusError) as local:
         build_stimuli(d, tmp_path / "local", progress=False)
     with pytest.raises(StimulusError) as there:
