@@ -129,7 +129,7 @@ FRAMINGS = ("clip", "stimulus")
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
-                 cluster=None, framing: str = "clip") -> RenderResult:
+                 cluster=None, framing: str = "clip", replace_check=None) -> RenderResult:
     """Render the stimuli of a study (``study_dir``: its folder or its
     :class:`~flipstudy.stimuli.contract.StimulusSet`) with one style, one take-off spot and one
     camera per base clip (fitted to all its stimuli; ``cameras`` in the record,
@@ -170,6 +170,11 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     cluster : Cluster, optional
     framing : str
         ``"clip"`` or ``"stimulus"`` (see :data:`FRAMINGS`).
+    replace_check : callable, optional
+        Called with the names of the existing videos this call would make again
+        (stale or ``force``), before anything is made; raises to refuse
+        (:func:`flipstudy.study.pipeline.render` refuses for a study holding
+        real participants' answers: they answered the videos as they are).
 
     Returns
     -------
@@ -304,6 +309,11 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
             tasks.append({"stimulus": name, "bvh": p, "offset": o.tolist(), "yaw": y,
                           "takeoff": t0, "landing": t1, "what": todo, "reference": ref,
                           "body": body, "style": character, "camera": cam})
+    if replace_check is not None:
+        again = [RENDER_KINDS["video"].format(s=t["stimulus"]) for t in tasks if "video" in t["what"]]
+        again = [f for f in again if (out / f).is_file()]
+        if again:
+            replace_check(again)
     settings_records = {k: v for k, v in (old.get("settings_records") or {}).items()
                         if any(o_.get("settings") == k for o_ in outputs.values())}
     settings_records[sid] = pixel

@@ -129,13 +129,16 @@ def answers_in(study_dir) -> dict:
 def describe(a: dict) -> str:
     """``"300 answers of 12 real participant(s) (sessions.sqlite)"`` and so on."""
     parts = []
+
+    def answers(n: int) -> str:
+        return f"{n} answer{'' if n == 1 else 's'}"
     if a["real_answers"]:
-        parts.append(f"{a['real_answers']} answers of {len(a['real_participants'])} real "
+        parts.append(f"{answers(a['real_answers'])} of {len(a['real_participants'])} real "
                      f"participant(s) ({', '.join(a['where'])})")
     if a["unreadable"]:
         parts.append(f"file(s) that could not be read ({', '.join(a['unreadable'])})")
     if a["simulated_answers"]:
-        parts.append(f"{a['simulated_answers']} answers of {len(a['simulated_participants'])} "
+        parts.append(f"{answers(a['simulated_answers'])} of {len(a['simulated_participants'])} "
                      f"simulated participant(s)")
     return "; ".join(parts) or "no answers"
 

@@ -78,7 +78,25 @@ def render(study_dir, *, cluster: str | None = None, **options) -> RenderResult:
     # --force replaces videos a `run` server may be showing
     held = study_closed(study_dir, "render --force") if options.get("force") else contextlib.nullcontext()
     with held, open_cluster(cluster) as c:
-        return render_study(study_dir, cluster=c, **options)
+        return render_study(study_dir, cluster=c, replace_check=lambda names: _refuse_replacing_seen(
+            study_dir, names), **options)
+
+
+def _refuse_replacing_seen(study_dir, names) -> None:
+    """Refuse to make again videos of a study holding real participants' answers:
+    they answered the videos as they are, and the next participant would see others."""
+    from .archive import answers_in, describe
+    from flipstudy.errors import StudyHasAnswers
+    a = answers_in(study_dir)
+    if not (a["real_answers"] or a["unreadable"]):
+        return
+    d = Path(study_dir)
+    raise StudyHasAnswers(
+        f"{d} holds {describe(a)}; rendering now would replace {len(names)} video(s) they may have "
+        f"seen (first: {names[0]}), so later participants would answer other pictures. The videos "
+        f"as they are still serve `flipstudy run`. For the new look, build a new study "
+        f"(`flipstudy stimuli {d / 'design.toml'} --out NEW && flipstudy render NEW`), or move "
+        f"this one aside first with `flipstudy archive {d}`")
 
 
 def status(study_dir) -> StatusResult:

@@ -112,6 +112,6 @@ def test_force_refused_while_the_study_holds_a_real_answer(run, tmp_path):
         return {str(p.relative_to(copy)): hashlib.sha256(p.read_bytes()).hexdigest()
                 for p in sorted(copy.rglob("*")) if p.is_file()}
     before = snap()
-    with pytest.raises(OSError, match="1 answers of 1 real participant"):
+    with pytest.raises(OSError, match="1 answer of 1 real participant"):
         reproduce(copy, participants=2, size=(160, 120), quiet=True, force=True)
     assert snap() == before and sorted(p.name for p in tmp_path.iterdir()) == ["paper"]

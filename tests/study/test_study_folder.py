@@ -136,7 +136,7 @@ def test_force_replaces_a_study_with_only_simulated_answers_and_says_so(study, t
 def test_an_exported_response_table_of_real_participants_also_protects(study, tmp_path):
     (study / "responses.csv").write_text("participant,group,level,response,input\n"
                                          "P07,g,0,correct,click\n")
-    with pytest.raises(StudyHasAnswers, match="1 answers of 1 real participant"):
+    with pytest.raises(StudyHasAnswers, match="1 answer of 1 real participant"):
         build_stimuli(parse_design(DESIGN.format(seed=4)), study, force=True, progress=False,
                       replace_check=refuse_real_answers)
     # an unreadable database counts as holding answers
