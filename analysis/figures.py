@@ -483,7 +483,8 @@ def sheet_figure(fits: list[PsychometricFit], table: pd.DataFrame, images: dict 
         else:
             notes.append(f"figure sheet: image {p} ({label}) not found; left out")
     if not images:
-        notes.append("figure sheet: no images given (ghost / marker-trail composites); "
+        notes.append("figure sheet: no images given (ghost / marker-trail composites: `flipstudy "
+                     "render STUDY --what ghost,trail`, then `analyze STUDY`, or --image); "
                      "the sheet shows the curves only")
     groups = group_order(table["group"].unique())
     sty = group_styles(groups)

@@ -157,7 +157,9 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     rules = d.exclusions.to_dict() if d is not None and not d.exclusions.is_default else None
     if len(responses) > 1:
         src = combine_responses(responses)
-    if not images and Path(responses[0]).is_dir() and (src.parent / "manifest.csv").is_file():
+    # a study folder, or a response table inside one (its exported responses.csv): the
+    # sheet shows the study's own ghosts and trails, where it has rendered them
+    if not images and len(responses) == 1 and (src.parent / "manifest.csv").is_file():
         from flipstudy.stimuli.contract import StimulusSet
         from .reproduce import sheet_images        # the study's own ghosts and trails
         images = sheet_images(StimulusSet.read(src.parent, files=False, design=False),

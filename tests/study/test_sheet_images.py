@@ -47,3 +47,34 @@ def test_the_default_study_keeps_reproduces_pair(tmp_path):
     imgs = sheet_images(_set(tmp_path, rows), tmp_path / "render")
     assert {p.name.rsplit("_", 1)[0] for p in imgs.values()} == {"backflip_reference",
                                                                 "backflip_abrupt-decrease_50"}
+
+
+def test_analyze_of_a_studys_own_responses_table_shows_its_ghosts(tmp_path):
+    # `analyze STUDY/responses.csv` (the table `export` writes into the study) draws the sheet
+    # with the study's ghosts and trails, as `analyze STUDY` does; a copy of the table
+    # elsewhere has no study beside it and says how to get them
+    import json
+    import shutil
+
+    from flipstudy.study.cli import main as cli
+    (tmp_path / "d.toml").write_text('[study]\nname = "s"\nseed = 3\nrepetitions = 1\n\n'
+                                     '[[clips]]\nname = "jump"\nsource = "jump"\n\n'
+                                     '[[groups]]\nname = "takeoff-increase"\nkind = "takeoff-angle"\n'
+                                     'levels = [0, 20]\n')
+    st = tmp_path / "st"
+    assert cli(["stimuli", str(tmp_path / "d.toml"), "--out", str(st), "--quiet"]) == 0
+    assert cli(["render", str(st), "--what", "ghost,trail", "--size", "64x48", "--quiet"]) == 0
+    assert cli(["simulate", str(st), "--participants", "2", "--seed", "1"]) == 0
+    assert cli(["export", str(st), "--include-simulated"]) == 0
+    shutil.copy(st / "responses.csv", tmp_path / "elsewhere.csv")
+    fast = ["--include-simulated", "--psychometric", "none", "--no-gee", "--n-boot", "50", "--json"]
+    notes = {}
+    for name, table in (("own", st / "responses.csv"), ("copy", tmp_path / "elsewhere.csv")):
+        from contextlib import redirect_stdout
+        from io import StringIO
+        buf = StringIO()
+        with redirect_stdout(buf):
+            assert cli(["analyze", str(table), "--out", str(tmp_path / name), *fast]) == 0
+        notes[name] = " ".join(json.loads(buf.getvalue()).get("notes", []))
+    assert "no images given" not in notes["own"]
+    assert "no images given" in notes["copy"] and "render STUDY --what ghost,trail" in notes["copy"]
