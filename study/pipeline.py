@@ -159,7 +159,8 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
         src = combine_responses(responses)
     # a study folder, or a response table inside one (its exported responses.csv): the
     # sheet shows the study's own ghosts and trails, where it has rendered them
-    if not images and len(responses) == 1 and (src.parent / "manifest.csv").is_file():
+    if not images and len(responses) == 1 and (src.parent / "manifest.csv").is_file() \
+            and (src.parent / "render").is_dir():
         from flipstudy.stimuli.contract import StimulusSet
         from .reproduce import sheet_images        # the study's own ghosts and trails
         images = sheet_images(StimulusSet.read(src.parent, files=False, design=False),
