@@ -383,17 +383,21 @@ class Scene:
             c.visible = False
         try:
             self._render_raw()
-            rw = self.plotter.render_window
-            w, h = rw.GetSize()
-            rgb_, z = vtkUnsignedCharArray(), vtkFloatArray()
-            rw.GetPixelData(0, 0, w - 1, h - 1, 1, rgb_, 0)
-            rw.GetZbufferData(0, 0, w - 1, h - 1, z)
+            rgb_, z = self._read_rgb_depth(vtkUnsignedCharArray(), vtkFloatArray())
         finally:
             for c in shown:
                 c.visible = True
+        return Plate(self._plate_key(), rgb_.copy(), z.copy())
+
+    def _read_rgb_depth(self, rgb_buf, z_buf) -> tuple:
+        """The rendered frame's colours (H, W, 3) and depth (H, W), read into the
+        given VTK arrays and viewed as numpy, rows top-down."""
         from vtkmodules.util.numpy_support import vtk_to_numpy
-        return Plate(self._plate_key(), vtk_to_numpy(rgb_).reshape(h, w, 3)[::-1].copy(),
-                     vtk_to_numpy(z).reshape(h, w)[::-1].copy())
+        rw = self.plotter.render_window
+        w, h = rw.GetSize()
+        rw.GetPixelData(0, 0, w - 1, h - 1, 1, rgb_buf, 0)
+        rw.GetZbufferData(0, 0, w - 1, h - 1, z_buf)
+        return vtk_to_numpy(rgb_buf).reshape(h, w, 3)[::-1], vtk_to_numpy(z_buf).reshape(h, w)[::-1]
 
     def _plate_key(self) -> tuple:
         cam = self.plotter.renderer.GetActiveCamera()
@@ -403,11 +407,8 @@ class Scene:
     def _render_raw(self) -> None:
         """Render without VTK's anti-aliasing (the read-back frame's own FXAA
         runs after the plate is composited)."""
-        ren = self.plotter.renderer
-        ren.SetUseFXAA(False)
+        self.plotter.renderer.SetUseFXAA(False)
         self._clip_range()
-        if self._overlay is not None:
-            self._overlay.SetActiveCamera(ren.GetActiveCamera())
         self.plotter.render_window.Render()
 
     def _grab_on_plate(self, plate: "Plate", out: np.ndarray | None) -> np.ndarray:
@@ -416,7 +417,6 @@ class Scene:
         # first): the frame the whole scene renders to, without drawing the
         # ground on every frame (its lit, full-screen fill is half a frame's cost);
         # the FXAA of the plate is kept, and redone only around the characters
-        from vtkmodules.util.numpy_support import vtk_to_numpy
         from vtkmodules.vtkCommonCore import vtkFloatArray, vtkUnsignedCharArray
         from .antialias import fxaa, fxaa_update
         if plate.key != self._plate_key():
@@ -427,16 +427,12 @@ class Scene:
             self._render_raw()
         finally:
             ga.SetVisibility(True)
-        rw = self.plotter.render_window
-        w, h = rw.GetSize()
+        h, w = plate.depth.shape
         bufs = self._readback.get("plate")
         if bufs is None or bufs[2].shape != (h, w, 3):
             bufs = self._readback["plate"] = (vtkUnsignedCharArray(), vtkFloatArray(),
                                               np.empty((h, w, 3), np.uint8))
-        rw.GetPixelData(0, 0, w - 1, h - 1, 1, bufs[0], 0)
-        rw.GetZbufferData(0, 0, w - 1, h - 1, bufs[1])
-        rgb_ = vtk_to_numpy(bufs[0]).reshape(h, w, 3)[::-1]          # rows top-down
-        z = vtk_to_numpy(bufs[1]).reshape(h, w)[::-1]
+        rgb_, z = self._read_rgb_depth(bufs[0], bufs[1])
         near = z <= plate.depth
         near &= z < 1.0                                     # drawn on (not the far plane)
         aa = self.style.anti_aliasing == "fxaa"
