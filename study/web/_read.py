@@ -37,8 +37,8 @@ class Budget:
     """What is left of an import's :data:`MAX_IMPORT` bytes (``take`` raises when one
     more file or entry would go over it)."""
 
-    def __init__(self, limit: int = MAX_IMPORT):
-        self.limit = self.left = int(limit)
+    def __init__(self, limit: int | None = None):
+        self.limit = self.left = int(MAX_IMPORT if limit is None else limit)
 
     def take(self, n: int, where: str) -> None:
         if n > self.left:
