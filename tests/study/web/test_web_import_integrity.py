@@ -20,6 +20,7 @@ from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.web import _read
 from flipstudy.study.web.importer import import_web
+from flipstudy.study.web.sites import remember_site
 
 ONLINE = """
 [online]
@@ -127,11 +128,9 @@ def test_a_formula_in_the_user_agent_is_written_as_text(study, tmp_path):
     ("user_agent", {"a": 1}, "user_agent: expected up to 1000 printable characters"),
     ("block_order", FORMULA, "block_order '=HYPERLINK.* no Latin-square"),
     ("run_started", FORMULA, "run_started '=HYPERLINK.* ISO 8601"),
-    ("run_id", "-1+1", "run_id '-1\\+1' is not valid"),
-    ("participant", "-1+1", "participant '-1\\+1' is not a valid participant ID"),
-    ("STUDY_ID", "-2+3", "STUDY_ID '-2\\+3' is not a valid recruiter ID"),
-    ("site_id", ["s"], r"site_id \"\['s'\]\" is not valid"),
-    ("site_id", {"a": 1}, r"site_id \"\{'a': 1\}\" is not valid"),
+    ("run_id", "-1-1", "run_id '-1-1' is not valid"),
+    ("participant", "-1-1", "participant '-1-1' is not a valid participant ID"),
+    ("STUDY_ID", "-2-3", "STUDY_ID '-2-3' is not a valid recruiter ID"),
 ])
 def test_a_string_from_the_browser_that_is_not_what_the_site_writes_is_refused(study, tmp_path, field, value,
                                                                                message):
@@ -142,11 +141,13 @@ def test_a_string_from_the_browser_that_is_not_what_the_site_writes_is_refused(s
     assert not (study / "web").exists()
 
 
-def test_a_site_id_that_is_a_list_is_one_line_from_the_cli(study, tmp_path, capsys):
-    recs = web_records(study, "FX1", site_id=["s", "t"])
+@pytest.mark.parametrize("site_id", [["s", "t"], {"s": 1}])
+def test_a_site_id_that_is_a_list_or_object_is_one_line_from_the_cli(study, tmp_path, capsys, site_id):
+    remember_site(study, "s", "jatos", tmp_path / "site")       # as export-web records it
+    recs = web_records(study, "FX1", site_id=site_id)
     assert cli(["import-web", str(study), str(write_jsonl(tmp_path / "w.jsonl", recs))]) == 1
     err = capsys.readouterr().err.strip()
-    assert "\n" not in err and "w.jsonl: line 1: site_id" in err and "Traceback" not in err
+    assert "\n" not in err and "w.jsonl: line 1: site_id" in err and "is not valid" in err
 
 
 # --- item 9: two tabs on one run ---------------------------------------------------------------
