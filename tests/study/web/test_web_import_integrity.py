@@ -247,3 +247,19 @@ def test_a_zip_bomb_ends_in_one_line_within_1_gb(study, tmp_path):
     assert "\n" not in err and "MemoryError" not in err and "Traceback" not in err
     assert "jatos_results.zip: the files of one import hold more than" in err
     assert not (study / "web").exists()
+
+
+def test_runs_kept_out_at_import_are_counted_in_the_participant_flow(tmp_path):
+    d = make_demo_study(tmp_path / "study", videos=False, levels=(0, 25), repetitions=1,
+                        extra=ONLINE)
+    (d / "consent.md").write_text("# Consent\n\nI agree.\n")
+    bad = web_records(d, "FX2", run="r2")
+    bad[0]["consent"] = None
+    tabs = [web_records(d, "FX3", run="r3"), web_records(d, "FX3", run="r3", response=lambda t: "incorrect")]
+    import_web(d, [write_jsonl(tmp_path / "w.jsonl", web_records(d, "FX1") + bad + tabs[0] + tabs[1])])
+    from flipstudy.analysis.pipeline import analyze
+    res = analyze(d / "web", None, psychometric="none", gee=False, n_boot=20, figures=False,
+                  exclusions={"require_complete": True})
+    flow = res.exclusions.flow
+    assert list(zip(flow["stage"], flow["n"]))[:3] == [("kept out at import: conflict", 1),
+                                                       ("kept out at import: no consent", 1), ("recruited", 1)]
