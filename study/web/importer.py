@@ -27,8 +27,10 @@ lists them in the order they were imported, with when and what they added), and
 read twice (a file imported again, a JATOS export and the participant's
 download of the same run, a record resent after a reload) is one row; a file
 already imported is skipped and reported, and a file whose every record is
-already kept is read but not kept (nor re-read by later imports); two different answers to one trial
-of one run refuse the import.  Web participants are kept apart from local ones:
+already kept is read but not kept (nor re-read by later imports).  Runs without a
+recorded agreement to the consent text, and runs with two different records for one
+trial, are kept out of the tables and listed in ``web/quarantine.csv`` (see
+:mod:`flipstudy.study.web._runs`); the rest is imported.  Web participants are kept apart from local ones:
 an ID that also has sessions in ``sessions.sqlite`` is refused.  Each browser
 run of a participant is a session, numbered by the run's start time.
 
@@ -66,7 +68,7 @@ from flipstudy.errors import WebImportError
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
 from ._read import MAX_FILE, MAX_IMPORT, Budget, read_records, read_results_file  # noqa: F401 (public here)
-from ._runs import (ID_RE, QUARANTINE_COLUMNS, WINDOW_RE, check_id, check_text, check_time, consent_of,
+from ._runs import (QUARANTINE_COLUMNS, WINDOW_RE, check_id, check_text, check_time, consent_of,
                     set_aside)
 from .order import balanced_latin_square, condition_groups, order_groups, web_trial_order
 from .sites import SITES, read_sites as _sites
@@ -187,45 +189,7 @@ class _Checker:
             row = out["latin_row"] = _num(rec["latin_row"], where, "latin_row", 0,
                                           len(balanced_latin_square(len(seen))) - 1, integer=True)
         if kind == "answer":
-            _need(rec, where, ANSWER)
-            trials = self.order(pid, cond, row)
-            t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
-            want = trials[t - 1]
-            got = {"stimulus": rec["stimulus"], "group": rec["group"],
-                   "level": _num(rec["level"], where, "level", -1e6, 1e6),
-                   "repetition": _num(rec["repetition"], where, "repetition", 1, 1000, integer=True)}
-            task = getattr(want, "task", "") or "yes-no"
-            if task == "2afc":          # which motion came first, and the comparison, as the order says
-                got.update(task=rec.get("task"), first=rec.get("first"), original=rec.get("original"))
-            elif rec.get("task", "yes-no") != "yes-no":
-                got["task"] = rec.get("task")
-            for k in got:
-                if got[k] != getattr(want, k):
-                    raise WebImportError(f"{where}: trial {t}: {k} {got[k]!r}, but trial {t} of "
-                                         f"participant {pid} is {getattr(want, k)!r} ({want.stimulus})")
-            got.pop("original", None)
-            out.update(got, trial=t, clip=want.clip, kind=want.kind, method="constant", task=task,
-                       first=getattr(want, "first", "") or "",
-                       original_stimulus=getattr(want, "original", "") or "",
-                       response=_str(rec["response"], where, "response", RESPONSES_BY_TASK[task]),
-                       rt_ms=_num(rec["rt_ms"], where, "rt_ms", 0, MAX_RT_MS),
-                       shown_ms=_num(rec["shown_ms"], where, "shown_ms", 0, MAX_SHOWN_MS),
-                       input=_str(rec["input"], where, "input", ("key", "click")),
-                       replays=_num(rec["replays"], where, "replays", 0, MAX_REPLAYS, integer=True),
-                       timing=_str(rec["timing"], where, "timing", ("rvfc", "raf")),
-                       playback_flagged=_bool(rec["playback_flagged"], where, "playback_flagged"),
-                       refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True),
-                       repeat=_num(0 if rec.get("repeat") is None else rec["repeat"], where, "repeat", 0, 1,
-                                  integer=True))
-            for k in ("frames_expected", "frames_presented", "frames_dropped"):
-                out[k] = _num(rec[k], where, k, 0, 10_000_000, integer=True)
-            for k in ("dropped_pct", "max_dropped_pct"):
-                out[k] = _num(rec[k], where, k, 0, 100)
-            for k in ("playback_ms", "video_ms"):
-                out[k] = _num(rec[k], where, k, 0, MAX_SHOWN_MS)
-            if out["frames_dropped"] != max(0, out["frames_expected"] - out["frames_presented"]):
-                raise WebImportError(f"{where}: frames_dropped {out['frames_dropped']} is not "
-                                     f"frames_expected - frames_presented")
+            self._check_answer(rec, where, pid, cond, row, out)
         elif kind == "demographics":
             for f in DEMOGRAPHIC_FIELDS:
                 _need(rec, where, (f["name"],))
@@ -236,34 +200,82 @@ class _Checker:
                 else:
                     out[f["name"]] = _str(v, where, f["name"], [o[0] for o in f["options"]])
         elif kind == "start":
-            _need(rec, where, ("n_trials", "order"))
-            n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
-            order = " ".join(t.stimulus for t in self.order(pid, cond, row))
-            if n != len(self.order(pid, cond, row)) or rec["order"] != order:
-                raise WebImportError(f"{where}: the run's trial order is not this study's order for "
-                                     f"{pid} (another design or trial-order rule)")
-            if self.study.design.online.block_order == "latin-square":
-                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond, row)))
-                if rec.get("block_order") != blocks:
-                    raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
-                                         f"Latin-square row ({blocks!r})")
-            elif rec.get("block_order") not in (None, ""):
-                raise WebImportError(f"{where}: block_order {str(rec['block_order'])[:40]!r}, but this "
-                                     f"design has no Latin-square block order")
-            out.update(n_trials=n, refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000,
-                                                   optional=True),
-                       participant_from=None if rec.get("participant_from") in (None, "") else
-                       _str(rec["participant_from"], where, "participant_from", PARTICIPANT_PARAMS + ("generated",)),
-                       user_agent=check_text(rec.get("user_agent"), where, "user_agent"),
-                       consent=consent_of(rec.get("consent")),
-                       window=None if rec.get("window") in (None, "") else
-                       check_id(rec["window"], where, "window", WINDOW_RE, "WIDTHxHEIGHT in pixels"),
-                       block_order=rec.get("block_order") or None,
-                       screen_ok=None if rec.get("screen_ok") in (None, "") else
-                       _bool(rec["screen_ok"], where, "screen_ok"))
-            if out["consent"] is None and rec.get("consent") not in (None, ""):
-                out["consent_given"] = str(rec["consent"])[:40]    # not a time of agreement: said why
+            self._check_start(rec, where, pid, cond, row, out)
         return out
+
+    def _check_answer(self, rec: dict, where: str, pid: str, cond, row, out: dict) -> None:
+        """The fields of an ``answer`` record into ``out``, checked against the trial
+        the participant's order has at its place."""
+        _need(rec, where, ANSWER)
+        trials = self.order(pid, cond, row)
+        t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
+        want = trials[t - 1]
+        got = {"stimulus": rec["stimulus"], "group": rec["group"],
+               "level": _num(rec["level"], where, "level", -1e6, 1e6),
+               "repetition": _num(rec["repetition"], where, "repetition", 1, 1000, integer=True)}
+        task = getattr(want, "task", "") or "yes-no"
+        if task == "2afc":          # which motion came first, and the comparison, as the order says
+            got.update(task=rec.get("task"), first=rec.get("first"), original=rec.get("original"))
+        elif rec.get("task", "yes-no") != "yes-no":
+            got["task"] = rec.get("task")
+        for k in got:
+            if got[k] != getattr(want, k):
+                raise WebImportError(f"{where}: trial {t}: {k} {got[k]!r}, but trial {t} of "
+                                     f"participant {pid} is {getattr(want, k)!r} ({want.stimulus})")
+        got.pop("original", None)
+        out.update(got, trial=t, clip=want.clip, kind=want.kind, method="constant", task=task,
+                   first=getattr(want, "first", "") or "",
+                   original_stimulus=getattr(want, "original", "") or "",
+                   response=_str(rec["response"], where, "response", RESPONSES_BY_TASK[task]),
+                   rt_ms=_num(rec["rt_ms"], where, "rt_ms", 0, MAX_RT_MS),
+                   shown_ms=_num(rec["shown_ms"], where, "shown_ms", 0, MAX_SHOWN_MS),
+                   input=_str(rec["input"], where, "input", ("key", "click")),
+                   replays=_num(rec["replays"], where, "replays", 0, MAX_REPLAYS, integer=True),
+                   timing=_str(rec["timing"], where, "timing", ("rvfc", "raf")),
+                   playback_flagged=_bool(rec["playback_flagged"], where, "playback_flagged"),
+                   refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True),
+                   repeat=_num(0 if rec.get("repeat") is None else rec["repeat"], where, "repeat", 0, 1,
+                              integer=True))
+        for k in ("frames_expected", "frames_presented", "frames_dropped"):
+            out[k] = _num(rec[k], where, k, 0, 10_000_000, integer=True)
+        for k in ("dropped_pct", "max_dropped_pct"):
+            out[k] = _num(rec[k], where, k, 0, 100)
+        for k in ("playback_ms", "video_ms"):
+            out[k] = _num(rec[k], where, k, 0, MAX_SHOWN_MS)
+        if out["frames_dropped"] != max(0, out["frames_expected"] - out["frames_presented"]):
+            raise WebImportError(f"{where}: frames_dropped {out['frames_dropped']} is not "
+                                 f"frames_expected - frames_presented")
+
+    def _check_start(self, rec: dict, where: str, pid: str, cond, row, out: dict) -> None:
+        """The fields of a ``start`` record into ``out``: the order, the display and
+        the browser's strings, and the consent (its time of agreement, or None)."""
+        _need(rec, where, ("n_trials", "order"))
+        n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
+        order = " ".join(t.stimulus for t in self.order(pid, cond, row))
+        if n != len(self.order(pid, cond, row)) or rec["order"] != order:
+            raise WebImportError(f"{where}: the run's trial order is not this study's order for "
+                                 f"{pid} (another design or trial-order rule)")
+        if self.study.design.online.block_order == "latin-square":
+            blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond, row)))
+            if rec.get("block_order") != blocks:
+                raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
+                                     f"Latin-square row ({blocks!r})")
+        elif rec.get("block_order") not in (None, ""):
+            raise WebImportError(f"{where}: block_order {str(rec['block_order'])[:40]!r}, but this "
+                                 f"design has no Latin-square block order")
+        out.update(n_trials=n, refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000,
+                                               optional=True),
+                   participant_from=None if rec.get("participant_from") in (None, "") else
+                   _str(rec["participant_from"], where, "participant_from", PARTICIPANT_PARAMS + ("generated",)),
+                   user_agent=check_text(rec.get("user_agent"), where, "user_agent"),
+                   consent=consent_of(rec.get("consent")),
+                   window=None if rec.get("window") in (None, "") else
+                   check_id(rec["window"], where, "window", WINDOW_RE, "WIDTHxHEIGHT in pixels"),
+                   block_order=rec.get("block_order") or None,
+                   screen_ok=None if rec.get("screen_ok") in (None, "") else
+                   _bool(rec["screen_ok"], where, "screen_ok"))
+        if out["consent"] is None and rec.get("consent") not in (None, ""):
+            out["consent_given"] = str(rec["consent"])[:40]    # not a time of agreement: said why
 
 
 # --- merging and writing ---------------------------------------------------------------------
