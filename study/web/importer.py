@@ -274,7 +274,7 @@ class _Checker:
                    block_order=rec.get("block_order") or None,
                    screen_ok=None if rec.get("screen_ok") in (None, "") else
                    _bool(rec["screen_ok"], where, "screen_ok"))
-        if out["consent"] is None and rec.get("consent") not in (None, ""):
+        if out["consent"] is None and rec.get("consent") is not None:
             out["consent_given"] = str(rec["consent"])[:40]    # not a time of agreement: said why
 
 
@@ -548,5 +548,5 @@ def import_web(study_dir, files) -> ImportResult:
                       if r["repeat"] == "1"),
         duplicates=dup, responses=out, participants_csv=d / "participants.csv",
         description=Path(desc) if desc is not None else None, study=str(study_dir),
-        quarantined=tuple(f"{a['participant']} run {a['run_id']} {a['what']}: {a['reason']}: {a['detail']}"
-                          for a in aside), quarantine_csv=d / QUARANTINE)
+        quarantined=tuple(f"{a['participant']} run {a['run_id']}" + ("" if a["what"] == "run" else f" {a['what']}")
+                          + f": {a['reason']}: {a['detail']}" for a in aside), quarantine_csv=d / QUARANTINE)

@@ -57,7 +57,7 @@ def _everywhere(study) -> str:
     (lambda recs: recs.pop(0), "no start record"),
     (lambda recs: recs[0].pop("consent"), "consent None"),
     (lambda recs: recs[0].update(consent=None), "consent None"),
-    (lambda recs: recs[0].update(consent=""), "consent None"),
+    (lambda recs: recs[0].update(consent=""), "consent ''"),
     (lambda recs: recs[0].update(consent={"agreed": True}), "consent \"{'agreed': True}\""),
     (lambda recs: recs[0].update(consent="yes"), "consent 'yes'"),
 ])
@@ -68,7 +68,7 @@ def test_a_run_without_a_recorded_agreement_is_kept_out_of_every_table(study, tm
     f = write_jsonl(tmp_path / "jatos.txt", good + bad)
     assert cli(["import-web", str(study), str(f)]) == 0
     out = capsys.readouterr().out
-    assert "kept out of the tables (1;" in out and "FX2 run rbad run: no consent:" in out and why in out
+    assert "kept out of the tables (1;" in out and "FX2 run rbad: no consent:" in out and why in out
     assert _people(study) == {"FX1"}                             # the rest imported
     assert "FX2" not in _everywhere(study)
     aside = _table(study / "web" / "quarantine.csv")
@@ -89,7 +89,7 @@ def test_a_pavlovia_csv_with_an_empty_consent_cell_is_kept_out(study, tmp_path):
             w.writerow(["" if r.get(c) is None else json.dumps(r[c]) if isinstance(r[c], bool) else r[c]
                         for c in cols])
     out = import_web(study, [p])
-    assert out["answers"] == 0 and out.quarantined[0].startswith("FX2 run r1 run: no consent")
+    assert out["answers"] == 0 and out.quarantined[0].startswith("FX2 run r1: no consent")
     # the start record comes later (the participant's download): then the run is imported
     later = write_jsonl(tmp_path / "download.jsonl", web_records(study, "FX2", run="r2"))
     assert import_web(study, [later])["participants"] == 1 and _people(study) == {"FX2"}
@@ -168,7 +168,7 @@ def test_a_run_two_tabs_wrote_is_quarantined_and_the_rest_imported(study, tmp_pa
     z = _two_tabs_zip(study, tmp_path / "jatos_results.zip")
     assert cli(["import-web", str(study), str(z)]) == 0
     out = capsys.readouterr().out
-    assert "P6good run rtabs run: conflict: trial 1 differs between" in out and "whole run is kept out" in out
+    assert "P6good run rtabs: conflict: trial 1 differs between" in out and "whole run is kept out" in out
     assert _people(study) == {"P1", "P2"} and "P6good" not in _everywhere(study)
     aside = _table(study / "web" / "quarantine.csv")
     assert [(a["participant"], a["what"], a["reason"]) for a in aside] == [("P6good", "run", "conflict")]
