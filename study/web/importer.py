@@ -59,6 +59,7 @@ from pathlib import Path
 from flipstudy.stimuli._io import atomic_write_text
 
 from .. import store
+from ..lock import study_writer
 from ..export import (ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS, _manifest_styles,
                       response_columns)
 from ..psychds import write_dataset_description
@@ -495,6 +496,7 @@ def _kept(d: Path) -> list[Path]:
     return [files[n] for n in order] + [files[n] for n in sorted(files) if n not in order]
 
 
+@study_writer("import-web")
 def import_web(study_dir, files) -> ImportResult:
     """Import results files into ``STUDY_DIR/web/`` (see the module docstring).
 
