@@ -21,7 +21,6 @@ from flipstudy.errors import StudyInUse
 from flipstudy.study import pipeline, store
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study
-from flipstudy.study.lock import StudyLock
 from flipstudy.study.session import load_study, open_session
 from flipstudy.study.web.sites import remember_site
 
@@ -104,6 +103,7 @@ def test_stimuli_render_init_archive_and_the_site_record_wait(study, tmp_path, c
 
 
 def test_a_writer_waits_for_the_holder_then_runs(study, monkeypatch):
+    from flipstudy.study.lock import StudyLock
     monkeypatch.setenv("FLIPSTUDY_LOCK_WAIT", "60")
     blocked, out = threading.Event(), []
     attempt = StudyLock._try_once
