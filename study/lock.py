@@ -385,7 +385,7 @@ class StudyLock:
 
     def acquire(self) -> "StudyLock":
         held = _held.__dict__.setdefault("depth", {})
-        key = self._key()
+        key = self.key = self._key()          # kept: the folder may be moved while held (archive)
         if held.get(key):
             held[key] += 1
             self.reentered = True
@@ -479,7 +479,7 @@ class StudyLock:
 
     def release(self) -> None:
         held = _held.__dict__.setdefault("depth", {})
-        key = self._key()
+        key = getattr(self, "key", None)
         if self.reentered:
             held[key] -= 1
             self.reentered = False
