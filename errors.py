@@ -262,8 +262,10 @@ class OwnedPathError(FlipstudyError, FileExistsError):
     """An output path is a file or folder that a study folder owns."""
 
 class StudyInUse(FlipstudyError, RuntimeError):
-    """A command would replace a study that a ``flipstudy run`` server has open, or a
-    server would open a study that a command is replacing right now."""
+    """A command would replace a study that a ``flipstudy run`` server has open, a
+    server would open a study that a command is replacing right now, or another
+    command held the study's writer lock (:class:`flipstudy.study.lock.StudyLock`)
+    for longer than ``FLIPSTUDY_LOCK_WAIT`` seconds."""
 
 class DesignFrozen(FlipstudyError, RuntimeError):
     """The design of a study with answers would change, or has changed."""

@@ -175,16 +175,22 @@ class RenderResult(StepResult):
 
 @dataclass(frozen=True)
 class SimulateResult(StepResult):
-    """Simulated participants stored in a study's ``sessions.sqlite``."""
+    """Simulated participants stored in a study's ``sessions.sqlite``: ``participants``
+    those this step answered for, ``finished_before`` those asked for that had finished
+    already (left as they were)."""
     study: str
     participants: tuple[str, ...]
+    finished_before: tuple[str, ...] = ()
 
     def summary(self) -> str:
-        ids = self.participants
-        return (f"simulated {len(ids)} participant(s) ({ids[0]}..{ids[-1]}) in "
-                f"{self.study}/sessions.sqlite, stored as source=simulated; export and analyze leave "
-                f"them out unless --include-simulated. next: flipstudy export {self.study} "
-                f"--include-simulated")
+        ids, old = self.participants, self.finished_before
+        span = (lambda x: x[0] if len(x) == 1 else f"{x[0]}..{x[-1]}")
+        done = (f"simulated {len(ids)} participant(s) ({span(ids)})" if ids else
+                "simulated no participant")
+        return (f"{done} in {self.study}/sessions.sqlite, stored as source=simulated"
+                + (f"; {len(old)} had finished already ({span(old)}), left as they are" if old else "")
+                + f"; export and analyze leave them out unless --include-simulated. next: "
+                  f"flipstudy export {self.study} --include-simulated")
 
 
 # ---- export: responses.csv and participants.csv (flipstudy.study.export.export_responses)

@@ -180,8 +180,8 @@ def archive_study(study_dir, dest=None) -> Path:
     if dest.exists():
         raise ArchiveError(f"{dest} exists; choose another --to")
     dest.parent.mkdir(parents=True, exist_ok=True)
-    from .lock import study_closed
-    with study_lock(d, "archive"), study_closed(d, "archive"):
+    from .lock import StudyLock, study_closed
+    with study_lock(d, "archive"), StudyLock(d, "archive"), study_closed(d, "archive"):
         try:
             if not _renameat2(d, dest, RENAME_NOREPLACE):
                 if dest.exists():

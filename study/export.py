@@ -54,6 +54,7 @@ from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli._io import atomic_write_text
 
 from . import store
+from .lock import study_writer
 
 RESPONSE_COLUMNS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
                     "response", "rt_ms", "shown_ms", "timestamp", "clip", "kind", "late_frames",
@@ -152,6 +153,7 @@ def response_columns(styled: bool) -> list[str]:
     return RESPONSE_COLUMNS[:k] + ["style"] + RESPONSE_COLUMNS[k:]
 
 
+@study_writer("export")
 def export_responses(study_dir, out=None, *, participants_out=None,
                      include_simulated: bool = False) -> ExportResult:
     """Write ``responses.csv`` (default ``STUDY_DIR/responses.csv``; ``study_dir``: the

@@ -123,7 +123,7 @@ def write_design(out, text: str, *, force: bool = False) -> None:
     from flipstudy.stimuli._io import atomic_write_text
 
     from .archive import answers_in, describe
-    from .lock import study_closed
+    from .lock import StudyLock, study_closed
     from .owned import is_study
     out = Path(out)
     if out.exists() and not force:
@@ -133,7 +133,7 @@ def write_design(out, text: str, *, force: bool = False) -> None:
     if not is_study(folder):
         atomic_write_text(out, text)
         return
-    with study_closed(folder, "init --force"):
+    with StudyLock(folder, "init"), study_closed(folder, "init --force"):
         a = answers_in(folder)
         if a["real_answers"] or a["simulated_answers"] or a["unreadable"] or \
                 recorded_design(folder) is not None:

@@ -28,6 +28,7 @@ import fcntl
 import json
 import os
 import socket
+import threading
 from pathlib import Path
 
 from flipstudy.errors import ParticipantBusy, StudyInUse
@@ -289,3 +290,236 @@ class study_closed:
         os.close(self.fd)
         self.fd = None
         self._close_dirs()
+
+
+# --- one writer at a time ---------------------------------------------------------------------
+#
+# Every command that writes into a study (``import-web``, ``simulate``, ``run``'s session
+# creation, ``stimuli``, ``render``, ``export``, ``export-web``'s site record, ``archive``) holds
+# ``STUDY_DIR/.locks/study.lock`` exclusively (``fcntl.flock``) while it reads what it will
+# rewrite and writes it back, so two of them never interleave (two ``import-web`` runs each
+# rewriting ``web/responses.csv`` from what it read would drop the other's participant).  A
+# second writer waits for the first up to ``FLIPSTUDY_LOCK_WAIT`` seconds (default 60; 0:
+# refuse at once), then fails in one line naming the holder.  The hold is re-entrant within
+# one thread (``simulate`` opens sessions through ``run``'s path); the file is removed on
+# release (and ``.locks/`` when this hold made it), so a study keeps no trace of it.
+
+STUDY_LOCK = "study.lock"
+#: the environment variable with the seconds a writer waits for another (default
+#: :data:`DEFAULT_LOCK_WAIT`; 0: refuse at once)
+LOCK_WAIT_ENV = "FLIPSTUDY_LOCK_WAIT"
+DEFAULT_LOCK_WAIT = 60.0
+_POLL = 0.02
+_held = threading.local()                 # per thread: resolved study path -> [depth]
+
+
+def lock_wait() -> float:
+    """The seconds a writer waits for the study lock (``FLIPSTUDY_LOCK_WAIT``).
+
+    >>> import os
+    >>> os.environ["FLIPSTUDY_LOCK_WAIT"] = "2.5"; lock_wait()
+    2.5
+    >>> os.environ["FLIPSTUDY_LOCK_WAIT"] = "soon"; lock_wait()
+    Traceback (most recent call last):
+        ...
+    flipstudy.errors.FlipstudyValueError: FLIPSTUDY_LOCK_WAIT='soon': expected the seconds a command waits for another writing the same study (a number >= 0; 0: refuse at once)
+    >>> del os.environ["FLIPSTUDY_LOCK_WAIT"]; lock_wait()
+    60.0
+    """
+    import math
+
+    from flipstudy.errors import FlipstudyValueError
+    text = os.environ.get(LOCK_WAIT_ENV, "").strip()
+    if not text:
+        return DEFAULT_LOCK_WAIT
+    try:
+        v = float(text)
+    except ValueError:
+        v = -1.0
+    if not (math.isfinite(v) and v >= 0):
+        raise FlipstudyValueError(
+            f"{LOCK_WAIT_ENV}={text!r}: expected the seconds a command waits for another writing "
+            f"the same study (a number >= 0; 0: refuse at once)")
+    return v
+
+
+class StudyLock:
+    """``with StudyLock(STUDY_DIR, "import-web"):`` the one writer of a study (module text
+    above).  Waits up to :func:`lock_wait` seconds for another holder, then raises
+    :class:`~flipstudy.errors.StudyInUse` naming it (command, pid, since).  A path that
+    is not an existing folder, or one that cannot be written, holds nothing (the
+    command then fails, or reads, on its own).
+
+    >>> import tempfile, os
+    >>> tmp = tempfile.TemporaryDirectory()
+    >>> with StudyLock(tmp.name, "simulate"):
+    ...     with StudyLock(tmp.name, "run"):             # re-entrant in one thread
+    ...         os.environ["FLIPSTUDY_LOCK_WAIT"] = "0"
+    ...         import threading; out = []
+    ...         t = threading.Thread(target=lambda: out.append(StudyLock.probe(tmp.name, "export")))
+    ...         t.start(); t.join(); del os.environ["FLIPSTUDY_LOCK_WAIT"]
+    >>> print(out[0].split(": ", 1)[1])
+    `flipstudy simulate` (pid ..., since ...) is writing this study; `flipstudy export` waited 0 s for it (FLIPSTUDY_LOCK_WAIT): run it again once that has finished (lock ...)
+    >>> os.listdir(tmp.name)                               # no trace left
+    []
+    >>> tmp.cleanup()
+    """
+
+    def __init__(self, study_dir, command: str):
+        self.study_dir, self.command = Path(study_dir), command
+        self.fd = self.dir_fd = self.study_fd = None
+        self.reentered = False
+        self.made_dir = False
+
+    @staticmethod
+    def probe(study_dir, command: str) -> str | None:
+        """Take and release the lock at once; the refusal's message, or None when it was free."""
+        try:
+            with StudyLock(study_dir, command):
+                return None
+        except StudyInUse as e:
+            return str(e)
+
+    def _key(self) -> str:
+        return os.path.realpath(self.study_dir)
+
+    def acquire(self) -> "StudyLock":
+        held = _held.__dict__.setdefault("depth", {})
+        key = self.key = self._key()          # kept: the folder may be moved while held (archive)
+        if held.get(key):
+            held[key] += 1
+            self.reentered = True
+            return self
+        wait = lock_wait()
+        import time
+        end = time.monotonic() + wait
+        while True:
+            got = self._try_once()
+            if got is None:                  # nothing to hold: no folder, or read-only
+                return self
+            if got == "again":               # the file its last holder removed: lock anew
+                continue
+            if got:
+                break
+            if time.monotonic() >= end:
+                raise self._refusal(wait)
+            time.sleep(_POLL)
+        held[key] = 1
+        info = {"command": self.command, "pid": os.getpid(), "host": socket.gethostname(),
+                "since": _utc_now()}
+        os.ftruncate(self.fd, 0)
+        os.pwrite(self.fd, (json.dumps(info) + "\n").encode(), 0)
+        return self
+
+    def _try_once(self):
+        """One attempt: True (held), False (another holds it), ``"again"`` (the file or
+        ``.locks/`` was removed meanwhile), None (nothing to hold)."""
+        d = self.study_dir
+        self._close()
+        try:
+            self.study_fd = os.open(d, os.O_RDONLY | os.O_DIRECTORY)
+        except OSError:
+            return None
+        try:
+            try:
+                os.mkdir(LOCK_DIR, dir_fd=self.study_fd)
+                self.made_dir = True
+            except FileExistsError:
+                self.made_dir = False
+            self.dir_fd = os.open(LOCK_DIR, os.O_RDONLY | os.O_DIRECTORY, dir_fd=self.study_fd)
+            self.fd = os.open(STUDY_LOCK, os.O_RDWR | os.O_CREAT, 0o644, dir_fd=self.dir_fd)
+        except FileNotFoundError:            # .locks/ removed by a holder that just released
+            self._close()
+            return "again" if self.study_dir.is_dir() else None
+        except OSError:                      # a read-only study: no writer of ours can write it
+            self._close()
+            return None
+        try:
+            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            self.holder = self._read()
+            self._close()
+            return False
+        def ident(st):
+            return st.st_dev, st.st_ino
+        try:                                 # still the file at STUDY/.locks/study.lock?
+            same = (ident(os.fstat(self.fd)) == ident(os.stat(STUDY_LOCK, dir_fd=self.dir_fd))
+                    and ident(os.fstat(self.dir_fd)) == ident(os.stat(LOCK_DIR, dir_fd=self.study_fd))
+                    and ident(os.fstat(self.study_fd)) == ident(os.stat(d)))
+        except OSError:
+            same = False
+        if not same:
+            self._close()
+            return "again" if self.study_dir.is_dir() else None
+        return True
+
+    def _read(self) -> dict:
+        try:
+            got = json.loads(os.pread(self.fd, 4096, 0).decode() or "{}")
+            return got if isinstance(got, dict) else {}
+        except (OSError, ValueError):
+            return {}
+
+    def _refusal(self, wait: float) -> StudyInUse:
+        h = getattr(self, "holder", {}) or {}
+        who = (f"`flipstudy {h['command']}`" if h.get("command") else "another command") + " (" + \
+            ", ".join(x for x in (f"pid {h['pid']}" if h.get("pid") else "",
+                                  f"since {h['since']}" if h.get("since") else "") if x) + ")"
+        return StudyInUse(
+            f"{self.study_dir}: {who.replace(' ()', '')} is writing this study; `flipstudy "
+            f"{self.command}` waited {wait:g} s for it ({LOCK_WAIT_ENV}): run it again once that "
+            f"has finished (lock {self.study_dir / LOCK_DIR / STUDY_LOCK})")
+
+    def _close(self) -> None:
+        for name in ("fd", "dir_fd", "study_fd"):
+            fd = getattr(self, name)
+            if fd is not None:
+                os.close(fd)
+                setattr(self, name, None)
+
+    def release(self) -> None:
+        held = _held.__dict__.setdefault("depth", {})
+        key = getattr(self, "key", None)
+        if self.reentered:
+            held[key] -= 1
+            self.reentered = False
+            return
+        if self.fd is None:
+            return
+        held.pop(key, None)
+        try:                                 # unlinked while still locked: no one holds the old inode
+            os.unlink(STUDY_LOCK, dir_fd=self.dir_fd)
+            if self.made_dir:
+                os.rmdir(LOCK_DIR, dir_fd=self.study_fd)
+        except OSError:                      # e.g. a server made its lock there meanwhile
+            pass
+        self._close()
+
+    def __enter__(self):
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+def study_writer(command: str, arg: str = "study_dir"):
+    """Decorate a function that writes into the study named by its argument ``arg`` (a
+    path, a :class:`~flipstudy.study.session.Study` or a
+    :class:`~flipstudy.stimuli.contract.StimulusSet`) so that it runs holding that
+    study's :class:`StudyLock` for ``flipstudy command``."""
+    import functools
+    import inspect
+
+    def deco(fn):
+        sig = inspect.signature(fn)
+
+        @functools.wraps(fn)
+        def wrapper(*args, **kwargs):
+            where = sig.bind_partial(*args, **kwargs).arguments.get(arg)
+            where = getattr(where, "dir", None) or getattr(where, "folder", None) or where
+            if where is None:
+                return fn(*args, **kwargs)
+            with StudyLock(where, command):
+                return fn(*args, **kwargs)
+        return wrapper
+    return deco

@@ -55,8 +55,8 @@ def build(design, out, *, force: bool = False, progress: bool = True, cluster: s
         replaced["answers"] = refuse_real_answers(folder, foreign, shown=Path(out))
         replaced["foreign"] = foreign
 
-    from .lock import study_closed
-    with study_closed(out, "stimuli --force"), open_cluster(cluster) as c:
+    from .lock import StudyLock, study_closed
+    with StudyLock(out, "stimuli"), study_closed(out, "stimuli --force"), open_cluster(cluster) as c:
         res = build_stimuli(design, out, force=force, progress=progress, replace_check=replace_check,
                             cluster=c)
     if replaced:
@@ -74,10 +74,10 @@ def render(study_dir, *, cluster: str | None = None, **options) -> RenderResult:
     import contextlib
 
     from .cluster import open_cluster
-    from .lock import study_closed
+    from .lock import StudyLock, study_closed
     # --force replaces videos a `run` server may be showing
     held = study_closed(study_dir, "render --force") if options.get("force") else contextlib.nullcontext()
-    with held, open_cluster(cluster) as c:
+    with StudyLock(getattr(study_dir, "folder", study_dir), "render"), held, open_cluster(cluster) as c:
         return render_study(study_dir, cluster=c, replace_check=lambda names: _refuse_replacing_seen(
             study_dir, names), **options)
 
@@ -115,9 +115,10 @@ def simulate(study_dir, participants: int, *, model=None, seed: int = 0, strengt
     """``flipstudy simulate``: simulated observers answer every trial
     (:func:`flipstudy.study.simulate.simulate`; ``strengths``: a comparison study's
     known source strengths)."""
-    from .simulate import simulate as _simulate
+    from .simulate import sim_ids, simulate as _simulate
     ids = _simulate(study_dir, participants, model=model, seed=seed, strengths=strengths)
-    return SimulateResult(study=str(study_dir), participants=tuple(ids))
+    return SimulateResult(study=str(study_dir), participants=tuple(ids),
+                          finished_before=tuple(p for p in sim_ids(participants) if p not in ids))
 
 
 def export(study_dir, out=None, *, participants_out=None, include_simulated: bool = False) -> ExportResult:

@@ -306,8 +306,23 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
     A new session's trial order is stored before this returns (so before the
     first trial is served).  A finished participant is refused unless
     ``new_session`` (which starts session n+1 and keeps session n).
-    ``dry_run``: make every check but store nothing.
+    ``dry_run``: make every check but store nothing.  A session is created holding
+    the study's lock (:class:`~flipstudy.study.lock.StudyLock`), so it never
+    interleaves with another command writing the study (an ``import-web`` whose
+    participants a local ID may not take, a ``simulate``).
     """
+    import contextlib
+
+    from .lock import StudyLock
+    held = contextlib.nullcontext() if dry_run else \
+        StudyLock(study.dir, "run" if source == "browser" else "simulate")
+    with held:
+        return _open_session(study, participant, new_session=new_session, source=source,
+                             dry_run=dry_run, _retried=_retried)
+
+
+def _open_session(study: Study, participant: str, *, new_session: bool, source: str,
+                  dry_run: bool, _retried: bool) -> Session:
     try:
         check_participant(participant)
     except RequestError as e:
@@ -353,18 +368,20 @@ def open_session(study: Study, participant: str, *, new_session: bool = False,
             raise SessionError(f"{store.db_path(study.dir)} was made by an older flipstudy (schema "
                                f"1): it accepts only correct/incorrect answers, not a 2AFC group's "
                                f"first/second; run this design in a new study folder")
-        manifest = study.manifest
-        between = tuple(study.design.online.between)
-        if between:      # between-subject conditions: the least-filled first (ties: the design's order)
-            counts = store.condition_counts(conn, between, source)
-            condition = min(between, key=lambda c: counts[c])
-            manifest = [r for r in study.manifest if r.group not in between or r.group == condition]
-        trials = trial_order(study.design, manifest, participant, s)
+        def order(conn) -> list:
+            manifest, between = study.manifest, tuple(study.design.online.between)
+            if between:  # between-subject conditions: the least-filled first (ties: the design's
+                # order), counted in the transaction that stores this session (store.create_session)
+                counts = store.condition_counts(conn, between, source)
+                condition = min(between, key=lambda c: counts[c])
+                manifest = [r for r in manifest if r.group not in between or r.group == condition]
+            return trial_order(study.design, manifest, participant, s)
         seed = participant_seed(study.design.seed, participant, s)
+        trials = order(conn) if dry_run else None
         if not dry_run:
             try:
-                store.create_session(conn, participant, s, source, seed, study.manifest_sha256,
-                                     trials)
+                trials = store.create_session(conn, participant, s, source, seed,
+                                              study.manifest_sha256, order)
             except store.Conflict:
                 if _retried:
                     raise SessionError(f"participant {participant}: session {s} is being created "

@@ -80,6 +80,7 @@ except ModuleNotFoundError:  # Python 3.10
 from flipstudy.analysis.simulate import PAPER_TABLE2
 
 from . import store
+from .lock import study_writer
 from .session import load_study, open_session, submit_answer, submit_demographics
 from .validate import DEMOGRAPHIC_FIELDS, PREFER_NOT, parse_json_object
 
@@ -313,6 +314,7 @@ def check_strengths(strengths: dict, study) -> dict:
     return out
 
 
+@study_writer("simulate")
 def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None, seed: int = 0,
              progress=None, population: dict | None = None, strengths: dict | None = None) -> list[str]:
     """Simulate ``n`` participants (``sim001``…) answering every trial of the study.
@@ -323,7 +325,10 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
     any study).  ``strengths`` (source → Bradley–Terry logit): a comparison study's
     observers with known source preferences (:func:`comparison_probability`; stored as
     the sessions' simulated truth).  Unfinished simulated participants are resumed;
-    finished ones are left as they are (their answers would be the same).  Returns the IDs.
+    finished ones are left as they are (their answers would be the same).  Returns the IDs
+    this call answered for (not those finished before it).  The whole run holds the
+    study's lock (:class:`~flipstudy.study.lock.StudyLock`): a second ``simulate`` waits
+    for it, then finds those participants finished.
     """
     if isinstance(n, bool) or not isinstance(n, int) or n < 1 or n > 9999:
         raise FlipstudyValueError(f"--participants: expected 1 to 9999, got {n!r}")
@@ -351,14 +356,15 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
             for r in study.manifest:
                 if r.group == g:
                     model.p_correct(g, r.level)
-    ids = sim_ids(n)
-    for pid in ids:
+    done = []
+    for pid in sim_ids(n):
         try:
             session = open_session(study, pid, source="simulated")
         except SessionError as e:
             if "already finished" in str(e):
                 continue
             raise
+        done.append(pid)
         rng = _rng(seed, pid)
         shift = float(rng.normal(0.0, model.sigma)) if model.sigma > 0 else 0.0
         state = session.state()
@@ -412,4 +418,4 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
         session.close()
         if progress is not None:
             progress(pid, session)
-    return ids
+    return done

@@ -258,12 +258,17 @@ def latest_session(conn, participant: str):
 
 
 def create_session(conn, participant: str, session: int, source: str, seed: int,
-                   manifest_sha256: str, trials: list[Trial]) -> None:
-    """Create a session and store its whole trial order, in one transaction.
-    Raises :class:`Conflict` if another connection created that session first
-    (two processes opening the same new participant at once)."""
+                   manifest_sha256: str, trials) -> list[Trial]:
+    """Create a session and store its whole trial order, in one transaction; returns
+    the trials stored.  ``trials``: the order, or a function ``trials(conn)`` that
+    makes it inside the transaction, so what it reads (a between-subject condition's
+    count of sessions, :func:`condition_counts`) no other session can change before
+    this one is stored.  Raises :class:`Conflict` if another connection created that
+    session first (two processes opening the same new participant at once)."""
     try:
         with transaction(conn):
+            if callable(trials):
+                trials = trials(conn)
             conn.execute("INSERT INTO sessions (participant, session, source, seed, "
                          "manifest_sha256, n_trials, started) VALUES (?,?,?,?,?,?,?)",
                          (participant, session, source, str(seed), manifest_sha256, len(trials),
@@ -272,6 +277,7 @@ def create_session(conn, participant: str, session: int, source: str, seed: int,
     except sqlite3.IntegrityError as e:
         raise Conflict(f"session {session} of participant {participant} was created by another "
                        f"process at the same time ({e})") from None
+    return trials
 
 
 def _insert_trials(conn, participant: str, session: int, trials: list[Trial]) -> None:

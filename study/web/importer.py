@@ -59,6 +59,7 @@ from pathlib import Path
 from flipstudy.stimuli._io import atomic_write_text
 
 from .. import store
+from ..lock import study_writer
 from ..export import (ADAPTIVE_COLUMNS, PARTICIPANT_COLUMNS, RESPONSE_COLUMNS, _manifest_styles,
                       response_columns)
 from ..psychds import write_dataset_description
@@ -472,6 +473,7 @@ def _write_files(d: Path, new_files, report, new_quarantine) -> None:
     atomic_write_text(d / LEDGER, json.dumps(ledger + new, indent=1) + "\n")
 
 
+@study_writer("import-web")
 def import_web(study_dir, files) -> ImportResult:
     """Import results files into ``STUDY_DIR/web/`` (see the module docstring).
 

@@ -8,12 +8,14 @@ from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
 
+from ..lock import study_writer
 from ._fields import WebImportError
 
 WEB_DIR = "web"
 SITES = "sites.json"
 
 
+@study_writer("export-web")
 def remember_site(study_dir, site_id: str, host: str, out) -> None:
     """Record in ``STUDY/web/sites.json`` that the site ``site_id`` was exported from
     this study (``export-web``), with the SHA-256 of its ``design.toml`` then;
