@@ -7,7 +7,8 @@ first rule they fail; ``exclusion_rules`` lists every rule they fail):
 
 ``incomplete``      (``require_complete``) a session that did not answer every trial
 ``catch accuracy``  percent of catch trials (the rows of the ``catch_groups``: the trials
-                    the participant saw there, never the shared original) answered "incorrect" below
+                    the participant saw there, never the shared original) answered right
+                    ("incorrect" to a gross error, "correct" to the group's own original) below
                     ``min_catch_accuracy_pct`` (a participant with no catch trial fails it
                     when the rule is set: the check could not be made)
 ``dropped frames``  percent of trials flagged for dropped frames (``playback_flagged``,
@@ -51,9 +52,10 @@ def rule_sentences(rules: dict) -> list[str]:
     if r["require_complete"]:
         out.append("incomplete: a participant with a session that did not answer every trial is excluded")
     if r["catch_groups"]:
-        out.append(f"catch accuracy: catch groups {', '.join(r['catch_groups'])} (gross errors; the right "
-                   f"answer is 'incorrect'); a participant answering fewer than "
-                   f"{r['min_catch_accuracy_pct']:g} % of them 'incorrect' is excluded")
+        out.append(f"catch accuracy: catch groups {', '.join(r['catch_groups'])} (gross errors, whose right "
+                   f"answer is 'incorrect', and any original of their own, whose right answer is "
+                   f"'correct'); a participant answering fewer than {r['min_catch_accuracy_pct']:g} % of "
+                   f"them right is excluded")
     if r["max_flagged_pct"] < 100:
         out.append(f"dropped frames: a participant with more than {r['max_flagged_pct']:g} % of trials "
                    f"flagged for dropped frames is excluded")
@@ -61,6 +63,21 @@ def rule_sentences(rules: dict) -> list[str]:
         out.append(f"response time: a participant whose median response time is below "
                    f"{r['min_median_rt_ms']:g} ms is excluded")
     return out
+
+
+def right_answer(catch: pd.DataFrame) -> np.ndarray:
+    """Was each catch trial answered right: "incorrect" to a gross error, "correct" to
+    the catch group's own original (level 0)?
+
+    >>> right_answer(pd.DataFrame({"level": [100, 100, 0, 0],
+    ...                            "response": ["incorrect", "correct", "correct", "incorrect"]})).tolist()
+    [True, False, True, False]
+    """
+    resp = catch["response"].astype(str).to_numpy()
+    if "level" not in catch.columns:
+        return resp == "incorrect"
+    original = pd.to_numeric(catch["level"], errors="coerce").to_numpy() == 0
+    return np.where(original, resp == "correct", resp == "incorrect")
 
 
 @dataclass
@@ -127,7 +144,7 @@ def apply_exclusions(df: pd.DataFrame, rules: dict | None, *, include_incomplete
     else:
         m["complete"] = m["finished"] = True
     catch = base[base["catch"]]
-    hit = (catch["response"].astype(str) == "incorrect").groupby(bp[catch.index])
+    hit = pd.Series(right_answer(catch), index=catch.index).groupby(bp[catch.index])
     m["catch_trials"] = hit.size().reindex(people).fillna(0).astype(int).to_numpy()
     m["catch_accuracy_pct"] = (hit.mean() * 100).reindex(people).to_numpy()
     if "playback_flagged" in base.columns:

@@ -584,10 +584,15 @@ class Design:
             g = by_name.get(c)
             if g is None:
                 raise DesignError(f"{src}: [exclusions].catch_groups: {c!r} is not one of the groups {gnames}")
-            if g.task != "yes-no" or g.adaptive or 0.0 in g.levels:
+            if g.task != "yes-no" or g.adaptive or not any(lv != 0 for lv in g.levels):
                 raise DesignError(f"{src}: [exclusions].catch_groups: {c!r}: a catch group shows gross "
-                                  f"errors only (yes-no, constant, no level 0), whose right answer is "
-                                  f"'incorrect'")
+                                  f"errors (yes-no, constant, at least one level above 0), whose right "
+                                  f"answer is 'incorrect'")
+            if 0.0 in g.levels and g.original != "own":
+                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r}: a catch group's level 0 is "
+                                  f"its own original (right answer 'correct'), not the shared one every "
+                                  f"error group compares against; write original = \"own\" in the group "
+                                  f"or drop level 0")
         for c in self.online.between:
             if c not in by_name:
                 raise DesignError(f"{src}: [online].between: {c!r} is not one of the groups {gnames}")

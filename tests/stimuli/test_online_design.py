@@ -62,7 +62,7 @@ def test_redirect_url():
     ({"online": {"min_width": -1}}, "[online].min_width: expected 0 to 10000 pixels"),
     ({"online": {"completion": "x"}}, "unknown key 'completion'; did you mean 'completion_url'?"),
     ({"exclusions": {"catch_groups": ["nope"]}}, "'nope' is not one of the groups"),
-    ({"exclusions": {"catch_groups": ["smooth-increase"]}}, "a catch group shows gross errors only"),
+    ({"exclusions": {"catch_groups": ["smooth-increase"]}}, "a catch group's level 0 is its own original"),
     ({"exclusions": {"min_catch_accuracy_pct": 120}}, "[exclusions].min_catch_accuracy_pct: expected 0 to 100"),
     ({"exclusion": {}}, "unknown section [exclusion]; did you mean [exclusions]?"),
 ])
