@@ -70,3 +70,22 @@ def test_bad_tables_are_refused_naming_file_and_key(extra, message):
     with pytest.raises(DesignError, match=None) as e:
         Design.from_dict(catch_design(extra), "d.toml")
     assert message in str(e.value) and str(e.value).startswith("d.toml")
+
+
+@pytest.mark.parametrize("group, message", [
+    ({"levels": [0, 100], "original": "own"}, None),                    # its own original (the guide's)
+    ({"levels": [100]}, None),                                          # none
+    ({"levels": [0, 100]}, "a catch group's level 0 is its own original"),    # the shared one: refused
+    ({"levels": [0], "original": "own"}, "at least one level above 0"),
+])
+def test_a_catch_group_may_show_its_own_original_never_the_shared_one(group, message):
+    t = tomllib.loads(PAPER_DESIGN)
+    t["groups"].append({"name": "catch", "kind": "angular-momentum", "profile": "abrupt", **group})
+    t["exclusions"] = {"catch_groups": ["catch"], "min_catch_accuracy_pct": 75}
+    if message is None:
+        d = Design.from_dict(t, "d.toml")
+        assert d.groups[-1].trial_levels() == list(group["levels"])
+    else:
+        with pytest.raises(DesignError) as e:
+            Design.from_dict(t, "d.toml")
+        assert message in str(e.value) and str(e.value).startswith("d.toml")
