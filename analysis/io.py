@@ -86,22 +86,7 @@ def load_responses(source, *, name: str | None = None, catch_groups=()) -> pd.Da
     >>> df["incorrect"].dtype.kind, sorted(df["participant"].unique())
     ('i', ['P01', 'P02'])
     """
-    if isinstance(source, pd.DataFrame):
-        df = source.copy()
-        where = name or "responses table"
-        line_offset = None
-    else:
-        path = resolve_responses_path(source)
-        where = str(path)
-        try:
-            df = pd.read_csv(path, dtype={"participant": str, "group": str, "response": str,
-                                          "stimulus": str, "session": str})
-        except pd.errors.EmptyDataError:
-            raise ResponsesError(f"{where}: the file is empty (expected a header line with "
-                                 f"{', '.join(DESIGN_COLUMNS)})") from None
-        except pd.errors.ParserError as e:
-            raise ResponsesError(f"{where}: not a readable CSV ({e})") from None
-        line_offset = 2                      # header is line 1
+    df, where, line_offset = _read_table(source, name)
 
     def line(i) -> str:
         return f"line {i + line_offset}" if line_offset else f"row {i}"
@@ -135,29 +120,53 @@ def load_responses(source, *, name: str | None = None, catch_groups=()) -> pd.Da
         i = int(df.index[bad.to_numpy()][0])
         raise ResponsesError(f"{where}: {line(i)}: response {df.loc[i, 'response']!r} is neither "
                              f"'correct' nor 'incorrect' ({int(bad.sum())} such row(s))")
-    detected = (resp == "incorrect").to_numpy()
-    if afc.any():
-        bad = ~resp.isin(("first", "second")) & afc
-        if bad.any():
-            i = int(df.index[bad.to_numpy()][0])
-            raise ResponsesError(f"{where}: {line(i)}: 2AFC response {df.loc[i, 'response']!r} is "
-                                 f"neither 'first' nor 'second' ({int(bad.sum())} such row(s))")
-        first = (df["first"] if "first" in df.columns else pd.Series("", index=df.index))
-        first = first.fillna("").astype(str).str.strip().str.lower()
-        bad = ~first.isin(("original", "modified")) & afc
-        if bad.any():
-            i = int(df.index[bad.to_numpy()][0])
-            raise ResponsesError(f"{where}: {line(i)}: a 2AFC answer needs column 'first' = "
-                                 f"'original' or 'modified' (what was shown first), got "
-                                 f"{df.loc[i, 'first'] if 'first' in df.columns else 'no such column'!r}")
-        chose_original = (resp == "first") == (first == "original")
-        detected = np.where(afc, chose_original.to_numpy(), detected)
+    detected = _detected(df, resp, afc, where, line)
     df = df.assign(level=lvl.astype(float), response=resp,
                    incorrect=((resp == "incorrect").to_numpy() & ~afc).astype(np.int8),
                    detected=detected.astype(np.int8)).reset_index(drop=True)
     if df.empty:
         raise ResponsesError(f"{where}: no trials to analyse (after dropping 'reference' rows)")
     return expand_shared_originals(use_repeats(df, where), where, catch_groups)
+
+
+def _detected(df, resp, afc, where, line) -> np.ndarray:
+    """Was the error detected: a yes/no answer "incorrect"; a 2AFC answer (rows ``afc``)
+    that chose the original as the correct one, by column ``first``."""
+    detected = (resp == "incorrect").to_numpy()
+    if not afc.any():
+        return detected
+    bad = ~resp.isin(("first", "second")) & afc
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        raise ResponsesError(f"{where}: {line(i)}: 2AFC response {df.loc[i, 'response']!r} is "
+                             f"neither 'first' nor 'second' ({int(bad.sum())} such row(s))")
+    first = (df["first"] if "first" in df.columns else pd.Series("", index=df.index))
+    first = first.fillna("").astype(str).str.strip().str.lower()
+    bad = ~first.isin(("original", "modified")) & afc
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        raise ResponsesError(f"{where}: {line(i)}: a 2AFC answer needs column 'first' = "
+                             f"'original' or 'modified' (what was shown first), got "
+                             f"{df.loc[i, 'first'] if 'first' in df.columns else 'no such column'!r}")
+    chose_original = (resp == "first") == (first == "original")
+    return np.where(afc, chose_original.to_numpy(), detected)
+
+
+def _read_table(source, name):
+    """(table, how errors name it, the file line of row 0 or None for a DataFrame)."""
+    if isinstance(source, pd.DataFrame):
+        return source.copy(), name or "responses table", None
+    path = resolve_responses_path(source)
+    where = str(path)
+    try:
+        df = pd.read_csv(path, dtype={"participant": str, "group": str, "response": str,
+                                      "stimulus": str, "session": str})
+    except pd.errors.EmptyDataError:
+        raise ResponsesError(f"{where}: the file is empty (expected a header line with "
+                             f"{', '.join(DESIGN_COLUMNS)})") from None
+    except pd.errors.ParserError as e:
+        raise ResponsesError(f"{where}: not a readable CSV ({e})") from None
+    return df, where, 2                      # header is line 1
 
 
 def _norm_column(df: pd.DataFrame, col: str, allowed, where, line, default) -> pd.Series:

@@ -245,6 +245,13 @@ def with_catch_groups(model: ObserverModel, design) -> ObserverModel:
     return ObserverModel(groups, model.sigma, model.source)
 
 
+def _pilot_model(model: ObserverModel, study) -> ObserverModel:
+    """``model`` for the study's groups: its catch groups (:func:`with_catch_groups`) and
+    its shared original (the mean of the sharing groups, catch groups not among them)."""
+    catch = study.design.exclusions.catch_groups
+    return _with_shared_original(with_catch_groups(model, study.design), study.manifest, catch)
+
+
 def sim_ids(n: int) -> list[str]:
     width = max(3, len(str(n)))
     return [f"sim{i:0{width}d}" for i in range(1, n + 1)]
@@ -374,8 +381,7 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
         model = load_model(model)
     rows = study.by_name
     if not observers and strengths is None:
-        model = _with_shared_original(with_catch_groups(model, study.design), study.manifest,
-                                      study.design.exclusions.catch_groups)
+        model = _pilot_model(model, study)
         groups = {r.group for r in study.manifest if not r.is_reference}
         for g in sorted(groups):                   # fail before anything is stored
             for r in study.manifest:
