@@ -6,7 +6,9 @@ The rules, in the order they are checked (a participant is counted under the
 first rule they fail; ``exclusion_rules`` lists every rule they fail):
 
 ``incomplete``      (``require_complete``) a session that did not answer every trial
-``catch accuracy``  percent of catch trials (``catch_groups``) answered "incorrect" below
+``catch accuracy``  percent of catch trials (the rows of the ``catch_groups``: the trials
+                    the participant saw there, never the shared original) answered right
+                    ("incorrect" to a gross error, "correct" to the group's own original) below
                     ``min_catch_accuracy_pct`` (a participant with no catch trial fails it
                     when the rule is set: the check could not be made)
 ``dropped frames``  percent of trials flagged for dropped frames (``playback_flagged``,
@@ -32,6 +34,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from flipstudy.errors import ResponsesError
+
 RULES = ("incomplete", "catch accuracy", "dropped frames", "response time")
 DEFAULTS = {"catch_groups": [], "min_catch_accuracy_pct": 0.0, "max_flagged_pct": 100.0,
             "require_complete": False, "min_median_rt_ms": 0.0}
@@ -50,9 +54,10 @@ def rule_sentences(rules: dict) -> list[str]:
     if r["require_complete"]:
         out.append("incomplete: a participant with a session that did not answer every trial is excluded")
     if r["catch_groups"]:
-        out.append(f"catch accuracy: catch groups {', '.join(r['catch_groups'])} (gross errors; the right "
-                   f"answer is 'incorrect'); a participant answering fewer than "
-                   f"{r['min_catch_accuracy_pct']:g} % of them 'incorrect' is excluded")
+        out.append(f"catch accuracy: catch groups {', '.join(r['catch_groups'])} (gross errors, whose right "
+                   f"answer is 'incorrect', and any original of their own, whose right answer is "
+                   f"'correct'); a participant answering fewer than {r['min_catch_accuracy_pct']:g} % of "
+                   f"them right is excluded")
     if r["max_flagged_pct"] < 100:
         out.append(f"dropped frames: a participant with more than {r['max_flagged_pct']:g} % of trials "
                    f"flagged for dropped frames is excluded")
@@ -60,6 +65,21 @@ def rule_sentences(rules: dict) -> list[str]:
         out.append(f"response time: a participant whose median response time is below "
                    f"{r['min_median_rt_ms']:g} ms is excluded")
     return out
+
+
+def right_answer(catch: pd.DataFrame) -> np.ndarray:
+    """Was each catch trial answered right: "incorrect" to a gross error, "correct" to
+    the catch group's own original (level 0)?
+
+    >>> right_answer(pd.DataFrame({"level": [100, 100, 0, 0],
+    ...                            "response": ["incorrect", "correct", "correct", "incorrect"]})).tolist()
+    [True, False, True, False]
+    """
+    resp = catch["response"].astype(str).to_numpy()
+    if "level" not in catch.columns:
+        return resp == "incorrect"
+    original = pd.to_numeric(catch["level"], errors="coerce").to_numpy() == 0
+    return np.where(original, resp == "correct", resp == "incorrect")
 
 
 @dataclass
@@ -78,6 +98,18 @@ class ExclusionReport:
         """The rows the analysis uses: not excluded, not catch trials."""
         return self.rows[~self.rows["excluded"] & ~self.rows["catch"]].reset_index(drop=True)
 
+    def answers(self) -> pd.DataFrame:
+        """The answers as given, once each, every one in its own group: a shared
+        original's answer in group ``original`` (not in the group that holds its first
+        copy); without the analysis's helper columns."""
+        from .io import SHARED_ORIGINAL
+        rows = self.rows
+        if "shared_copy" in rows.columns:
+            rows = rows[~rows["shared_copy"].astype(bool)].copy()
+            rows.loc[rows["shared_original"].astype(bool), "group"] = SHARED_ORIGINAL
+        return rows.drop(columns=[c for c in ("shared_copy", "shared_original", "incorrect", "detected")
+                                  if c in rows.columns])
+
 
 def apply_exclusions(df: pd.DataFrame, rules: dict | None, *, include_incomplete: bool = False
                      ) -> ExclusionReport:
@@ -85,11 +117,22 @@ def apply_exclusions(df: pd.DataFrame, rules: dict | None, *, include_incomplete
     to a response table (one row per answer; rows marked ``shared_copy`` are copies and
     are not counted).  A participant none of whose sessions is complete (column
     ``complete``) is counted as not completed (rule ``incomplete``) unless
-    ``include_incomplete``; with ``require_complete`` one incomplete session is enough."""
+    ``include_incomplete``; with ``require_complete`` one incomplete session is enough.
+    A catch trial is a row of a catch group: a shared original's answer never is one
+    (read the table with ``load_responses(..., catch_groups=...)``, which gives a
+    catch group none of its copies)."""
     r = {**DEFAULTS, **(rules or {})}
     rows = df.copy()
     own = ~rows["shared_copy"].astype(bool) if "shared_copy" in rows.columns else pd.Series(True, index=rows.index)
-    rows["catch"] = rows["group"].astype(str).isin(set(r["catch_groups"]))
+    shared = rows["shared_original"].astype(bool) if "shared_original" in rows.columns \
+        else pd.Series(False, index=rows.index)
+    in_catch = rows["group"].astype(str).isin(set(r["catch_groups"]))
+    if (in_catch & shared).any():
+        g = rows.loc[in_catch & shared, "group"].iloc[0]
+        raise ResponsesError(f"responses table: the shared originals' answers were copied into the catch "
+                             f"group {g!r}; read the table with load_responses(..., catch_groups="
+                             f"{list(r['catch_groups'])!r})")
+    rows["catch"] = in_catch
     pid = rows["participant"].astype(str)
     base = rows[own]
     bp = pid[own]
@@ -103,7 +146,7 @@ def apply_exclusions(df: pd.DataFrame, rules: dict | None, *, include_incomplete
     else:
         m["complete"] = m["finished"] = True
     catch = base[base["catch"]]
-    hit = (catch["response"].astype(str) == "incorrect").groupby(bp[catch.index])
+    hit = pd.Series(right_answer(catch), index=catch.index).groupby(bp[catch.index])
     m["catch_trials"] = hit.size().reindex(people).fillna(0).astype(int).to_numpy()
     m["catch_accuracy_pct"] = (hit.mean() * 100).reindex(people).to_numpy()
     if "playback_flagged" in base.columns:

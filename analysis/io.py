@@ -37,7 +37,7 @@ def resolve_responses_path(path: str | Path) -> Path:
     return p
 
 
-def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
+def load_responses(source, *, name: str | None = None, catch_groups=()) -> pd.DataFrame:
     """Read and check a response table.
 
     ``source`` is a DataFrame, a CSV path, or a study folder (its
@@ -50,7 +50,8 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
     ``method``, where present, are normalised (empty: ``yes-no``, ``constant``).  Rows of the ``reference`` group are
     dropped.  Answers to a shared original (group ``original``, see
     :func:`expand_shared_originals`) become the level 0 of every group that shares
-    it, marked ``shared_copy`` beyond the first.  A first answer that was shown
+    it, marked ``shared_copy`` beyond the first; never of a catch group
+    (``catch_groups``, the design's ``[exclusions]``).  A first answer that was shown
     again at the end (a row of the same participant, session and trial with
     ``repeat`` = 1, see :func:`use_repeats`) is left out: the repeat stands in its
     place.  Raises :class:`ResponsesError` naming the file, the line and what
@@ -62,6 +63,9 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
         A table, a CSV file or a study folder.
     name : str, optional
         How errors name a DataFrame source.
+    catch_groups : sequence of str, optional
+        The attention-check groups: they show their own stimuli only and never take
+        the shared originals' answers.
 
     Returns
     -------
@@ -82,22 +86,7 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
     >>> df["incorrect"].dtype.kind, sorted(df["participant"].unique())
     ('i', ['P01', 'P02'])
     """
-    if isinstance(source, pd.DataFrame):
-        df = source.copy()
-        where = name or "responses table"
-        line_offset = None
-    else:
-        path = resolve_responses_path(source)
-        where = str(path)
-        try:
-            df = pd.read_csv(path, dtype={"participant": str, "group": str, "response": str,
-                                          "stimulus": str, "session": str})
-        except pd.errors.EmptyDataError:
-            raise ResponsesError(f"{where}: the file is empty (expected a header line with "
-                                 f"{', '.join(DESIGN_COLUMNS)})") from None
-        except pd.errors.ParserError as e:
-            raise ResponsesError(f"{where}: not a readable CSV ({e})") from None
-        line_offset = 2                      # header is line 1
+    df, where, line_offset = _read_table(source, name)
 
     def line(i) -> str:
         return f"line {i + line_offset}" if line_offset else f"row {i}"
@@ -131,29 +120,53 @@ def load_responses(source, *, name: str | None = None) -> pd.DataFrame:
         i = int(df.index[bad.to_numpy()][0])
         raise ResponsesError(f"{where}: {line(i)}: response {df.loc[i, 'response']!r} is neither "
                              f"'correct' nor 'incorrect' ({int(bad.sum())} such row(s))")
-    detected = (resp == "incorrect").to_numpy()
-    if afc.any():
-        bad = ~resp.isin(("first", "second")) & afc
-        if bad.any():
-            i = int(df.index[bad.to_numpy()][0])
-            raise ResponsesError(f"{where}: {line(i)}: 2AFC response {df.loc[i, 'response']!r} is "
-                                 f"neither 'first' nor 'second' ({int(bad.sum())} such row(s))")
-        first = (df["first"] if "first" in df.columns else pd.Series("", index=df.index))
-        first = first.fillna("").astype(str).str.strip().str.lower()
-        bad = ~first.isin(("original", "modified")) & afc
-        if bad.any():
-            i = int(df.index[bad.to_numpy()][0])
-            raise ResponsesError(f"{where}: {line(i)}: a 2AFC answer needs column 'first' = "
-                                 f"'original' or 'modified' (what was shown first), got "
-                                 f"{df.loc[i, 'first'] if 'first' in df.columns else 'no such column'!r}")
-        chose_original = (resp == "first") == (first == "original")
-        detected = np.where(afc, chose_original.to_numpy(), detected)
+    detected = _detected(df, resp, afc, where, line)
     df = df.assign(level=lvl.astype(float), response=resp,
                    incorrect=((resp == "incorrect").to_numpy() & ~afc).astype(np.int8),
                    detected=detected.astype(np.int8)).reset_index(drop=True)
     if df.empty:
         raise ResponsesError(f"{where}: no trials to analyse (after dropping 'reference' rows)")
-    return expand_shared_originals(use_repeats(df, where), where)
+    return expand_shared_originals(use_repeats(df, where), where, catch_groups)
+
+
+def _detected(df, resp, afc, where, line) -> np.ndarray:
+    """Was the error detected: a yes/no answer "incorrect"; a 2AFC answer (rows ``afc``)
+    that chose the original as the correct one, by column ``first``."""
+    detected = (resp == "incorrect").to_numpy()
+    if not afc.any():
+        return detected
+    bad = ~resp.isin(("first", "second")) & afc
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        raise ResponsesError(f"{where}: {line(i)}: 2AFC response {df.loc[i, 'response']!r} is "
+                             f"neither 'first' nor 'second' ({int(bad.sum())} such row(s))")
+    first = (df["first"] if "first" in df.columns else pd.Series("", index=df.index))
+    first = first.fillna("").astype(str).str.strip().str.lower()
+    bad = ~first.isin(("original", "modified")) & afc
+    if bad.any():
+        i = int(df.index[bad.to_numpy()][0])
+        raise ResponsesError(f"{where}: {line(i)}: a 2AFC answer needs column 'first' = "
+                             f"'original' or 'modified' (what was shown first), got "
+                             f"{df.loc[i, 'first'] if 'first' in df.columns else 'no such column'!r}")
+    chose_original = (resp == "first") == (first == "original")
+    return np.where(afc, chose_original.to_numpy(), detected)
+
+
+def _read_table(source, name):
+    """(table, how errors name it, the file line of row 0 or None for a DataFrame)."""
+    if isinstance(source, pd.DataFrame):
+        return source.copy(), name or "responses table", None
+    path = resolve_responses_path(source)
+    where = str(path)
+    try:
+        df = pd.read_csv(path, dtype={"participant": str, "group": str, "response": str,
+                                      "stimulus": str, "session": str})
+    except pd.errors.EmptyDataError:
+        raise ResponsesError(f"{where}: the file is empty (expected a header line with "
+                             f"{', '.join(DESIGN_COLUMNS)})") from None
+    except pd.errors.ParserError as e:
+        raise ResponsesError(f"{where}: not a readable CSV ({e})") from None
+    return df, where, 2                      # header is line 1
 
 
 def _norm_column(df: pd.DataFrame, col: str, allowed, where, line, default) -> pd.Series:
@@ -231,20 +244,25 @@ def combine_responses(sources) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)
 
 
-def expand_shared_originals(df: pd.DataFrame, where: str = "responses table") -> pd.DataFrame:
+def expand_shared_originals(df: pd.DataFrame, where: str = "responses table",
+                            catch_groups=()) -> pd.DataFrame:
     """The answers to the shared originals as level 0 of each group that shares them.
 
     Rows of group ``original`` (one original per base clip, shown ``repetitions``
     times, which the angular-momentum groups of the paper's design compare with)
     are copied, as level 0, into every group without a level 0 of its own — of the
     originals' ``kind`` when the table has a ``kind`` column (so a take-off group
-    keeps its own original).  Every group's d′ is then computed against those
+    keeps its own original), but never into a catch group (``catch_groups``: its
+    trials are gross errors only, and its rows are exactly the catch trials a
+    participant saw).  Every group's d′ is then computed against those
     same answers, and each sharing group's level-0 cell shows them (the paper's
     Table 2: 72 in all four angular-momentum groups).  The copies carry
     ``shared_original = True`` and, beyond the first, ``shared_copy = True`` (count
     trials with ``~shared_copy``); the ``original``
-    group itself is not a row of the tables.  A table without such rows is
-    returned as it is (``shared_copy`` all False)."""
+    group itself is not a row of the tables.  Which group holds the first copy
+    follows the groups' names (:func:`group_order` of them sorted), not the
+    order of the rows.  A table without such rows is returned as it is
+    (``shared_copy`` all False)."""
     is_orig = (df["group"] == SHARED_ORIGINAL).to_numpy()
     df = df.assign(shared_copy=False, shared_original=False)
     if not is_orig.any():
@@ -267,8 +285,9 @@ def expand_shared_originals(df: pd.DataFrame, where: str = "responses table") ->
     kinds = None
     if "kind" in df.columns:
         kinds = set(orig["kind"].dropna().astype(str))
+    has0 |= set(catch_groups)
     targets = []
-    for g in dict.fromkeys(rest["group"]):
+    for g in group_order(sorted(set(rest["group"]))):
         if g in has0:
             continue
         if kinds is not None:

@@ -210,7 +210,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     ['group', 'level', 'n', 'n_incorrect', 'n_participants']
     """
     correction = normalise_correction(correction)
-    df = load_responses(responses)
+    df = load_responses(responses, catch_groups=(exclusions or {}).get("catch_groups", ()))
     report = None
     if exclusions is not None:
         from .exclusions import apply_exclusions, kept_out_at_import, with_kept_out
@@ -362,11 +362,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     files["participants.csv"] = out / "participants.csv"
     participants.to_csv(files["participants.csv"], index=False)
     if report is not None:
-        rows = report.rows
-        if "shared_copy" in rows.columns:                  # the answers as given, once each
-            rows = rows[~rows["shared_copy"].astype(bool)]
-        rows = rows.drop(columns=[c for c in ("shared_copy", "shared_original", "incorrect", "detected")
-                                  if c in rows.columns])
+        rows = report.answers()                            # the answers as given, once each
         for name, frame in (("flow.csv", report.flow), ("exclusions_participants.csv", report.participants),
                             ("responses_exclusions.csv", rows)):
             files[name] = out / name

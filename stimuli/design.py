@@ -580,14 +580,7 @@ class Design:
             raise DesignError(f"{src}: clip and group names give the same stimulus name twice "
                               f"({dup[:3]}); rename a clip or group")
         by_name = {g.name: g for g in self.groups}
-        for c in self.exclusions.catch_groups:
-            g = by_name.get(c)
-            if g is None:
-                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r} is not one of the groups {gnames}")
-            if g.task != "yes-no" or g.adaptive or 0.0 in g.levels:
-                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r}: a catch group shows gross "
-                                  f"errors only (yes-no, constant, no level 0), whose right answer is "
-                                  f"'incorrect'")
+        self._check_catch_groups(src, by_name, gnames)
         for c in self.online.between:
             if c not in by_name:
                 raise DesignError(f"{src}: [online].between: {c!r} is not one of the groups {gnames}")
@@ -613,6 +606,23 @@ class Design:
             raise DesignError(f"{src}: [study].repetitions = {self.repetitions} × {self.n_test_stimuli()} "
                               f"test stimuli = {n_trials} trials per participant; at most {TRIALS_MAX} "
                               f"(fewer repetitions, clips, groups or levels)")
+
+    def _check_catch_groups(self, src: str, by_name: dict, gnames) -> None:
+        """``[exclusions].catch_groups``: groups of the design, yes/no and constant, with a
+        gross error (a level above 0); a level 0 only as the group's own original."""
+        for c in self.exclusions.catch_groups:
+            g = by_name.get(c)
+            if g is None:
+                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r} is not one of the groups {gnames}")
+            if g.task != "yes-no" or g.adaptive or not any(lv != 0 for lv in g.levels):
+                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r}: a catch group shows gross "
+                                  f"errors (yes-no, constant, at least one level above 0), whose right "
+                                  f"answer is 'incorrect'")
+            if 0.0 in g.levels and g.original != "own":
+                raise DesignError(f"{src}: [exclusions].catch_groups: {c!r}: a catch group's level 0 is "
+                                  f"its own original (right answer 'correct'), not the shared one every "
+                                  f"error group compares against; write original = \"own\" in the group "
+                                  f"or drop level 0")
 
     def _check_sources(self, src: str) -> None:
         """A comparison design: ``[[sources]]`` (at least two, names and folders not

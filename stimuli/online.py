@@ -23,15 +23,18 @@ stated before any data came in.
 ``[exclusions]`` (participants; applied by ``analyze``, reported as a flow table)::
 
     catch_groups          = ["catch"]   # groups whose motions are attention checks (gross errors)
-    min_catch_accuracy_pct = 75.0       # catch trials answered "incorrect", at least
+    min_catch_accuracy_pct = 75.0       # catch trials answered right, at least
     max_flagged_pct       = 100.0       # trials flagged for dropped frames, at most (percent)
     require_complete      = false       # sessions that did not answer every trial
     min_median_rt_ms      = 0.0         # median response time, at least
 
 A catch group is an ordinary ``[[groups]]`` entry (kind and size of its gross error:
 its ``kind`` and ``levels``; its rate: its share of the trials), interleaved by the
-trial order like every group; its correct answer is "incorrect" and ``analyze``
-leaves it out of the tables.
+trial order like every group; ``analyze`` leaves it out of the tables.  Its trials, and
+only they, are the catch trials: the right answer to its gross errors is "incorrect";
+with ``original = "own"`` it may also show its own original (level 0, right answer
+"correct", which catches a participant answering "incorrect" to everything).  The
+shared original is never a catch trial: it stays the level 0 of the error groups.
 
 >>> o = OnlineSettings.from_dict({"completion_code": "ABC"}, "d.toml: [online]")
 >>> o.redirect_url()

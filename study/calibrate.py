@@ -35,9 +35,10 @@ def study_answers(study, index: int = 0, *, include_simulated: bool = False):
     """A study's selected answers with its groups' calibration keys, and its source record."""
     csv = resolve_responses_path(study)
     root = csv.parent
-    df = load_responses(csv)
-    df, who = select_participants(df, include_simulated=include_simulated)
     keys = _group_keys(root)
+    catch = load_design(root / "design.toml").exclusions.catch_groups   # none takes the shared original
+    df = load_responses(csv, catch_groups=catch)
+    df, who = select_participants(df, include_simulated=include_simulated)
     unknown = sorted(set(df["group"]) - set(keys))
     if unknown:
         raise CalibrationError(f"{csv}: groups {unknown} are not in {root / 'design.toml'}")

@@ -93,7 +93,8 @@ COLUMNS = {
 
 
 COLUMNS.update({
-    "catch": "true: an attention (catch) trial, a gross error whose right answer is incorrect",
+    "catch": "true: an attention (catch) trial, a trial of a catch group: a gross error (right answer "
+             "incorrect) or the group's own original (right answer correct)",
     "condition": "between-subject condition the participant was assigned to",
     "block_order": "the participant's order of blocks (balanced Latin square row)",
     "latin_row": "the participant's row of the balanced Latin square (0-based)",

@@ -15,7 +15,10 @@ between 25 % (72) and 50 % (41).  The shared original of the angular-momentum
 groups (group ``original``) is answered "correct" with their level-0 72 %, the
 take-off group's own original with 63 %.  A model without an ``original``
 group answers the shared original with the mean of the level-0 probabilities
-of the groups that share it.
+of the groups that share it.  A catch group (``[exclusions] catch_groups``) the
+model does not name is answered with the model of its kind
+(:func:`with_catch_groups`: the paper's group of its kind, profile and sign,
+the largest level's probability held for its gross levels).
 
 Model file (TOML)::
 
@@ -201,14 +204,15 @@ def load_model(path) -> ObserverModel:
     return parse_model(text, str(p))
 
 
-def _with_shared_original(model: ObserverModel, manifest) -> ObserverModel:
+def _with_shared_original(model: ObserverModel, manifest, catch_groups=()) -> ObserverModel:
     """``model`` with an ``original`` group when the manifest has shared originals
-    and the model lacks one: the mean level-0 probability of the sharing groups."""
+    and the model lacks one: the mean level-0 probability of the sharing groups
+    (the catch groups are not among them)."""
     from flipstudy.stimuli.design import SHARED_ORIGINAL_GROUP as SO
     if SO in model.groups or not any(r.group == SO for r in manifest):
         return model
-    sharing = sorted({r.group for r in manifest
-                      if r.group not in (SO, "reference") and r.original.endswith(f"_{SO}")})
+    sharing = sorted({r.group for r in manifest if r.group not in (SO, "reference", *catch_groups)
+                      and r.original.endswith(f"_{SO}")})
     if not sharing:
         raise ModelError(f"observer model ({model.source}) has no group {SO!r} for the shared "
                          f"originals; add [groups.{SO}] levels = [0] p_correct = [...]")
@@ -216,6 +220,37 @@ def _with_shared_original(model: ObserverModel, manifest) -> ObserverModel:
     groups = dict(model.groups)
     groups[SO] = (np.array([0.0]), np.array([p]))
     return ObserverModel(groups, model.sigma, model.source)
+
+
+def with_catch_groups(model: ObserverModel, design) -> ObserverModel:
+    """``model`` with a table for each catch group (``[exclusions] catch_groups``) it
+    lacks: the model of the catch group's kind, the model's group that the paper's
+    design names after the same kind, profile and sign (e.g. ``abrupt-increase``),
+    its probability at the largest level held for the larger, gross levels of the
+    catch group.  A catch group with no such model group is left to the model's
+    error (pass ``--model FILE``)."""
+    from flipstudy.analysis.calibrate import FWP_GROUPS
+    groups, added = dict(model.groups), False
+    for name in design.exclusions.catch_groups:
+        g = next(x for x in design.groups if x.name == name)
+        like = [n for n, key in FWP_GROUPS.items() if key == (g.kind, g.profile, g.sign) and n in groups]
+        if name in groups or not like:
+            continue
+        lv, p = groups[like[0]]
+        top = max(g.levels)
+        if top > lv[-1]:
+            lv, p = np.append(lv, top), np.append(p, p[-1])
+        groups[name], added = (lv, p), True
+    if not added:
+        return model
+    return ObserverModel(groups, model.sigma, model.source)
+
+
+def _pilot_model(model: ObserverModel, study) -> ObserverModel:
+    """``model`` for the study's groups: its catch groups (:func:`with_catch_groups`) and
+    its shared original (the mean of the sharing groups, catch groups not among them)."""
+    catch = study.design.exclusions.catch_groups
+    return _with_shared_original(with_catch_groups(model, study.design), study.manifest, catch)
 
 
 def sim_ids(n: int) -> list[str]:
@@ -260,7 +295,8 @@ def draw_observers(design, rng: np.random.Generator, population: dict | None = N
             gamma = o.gamma if gamma is None else gamma
             o = replace(o, gamma=gamma)
         out[g.name] = o
-    sharing = [g.name for g in design.groups if g.task == "yes-no" and g.original == "shared"]
+    sharing = [g.name for g in design.groups if g.task == "yes-no" and g.original == "shared"
+               and g.name not in design.exclusions.catch_groups]
     if sharing:
         out[SHARED_ORIGINAL_GROUP] = out[sharing[0]]
     return out
@@ -350,7 +386,7 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
         model = load_model(model)
     rows = study.by_name
     if not observers and strengths is None:
-        model = _with_shared_original(model, study.manifest)
+        model = _pilot_model(model, study)
         groups = {r.group for r in study.manifest if not r.is_reference}
         for g in sorted(groups):                   # fail before anything is stored
             for r in study.manifest:

@@ -28,6 +28,8 @@ def web_records(study_dir, pid, *, run="r1", site_id="s", response=lambda t: "co
             "timestamp": "2026-01-05T10:00:01.000Z", **extra}
     recs = [dict(base, record="start", n_trials=len(trials), order=" ".join(t.stimulus for t in trials),
                  refresh_hz=60.0, consent="2026-01-05T10:00:00.500Z", window="900x760", screen_ok=True)]
+    if st.design.online.block_order == "latin-square":      # the blocks' order, as the site records it
+        recs[0]["block_order"] = " ".join(dict.fromkeys(t.group for t in trials))
     recs += [dict(base, record="answer", trial=t.trial, stimulus=t.stimulus, group=t.group, level=t.level,
                   repetition=t.repetition, clip=t.clip, kind=t.kind, response=response(t), rt_ms=600.0,
                   shown_ms=400.0, input="key", replays=0, frames_expected=12, frames_presented=12,
@@ -41,3 +43,13 @@ def web_records(study_dir, pid, *, run="r1", site_id="s", response=lambda t: "co
 def write_jsonl(path, recs):
     path.write_text("".join(json.dumps(r) + "\n" for r in recs))
     return path
+
+
+def guide_prolific_tables() -> str:
+    """The TOML of docs/guide/sessions.md's "Running on Prolific" (its catch group, [online]
+    and [exclusions]): what the guide tells a researcher to add to ``flipstudy init``'s design."""
+    import re
+    from pathlib import Path
+    guide = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "sessions.md").read_text()
+    block, = [b for b in re.findall(r"```toml\n(.*?)```", guide, re.S) if "catch_groups" in b]
+    return block

@@ -62,7 +62,7 @@ def test_redirect_url():
     ({"online": {"min_width": -1}}, "[online].min_width: expected 0 to 10000 pixels"),
     ({"online": {"completion": "x"}}, "unknown key 'completion'; did you mean 'completion_url'?"),
     ({"exclusions": {"catch_groups": ["nope"]}}, "'nope' is not one of the groups"),
-    ({"exclusions": {"catch_groups": ["smooth-increase"]}}, "a catch group shows gross errors only"),
+    ({"exclusions": {"catch_groups": ["smooth-increase"]}}, "a catch group's level 0 is its own original"),
     ({"exclusions": {"min_catch_accuracy_pct": 120}}, "[exclusions].min_catch_accuracy_pct: expected 0 to 100"),
     ({"exclusion": {}}, "unknown section [exclusion]; did you mean [exclusions]?"),
 ])
@@ -70,3 +70,22 @@ def test_bad_tables_are_refused_naming_file_and_key(extra, message):
     with pytest.raises(DesignError, match=None) as e:
         Design.from_dict(catch_design(extra), "d.toml")
     assert message in str(e.value) and str(e.value).startswith("d.toml")
+
+
+@pytest.mark.parametrize("group, message", [
+    ({"levels": [0, 100], "original": "own"}, None),                    # its own original (the guide's)
+    ({"levels": [100]}, None),                                          # none
+    ({"levels": [0, 100]}, "a catch group's level 0 is its own original"),    # the shared one: refused
+    ({"levels": [0], "original": "own"}, "at least one level above 0"),
+])
+def test_a_catch_group_may_show_its_own_original_never_the_shared_one(group, message):
+    t = tomllib.loads(PAPER_DESIGN)
+    t["groups"].append({"name": "catch", "kind": "angular-momentum", "profile": "abrupt", **group})
+    t["exclusions"] = {"catch_groups": ["catch"], "min_catch_accuracy_pct": 75}
+    if message is None:
+        d = Design.from_dict(t, "d.toml")
+        assert d.groups[-1].trial_levels() == list(group["levels"])
+    else:
+        with pytest.raises(DesignError) as e:
+            Design.from_dict(t, "d.toml")
+        assert message in str(e.value) and str(e.value).startswith("d.toml")
