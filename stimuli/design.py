@@ -62,6 +62,7 @@ from .groupkeys import (GRID_MAX, LEVELS_MAX, METHODS, QUEST_KEYS, TASKS, QuestS
 from .ballistic import BALLISTIC_LEVEL_BOUNDS, KIND_OPTIONS
 from .injection import COM_POLICIES, KINDS, PROFILES
 from .online import Exclusions, OnlineSettings
+from ._sourcelimits import check_sources
 
 
 PAPER_DESIGN = """\
@@ -629,11 +630,6 @@ class Design:
         if len(self.sources) < 2:
             raise DesignError(f"{src}: [[sources]]: a comparison needs at least two sources (e.g. the "
                               f"ground truth and a model), got {len(self.sources)}")
-        for what in ("name", "folder"):
-            vals = [getattr(x, what) for x in self.sources]
-            if len(set(vals)) != len(vals):
-                raise DesignError(f"{src}: [[sources]]: duplicate source {what}s "
-                                  f"{sorted({v for v in vals if vals.count(v) > 1})}")
         if self.clips:
             raise DesignError(f"{src}: [[clips]] and [[sources]]: a comparison design takes its items "
                               f"from the [[sources]] folders (clips matched by file name); remove [[clips]]")
@@ -645,6 +641,7 @@ class Design:
                 or not all(isinstance(g, (Group, SourceGroup)) for g in groups):
             raise DesignError(f"{src}: [[groups]]: expected Group entries, got {_show(groups)}")
         errors = [g for g in groups if isinstance(g, Group)]
+        check_sources(self, src)           # counts (with the number it would build), folders told apart
         names = [x.name for x in self.sources] + [g.name for g in errors]
         for i, g in enumerate(errors):
             w = f"{src}: groups[{i}] ({g.name})"
