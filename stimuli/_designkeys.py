@@ -58,8 +58,8 @@ def _show(v) -> str:
 
 
 def _pct(v) -> str:
-    """A level as written, in percent: 200, 17.5, inf."""
-    return _show(v) if isinstance(v, float) and not math.isfinite(v) else f"{v:g}"
+    """A level as written, in percent: 200, 17.5, 99.999999 (not rounded to 100), inf."""
+    return _show(v) if isinstance(v, float) and not math.isfinite(v) else f"{v:.12g}"
 
 
 def _between(lo, hi, unit: str = ""):
