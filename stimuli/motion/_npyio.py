@@ -91,8 +91,9 @@ def _check(path, label: str, shape: tuple, dtype: np.dtype, frames: bool, budget
     if frames and shape and shape[0] > MAX_POSITION_FRAMES:
         raise MotionFileError(f"{where}: {shape[0]:,} frames, more than the {MAX_POSITION_FRAMES:,} a "
                               f"motion may have (stimuli.motion._npyio.MAX_POSITION_FRAMES); cut it first")
-    if nbytes > budget or count > MAX_ARRAY_BYTES:
-        raise MotionFileError(f"{where}: an array of shape {shape} ({nbytes / 2**20:,.0f} MiB), more than "
+    span = math.prod(max(int(n), 1) for n in shape)        # an empty axis hides no others' size
+    if nbytes > budget or span * max(dtype.itemsize, 1) > MAX_ARRAY_BYTES:
+        raise MotionFileError(f"{where}: an array of shape {shape} ({span * dtype.itemsize / 2**20:,.0f} MiB), more than "
                               f"the {MAX_ARRAY_BYTES / 2**20:g} MiB read from one file "
                               f"(stimuli.motion._npyio.MAX_ARRAY_BYTES)")
     return nbytes
