@@ -4,8 +4,9 @@ line on stdin and writes one JSON result per line on stdout:
 
 * ``{"kind": "clip", "path": P, "kwargs": {...}}``: ``load_clip(P, **kwargs)``;
 * ``{"kind": "calibration", "path": P}``: ``Calibration.load(P)``;
-* ``{"kind": "design", "path": P}``: ``Design.from_toml(P)`` and, for a
-  comparison design, ``plan_comparison`` (every check made before building).
+* ``{"kind": "design", "path": P, "out": O}``: ``Design.from_toml(P)``, for a
+  comparison design ``plan_comparison`` (every check made before building), and
+  with ``out`` the build into ``O``.
 
 A result is ``{"status": "ok" | "error" | "bug", "message": ..., "seconds": ...}``:
 ``error`` a :class:`~flipstudy.errors.FlipstudyError` (its message), ``bug`` any
@@ -45,6 +46,9 @@ def run(case: dict):
         if d.compares:
             from flipstudy.stimuli.compare import plan_comparison
             plan_comparison(d)
+        if case.get("out"):
+            from flipstudy.stimuli.stimset import build_stimuli
+            build_stimuli(d, case["out"], progress=False)
     else:
         raise ValueError(f"unknown case kind {case['kind']!r}")
 

@@ -268,27 +268,40 @@ STEMS = ["88_01", "jump", "my clip", "sprüng", "x" * 200, ".hidden", "-dash"]
 
 
 def test_sources_designs(tmp_path):
+    """Drawn comparison designs, read and built: each a valid design (two or three
+    sources of one or two items) with one or two fields drawn hostile: the number of
+    sources (up to 1,000, compare = "all"), a folder written twice, a name, an item's
+    file name, repetitions, compare, error levels."""
+    from flipstudy import save_bvh
+    save_bvh(builtin("jump"), tmp_path / "jump.bvh")
+    clip = (tmp_path / "jump.bvh").read_bytes()
     rng = random.Random(45_1316)
     cases = []
-    for i in range(N):
+    for i in range(N // 3):
         root = tmp_path / f"d{i}"
+        hostile = set(rng.sample(["count", "folder", "name", "stem", "repetitions", "compare", "levels"],
+                                 rng.randint(1, 2)))
+        stems = rng.sample(STEMS if "stem" in hostile else STEMS[:2], rng.randint(1, 2))
         for f in ("gt", "a", "b"):
             (root / f).mkdir(parents=True)
-            for stem in rng.sample(STEMS, rng.randint(1, 3)):
-                (root / f / f"{stem}.bvh").write_bytes(b"")
-        n = rng.choice([0, 1, 2, 3, 5, 65, 200, 1000])
-        compare = rng.choice(["first", "all", "none", 3])
-        task = rng.choice(["2afc", "yes-no"])
-        text = (f'[study]\nname = "f"\nseed = 1\ntask = "{task}"\nrepetitions = {rng.choice([1, 2, 20, 0])}\n'
-                + (f"compare = {json.dumps(compare)}\n" if rng.random() < 0.7 else ""))
+            for stem in stems:
+                (root / f / f"{stem}.bvh").write_bytes(clip)
+        n = rng.choice([0, 1, 65, 200, 1000]) if "count" in hostile else rng.choice([2, 3])
+        compare = rng.choice(["none", 3, "all"]) if "compare" in hostile or "count" in hostile \
+            else rng.choice(["first", "all"])
+        reps = rng.choice([0, 20, 21]) if "repetitions" in hostile else 1
+        text = (f'[study]\nname = "f"\nseed = 1\ntask = "2afc"\nrepetitions = {reps}\n'
+                f"compare = {json.dumps(compare)}\n")
         for k in range(n):
-            name = rng.choice(SOURCE_NAMES) if rng.random() < 0.2 else f"s{k}"
-            folder = rng.choice(FOLDERS) if k < 3 or rng.random() < 0.3 else f"f{k}"
+            name = rng.choice(SOURCE_NAMES) if "name" in hostile and k == n - 1 else f"s{k}"
+            folder = ["gt", "a", "b"][k] if k < 3 else f"f{k}"
+            if "folder" in hostile and k == 1:
+                folder = rng.choice(FOLDERS)
             text += f"\n[[sources]]\nname = {json.dumps(name)}\nfolder = {json.dumps(folder)}\n"
-        if rng.random() < 0.4:
-            levels = sorted({0.0, *rng.sample([5.0, 10.0, 20.0, 40.0, 99.999999, 1e9], rng.randint(1, 3))})
+        if "levels" in hostile:
+            levels = sorted({0.0, *rng.sample([5.0, 10.0, 20.0, 99.999999, 1e9], rng.randint(1, 3))})
             text += f'\n[[groups]]\nname = "g"\nkind = "takeoff-angle"\nlevels = {json.dumps(levels)}\n'
         p = root / "design.toml"
         p.write_text(text)
-        cases.append({"kind": "design", "path": str(p), "files": [str(p), str(root)]})
+        cases.append({"kind": "design", "path": str(p), "out": str(root / "study"), "files": [str(p), str(root)]})
     check(run_cases(cases))
