@@ -8,7 +8,7 @@ design would build:
 * at most :data:`MAX_SOURCES` sources;
 * the stimuli of one item (each source's clip, its error levels, and with
   ``compare = "all"`` the pairs without the first source) times ``repetitions``
-  within :data:`~flipstudy.stimuli.design.TRIALS_MAX` trials per participant, first
+  within :data:`~flipstudy.stimuli._designkeys.TRIALS_MAX` trials per participant, first
   for one item (when the design is read) and then for the items the folders hold
   (when it is built), so a design ``run`` would refuse is never built.
 
@@ -21,6 +21,7 @@ import os
 from pathlib import Path
 
 from flipstudy.errors import DesignError
+from ._designkeys import TRIALS_MAX, _name_ok
 
 #: Sources a comparison design may name (ground truth and models).
 MAX_SOURCES = 64
@@ -49,7 +50,6 @@ def check_sources(design, src: str) -> None:
     """Refuse a comparison design beyond :data:`MAX_SOURCES` sources, whose one item
     alone would exceed the trials of a session, or whose folders are one folder
     written twice (``gt``, ``gt/``, ``./gt``)."""
-    from .design import TRIALS_MAX
     S = len(design.sources)
     per, what = _count_text(design)
     if S > MAX_SOURCES:
@@ -80,7 +80,6 @@ def _folder_key(design, folder: str) -> str:
 def check_items(design, items, where: str) -> None:
     """Refuse, before building, item names (file stems) that cannot name a stimulus
     file, and more stimuli than a session may show (naming the number)."""
-    from .design import TRIALS_MAX, _name_ok
     for item, files in items.items():
         msg = _name_ok(item)
         if msg:
