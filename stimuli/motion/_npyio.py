@@ -4,8 +4,8 @@ body models): every header is read and checked before an array is allocated.
 An ``.npy`` header names the shape and dtype; it is read with
 :mod:`numpy.lib.format` and refused when it holds Python objects (never
 unpickled), a structured type, more than :data:`MAX_POSITION_FRAMES` frames (for
-the arrays whose first axis is frames) or more than :data:`MAX_ARRAY_BYTES`
-bytes; an ``.npz`` is opened with :mod:`zipfile`, and each member read is
+the arrays whose first axis is frames), more than :data:`MAX_JOINT_FRAMES` frames ×
+joints (a position array) or more than :data:`MAX_ARRAY_BYTES` bytes; an ``.npz`` is opened with :mod:`zipfile`, and each member read is
 checked the same way (its header, its uncompressed size, the total of all
 members read), so neither a header claiming 10¹² frames nor a small zip of a
 gigabyte of compressed zeros allocates more than the limit.  A truncated file, a
@@ -31,6 +31,9 @@ from flipstudy.errors import MotionFileError
 MAX_POSITION_FRAMES = 100_000
 #: Bytes of the arrays read from one ``.npy``/``.npz`` file, as stored (256 MiB).
 MAX_ARRAY_BYTES = 256 * 2**20
+#: Frames × joints of a position array (2.5 million: 100,000 frames of 25 joints; the clip
+#: built from 2.1 million, 100,000 frames of 21 joints, peaks at 1.2 GB in 13 s).
+MAX_JOINT_FRAMES = 2_500_000
 
 _ZIP_ERRORS = (zipfile.BadZipFile, zipfile.LargeZipFile, zlib.error, EOFError, OSError,
                NotImplementedError, RuntimeError, ValueError)
@@ -91,6 +94,10 @@ def _check(path, label: str, shape: tuple, dtype: np.dtype, frames: bool, budget
     if frames and shape and shape[0] > MAX_POSITION_FRAMES:
         raise MotionFileError(f"{where}: {shape[0]:,} frames, more than the {MAX_POSITION_FRAMES:,} a "
                               f"motion may have (stimuli.motion._npyio.MAX_POSITION_FRAMES); cut it first")
+    if frames and len(shape) == 3 and shape[0] * shape[1] > MAX_JOINT_FRAMES:
+        raise MotionFileError(f"{where}: {shape[0]:,} frames × {shape[1]:,} joints = {shape[0] * shape[1]:,} "
+                              f"joint-frames, more than the {MAX_JOINT_FRAMES:,} a position file may hold "
+                              f"(stimuli.motion._npyio.MAX_JOINT_FRAMES); cut it first")
     span = math.prod(max(int(n), 1) for n in shape)        # an empty axis hides no others' size
     if nbytes > budget or span * max(dtype.itemsize, 1) > MAX_ARRAY_BYTES:
         raise MotionFileError(f"{where}: an array of shape {shape} ({span * dtype.itemsize / 2**20:,.0f} MiB), more than "
@@ -201,4 +208,4 @@ def scalar(a: np.ndarray, where: str) -> float:
     return float(real_array(a.reshape(-1), where)[0])
 
 
-__all__ = ["MAX_POSITION_FRAMES", "MAX_ARRAY_BYTES", "load_npy", "load_npz", "npz_names", "real_array", "scalar"]
+__all__ = ["MAX_POSITION_FRAMES", "MAX_ARRAY_BYTES", "MAX_JOINT_FRAMES", "load_npy", "load_npz", "npz_names", "real_array", "scalar"]

@@ -51,9 +51,12 @@ CASES = {
                                    r"big\.npy: .*1,000,000,000,000 frames, more than the 100,000"),
     "header of 10^6 frames": (lambda t: _file(t, "m6.npy", lambda p: npy_header_only(p, (10**6, 22, 3), "<f4")),
                               r"m6\.npy: .*1,000,000 frames"),
+    "header of 100,000 frames of 30 joints": (
+        lambda t: _file(t, "wide.npy", lambda p: npy_header_only(p, (100_000, 30, 3))),
+        r"wide\.npy: .*100,000 frames × 30 joints = 3,000,000 joint-frames, more than the 2,500,000"),
     "npz whose array header claims more than the bytes limit": (
-        lambda t: _file(t, "bomb.npz", lambda p: zip_of(p, {"joints.npy": _header_bytes((2_000, 8_000, 3))})),
-        r"bomb\.npz: the file's array 'joints': an array of shape \(2000, 8000, 3\) \(366 MiB\), more than "
+        lambda t: _file(t, "bomb.npz", lambda p: zip_of(p, {"joints.npy": _header_bytes((2_000, 1_000, 20))})),
+        r"bomb\.npz: the file's array 'joints': an array of shape \(2000, 1000, 20\) \(305 MiB\), more than "
         r"the 256 MiB"),
     # tracebacks on main
     "npz with an object array under joints": (
@@ -124,9 +127,9 @@ def test_a_bad_motion_file_is_one_line_naming_the_file_and_field(case, tmp_path)
 
 
 def test_the_limits_leave_room_for_a_long_real_capture():
-    """A 10-minute 120 fps capture (72,000 frames) of 22 joints fits both limits."""
-    from flipstudy.stimuli.motion._npyio import MAX_ARRAY_BYTES, MAX_POSITION_FRAMES
-    assert MAX_POSITION_FRAMES >= 72_000
+    """A 10-minute 120 fps capture (72,000 frames) of 22 joints fits the limits."""
+    from flipstudy.stimuli.motion._npyio import MAX_ARRAY_BYTES, MAX_JOINT_FRAMES, MAX_POSITION_FRAMES
+    assert MAX_POSITION_FRAMES >= 72_000 and 72_000 * 22 <= MAX_JOINT_FRAMES
     assert 72_000 * 22 * 3 * 8 <= MAX_ARRAY_BYTES
 
 

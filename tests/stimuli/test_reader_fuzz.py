@@ -150,7 +150,7 @@ def test_npz_files(tmp_path):
         if rng.random() < 0.4:
             p.write_bytes(mutate_bytes(rng, p.read_bytes()))
         cases.append({"kind": "clip", "path": str(p)})
-    zip_bomb(tmp_path / "bomb.npz", (45_000, 1_000, 3))         # 1.08 GB of zeros in about 1 MB
+    zip_bomb(tmp_path / "bomb.npz", (2_000, 1_000, 67))         # 1.07 GB of zeros in about 1 MB
     cases.append({"kind": "clip", "path": str(tmp_path / "bomb.npz")})
     check(run_cases(cases))
 
@@ -271,16 +271,23 @@ def test_sources_designs(tmp_path):
     """Drawn comparison designs, read and built: each a valid design (two or three
     sources of one or two items) with one or two fields drawn hostile: the number of
     sources (up to 1,000, compare = "all"), a folder written twice, a name, an item's
-    file name, repetitions, compare, error levels."""
+    file name, repetitions, compare, error levels, 2- and 3-frame clips."""
     from flipstudy import save_bvh
-    save_bvh(builtin("jump"), tmp_path / "jump.bvh")
-    clip = (tmp_path / "jump.bvh").read_bytes()
+    from flipstudy.stimuli.motion.clip import Clip
+    jump = builtin("jump")
+    save_bvh(jump, tmp_path / "jump.bvh")
+    clips = {"full": (tmp_path / "jump.bvh").read_bytes()}
+    for n, at in ((2, 0), (3, 150), (2, 160)):                  # 2- and 3-frame clips, standing or in the air
+        save_bvh(Clip(jump.skeleton, jump.fps, jump.root_pos[at:at + n], jump.rotations[at:at + n]),
+                 tmp_path / "short.bvh")
+        clips[f"{n}@{at}"] = (tmp_path / "short.bvh").read_bytes()
     rng = random.Random(45_1316)
     cases = []
     for i in range(N // 3):
         root = tmp_path / f"d{i}"
-        hostile = set(rng.sample(["count", "folder", "name", "stem", "repetitions", "compare", "levels"],
-                                 rng.randint(1, 2)))
+        hostile = set(rng.sample(["count", "folder", "name", "stem", "repetitions", "compare", "levels",
+                                  "short"], rng.randint(1, 2)))
+        clip = clips[rng.choice(sorted(clips))] if "short" in hostile else clips["full"]
         stems = rng.sample(STEMS if "stem" in hostile else STEMS[:2], rng.randint(1, 2))
         for f in ("gt", "a", "b"):
             (root / f).mkdir(parents=True)
