@@ -8,6 +8,8 @@ import numpy as np
 
 from .plots import _mpl
 
+#: The files ``score --figure`` writes (matplotlib's formats by suffix).
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 _PHASE_COLORS = {"flight": "#dbe9f6", "ground": "#eeeeee"}
 
 
@@ -29,8 +31,12 @@ def score_figure(clip, scored, path, *, strip: bool = True, panel_size=(120, 170
     ...     png.read_bytes()[:4]
     b'\\x89PNG'
     """
-    plt = _mpl()
     path = Path(path)
+    if path.suffix.lower() not in FIGURE_SUFFIXES:
+        from flipstudy.errors import FlipstudyValueError
+        raise FlipstudyValueError(f"--figure {path}: a figure is written as {', '.join(FIGURE_SUFFIXES)}; "
+                                  f"got {path.suffix or 'no suffix'!r}")
+    plt = _mpl()
     worst = scored.worst
     img = None
     if strip and worst is not None:

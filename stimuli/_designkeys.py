@@ -14,8 +14,19 @@ from __future__ import annotations
 
 import difflib
 import math
+import re
 
 from flipstudy.errors import DesignError
+
+
+#: test trials per participant (repetitions × stimuli, quest+ trials)
+TRIALS_MAX = 3000
+
+
+def _name_ok(v: str):
+    """None if ``v`` can name files (a group, clip, source or item), else what is wrong."""
+    return None if re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}", v) else \
+        "must be 1-64 letters, digits, '_', '.', '-' (it names files)"
 
 
 def _typename(typ) -> str:
@@ -58,8 +69,8 @@ def _show(v) -> str:
 
 
 def _pct(v) -> str:
-    """A level as written, in percent: 200, 17.5, inf."""
-    return _show(v) if isinstance(v, float) and not math.isfinite(v) else f"{v:g}"
+    """A level as written, in percent: 200, 17.5, 99.999999 (not rounded to 100), inf."""
+    return _show(v) if isinstance(v, float) and not math.isfinite(v) else f"{v:.12g}"
 
 
 def _between(lo, hi, unit: str = ""):

@@ -63,6 +63,8 @@ WIDTH_SCALE = float(ndtri(0.95) - ndtri(0.05))
 #: the shipped default calibration (package data)
 DEFAULT_FILE = "default_calibration.json"
 _PARAMS = ("threshold", "width", "gamma", "lambda")
+#: Bytes of a calibration file (32 MiB; one function with 4,000 posterior samples is about 100 kB).
+MAX_CALIBRATION_BYTES = 32 * 2**20
 
 
 def psychometric_curve(x, threshold, width, gamma, lam):
@@ -186,8 +188,16 @@ class Calibration:
             got = d.get("format") if isinstance(d, dict) else type(d).__name__
             raise CalibrationError(f"{where}: format: expected {FORMAT!r}, got {got!r}")
         sources = d.get("sources", [])
+        if not isinstance(sources, list) or not all(isinstance(x, dict) for x in sources):
+            bad = next((i for i, x in enumerate(sources) if not isinstance(x, dict)), None) \
+                if isinstance(sources, list) else None
+            raise CalibrationError(f"{where}: sources" + (f"[{bad}]" if bad is not None else "")
+                                   + ": expected a list of objects (name, citation or path, sha256)")
+        functions = d.get("functions") or []
+        if not isinstance(functions, list):
+            raise CalibrationError(f"{where}: functions: expected a list of objects")
         fns = []
-        for i, f in enumerate(d.get("functions") or []):
+        for i, f in enumerate(functions):
             w = f"{where}: functions[{i}]"
             try:
                 samples = np.column_stack([np.asarray(f["samples"][k], float) for k in _PARAMS])
@@ -203,14 +213,15 @@ class Calibration:
                     max_level=float(f["max_level"]), n_real=int(f["n_real"]),
                     n_simulated=int(f.get("n_simulated", 0)), source=src,
                     source_name=str(sources[src].get("name", "")) if 0 <= src < len(sources) else "")
-            except (KeyError, TypeError, ValueError) as e:
-                raise CalibrationError(f"{w}: {type(e).__name__}: {e} (see flipstudy.stimuli.calibration "
-                                       f"for the schema)") from None
+            except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as e:
+                raise CalibrationError(f"{w}: {type(e).__name__}: {str(e)[:200]} (see "
+                                       f"flipstudy.stimuli.calibration for the schema)") from None
             if fn.task not in TASKS or fn.sign not in (-1, 0, 1):
                 raise CalibrationError(f"{w}: task must be one of {TASKS} and sign 1, -1 or 0")
             missing = [k for k in _PARAMS if k not in params]
             if missing or samples.ndim != 2 or len(samples) < 10:
                 raise CalibrationError(f"{w}: params need {list(_PARAMS)} and at least 10 posterior samples")
+            _check_ranges(fn, w)
             fns.append(fn)
         if not fns:
             raise CalibrationError(f"{where}: functions: no calibrated function")
@@ -219,14 +230,75 @@ class Calibration:
 
     @classmethod
     def load(cls, path) -> "Calibration":
+        """A calibration file: UTF-8 JSON of at most :data:`MAX_CALIBRATION_BYTES`,
+        every number in its range (:class:`CalibrationError` naming file and field)."""
         path = Path(path)
         try:
-            d = json.loads(path.read_text(encoding="utf-8"))
-        except FileNotFoundError:
-            raise CalibrationError(f"{path}: no such calibration file") from None
+            if not path.is_file():
+                raise CalibrationError(f"{path}: no such calibration file" if not path.exists() else
+                                       f"{path}: not a regular file; expected a calibration (JSON) file")
+            with open(path, "rb") as fh:
+                raw = fh.read(MAX_CALIBRATION_BYTES + 1)
+        except OSError as e:
+            raise CalibrationError(f"{path}: cannot read the calibration file: {e.strerror}") from None
+        if len(raw) > MAX_CALIBRATION_BYTES:
+            raise CalibrationError(f"{path}: larger than the {MAX_CALIBRATION_BYTES // 2**20} MiB a "
+                                   f"calibration file may be (stimuli.calibration.MAX_CALIBRATION_BYTES)")
+        try:
+            d = json.loads(raw.decode("utf-8"))
+        except UnicodeDecodeError as e:
+            raise CalibrationError(f"{path}: not UTF-8 text (byte {e.start}); expected a calibration "
+                                   f"(JSON) file") from None
         except json.JSONDecodeError as e:
             raise CalibrationError(f"{path}: line {e.lineno}: not JSON ({e.msg})") from None
+        except RecursionError:
+            raise CalibrationError(f"{path}: not a calibration file (JSON nested too deeply)") from None
         return cls.from_dict(d, str(path))
+
+
+def _bad(where: str, field: str, what: str, value) -> CalibrationError:
+    return CalibrationError(f"{where}.{field}: expected {what}, got {value!r}")
+
+
+def _check_ranges(fn: PsychFunction, w: str) -> None:
+    """Every number of a function in its range: threshold finite, width > 0, γ and λ
+    in [0, 1) with γ + λ < 1 (the point estimate and every posterior sample), data
+    counts 0 <= k <= n, a finite positive max_level."""
+    p = fn.params
+    for k in p:
+        if not np.isfinite(p[k]):
+            raise _bad(w, f"params.{k}", "a finite number", p[k])
+    if p["width"] <= 0:
+        raise _bad(w, "params.width", "a positive width", p["width"])
+    for k in ("gamma", "lambda"):
+        if not 0 <= p[k] < 1:
+            raise _bad(w, f"params.{k}", "a rate in [0, 1)", p[k])
+    if p["gamma"] + p["lambda"] >= 1:
+        raise _bad(w, "params", "gamma + lambda < 1", (p["gamma"], p["lambda"]))
+    S = fn.samples
+    for i, k in enumerate(_PARAMS):
+        col = S[:, i]
+        ok = np.isfinite(col) & ((col > 0) if k == "width" else (col >= 0) & (col < 1)
+                                 if k in ("gamma", "lambda") else True)
+        if not ok.all():
+            j = int(np.flatnonzero(~ok)[0])
+            what = "finite numbers" + {"width": " > 0", "gamma": " in [0, 1)", "lambda": " in [0, 1)"}.get(k, "")
+            raise _bad(w, f"samples.{k}[{j}]", what, float(col[j]))
+    if (S[:, 2] + S[:, 3] >= 1).any():
+        j = int(np.flatnonzero(S[:, 2] + S[:, 3] >= 1)[0])
+        raise _bad(w, f"samples[{j}]", "gamma + lambda < 1", (float(S[j, 2]), float(S[j, 3])))
+    x, k, n = (fn.data[c] for c in ("x", "k", "n"))
+    if not (x.shape == k.shape == n.shape and x.ndim == 1):
+        raise _bad(w, "data", "x, k and n of one length", (x.shape, k.shape, n.shape))
+    if not (np.isfinite(x).all() and np.isfinite(n).all() and (n >= 0).all() and (k >= 0).all() and (k <= n).all()):
+        raise _bad(w, "data", "finite levels x and counts 0 <= k <= n", "other values")
+    if not (np.isfinite(fn.max_level) and fn.max_level > 0):
+        raise _bad(w, "max_level", "a finite positive level", fn.max_level)
+    if fn.n_real < 0 or fn.n_simulated < 0:
+        raise _bad(w, "n_real", "counts >= 0", (fn.n_real, fn.n_simulated))
+    for field, v in (("threshold", fn.threshold), *((f"threshold_ci[{i}]", c) for i, c in enumerate(fn.threshold_ci))):
+        if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)):
+            raise _bad(w, field, "a finite number or null", v)
 
 
 @lru_cache(maxsize=1)

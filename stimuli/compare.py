@@ -39,6 +39,7 @@ from pathlib import Path
 
 from flipstudy.errors import FlipstudyFileNotFoundError, SourceMismatchError
 
+from ._sourcelimits import check_items
 from .design import GIVEN_KIND, Design, SourceSpec, pair_group
 
 def clip_suffixes() -> tuple[str, ...]:
@@ -109,7 +110,9 @@ def plan_comparison(design: Design) -> list[tuple]:
     by = {x.name: x for x in design.sources}
     groups = {g.name: g for g in design.groups}
     rows = []
-    for item, files in match_items(design).items():
+    items = match_items(design)
+    check_items(design, items, f"{design.path}: " if design.path is not None else "")
+    for item, files in items.items():
         for s in design.sources:
             given = stimulus_name(item, s.name)
             orig = stimulus_name(item, first) if design.task == "2afc" and s.name != first else ""

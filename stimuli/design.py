@@ -44,13 +44,12 @@ from __future__ import annotations
 
 import difflib
 import json
-import re
 import warnings
 from dataclasses import InitVar, dataclass, field
 from pathlib import Path
 
 from flipstudy.errors import DesignError
-from ._designkeys import _between, _check_keys, _get, _pct, _show  # noqa: F401
+from ._designkeys import TRIALS_MAX, _between, _check_keys, _get, _name_ok, _pct, _show  # noqa: F401
 
 try:
     import tomllib
@@ -62,6 +61,7 @@ from .groupkeys import (GRID_MAX, LEVELS_MAX, METHODS, QUEST_KEYS, TASKS, QuestS
 from .ballistic import BALLISTIC_LEVEL_BOUNDS, KIND_OPTIONS
 from .injection import COM_POLICIES, KINDS, PROFILES
 from .online import Exclusions, OnlineSettings
+from ._sourcelimits import check_sources
 
 
 PAPER_DESIGN = """\
@@ -148,7 +148,6 @@ TOLERANCE_MAX = 50.0                  # percent
 TOLERANCE_MIN = 1e-6
 BREAK_EVERY_MAX = 10000
 SCALE_RANGE = (1e-4, 100.0)           # metres per file unit (mm is 0.001, m is 1)
-TRIALS_MAX = 3000                     # test trials per participant (repetitions × stimuli, quest+ trials)
 #: level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
 LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, True),     # |L| below 6× the original
                 ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
@@ -639,11 +638,6 @@ class Design:
         if len(self.sources) < 2:
             raise DesignError(f"{src}: [[sources]]: a comparison needs at least two sources (e.g. the "
                               f"ground truth and a model), got {len(self.sources)}")
-        for what in ("name", "folder"):
-            vals = [getattr(x, what) for x in self.sources]
-            if len(set(vals)) != len(vals):
-                raise DesignError(f"{src}: [[sources]]: duplicate source {what}s "
-                                  f"{sorted({v for v in vals if vals.count(v) > 1})}")
         if self.clips:
             raise DesignError(f"{src}: [[clips]] and [[sources]]: a comparison design takes its items "
                               f"from the [[sources]] folders (clips matched by file name); remove [[clips]]")
@@ -655,6 +649,7 @@ class Design:
                 or not all(isinstance(g, (Group, SourceGroup)) for g in groups):
             raise DesignError(f"{src}: [[groups]]: expected Group entries, got {_show(groups)}")
         errors = [g for g in groups if isinstance(g, Group)]
+        check_sources(self, src)           # counts (with the number it would build), folders told apart
         names = [x.name for x in self.sources] + [g.name for g in errors]
         for i, g in enumerate(errors):
             w = f"{src}: groups[{i}] ({g.name})"
@@ -933,11 +928,6 @@ def _style_ok(v: str):
     close = difflib.get_close_matches(v, CHARACTER_STYLES, n=1, cutoff=0.5)
     hint = f" (did you mean '{close[0]}'?)" if close else ""
     return f"unknown character style{hint}; expected one of {', '.join(CHARACTER_STYLES)}"
-
-
-def _name_ok(v: str):
-    return None if re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}", v) else \
-        "must be 1-64 letters, digits, '_', '.', '-' (it names files)"
 
 
 #: the keys each section may hold (anything else is refused with a did-you-mean): the types' fields

@@ -145,7 +145,16 @@ class ScoreResult:
 
 
 def _pct(p) -> str:
-    return "-" if p is None or not np.isfinite(p) else f"{100 * p:.1f} %"
+    """A probability in percent to 0.1, never rounded to a certainty it is not
+    (``> 99.9 %``, ``< 0.1 %``)."""
+    if p is None or not np.isfinite(p):
+        return "-"
+    v = 100.0 * float(p)
+    if 99.95 <= v < 100.0:
+        return "> 99.9 %"
+    if 0.0 < v < 0.05:
+        return "< 0.1 %"
+    return f"{v:.1f} %"
 
 
 def _clean(v):

@@ -24,6 +24,11 @@ def _range(text: str) -> tuple[int, int]:
     return a, b
 
 
+def _signed(v: float) -> str:
+    """``v`` to 0.1 with its sign, the minus a true minus (``−2.6``, ``+2.6``)."""
+    return f"{v:+.1f}".replace("-", "−")
+
+
 def _pick(clip, rng, label: str, spec: str):
     if rng is None:
         return clip
@@ -186,7 +191,7 @@ def inspect(clip_spec: str, *, scale=None, fps=None, readers=None, mass: float =
             band = "no band" if mf["band_pct"] is None else f"every group within ±{mf['band_pct']:.0f} % of de Leva"
             lines.append(f"  mass fit        fitted (W = {mf['W']:g} m²/kg², {band}): COM residual {mf['com_rms_prior_mm']:.1f} → {mf['com_rms_mm']:.1f} mm, "
                          f"momentum deviation {mf['p_dev_prior']:.3g} → {mf['p_dev']:.3g} kg·m/s "
-                         f"(−{mf['p_dev_reduction_pct']:.1f} %); " +
+                         f"({_signed(-mf['p_dev_reduction_pct'])} %); " +
                          ", ".join(f"{k} {mf['prior'][k]:.1f} → {v:.1f}" for k, v in mf["fitted"].items()) + " kg")
         elif mf:
             lines.append(f"  mass fit        prior kept (W = {mf['W']:g} m²/kg²): {mf['message']}")

@@ -51,6 +51,7 @@ True
 from __future__ import annotations
 
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -58,6 +59,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from flipstudy.errors import MotionFileError
+from ._bvh_units import FPS_RANGE
+from ._npyio import load_npy, load_npz, npz_names, scalar
 from .clip import Clip
 from .skeleton import POSITION_CHANNELS, Skeleton
 from .smpl import SMPL22_NAMES, SMPL22_PARENTS, read_amass
@@ -90,6 +93,37 @@ class Layout:
 LAYOUTS = {"humanml3d-22": Layout("humanml3d-22", SMPL22_NAMES, SMPL22_PARENTS, fps=20.0, up="y", scale=1.0)}
 
 
+#: Bytes of a layout file (1 MiB: a layout of a thousand joints is a few tens of kB).
+MAX_LAYOUT_BYTES = 2**20
+#: Metres per file unit a layout may give (as ``--scale``).
+SCALE_RANGE = (1e-6, 1e3)
+
+
+def _layout_data(p: Path):
+    """The table of a JSON/TOML layout file: UTF-8, at most :data:`MAX_LAYOUT_BYTES`."""
+    try:
+        with open(p, "rb") as f:
+            raw = f.read(MAX_LAYOUT_BYTES + 1)
+    except OSError as e:
+        raise MotionFileError(f"{p}: cannot read the layout file: {e.strerror}") from None
+    if len(raw) > MAX_LAYOUT_BYTES:
+        raise MotionFileError(f"{p}: a layout file larger than {MAX_LAYOUT_BYTES // 1024} KiB "
+                              f"(stimuli.motion.positions.MAX_LAYOUT_BYTES)")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise MotionFileError(f"{p}: not UTF-8 text (byte {e.start}); expected a JSON or TOML layout file") from None
+    try:
+        if p.suffix.lower() == ".toml":
+            import tomllib
+            return tomllib.loads(text)
+        return json.loads(text)
+    except RecursionError:
+        raise MotionFileError(f"{p}: not a readable layout file (nested too deeply)") from None
+    except ValueError as e:
+        raise MotionFileError(f"{p}: not a readable layout file ({str(e).splitlines()[0]})") from None
+
+
 def read_layout(spec) -> Layout:
     """A layout by name (:data:`LAYOUTS`) or from a JSON/TOML file with ``joints``
     and ``parents`` (indices, or parent names with ``""``/``null`` for the root),
@@ -104,15 +138,7 @@ def read_layout(spec) -> Layout:
     if not p.is_file():
         raise MotionFileError(f"layout {spec!r}: neither a known layout ({', '.join(LAYOUTS)}) nor a "
                               f"layout file (JSON or TOML with 'joints' and 'parents')")
-    text = p.read_text(encoding="utf-8")
-    try:
-        if p.suffix.lower() == ".toml":
-            import tomllib
-            d = tomllib.loads(text)
-        else:
-            d = json.loads(text)
-    except ValueError as e:
-        raise MotionFileError(f"{p}: not a readable layout file ({e})") from None
+    d = _layout_data(p)
     if not isinstance(d, dict) or "joints" not in d or "parents" not in d:
         raise MotionFileError(f"{p}: a layout file needs 'joints' (a list of names) and 'parents' "
                               f"(each joint's parent: index or name, -1 or \"\" for the root)")
@@ -142,9 +168,10 @@ def read_layout(spec) -> Layout:
     if up not in ("y", "z"):
         raise MotionFileError(f"{p}: up = {d['up']!r}: expected \"y\" or \"z\"")
     fps, scale = d.get("fps"), d.get("scale")
-    for key, v in (("fps", fps), ("scale", scale)):
-        if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0):
-            raise MotionFileError(f"{p}: {key} = {v!r}: expected a positive number")
+    for key, v, (lo, hi) in (("fps", fps, FPS_RANGE), ("scale", scale, SCALE_RANGE)):
+        if v is not None and not (isinstance(v, (int, float)) and not isinstance(v, bool)
+                                  and math.isfinite(v) and lo <= v <= hi):
+            raise MotionFileError(f"{p}: {key} = {v!r}: expected a number between {lo:g} and {hi:g}")
     lm = d.get("landmarks")
     if lm is not None:
         from ..body import LANDMARKS
@@ -153,7 +180,7 @@ def read_layout(spec) -> Layout:
         for k, v in lm.items():
             if k not in LANDMARKS:
                 raise MotionFileError(f"{p}: landmarks.{k}: unknown landmark; expected one of {', '.join(LANDMARKS)}")
-            if v not in index:
+            if not isinstance(v, str) or v not in index:
                 raise MotionFileError(f"{p}: landmarks.{k} = {v!r}: not one of the layout's joints")
     return Layout(p.stem, joints, par, None if fps is None else float(fps), up,
                   None if scale is None else float(scale), lm)
@@ -177,6 +204,8 @@ def check_positions(X, where: str, J: int | None = None) -> np.ndarray:
                               f"got an array of shape {X.shape}")
     if J is not None and X.shape[1] != J:
         raise MotionFileError(f"{where}: {X.shape[1]} joints per frame, but the layout names {J}")
+    if X.dtype.kind == "c":
+        raise MotionFileError(f"{where}: complex positions ({X.dtype}); expected real numbers")
     if not np.issubdtype(X.dtype, np.number):
         raise MotionFileError(f"{where}: expected numbers, got an array of {X.dtype}")
     X = X.astype(np.float64)
@@ -354,27 +383,22 @@ POSITION_KEYS = ("joints", "positions", "joint_positions")
 
 def _read_array(path: Path) -> tuple[np.ndarray | dict, float | None]:
     """The positions array of an ``.npy``, or of an ``.npz`` (with its ``fps`` if any);
-    an ``.npz`` with ``poses`` and ``trans`` is returned as its dict (an AMASS motion)."""
-    try:
-        z = np.load(path, allow_pickle=False)
-    except ValueError as e:
-        raise MotionFileError(f"{path}: cannot read it without unpickling Python objects ({e}); "
-                              f"expected a plain numeric array (frames, joints, 3)") from None
-    except (OSError, EOFError) as e:
-        raise MotionFileError(f"{path}: not a readable .npy/.npz file ({e})") from None
-    if isinstance(z, np.ndarray):
-        return z, None
-    with z:
-        keys = list(z.files)
-        if "poses" in keys and "trans" in keys:
-            return {k: None for k in keys}, None
-        key = next((k for k in POSITION_KEYS if k in keys), keys[0] if len(keys) == 1 else None)
-        if key is None:
-            raise MotionFileError(f"{path}: an .npz with arrays {keys}: expected joint positions under one of "
-                                  f"{list(POSITION_KEYS)} (or a single array), or an AMASS motion "
-                                  f"(poses, trans, betas, mocap_framerate)")
-        fps = next((float(z[k]) for k in ("fps", "mocap_framerate") if k in keys and z[k].size == 1), None)
-        return z[key], fps
+    an ``.npz`` with ``poses`` and ``trans`` is returned as its dict (an AMASS motion).
+    Headers are checked before reading (:mod:`._npyio`: frames and bytes limited)."""
+    if path.suffix.lower() == ".npy":
+        return load_npy(path), None
+    keys = npz_names(path)
+    if "poses" in keys and "trans" in keys:
+        return {k: None for k in keys}, None
+    key = next((k for k in POSITION_KEYS if k in keys), keys[0] if len(keys) == 1 else None)
+    if key is None:
+        raise MotionFileError(f"{path}: an .npz with arrays {keys}: expected joint positions under one of "
+                              f"{list(POSITION_KEYS)} (or a single array), or an AMASS motion "
+                              f"(poses, trans, betas, mocap_framerate)")
+    rate = next((k for k in ("fps", "mocap_framerate") if k in keys), None)
+    d = load_npz(path, [key] + ([rate] if rate else []), frames=(key,))
+    fps = scalar(d[rate], f"{path}: {rate}") if rate else None
+    return d[key], fps
 
 
 def load_positions(path, scale: float | None = None, fps: float | None = None, layout=None,
@@ -433,14 +457,27 @@ def load_positions(path, scale: float | None = None, fps: float | None = None, l
     elif lay.scale is not None:
         s, meta["scale_source"] = lay.scale, f"layout {lay.name}"
     else:
+        _check_extent(X, 1e-3, path, "the smallest unit guessed, mm")
         s, unit = guess_scale(clip_from_positions(X, lay, fps, {"path": str(path)}).skeleton)
         meta["scale_source"] = f"guess: {unit}"
+    _check_extent(X, s, path, meta["scale_source"])
     meta["scale"] = s
     meta["layout"] = lay.name
     if lay.landmarks:
         meta["body_mapping"] = dict(lay.landmarks)
     # joints in depth-first order, as BVH writes them (stimuli, edit, convert); find them by name
     return depth_first(clip_from_positions(X * s, lay, fps, meta))
+
+
+def _check_extent(X: np.ndarray, s: float, path, source: str) -> None:
+    """Refuse positions farther than :data:`~flipstudy.stimuli.motion.bvh.MAX_POSITION_M`
+    metres from the origin at ``s`` metres per file unit (as the BVH reader does)."""
+    from .bvh import MAX_POSITION_M
+    far = float(np.abs(X).max()) * s
+    if far > MAX_POSITION_M:
+        raise MotionFileError(f"{path}: positions reach {far:.3g} m from the origin at {s:g} m per unit "
+                              f"({source}), beyond the {MAX_POSITION_M:g} m a motion may span; check the "
+                              f"units (--scale)")
 
 
 def depth_first(clip: Clip) -> Clip:

@@ -25,6 +25,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from flipstudy.errors import MotionFileError
+from ._npyio import load_npz, real_array, scalar
 
 #: The SMPL body's first 22 joints, in SMPL order (HumanML3D's ``new_joints``).
 SMPL22_NAMES = ("pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2",
@@ -40,22 +41,11 @@ MODEL_KEYS = ("v_template", "shapedirs", "J_regressor", "kintree_table")
 NUM_BODY_JOINTS = len(SMPL22_PARENTS)
 
 
-def _load_npz(path: Path, what: str, keys) -> dict:
+def _load_npz(path: Path, what: str, keys, frames=()) -> dict:
     """The arrays ``keys`` of an ``.npz`` (those present; others, such as AMASS's
-    ``gender`` or a model's ``f``, are not read)."""
-    k = None
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            out = {}
-            for k in keys:
-                if k in z.files:
-                    out[k] = z[k]
-            return out
-    except ValueError as e:
-        raise MotionFileError(f"{path}: cannot read the {what}'s array {k!r} without unpickling Python "
-                              f"objects ({e}); expected an .npz of plain numeric arrays") from None
-    except (OSError, EOFError) as e:
-        raise MotionFileError(f"{path}: not a readable .npz {what} ({e})") from None
+    ``gender`` or a model's ``f``, are not read), headers and sizes checked before
+    reading (:func:`flipstudy.stimuli.motion._npyio.load_npz`)."""
+    return load_npz(path, keys, what, frames)
 
 
 def load_body_model(path) -> dict:
@@ -72,7 +62,7 @@ def load_body_model(path) -> dict:
     if missing:
         raise MotionFileError(f"{path}: not an SMPL-family body model: no array {', '.join(missing)} "
                               f"(expected {', '.join(MODEL_KEYS)}, as in the SMPL .npz format)")
-    v, sd, jr, kt = (np.asarray(m[k]) for k in MODEL_KEYS)
+    v, sd, jr, kt = (real_array(np.asarray(m[k]), f"{path}: {k}") for k in MODEL_KEYS)
     V = v.shape[0] if v.ndim == 2 else -1
     if v.ndim != 2 or v.shape[1] != 3:
         raise MotionFileError(f"{path}: v_template has shape {v.shape}; expected (vertices, 3)")
@@ -83,7 +73,7 @@ def load_body_model(path) -> dict:
                               f"{NUM_BODY_JOINTS}, {V})")
     if kt.ndim != 2 or kt.shape[0] != 2 or kt.shape[1] != jr.shape[0]:
         raise MotionFileError(f"{path}: kintree_table has shape {kt.shape}; expected (2, {jr.shape[0]})")
-    parents = kt[0, :NUM_BODY_JOINTS].astype(np.int64)
+    parents = kt[0, :NUM_BODY_JOINTS].astype(np.int64)      # finite: checked by real_array
     parents[0] = -1                                      # SMPL stores the root's parent as 2**32 - 1
     if tuple(parents.tolist()) != SMPL22_PARENTS:
         raise MotionFileError(f"{path}: the first {NUM_BODY_JOINTS} joints of kintree_table have parents "
@@ -119,7 +109,8 @@ def read_amass(path, body_model) -> tuple[np.ndarray, float | None]:
     file's frame rate (None when it has none) of an AMASS-style ``.npz``.
     ``body_model`` None: :class:`MotionFileError` naming ``--body-model``."""
     path = Path(path)
-    d = _load_npz(path, "motion", ("poses", "trans", "betas", "mocap_framerate", "mocap_frame_rate", "fps"))
+    d = _load_npz(path, "motion", ("poses", "trans", "betas", "mocap_framerate", "mocap_frame_rate", "fps"),
+                  frames=("poses", "trans"))
     if body_model is None:
         raise MotionFileError(f"{path}: an AMASS/SMPL motion (poses, trans, betas) needs the body model "
                               f"to place its joints; pass --body-model PATH to your licensed SMPL, SMPL-H "
@@ -134,14 +125,15 @@ def read_amass(path, body_model) -> tuple[np.ndarray, float | None]:
                               f"one root translation per frame of poses")
     betas = np.asarray(d.get("betas", np.zeros(0))).reshape(-1)
     for k, a in (("poses", poses), ("trans", trans), ("betas", betas)):
-        if not np.issubdtype(a.dtype, np.number):
-            raise MotionFileError(f"{path}: {k} holds {a.dtype}; expected numbers")
+        if a.dtype.kind not in "biuf":
+            raise MotionFileError(f"{path}: {k} holds {a.dtype}; expected real numbers")
         if not np.all(np.isfinite(a)):
             bad = np.flatnonzero(~np.isfinite(a).reshape(a.shape[0], -1).all(axis=1)) if a.ndim > 1 else []
             raise MotionFileError(f"{path}: {k} holds NaN or infinite values"
                                   + (f" (frames {', '.join(map(str, bad[:10]))})" if len(bad) else "")
                                   + "; expected finite numbers")
-    fps = next((float(d[k]) for k in ("mocap_framerate", "mocap_frame_rate", "fps") if k in d), None)
+    fps = next((scalar(d[k], f"{path}: {k}") for k in ("mocap_framerate", "mocap_frame_rate", "fps") if k in d),
+               None)
     return smpl_joints(model, poses.astype(np.float64), trans, betas), fps
 
 
