@@ -36,3 +36,8 @@ def as_site_writes(study_dir, recs):
 def site_name(study_dir, stimulus):
     """The opaque name the site gives ``stimulus`` (its video's file name without ``.mp4``)."""
     return site_map(load_study(study_dir)).video(stimulus)
+
+
+def study_names(study_dir, space="stimulus"):
+    """The study's map of opaque names in ``space`` ("stimulus" or "group"): opaque → name."""
+    return site_map(load_study(study_dir)).names[space]
