@@ -45,3 +45,16 @@ def site_name(study_dir, stimulus):
 def study_names(study_dir, space="stimulus"):
     """The study's map of opaque names in ``space`` ("stimulus" or "group"): opaque → name."""
     return site_map(load_study(study_dir)).names[space]
+
+
+def condition_words(study_dir):
+    """Every name of a condition a participant must not read: stimuli (the examples' too),
+    groups (the design's and the shared originals'), error kinds and profiles.  Not the
+    examples' group (and kind), "reference": the page says of each example that it is a
+    correct motion (and its instructions say "reference point")."""
+    from flipstudy.stimuli.contract import REFERENCE_GROUP
+    st = load_study(study_dir)
+    words = {g.name for g in st.design.groups}
+    for r in st.manifest:
+        words |= {r.stimulus} if r.group == REFERENCE_GROUP else {r.stimulus, r.group, r.kind, r.profile}
+    return sorted(w for w in words if w)

@@ -48,7 +48,7 @@ from flipstudy.study.web.importer import import_web
 from flipstudy.study.web.order import web_trial_order
 from flipstudy.study.web.site import export_site
 from _screenshots import screenshot as _shot  # noqa: E402
-from _site_names import site_name, study_names  # noqa: E402
+from _site_names import condition_words, site_name, study_names  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
                                 reason=f"needs Debian's chromium at {CHROMIUM} (apt-get install -y chromium)")
@@ -348,6 +348,8 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
         download = tmp_path / "download.jsonl"
         dl.value.save_as(download)
         assert host.ends, "the site did not end the JATOS study run"
+        kept = page.evaluate("() => JSON.stringify(Object.assign({}, window.localStorage))")
+        shown = page.get_attribute("#jspsych-target", "data-stimulus")
     assert blocked == []
     assert all(not p.startswith("/__") for p in host.paths)
 
@@ -356,6 +358,11 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
     lines = [json.loads(x) for x in jatos_file.read_text().splitlines()]
     assert [x["record"] for x in lines].count("start") == 1
     assert sorted(x["trial"] for x in lines if x["record"] == "answer") == list(range(1, 9))
+    # issue 42: what the browser keeps and sends names no stimulus, group, kind or level
+    words = condition_words(study)
+    assert not [w for w in words if w in kept or w in jatos_file.read_text() or w in shown]
+    assert not {"level", "kind", "clip"} & {k for x in lines for k in x}
+    assert {x["stimulus"] for x in lines if x["record"] == "answer"} <= set(study_names(study))
 
     # JATOS's results archive (Export results: one data.txt per component result)
     archive = tmp_path / "jatos_results.zip"

@@ -14,10 +14,10 @@ import zipfile
 import pytest
 
 from _prolific import CATCH_GROUP
+from _site_names import condition_words
 from test_session_browser import jspsych_dir  # noqa: F401 (fixture)
 
 from flipstudy.errors import WebImportError
-from flipstudy.stimuli.contract import REFERENCE_GROUP
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.session import load_study
@@ -51,17 +51,6 @@ def _config(site):
     return json.loads((site / "config.js").read_text().split("= ", 1)[1].rstrip().rstrip(";\n"))
 
 
-def _condition_words(study):
-    """Every name of a condition: stimuli (the examples' too), groups (the design's and the
-    shared originals'), error kinds and profiles.  Not the examples' group (and kind), "reference":
-    the page says of each example that it is a correct motion (and says "reference point")."""
-    st = load_study(study)
-    words = {g.name for g in st.design.groups}
-    for r in st.manifest:
-        words |= {r.stimulus} if r.group == REFERENCE_GROUP else {r.stimulus, r.group, r.kind, r.profile}
-    return sorted(w for w in words if w)
-
-
 def _strings(obj, keys=()):
     """Every key and every string value of a JSON document (keys apart)."""
     if isinstance(obj, dict):
@@ -77,7 +66,7 @@ def _strings(obj, keys=()):
 
 def test_no_file_name_or_string_of_the_uploaded_site_names_a_condition(built):
     study, sites, folder = built
-    words = _condition_words(study)
+    words = condition_words(study)
     assert {"catch", "smooth-increase", "abrupt-decrease", "backflip_catch_100", "angular-momentum"} <= set(words)
     st = load_study(study)
     for host, site in sites.items():
