@@ -292,7 +292,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
                 force: bool = False) -> dict:
     """Write the site of ``study_dir`` to ``out`` (see the module docstring).
     Returns ``{"out", "host", "site_id", "n_trials", "videos", "jspsych", "bytes",
-    "max_dropped_pct", "repeat_dropped"}``.
+    "max_dropped_pct", "repeat_dropped", "site_map"}`` (``site_map``: the study's
+    ``web/site-map.json``, the key and map of the site's opaque names).
 
     ``out`` must not exist, or be an earlier site (``flipstudy-site.json``) with
     ``force``; the site is built in a hidden folder beside it and renamed into place.
@@ -368,4 +369,5 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     return {"out": out, "host": host, "site_id": cfg["site_id"], "n_trials": cfg["n_trials"],
             "videos": len(videos), "jspsych": jsp.PACKAGES["jspsych"], "bytes": size,
-            "max_dropped_pct": cfg["max_dropped_pct"], "repeat_dropped": cfg["repeat_dropped"]}
+            "max_dropped_pct": cfg["max_dropped_pct"], "repeat_dropped": cfg["repeat_dropped"],
+            "site_map": names.path}

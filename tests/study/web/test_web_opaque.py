@@ -4,6 +4,7 @@ names no stimulus, group, kind or level in any file name or string; the key and 
 of its opaque names stay in the study (``STUDY/web/site-map.json``); ``import-web`` maps
 the answers back exactly, stimulus by stimulus, and refuses a name the map does not know
 (or a missing map) in one line naming the file."""
+import contextlib
 import csv
 import io
 import json
@@ -37,8 +38,12 @@ def built(tmp_path_factory, jspsych_dir):  # noqa: F811
     study = make_demo_study(tmp / "study", levels=(0, 25), repetitions=2, video_frames=4, size=(32, 24),
                             extra=CATCH_GROUP)
     sites = {h: tmp / f"site-{h}" for h in HOSTS}
-    for h, out in sites.items():
-        export_site(study, out, host=h, iti_ms=20, jspsych_dir=jspsych_dir)
+    export_site(study, sites["jatos"], host="jatos", iti_ms=20, jspsych_dir=jspsych_dir)
+    said = io.StringIO()
+    with contextlib.redirect_stdout(said):                   # the command says where the map is
+        assert cli(["export-web", str(study), "--out", str(sites["pavlovia"]), "--host", "pavlovia",
+                    "--iti-ms", "20", "--jspsych-dir", str(jspsych_dir)]) == 0
+    assert f"mapped in {study / 'web' / MAP_FILE} (keep it with the study; never upload it)" in said.getvalue()
     return study, sites, jspsych_dir
 
 
