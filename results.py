@@ -237,7 +237,9 @@ class ImportResult(StepResult):
     participants_csv: Path
     description: Path | None = None
     study: str = ""
-
+    #: what was kept out of the tables and why, one line each (``quarantine_csv`` lists them)
+    quarantined: tuple[str, ...] = ()
+    quarantine_csv: Path | None = None
 
     def summary(self) -> str:
         lines = []
@@ -253,6 +255,12 @@ class ImportResult(StepResult):
                      f"participant(s) in {self.sessions} session(s)"
                      + (f"; {self.duplicates} records read more than once, kept once"
                         if self.duplicates else ""))
+        if self.quarantined:
+            lines.append(f"kept out of the tables ({len(self.quarantined)}; listed in "
+                         f"{self.quarantine_csv}, the records stay in web/imports/):")
+            lines += [f"  {q}" for q in self.quarantined[:20]]
+            if len(self.quarantined) > 20:
+                lines.append(f"  ... and {len(self.quarantined) - 20} more")
         if self.incomplete:
             lines.append(f"{len(self.incomplete)} incomplete session(s), marked complete=false: "
                          + ", ".join(self.incomplete[:8]))

@@ -25,7 +25,9 @@ Excluded participants' rows stay in the data (columns ``excluded``,
 """
 from __future__ import annotations
 
+import csv
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -136,6 +138,41 @@ def apply_exclusions(df: pd.DataFrame, rules: dict | None, *, include_incomplete
                            flow=pd.DataFrame(flow, columns=["stage", "n"]), rules=rule_sentences(r))
 
 
+#: the table ``import-web`` writes beside ``web/responses.csv``: the runs it kept out
+KEPT_OUT = "quarantine.csv"
+
+
+def kept_out_at_import(tables) -> dict:
+    """``{reason: runs}`` that ``import-web`` kept out of the response tables ``tables``
+    (paths; each one's ``quarantine.csv`` beside it, rows naming a whole run), e.g.
+    ``{"no consent": 2, "conflict": 1}``; empty for tables without one."""
+    out = {}
+    for t in tables:
+        p = Path(t).parent / KEPT_OUT
+        if not p.is_file():
+            continue
+        with open(p, newline="", encoding="utf-8") as f:
+            for row in csv.DictReader(f):
+                if row.get("what") == "run" and row.get("reason"):
+                    out[row["reason"]] = out.get(row["reason"], 0) + 1
+    return out
+
+
+def with_kept_out(flow: pd.DataFrame, kept_out: dict | None) -> pd.DataFrame:
+    """``flow`` with a first stage per reason ``import-web`` kept runs out of the
+    tables (``kept out at import: no consent``, ...), when it kept any.
+
+    >>> f = pd.DataFrame([("recruited", 3), ("analysed", 3)], columns=["stage", "n"])
+    >>> with_kept_out(f, {"no consent": 1})["stage"].tolist()
+    ['kept out at import: no consent', 'recruited', 'analysed']
+    """
+    if not kept_out:
+        return flow
+    first = pd.DataFrame([(f"kept out at import: {k}", int(n)) for k, n in sorted(kept_out.items())],
+                         columns=["stage", "n"])
+    return pd.concat([first, flow], ignore_index=True)
+
+
 def flow_figure(flow: pd.DataFrame):
     """The flow as a figure: one horizontal bar per stage, its N written beside it."""
     import matplotlib.pyplot as plt
@@ -143,7 +180,7 @@ def flow_figure(flow: pd.DataFrame):
     with style():
         fig, ax = plt.subplots(figsize=(5.5, 0.45 * len(flow) + 1.0))
         y = np.arange(len(flow))[::-1]
-        colours = ["#0072B2" if not s.startswith("excluded") else "#D55E00" for s in flow["stage"]]
+        colours = ["#0072B2" if not s.startswith(("excluded", "kept out")) else "#D55E00" for s in flow["stage"]]
         ax.barh(y, flow["n"], color=colours)
         for yi, v in zip(y, flow["n"]):
             ax.text(v, yi, f" {v}", va="center", fontsize=8)

@@ -11,7 +11,7 @@ import pandas as pd
 
 from .core import summarize
 from flipstudy.errors import ResponsesError
-from .io import group_order, load_responses, participants_label, select_participants
+from .io import group_order, load_responses, participants_label, resolve_responses_path, select_participants
 from .sdt import CORRECTION_TEXT, normalise_correction
 from .stats import fit_psychometric, gee_levels
 from .tables import paper_layout, to_latex, to_markdown
@@ -142,7 +142,7 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
             n_boot: int = 2000, ci: float = 0.95, psychometric: str = "psignifit",
             gee: bool = True, figures: bool = True, include_simulated: bool = False,
             include_incomplete: bool = False, quest_specs: dict | None = None,
-            exclusions: dict | None = None) -> Result:
+            exclusions: dict | None = None, kept_out: dict | None = None) -> Result:
     """Run the whole analysis and write its outputs.
 
     ``responses``: a DataFrame, a responses CSV or a study folder (its
@@ -172,6 +172,8 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     excluded participants and the catch trials are left out, ``flow.csv`` and the
     ``flow`` figure report recruited → completed → excluded by rule → analysed, and
     ``responses_exclusions.csv`` keeps every row with ``excluded`` and ``exclusion_rule``.
+    The flow starts with the runs ``import-web`` kept out of the tables (``kept_out``:
+    ``{reason: runs}``; None: read from the ``quarantine.csv`` beside ``responses``).
 
     Files (in ``out_dir``): ``table.csv``, ``table_paper.csv``,
     ``table_paper.md``, ``table_paper.tex``, ``participants.csv``,
@@ -211,9 +213,12 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     df = load_responses(responses)
     report = None
     if exclusions is not None:
-        from .exclusions import apply_exclusions
+        from .exclusions import apply_exclusions, kept_out_at_import, with_kept_out
         df, first = select_participants(df, include_simulated=include_simulated, include_incomplete=True)
         report = apply_exclusions(df, exclusions, include_incomplete=include_incomplete)
+        if kept_out is None and isinstance(responses, (str, Path)):
+            kept_out = kept_out_at_import([resolve_responses_path(responses)])
+        report.flow = with_kept_out(report.flow, kept_out)
         df = report.kept()
     df, who = select_participants(df, include_simulated=include_simulated,
                                   include_incomplete=include_incomplete)

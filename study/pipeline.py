@@ -165,7 +165,10 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
         from .reproduce import sheet_images        # the study's own ghosts and trails
         images = sheet_images(StimulusSet.read(src.parent, files=False, design=False),
                               src.parent / "render")
-    res = _analyze(src, out, images=images or None, quest_specs=specs, exclusions=rules, **options)
+    from flipstudy.analysis.exclusions import kept_out_at_import    # the runs import-web kept out
+    kept_out = kept_out_at_import([resolve_responses_path(r) for r in responses])
+    res = _analyze(src, out, images=images or None, quest_specs=specs, exclusions=rules, kept_out=kept_out,
+                   **options)
     return AnalyzeResult(out=out, report=res.to_dict(), table_markdown=to_markdown(res.table))
 
 

@@ -27,8 +27,10 @@ lists them in the order they were imported, with when and what they added), and
 read twice (a file imported again, a JATOS export and the participant's
 download of the same run, a record resent after a reload) is one row; a file
 already imported is skipped and reported, and a file whose every record is
-already kept is read but not kept (nor re-read by later imports); two different answers to one trial
-of one run refuse the import.  Web participants are kept apart from local ones:
+already kept is read but not kept (nor re-read by later imports).  Runs without a
+recorded agreement to the consent text, and runs with two different records for one
+trial, are kept out of the tables and listed in ``web/quarantine.csv`` (see
+:mod:`flipstudy.study.web._runs`); the rest is imported.  Web participants are kept apart from local ones:
 an ID that also has sessions in ``sessions.sqlite`` is refused.  Each browser
 run of a participant is a session, numbered by the run's start time.
 
@@ -51,9 +53,7 @@ import csv
 import hashlib
 import io
 import json
-import math
 import re
-import zipfile
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
@@ -67,10 +67,13 @@ from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS,
 from flipstudy.errors import WebImportError
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
+from ._read import MAX_FILE, MAX_IMPORT, Budget, read_records, read_results_file  # noqa: F401 (public here)
+from ._runs import (QUARANTINE_COLUMNS, WINDOW_RE, check_id, check_text, check_time, consent_of,
+                    set_aside)
 from .opaque import Revealer
 from .order import balanced_latin_square, condition_groups, order_groups, web_trial_order
 from .sites import SITES, read_sites as _sites
-from .site import FORMAT, HOSTS
+from .site import FORMAT, HOSTS, PARTICIPANT_PARAMS
 
 WEB_DIR = "web"
 IMPORTS = "imports"
@@ -99,112 +102,6 @@ KINDS = ("start", "demographics", "answer", "end")
 #: the answers each task takes: yes/no judges one motion, 2AFC names the interval judged
 #: physically correct
 RESPONSES_BY_TASK = {"yes-no": ("correct", "incorrect"), "2afc": ("first", "second")}
-MAX_FILE = 256 * 1024 * 1024
-
-
-# --- reading ---------------------------------------------------------------------------------
-
-def _loads(text: str, where: str, what: str = "valid JSON"):
-    """``json.loads`` whose every failure (bad JSON, nesting too deep for the parser) is
-    a :class:`WebImportError` naming ``where``."""
-    try:
-        return json.loads(text, parse_constant=lambda c: math.nan)
-    except ValueError as e:
-        raise WebImportError(f"{where}: not {what} ({e})") from None
-    except RecursionError:
-        raise WebImportError(f"{where}: JSON nested too deeply to be a flipstudy record") from None
-
-
-def _ndjson(text: str, where: str):
-    for i, line in enumerate(text.splitlines(), start=1):
-        if not line.strip():
-            continue
-        obj = _loads(line, f"{where}: line {i}", "a JSON record")
-        if not isinstance(obj, dict):
-            raise WebImportError(f"{where}: line {i}: expected a JSON object, got {type(obj).__name__}")
-        yield f"{where}: line {i}", obj
-
-
-def _json_array(text: str, where: str):
-    arr = _loads(text, where)
-    if not isinstance(arr, list):
-        raise WebImportError(f"{where}: expected a JSON array of records")
-    for i, obj in enumerate(arr, start=1):
-        if not isinstance(obj, dict):
-            raise WebImportError(f"{where}: record {i}: expected a JSON object")
-        yield f"{where}: record {i}", obj
-
-
-def _csv(text: str, where: str):
-    reader = csv.DictReader(io.StringIO(text))
-    if not reader.fieldnames or "record" not in reader.fieldnames or "format" not in reader.fieldnames:
-        raise WebImportError(f"{where}: line 1: not a flipstudy results file (a CSV needs the columns "
-                             f"'format' and 'record'; JSON lines start with '{{')")
-    for i, row in enumerate(reader, start=2):
-        if None in row:
-            raise WebImportError(f"{where}: line {i}: more cells than the header has columns")
-        yield f"{where}: line {i}", {k: (None if v == "" else v) for k, v in row.items()}
-
-
-def _text_records(data: bytes, where: str):
-    try:
-        text = data.decode("utf-8-sig")
-    except UnicodeDecodeError as e:
-        raise WebImportError(f"{where}: not UTF-8 text ({e})") from None
-    head = text.lstrip()[:1]
-    if not head:
-        return iter(())
-    if head == "{":
-        return _ndjson(text, where)
-    if head == "[":
-        return _json_array(text, where)
-    return _csv(text, where)
-
-
-def read_records(path) -> list[tuple[str, dict]]:
-    """``[(where, record), ...]`` of one results file (JATOS data or archive,
-    Pavlovia CSV, download), unchecked; ``where`` names file and line."""
-    path = Path(path)
-    data = read_results_file(path)
-    if data[:4] == b"PK\x03\x04":
-        out = []
-        try:
-            with zipfile.ZipFile(io.BytesIO(data)) as z:
-                for info in sorted(z.infolist(), key=lambda i: i.filename):
-                    if info.is_dir() or info.file_size > MAX_FILE:
-                        continue
-                    name = info.filename.rsplit("/", 1)[-1]
-                    if not (name.endswith((".txt", ".jsonl", ".json", ".csv"))):
-                        continue
-                    out += list(_text_records(z.read(info), f"{path}:{info.filename}"))
-        except zipfile.BadZipFile as e:
-            raise WebImportError(f"{path}: a broken zip archive ({e})") from None
-        return out
-    return list(_text_records(data, str(path)))
-
-
-def read_results_file(path: Path) -> bytes:
-    """The bytes of a results file; a folder, a FIFO or device, a missing or too large
-    file is a :class:`WebImportError` saying which."""
-    import stat as st_
-    try:
-        st = path.stat()
-    except FileNotFoundError:
-        raise WebImportError(f"{path}: no such file") from None
-    except OSError as e:
-        raise WebImportError(f"{path}: cannot be read ({e.strerror})") from None
-    if st_.S_ISDIR(st.st_mode):
-        raise WebImportError(f"{path}: a folder; import-web takes the results files themselves "
-                             f"(e.g. {path}/*.jsonl, a JATOS .zip or a Pavlovia .csv)")
-    if not st_.S_ISREG(st.st_mode):
-        raise WebImportError(f"{path}: not a regular file (a FIFO, socket or device); save the "
-                             f"results to a file first")
-    if st.st_size > MAX_FILE:
-        raise WebImportError(f"{path}: larger than {MAX_FILE >> 20} MiB; not a results file")
-    try:
-        return path.read_bytes()
-    except OSError as e:
-        raise WebImportError(f"{path}: cannot be read ({e.strerror})") from None
 
 
 # --- checking --------------------------------------------------------------------------------
@@ -244,11 +141,12 @@ class _Checker:
             raise WebImportError(f"{where}: format {rec['format']!r}: this flipstudy reads {FORMAT}")
         kind = _str(rec["record"], where, "record", KINDS)
         name = self.study.design.name
+        site_id = check_id(rec["site_id"], where, "site_id")     # a list or object is no site id
         if rec["study"] != name:
             raise WebImportError(
                 f"{where}: study {str(rec['study'])[:60]!r}, but this is the study {name!r} "
                 f"({self.study.dir / 'design.toml'}); import it into the study it was exported from")
-        if self.sites is not None and rec["site_id"] not in self.sites:
+        if self.sites is not None and site_id not in self.sites:
             raise WebImportError(
                 f"{where}: site {str(rec['site_id'])[:40]!r} was not exported from this study "
                 f"({self.study.dir / WEB_DIR / SITES} lists {', '.join(sorted(self.sites)) or 'none'}); "
@@ -267,20 +165,26 @@ class _Checker:
                 f"once it has answers: restore the design the site was exported with")
         rec = self.reveal(where, rec)          # the site's opaque names back to the study's
         pid = rec["participant"]
-        if not isinstance(pid, str) or not PARTICIPANT_RE.fullmatch(pid):
-            raise WebImportError(f"{where}: participant {pid!r} is not a valid participant ID")
+        if not isinstance(pid, str) or not PARTICIPANT_RE.fullmatch(pid) or pid.startswith("-"):
+            raise WebImportError(f"{where}: participant {str(pid)[:40]!r} is not a valid participant ID "
+                                 f"(1-32 letters, digits, '_' or '-', not starting with '-')")
         out = {"record": kind, "participant": pid, "host": _str(rec["host"], where, "host", HOSTS),
-               "run_id": _str(rec["run_id"], where, "run_id"),
-               "run_started": _str(rec["run_started"], where, "run_started"),
-               "timestamp": _str(rec["timestamp"], where, "timestamp"),
-               "site_id": _str(rec["site_id"], where, "site_id")}
+               "run_id": check_id(rec["run_id"], where, "run_id"),
+               "run_started": check_time(rec["run_started"], where, "run_started"),
+               "timestamp": check_time(rec["timestamp"], where, "timestamp"),
+               "site_id": site_id}
         for name in self.recruit:              # checked as the site checks them (and participant IDs)
             v = rec.get(name)
             if v not in (None, ""):
-                if not isinstance(v, str) or not RECRUIT_RE.fullmatch(v):
+                if not isinstance(v, str) or not RECRUIT_RE.fullmatch(v) or v.startswith("-"):
                     raise WebImportError(f"{where}: {name} {str(v)[:40]!r} is not a valid recruiter ID "
-                                         f"(1-64 letters, digits, '_' or '-')")
+                                         f"(1-64 letters, digits, '_' or '-', not starting with '-')")
                 out[name] = v
+        prolific = rec.get("PROLIFIC_PID")     # the site takes the participant ID from it first
+        if prolific not in (None, "") and prolific != pid:
+            raise WebImportError(f"{where}: PROLIFIC_PID {str(prolific)[:40]!r} is not the participant ID "
+                                 f"{pid!r}; the site takes the ID from PROLIFIC_PID, so the record was "
+                                 f"changed after it was written")
         cond = row = None
         if self.between:                       # the run's between-subject condition sets its order
             cond = out["condition"] = _str(rec.get("condition"), where, "condition", self.between)
@@ -289,45 +193,7 @@ class _Checker:
             row = out["latin_row"] = _num(rec["latin_row"], where, "latin_row", 0,
                                           len(balanced_latin_square(len(seen))) - 1, integer=True)
         if kind == "answer":
-            _need(rec, where, ANSWER)
-            trials = self.order(pid, cond, row)
-            t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
-            want = trials[t - 1]
-            got = {"stimulus": rec["stimulus"], "group": rec["group"],
-                   "level": _num(rec["level"], where, "level", -1e6, 1e6),
-                   "repetition": _num(rec["repetition"], where, "repetition", 1, 1000, integer=True)}
-            task = getattr(want, "task", "") or "yes-no"
-            if task == "2afc":          # which motion came first, and the comparison, as the order says
-                got.update(task=rec.get("task"), first=rec.get("first"), original=rec.get("original"))
-            elif rec.get("task", "yes-no") != "yes-no":
-                got["task"] = rec.get("task")
-            for k in got:
-                if got[k] != getattr(want, k):
-                    raise WebImportError(f"{where}: trial {t}: {k} {got[k]!r}, but trial {t} of "
-                                         f"participant {pid} is {getattr(want, k)!r} ({want.stimulus})")
-            got.pop("original", None)
-            out.update(got, trial=t, clip=want.clip, kind=want.kind, method="constant", task=task,
-                       first=getattr(want, "first", "") or "",
-                       original_stimulus=getattr(want, "original", "") or "",
-                       response=_str(rec["response"], where, "response", RESPONSES_BY_TASK[task]),
-                       rt_ms=_num(rec["rt_ms"], where, "rt_ms", 0, MAX_RT_MS),
-                       shown_ms=_num(rec["shown_ms"], where, "shown_ms", 0, MAX_SHOWN_MS),
-                       input=_str(rec["input"], where, "input", ("key", "click")),
-                       replays=_num(rec["replays"], where, "replays", 0, MAX_REPLAYS, integer=True),
-                       timing=_str(rec["timing"], where, "timing", ("rvfc", "raf")),
-                       playback_flagged=_bool(rec["playback_flagged"], where, "playback_flagged"),
-                       refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True),
-                       repeat=_num(0 if rec.get("repeat") is None else rec["repeat"], where, "repeat", 0, 1,
-                                  integer=True))
-            for k in ("frames_expected", "frames_presented", "frames_dropped"):
-                out[k] = _num(rec[k], where, k, 0, 10_000_000, integer=True)
-            for k in ("dropped_pct", "max_dropped_pct"):
-                out[k] = _num(rec[k], where, k, 0, 100)
-            for k in ("playback_ms", "video_ms"):
-                out[k] = _num(rec[k], where, k, 0, MAX_SHOWN_MS)
-            if out["frames_dropped"] != max(0, out["frames_expected"] - out["frames_presented"]):
-                raise WebImportError(f"{where}: frames_dropped {out['frames_dropped']} is not "
-                                     f"frames_expected - frames_presented")
+            self._check_answer(rec, where, pid, cond, row, out)
         elif kind == "demographics":
             for f in DEMOGRAPHIC_FIELDS:
                 _need(rec, where, (f["name"],))
@@ -338,24 +204,82 @@ class _Checker:
                 else:
                     out[f["name"]] = _str(v, where, f["name"], [o[0] for o in f["options"]])
         elif kind == "start":
-            _need(rec, where, ("n_trials", "order"))
-            n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
-            order = " ".join(t.stimulus for t in self.order(pid, cond, row))
-            if n != len(self.order(pid, cond, row)) or rec["order"] != order:
-                raise WebImportError(f"{where}: the run's trial order is not this study's order for "
-                                     f"{pid} (another design or trial-order rule)")
-            if self.study.design.online.block_order == "latin-square":
-                blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond, row)))
-                if rec.get("block_order") != blocks:
-                    raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
-                                         f"Latin-square row ({blocks!r})")
-            out.update(n_trials=n, refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000,
-                                                   optional=True),
-                       participant_from=rec.get("participant_from"), user_agent=rec.get("user_agent"),
-                       consent=rec.get("consent"), window=rec.get("window"), block_order=rec.get("block_order"),
-                       screen_ok=None if rec.get("screen_ok") in (None, "") else
-                       _bool(rec["screen_ok"], where, "screen_ok"))
+            self._check_start(rec, where, pid, cond, row, out)
         return out
+
+    def _check_answer(self, rec: dict, where: str, pid: str, cond, row, out: dict) -> None:
+        """The fields of an ``answer`` record into ``out``, checked against the trial
+        the participant's order has at its place."""
+        _need(rec, where, ANSWER)
+        trials = self.order(pid, cond, row)
+        t = _num(rec["trial"], where, "trial", 1, len(trials), integer=True)
+        want = trials[t - 1]
+        got = {"stimulus": rec["stimulus"], "group": rec["group"],
+               "level": _num(rec["level"], where, "level", -1e6, 1e6),
+               "repetition": _num(rec["repetition"], where, "repetition", 1, 1000, integer=True)}
+        task = getattr(want, "task", "") or "yes-no"
+        if task == "2afc":          # which motion came first, and the comparison, as the order says
+            got.update(task=rec.get("task"), first=rec.get("first"), original=rec.get("original"))
+        elif rec.get("task", "yes-no") != "yes-no":
+            got["task"] = rec.get("task")
+        for k in got:
+            if got[k] != getattr(want, k):
+                raise WebImportError(f"{where}: trial {t}: {k} {got[k]!r}, but trial {t} of "
+                                     f"participant {pid} is {getattr(want, k)!r} ({want.stimulus})")
+        got.pop("original", None)
+        out.update(got, trial=t, clip=want.clip, kind=want.kind, method="constant", task=task,
+                   first=getattr(want, "first", "") or "",
+                   original_stimulus=getattr(want, "original", "") or "",
+                   response=_str(rec["response"], where, "response", RESPONSES_BY_TASK[task]),
+                   rt_ms=_num(rec["rt_ms"], where, "rt_ms", 0, MAX_RT_MS),
+                   shown_ms=_num(rec["shown_ms"], where, "shown_ms", 0, MAX_SHOWN_MS),
+                   input=_str(rec["input"], where, "input", ("key", "click")),
+                   replays=_num(rec["replays"], where, "replays", 0, MAX_REPLAYS, integer=True),
+                   timing=_str(rec["timing"], where, "timing", ("rvfc", "raf")),
+                   playback_flagged=_bool(rec["playback_flagged"], where, "playback_flagged"),
+                   refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000, optional=True),
+                   repeat=_num(0 if rec.get("repeat") is None else rec["repeat"], where, "repeat", 0, 1,
+                              integer=True))
+        for k in ("frames_expected", "frames_presented", "frames_dropped"):
+            out[k] = _num(rec[k], where, k, 0, 10_000_000, integer=True)
+        for k in ("dropped_pct", "max_dropped_pct"):
+            out[k] = _num(rec[k], where, k, 0, 100)
+        for k in ("playback_ms", "video_ms"):
+            out[k] = _num(rec[k], where, k, 0, MAX_SHOWN_MS)
+        if out["frames_dropped"] != max(0, out["frames_expected"] - out["frames_presented"]):
+            raise WebImportError(f"{where}: frames_dropped {out['frames_dropped']} is not "
+                                 f"frames_expected - frames_presented")
+
+    def _check_start(self, rec: dict, where: str, pid: str, cond, row, out: dict) -> None:
+        """The fields of a ``start`` record into ``out``: the order, the display and
+        the browser's strings, and the consent (its time of agreement, or None)."""
+        _need(rec, where, ("n_trials", "order"))
+        n = _num(rec["n_trials"], where, "n_trials", 1, 100_000, integer=True)
+        order = " ".join(t.stimulus for t in self.order(pid, cond, row))
+        if n != len(self.order(pid, cond, row)) or rec["order"] != order:
+            raise WebImportError(f"{where}: the run's trial order is not this study's order for "
+                                 f"{pid} (another design or trial-order rule)")
+        if self.study.design.online.block_order == "latin-square":
+            blocks = " ".join(dict.fromkeys(t.group for t in self.order(pid, cond, row)))
+            if rec.get("block_order") != blocks:
+                raise WebImportError(f"{where}: block_order {rec.get('block_order')!r} is not {pid}'s "
+                                     f"Latin-square row ({blocks!r})")
+        elif rec.get("block_order") not in (None, ""):
+            raise WebImportError(f"{where}: block_order {str(rec['block_order'])[:40]!r}, but this "
+                                 f"design has no Latin-square block order")
+        out.update(n_trials=n, refresh_hz=_num(rec.get("refresh_hz"), where, "refresh_hz", 0, 1000,
+                                               optional=True),
+                   participant_from=None if rec.get("participant_from") in (None, "") else
+                   _str(rec["participant_from"], where, "participant_from", PARTICIPANT_PARAMS + ("generated",)),
+                   user_agent=check_text(rec.get("user_agent"), where, "user_agent"),
+                   consent=consent_of(rec.get("consent")),
+                   window=None if rec.get("window") in (None, "") else
+                   check_id(rec["window"], where, "window", WINDOW_RE, "WIDTHxHEIGHT in pixels"),
+                   block_order=rec.get("block_order") or None,
+                   screen_ok=None if rec.get("screen_ok") in (None, "") else
+                   _bool(rec["screen_ok"], where, "screen_ok"))
+        if out["consent"] is None and rec.get("consent") is not None:
+            out["consent_given"] = str(rec["consent"])[:40]    # not a time of agreement: said why
 
 
 # --- merging and writing ---------------------------------------------------------------------
@@ -366,10 +290,12 @@ def _key(r: dict):
     return (r["run_id"], r["record"])
 
 
-def _merge(items, local_ids) -> tuple[dict, int]:
-    """``{key: (record, where, file)}`` from ``[(where, file, record)]``: identical
-    records once; two different ones for one key refuse."""
-    merged, dup = {}, 0
+def _merge(items, local_ids) -> tuple[dict, int, list]:
+    """``({key: (record, where, file)}, duplicates, conflicts)`` from ``[(where, file,
+    record)]``: identical records once; of two different ones for one key the first is
+    kept and the other is a conflict ``(key, where, where_kept)``
+    (:func:`~flipstudy.study.web._runs.set_aside` decides what the tables take)."""
+    merged, dup, conflicts = {}, 0, []
     runs = {}
     for where, fname, r in items:
         k = _key(r)
@@ -384,12 +310,9 @@ def _merge(items, local_ids) -> tuple[dict, int]:
         if k in merged:
             old = merged[k][0]
             if r != old and not (r["record"] in ("start", "end") and _same_but_time(r, old)):
-                what = f"trial {r['trial']}" if r["record"] == "answer" else r["record"]
-                raise WebImportError(
-                    f"{where}: {what} of participant {r['participant']} (run {r['run_id']}) differs "
-                    f"from the one in {merged[k][1]}; answers are never overwritten, so nothing was "
-                    f"imported")
-            dup += 1
+                conflicts.append((k, where, merged[k][1], fname))
+            else:
+                dup += 1
             continue
         merged[k] = (r, where, fname)
     for k, (r, where, _f) in merged.items():
@@ -399,7 +322,7 @@ def _merge(items, local_ids) -> tuple[dict, int]:
                 raise WebImportError(f"{where}: trial {r['trial']} of participant {r['participant']} "
                                      f"(run {r['run_id']}) is marked repeat = 1, but its first answer "
                                      f"({first[1]}) was not flagged; only flagged trials are repeated")
-    return merged, dup
+    return merged, dup, conflicts
 
 
 def _same_but_time(a, b):
@@ -484,6 +407,8 @@ def _local_participants(study_dir: Path) -> set:
 
 
 LEDGER = "imports.json"
+#: what was kept out of the tables, and why (rebuilt by every import)
+QUARANTINE = "quarantine.csv"
 
 
 def _kept(d: Path) -> list[Path]:
@@ -499,6 +424,58 @@ def _kept(d: Path) -> list[Path]:
     return [files[n] for n in order] + [files[n] for n in sorted(files) if n not in order]
 
 
+def _ledger(d: Path) -> list:
+    return json.loads((d / LEDGER).read_text()) if (d / LEDGER).is_file() else []
+
+
+def _read_new(files, checker, known: set):
+    """The records of the files not imported before (``known``: the hashes of those
+    that were), their report rows and bytes, within one import's :data:`MAX_IMPORT`."""
+    items, report, new_files, seen, budget = [], [], [], set(), Budget()
+    for f in files:
+        f = Path(f)
+        data = read_results_file(f)
+        sha = hashlib.sha256(data).hexdigest()[:16]
+        if sha in known or sha in seen:
+            report.append({"file": str(f), "status": "already imported", "records": 0, "new_answers": 0})
+            continue
+        seen.add(sha)
+        stored = f"{sha}-" + re.sub(r"[^A-Za-z0-9._-]", "_", f.name)[:120]
+        recs = [(where, stored, checker.check(where, rec)) for where, rec in read_records(f, data, budget)]
+        if not recs:
+            raise WebImportError(f"{f}: no flipstudy records in this file")
+        items += recs
+        new_files.append((stored, data))
+        report.append({"file": str(f), "status": "imported", "records": len(recs), "new_answers": 0,
+                       "stored": stored})
+    return items, report, new_files
+
+
+def _write_files(d: Path, new_files, report, new_quarantine) -> None:
+    """The new files as they were, then the ledger naming them (and the runs quarantined
+    by this import, on its first file's entry)."""
+    from ..store import utc_now
+    imports = d / IMPORTS
+    imports.mkdir(parents=True, exist_ok=True)
+    for stored, data in new_files:
+        target = imports / stored
+        tmp = target.with_name(f".{target.name}.tmp")
+        tmp.write_bytes(data)
+        tmp.replace(target)
+    ledger = _ledger(d)
+    names = {e["stored"] for e in ledger}
+    ledger += [{"stored": p.name, "imported": None} for p in _kept(d) if p.name not in names
+               and p.name not in {s for s, _ in new_files}]
+    ledger += [{"stored": None, "kept": False, "sha256": r["stored"].split("-", 1)[0], "file": r["file"],
+                "imported": utc_now(), "records": r["records"], "new_answers": 0}
+               for r in report if r["status"] == "nothing new"]
+    new = [{"stored": r["stored"], "file": r["file"], "imported": utc_now(), "records": r["records"],
+            "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
+    if new and new_quarantine:
+        new[0]["quarantined"] = dict(sorted(new_quarantine.items()))
+    atomic_write_text(d / LEDGER, json.dumps(ledger + new, indent=1) + "\n")
+
+
 def import_web(study_dir, files) -> ImportResult:
     """Import results files into ``STUDY_DIR/web/`` (see the module docstring).
 
@@ -506,49 +483,39 @@ def import_web(study_dir, files) -> ImportResult:
     "status" ("imported" | "already imported" | "nothing new": every record already kept,
     so the file is not kept), "records", "new_answers"), ``answers``,
     ``participants``, ``sessions``, ``incomplete``, ``flagged``, ``repeats``,
-    ``duplicates`` and the tables written (``responses``, ``participants_csv``,
-    ``description``)."""
+    ``duplicates``, ``quarantined`` (what was kept out of the tables and why: see
+    :mod:`flipstudy.study.web._runs`) and the tables written (``responses``,
+    ``participants_csv``, ``description``, ``quarantine_csv``)."""
     study = load_study(study_dir)
     d = study.dir / WEB_DIR
-    imports = d / IMPORTS
     checker = _Checker(study)
     # (between-subject conditions have as many trials each: the design checks it)
     n_trials = len(checker.order("x", checker.between[0] if checker.between else None)) if checker.groups else 0
     kept_sha = {p.name.split("-", 1)[0]: p for p in _kept(d)}
+    ledger = _ledger(d)
     # files read before that added nothing (not kept): known by their hash in the ledger
-    read_not_kept = {e.get("sha256") for e in (json.loads((d / LEDGER).read_text())
-                                                if (d / LEDGER).is_file() else [])
-                     if e.get("kept") is False}
+    read_not_kept = {e.get("sha256") for e in ledger if e.get("kept") is False}
+    # runs earlier imports quarantined whole, with their reasons
+    quarantined = {run: why for e in ledger for run, why in (e.get("quarantined") or {}).items()}
+    consent_required = bool(study.design.online.consent)
+    local = _local_participants(study.dir)
     items = []
-    for p in kept_sha.values():
-        for where, rec in read_records(p):
+    for p in kept_sha.values():                 # each was within the limits when it was imported
+        for where, rec in read_records(p, budget=Budget(1 << 62)):
             where = where.replace(str(p), f"{IMPORTS}/{p.name}")
             items.append((where, p.name, checker.check(where, rec)))
-    before, _ = _merge(items, _local_participants(study.dir))
-    report, new_files = [], []
-    seen = set()
-    for f in files:
-        f = Path(f)
-        data = read_results_file(f)
-        sha = hashlib.sha256(data).hexdigest()[:16]
-        if sha in kept_sha or sha in seen or sha in read_not_kept:
-            report.append({"file": str(f), "status": "already imported", "records": 0, "new_answers": 0})
-            continue
-        seen.add(sha)
-        stored = f"{sha}-" + re.sub(r"[^A-Za-z0-9._-]", "_", f.name)[:120]
-        recs = [(where, stored, checker.check(where, rec)) for where, rec in read_records(f)]
-        if not recs:
-            raise WebImportError(f"{f}: no flipstudy records in this file")
-        items += recs
-        new_files.append((stored, data))
-        report.append({"file": str(f), "status": "imported", "records": len(recs), "new_answers": 0,
-                       "stored": stored})
-    merged, dup = _merge(items, _local_participants(study.dir))
+    full_before, _, settled = _merge(items, local)
+    before, _, _ = set_aside(full_before, settled, quarantined, None, consent_required)
+    new_items, report, new_files = _read_new(files, checker, set(kept_sha) | read_not_kept)
+    full, dup, conflicts = _merge(items + new_items, local)
+    merged, aside, new_quarantine = set_aside(full, conflicts, quarantined, {k[0] for k in before},
+                                              consent_required, settled=settled)
     for r in report:
         if r["status"] == "imported":
             r["new_answers"] = sum(1 for k, (_rec, _w, fn) in merged.items()
                                    if k[1] == "answer" and fn == r["stored"] and k not in before)
-            if not any(fn == r["stored"] and k not in before for k, (_rec, _w, fn) in merged.items()):
+            if not any(fn == r["stored"] and k not in full_before for k, (_rec, _w, fn) in full.items()) \
+                    and not any(c[3] == r["stored"] for c in conflicts):
                 # every record of it is already kept: the file is not kept (nor re-read later)
                 r["status"], r["records_read"] = "nothing new", r["records"]
                 new_files = [(s, b) for s, b in new_files if s != r["stored"]]
@@ -563,26 +530,11 @@ def import_web(study_dir, files) -> ImportResult:
         for r in rows:
             r["style"] = styles.get(r["stimulus"], "")
     # write: the files as they were first, then the tables built from all of them
-    imports.mkdir(parents=True, exist_ok=True)
-    for stored, data in new_files:
-        target = imports / stored
-        tmp = target.with_name(f".{target.name}.tmp")
-        tmp.write_bytes(data)
-        tmp.replace(target)
-    from ..store import utc_now
-    ledger = json.loads((d / LEDGER).read_text()) if (d / LEDGER).is_file() else []
-    names = {e["stored"] for e in ledger}
-    ledger += [{"stored": p.name, "imported": None} for p in _kept(d) if p.name not in names
-               and p.name not in {s for s, _ in new_files}]
-    ledger += [{"stored": None, "kept": False, "sha256": r["stored"].split("-", 1)[0], "file": r["file"],
-                "imported": utc_now(), "records": r["records"], "new_answers": 0}
-               for r in report if r["status"] == "nothing new"]
-    ledger += [{"stored": r["stored"], "file": r["file"], "imported": utc_now(), "records": r["records"],
-                "new_answers": r["new_answers"]} for r in report if r["status"] == "imported"]
-    atomic_write_text(d / LEDGER, json.dumps(ledger, indent=1) + "\n")
+    _write_files(d, new_files, report, new_quarantine)
     out = d / "responses.csv"
     atomic_write_text(out, _table_text(columns, rows))
     atomic_write_text(d / "participants.csv", _table_text(part_columns, parts))
+    atomic_write_text(d / QUARANTINE, _table_text(QUARANTINE_COLUMNS, aside))
     from ..psychds import write_data_files
     write_data_files(d, study.design.name, "web", {"": _table_text(columns, rows),
                                                    "participants": _table_text(part_columns, parts)})
@@ -599,4 +551,6 @@ def import_web(study_dir, files) -> ImportResult:
         repeats=tuple(f"{r['participant']}/{r['session']} trial {r['trial']}" for r in rows
                       if r["repeat"] == "1"),
         duplicates=dup, responses=out, participants_csv=d / "participants.csv",
-        description=Path(desc) if desc is not None else None, study=str(study_dir))
+        description=Path(desc) if desc is not None else None, study=str(study_dir),
+        quarantined=tuple(f"{a['participant']} run {a['run_id']}" + ("" if a["what"] == "run" else f" {a['what']}")
+                          + f": {a['reason']}: {a['detail']}" for a in aside), quarantine_csv=d / QUARANTINE)

@@ -41,7 +41,11 @@
   const round1 = (x) => Math.round(x * 10) / 10;
   const nowIso = () => new Date().toISOString();
   const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-  const PID_RE = /^[A-Za-z0-9_-]{1,32}$/;
+  // not starting with '-': a spreadsheet reads a leading '-' as a formula (import-web refuses it too)
+  const PID_RE = /^[A-Za-z0-9_][A-Za-z0-9_-]{0,31}$/;
+  const RECRUIT_RE = /^[A-Za-z0-9_][A-Za-z0-9_-]{0,63}$/;
+  // a time as nowIso() writes it: the consent record's agreement
+  const ISO_RE = /^\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d(\.\d{1,9})?(Z|[+-]\d\d:?\d\d)?$/;
 
   function setScreen(id, type) {
     const el = app();
@@ -71,7 +75,7 @@
     for (const name of C.participant_params) {
       const v = params.get(name);
       if (v !== null && v !== '') {
-        if (!PID_RE.test(v)) throw new Error(`the participant ID in the link (${name}=${v}) is not valid: use 1-32 letters, digits, '_' or '-'`);
+        if (!PID_RE.test(v)) throw new Error(`the participant ID in the link (${name}=${v}) is not valid: use 1-32 letters, digits, '_' or '-' (not first)`);
         return {id: v, from: name};
       }
     }
@@ -519,6 +523,11 @@
   }
 
   // ---- the exported site (static, jatos, pavlovia): the order and the records are the browser's
+  function startedHere(r, pid, runId, O) {
+    return !!r && r.record === 'start' && r.format === FORMAT && r.site_id === C.site_id && r.participant === pid &&
+      typeof runId === 'string' && r.run_id === runId && (!O.consent_html || (typeof r.consent === 'string' && ISO_RE.test(r.consent)));
+  }
+
   async function runWeb(jsPsych) {
     const host = hosts[C.host];
     if (!host) throw new Error(`unknown host ${C.host}`);
@@ -533,11 +542,19 @@
     for (const name of O.recruit_params || []) {
       const v = params.get(name);
       if (v === null || v === '') continue;
-      if (!PID_RE.test(v) && !/^[A-Za-z0-9_-]{1,64}$/.test(v)) throw new Error(`the link's ${name}=${v} is not valid: use 1-64 letters, digits, '_' or '-'`);
+      if (!RECRUIT_RE.test(v)) throw new Error(`the link's ${name}=${v} is not valid: use 1-64 letters, digits, '_' or '-' (not first)`);
       recruit[name] = v;
     }
     const cp = new Checkpoint(pid);
-    const fresh = !cp.has('start');
+    // a run resumes only from the start record this site wrote for this participant and run,
+    // with the agreement to the consent text on it (consent as data, checked on every load):
+    // saved records without one are not a run: they are dropped with the state kept beside them
+    // (run id, condition), and the run starts afresh at the consent screen
+    const fresh = !cp.records.some((r) => startedHere(r, pid, cp.s.run_id, O));
+    if (fresh && cp.records.length) {
+      cp.s = {records: [], sent: 0};
+      cp.save();
+    }
     // consent first: nothing is kept or sent before it is given
     let consent = null;
     if (fresh && O.consent_html) {

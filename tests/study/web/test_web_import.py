@@ -151,14 +151,18 @@ def test_a_malformed_row_is_refused_with_its_line_and_nothing_is_written(study, 
         assert _nothing_imported(study)
 
 
-def test_a_different_answer_to_an_imported_trial_is_refused(study, tmp_path):
+def test_a_different_answer_to_an_imported_trial_is_kept_aside_never_overwritten(study, tmp_path):
     import_web(study, [jsonl(tmp_path / "a.jsonl", run_records(study, "W01"))])
     before = (study / "web" / "responses.csv").read_bytes()
     other = jsonl(tmp_path / "b.jsonl", run_records(study, "W01", responses={4: "correct"}))
-    with pytest.raises(WebImportError, match="trial 4 of participant W01 .* differs .* never overwritten"):
-        import_web(study, [other])
+    out = import_web(study, [other])                      # issue 45.9: set aside, the rest imported
+    assert out.quarantined == (f"W01 run r1 trial 4: conflict: differs from the one kept from "
+                               f"imports/{next((study / 'web' / 'imports').glob('*-a.jsonl')).name}: line 6, "
+                               f"which stays",)
     assert (study / "web" / "responses.csv").read_bytes() == before
-    assert len(list((study / "web" / "imports").iterdir())) == 1
+    assert len(list((study / "web" / "imports").iterdir())) == 2      # the evidence is kept
+    import_web(study, [other])                                          # and decided so again
+    assert (study / "web" / "responses.csv").read_bytes() == before
 
 
 def test_not_a_results_file(study, tmp_path):
@@ -240,9 +244,10 @@ def test_repeats_of_flagged_trials_are_kept_beside_the_first_answer(study, tmp_p
     bad = dict(next(r for r in recs if r.get("trial") == 4), repeat=1)
     with pytest.raises(WebImportError, match=r"line \d+: trial 4 .* repeat = 1, but its first answer"):
         import_web(study, [jsonl(tmp_path / "bad.jsonl", recs + [bad])])
-    twice = dict(rep, response="correct")
-    with pytest.raises(WebImportError, match="trial 3 of participant W09 .* differs"):
-        import_web(study, [jsonl(tmp_path / "twice.jsonl", recs + [rep, twice])])
+    twice = dict(rep, response="correct")                 # a second repeat: kept out (issue 45.9)
+    out = import_web(study, [jsonl(tmp_path / "twice.jsonl", recs + [rep, twice])])
+    assert [q.split(": ")[:2] for q in out.quarantined] == [["W09 run r1 trial 3 (repeat)", "conflict"]]
+    assert len(rows(study)) == 9
     # analyze: the repeat stands in for the flagged first answer
     from flipstudy.analysis.io import load_responses
     df = load_responses(study / "web")
