@@ -29,6 +29,8 @@ def cmd_export_web(args) -> int:
             "pavlovia": "push the folder to a Pavlovia project (index.html at its root) and set it "
                         "running; results arrive in its data/ folder as CSV"}[r["host"]]
     print(hint)
+    print(f"names: videos and trials go by opaque ids, mapped in {r['site_map']} (keep it with the study; "
+          f"never upload it)")
     print(f"dropped frames: a trial over {r['max_dropped_pct']:g} % is flagged "
           f"({'--max-dropped-pct' if args.max_dropped_pct is not None else 'the design'})"
           + ("; flagged trials are shown once more at the end" if r["repeat_dropped"] else ""))

@@ -71,6 +71,7 @@ from ._fields import _bool, _need, _num, _str
 from ._read import MAX_FILE, MAX_IMPORT, Budget, read_records, read_results_file  # noqa: F401 (public here)
 from ._runs import (QUARANTINE_COLUMNS, WINDOW_RE, check_id, check_text, check_time, consent_of,
                     set_aside)
+from .opaque import Revealer
 from .order import balanced_latin_square, condition_groups, order_groups, web_trial_order
 from .sites import SITES, read_sites as _sites
 from .site import FORMAT, HOSTS, PARTICIPANT_PARAMS
@@ -124,6 +125,8 @@ class _Checker:
         #: the recruiter's URL parameters the site keeps on every record ([online] recruit_params)
         self.recruit = tuple(study.design.online.recruit_params)
         self.between = tuple(study.design.online.between)
+        #: the site's opaque names read back through STUDY/web/site-map.json
+        self.reveal = Revealer(study, self.sites)
 
     def order(self, pid, condition=None, row=None):
         if (pid, condition, row) not in self.orders:
@@ -161,6 +164,7 @@ class _Checker:
                 f"was another design (its SHA-256 then: "
                 f"{self.sites[rec['site_id']]['design_sha256'][:12]}…); a study's design is frozen "
                 f"once it has answers: restore the design the site was exported with")
+        rec = self.reveal(where, rec)          # the site's opaque names back to the study's
         pid = rec["participant"]
         if not isinstance(pid, str) or not PARTICIPANT_RE.fullmatch(pid) or pid.startswith("-"):
             raise WebImportError(f"{where}: participant {str(pid)[:40]!r} is not a valid participant ID "

@@ -38,6 +38,7 @@ with :func:`web_trial_order` and refuses a row whose stimulus does not match.
 """
 from __future__ import annotations
 
+import math
 from typing import Iterable
 
 from flipstudy.errors import FlipstudyValueError
@@ -161,7 +162,9 @@ def condition_by_hash(participant: str, between) -> str:
 
 def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
                     participant: str, block_order: str = "interleaved", row: int | None = None) -> list[Trial]:
-    """The participant's trials online (``groups`` from :func:`order_groups`).
+    """The participant's trials online (``groups`` from :func:`order_groups`, or the
+    site's config, whose rows name their video only: then clip and kind are empty and
+    the level NaN).
     ``block_order`` "latin-square": one block per group in the order of Latin-square row
     ``row`` (None: :func:`latin_row` of the participant ID).
 
@@ -192,8 +195,9 @@ def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
                 if len(rows) == 1 or all(a != b for a, b in zip(seq, seq[1:])):
                     break
             for r, rep in items:
-                trials.append(Trial(len(trials) + 1, r["stimulus"], r["clip"], g, r["kind"], float(r["level"]),
-                                    rep, task=r.get("task", "yes-no"), original=r.get("original", "")))
+                trials.append(Trial(len(trials) + 1, r["stimulus"], r.get("clip", ""), g, r.get("kind", ""),
+                                    float(r.get("level", math.nan)), rep, task=r.get("task", "yes-no"),
+                                    original=r.get("original", "")))
         return balance_first(trials, rng.shuffle, rng.random) if any(t.task == "2afc" for t in trials) else trials
     for rep in range(1, int(repetitions) + 1):
         for _ in range(100):
@@ -201,8 +205,8 @@ def web_trial_order(groups: list[list], repetitions: int, design_seed: int,
             if not trials or n_stimuli == 1 or block[0][0]["stimulus"] != trials[-1].stimulus:
                 break
         for row, g in block:
-            trials.append(Trial(len(trials) + 1, row["stimulus"], row["clip"], g, row["kind"],
-                                float(row["level"]), rep, task=row.get("task", "yes-no"),
+            trials.append(Trial(len(trials) + 1, row["stimulus"], row.get("clip", ""), g, row.get("kind", ""),
+                                float(row.get("level", math.nan)), rep, task=row.get("task", "yes-no"),
                                 original=row.get("original", "")))
     if any(t.task == "2afc" for t in trials):
         trials = balance_first(trials, rng.shuffle, rng.random)

@@ -10,9 +10,14 @@
     flipstudy-web.js      the timeline on jsPsych, the checkpoint, the host adapter
     flipstudy-web.css
     lib/                  jsPsych and its plugins (npm, pinned: flipstudy.study.web.jspsych)
-    stimuli/<name>.mp4    the rendered videos (checked against render.json first)
+    stimuli/<id>.mp4      the rendered videos (checked against render.json first), each
+                          named by its opaque name (flipstudy.study.web.opaque)
     flipstudy-site.json   what the site is: study, manifest hash, host, jsPsych's packages
                           with versions and integrity hashes, every file's sha256
+
+No file name or string of the folder names a stimulus, group, kind or level: videos,
+groups and trials go by keyed hashes whose map (``STUDY/web/site-map.json``, with the
+key) stays in the study, outside the folder a researcher uploads.
 
 ``host`` is ``static`` (answers kept in the browser and offered as a download),
 ``jatos`` (the page loads ``jatos.js``, which JATOS serves beside it, and appends every
@@ -51,6 +56,7 @@ from .. import timeline as local_timeline
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS
 from . import jspsych as jsp
+from .opaque import hide_config, site_map
 from .order import RULE, order_groups
 
 FORMAT = "flipstudy-web/1"
@@ -286,7 +292,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
                 force: bool = False) -> dict:
     """Write the site of ``study_dir`` to ``out`` (see the module docstring).
     Returns ``{"out", "host", "site_id", "n_trials", "videos", "jspsych", "bytes",
-    "max_dropped_pct", "repeat_dropped"}``.
+    "max_dropped_pct", "repeat_dropped", "site_map"}`` (``site_map``: the study's
+    ``web/site-map.json``, the key and map of the site's opaque names).
 
     ``out`` must not exist, or be an earlier site (``flipstudy-site.json``) with
     ``force``; the site is built in a hidden folder beside it and renamed into place.
@@ -316,8 +323,9 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
     except StaleRenderError as e:
         raise SiteError(str(e)) from None
     videos = {r.stimulus: probe_video(study.video_path(r.stimulus)) for r in study.manifest}
-    cfg = site_config(study, host=host, iti_ms=iti_ms, max_dropped_pct=max_dropped_pct,
-                      video_width=video_width, videos=videos)
+    names = site_map(study)                  # opaque names; the map stays in the study (STUDY/web)
+    cfg = hide_config(site_config(study, host=host, iti_ms=iti_ms, max_dropped_pct=max_dropped_pct,
+                                  video_width=video_width, videos=videos), names)
     folder, packages = jsp.fetch(jspsych_dir)
 
     out.parent.mkdir(parents=True, exist_ok=True)
@@ -328,12 +336,12 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
             (tmp / rel).write_bytes(data)
         (tmp / "stimuli").mkdir()
         for r in study.manifest:
-            shutil.copyfile(study.video_path(r.stimulus), tmp / "stimuli" / f"{r.stimulus}.mp4")
+            shutil.copyfile(study.video_path(r.stimulus), tmp / "stimuli" / f"{names.video(r.stimulus)}.mp4")
         from flipstudy import __version__ as fs_version
         files = {p.relative_to(tmp).as_posix(): _sha256(p) for p in sorted(tmp.rglob("*")) if p.is_file()}
         design_path = study.dir / "design.toml"
         record = {"format": FORMAT, "site_id": cfg["site_id"], "host": host, "study": cfg["study"],
-                  "study_dir": str(study.dir.resolve()), "design_sha256": _sha256(design_path),
+                  "design_sha256": _sha256(design_path),
                   "manifest_sha256": study.manifest_sha256, "n_trials": cfg["n_trials"],
                   "order_rule": RULE, "max_dropped_pct": cfg["max_dropped_pct"],
                   "max_dropped_pct_from": "design" if max_dropped_pct is None else "export-web",
@@ -357,8 +365,9 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
     from .sites import remember_site           # import-web takes results of this study's sites only
-    remember_site(study.dir, cfg["site_id"], host, out)
+    remember_site(study.dir, cfg["site_id"], host, out, names="opaque")
     size = sum(p.stat().st_size for p in out.rglob("*") if p.is_file())
     return {"out": out, "host": host, "site_id": cfg["site_id"], "n_trials": cfg["n_trials"],
             "videos": len(videos), "jspsych": jsp.PACKAGES["jspsych"], "bytes": size,
-            "max_dropped_pct": cfg["max_dropped_pct"], "repeat_dropped": cfg["repeat_dropped"]}
+            "max_dropped_pct": cfg["max_dropped_pct"], "repeat_dropped": cfg["repeat_dropped"],
+            "site_map": names.path}

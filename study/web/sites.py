@@ -16,11 +16,12 @@ SITES = "sites.json"
 
 
 @study_writer("export-web")
-def remember_site(study_dir, site_id: str, host: str, out) -> None:
+def remember_site(study_dir, site_id: str, host: str, out, names: str | None = None) -> None:
     """Record in ``STUDY/web/sites.json`` that the site ``site_id`` was exported from
     this study (``export-web``), with the SHA-256 of its ``design.toml`` then;
     ``import-web`` takes results of these sites only, and only while the design is
-    the one they were exported with."""
+    the one they were exported with.  ``names="opaque"``: the site names its videos and
+    groups by opaque names (:mod:`flipstudy.study.web.opaque`)."""
     import hashlib
 
     from ..store import utc_now
@@ -28,7 +29,7 @@ def remember_site(study_dir, site_id: str, host: str, out) -> None:
     sites = read_sites(path) or {}
     sha = hashlib.sha256((Path(study_dir) / "design.toml").read_bytes()).hexdigest()
     sites.setdefault(site_id, {"host": host, "out": str(out), "exported": utc_now(),
-                               "design_sha256": sha})
+                               "design_sha256": sha, **({"names": names} if names else {})})
     path.parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(path, json.dumps(sites, indent=1, sort_keys=True) + "\n")
 

@@ -5,6 +5,7 @@ import json
 from flipstudy.study.session import load_study
 from flipstudy.study.web.order import order_groups, web_trial_order
 from flipstudy.study.web.site import FORMAT
+from _site_names import as_site_writes
 
 #: an attention-check group: a gross error (100 % abrupt, twice the paper's largest level)
 CATCH_GROUP = """
@@ -18,8 +19,8 @@ levels = [100]
 
 
 def web_records(study_dir, pid, *, run="r1", site_id="s", response=lambda t: "correct", end=True, **extra):
-    """The records of one complete run of ``pid`` (``response(trial)`` gives each answer;
-    ``extra`` goes on every record, e.g. the recruiter's ids)."""
+    """The records of one complete run of ``pid`` as the site writes them (``response(trial)``
+    gives each answer; ``extra`` goes on every record, e.g. the recruiter's ids)."""
     st = load_study(study_dir)
     trials = web_trial_order(order_groups(st.design, st.manifest), st.design.repetitions, st.design.seed, pid,
                              st.design.online.block_order)
@@ -37,7 +38,7 @@ def web_records(study_dir, pid, *, run="r1", site_id="s", response=lambda t: "co
                   playback_flagged=False, max_dropped_pct=10.0, refresh_hz=60.0) for t in trials]
     if end:
         recs.append(dict(base, record="end", answered=len(trials), n_trials=len(trials)))
-    return recs
+    return as_site_writes(study_dir, recs)
 
 
 def write_jsonl(path, recs):

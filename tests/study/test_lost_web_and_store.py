@@ -89,7 +89,7 @@ def test_import_web_checks_the_study_name_and_the_site(study, tmp_path):
     recs = run_records(study, "W01")
     with pytest.raises(WebImportError, match="study 'another', but this is the study 'demo'"):
         import_web(study, [jsonl(tmp_path / "a.jsonl", [dict(r, study="another") for r in recs])])
-    remember_site(study, "abc123", "jatos", tmp_path / "site")      # what export-web records
+    remember_site(study, "abc123", "jatos", tmp_path / "site", names="opaque")   # what export-web records
     with pytest.raises(WebImportError, match="site 's' was not exported from this study"):
         import_web(study, [jsonl(tmp_path / "b.jsonl", recs)])
     assert not (study / "web" / "responses.csv").exists()

@@ -80,8 +80,8 @@
         const tAnswer = performance.now();
         const vb = jsPsych.pluginAPI.video_buffers;
         for (const info of infos()) if (vb && vb[info.video]) { URL.revokeObjectURL(vb[info.video]); delete vb[info.video]; }
-        return record(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
-          repetition: t.repetition, clip: t.clip, kind: t.kind, task: '2afc', first: t.first, original: t.original,
+        return record(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group,
+          repetition: t.repetition, task: '2afc', first: t.first, original: t.original,
           response: data.response === 0 ? 'first' : 'second',
           rt_ms: Math.round((tAnswer - (tEnabled === null ? tAnswer : tEnabled)) * 10) / 10, input, replays, repeat,
           refresh_hz: env.refresh, max_dropped_pct: C.max_dropped_pct}, combine(first, C.max_dropped_pct)));

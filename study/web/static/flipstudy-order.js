@@ -79,14 +79,14 @@
   }
   function latinRow(participant, k) { return fnv1a32(utf8(`flipstudy-latin:${participant}`)) % balancedLatinSquare(k).length; }
 
-  // groups: [[group, [{stimulus, clip, kind, level}, ...]], ...] (the site's config)
+  // groups: [[group, [{stimulus}, ...]], ...] (the site's config: opaque names of the groups
+  // and videos, no clip, kind or level; a 2AFC row also has task and original)
   function webTrialOrder(groups, repetitions, designSeed, participant, blockOrder, row) {
     const rng = Sfc32.fromKey(orderKey(designSeed, participant));
     const nStimuli = groups.reduce((n, [, rows]) => n + rows.length, 0);
     const trials = [];
     const push = (row, g, rep) => {
-      const t = {trial: trials.length + 1, stimulus: row.stimulus, clip: row.clip, group: g,
-                 kind: row.kind, level: row.level, repetition: rep};
+      const t = {trial: trials.length + 1, stimulus: row.stimulus, group: g, repetition: rep};
       if (row.task === '2afc') Object.assign(t, {task: '2afc', first: '', original: row.original});
       trials.push(t);
     };
@@ -114,12 +114,7 @@
         block = makeBlock(groups, rng);
         if (!trials.length || nStimuli === 1 || block[0][0].stimulus !== trials[trials.length - 1].stimulus) break;
       }
-      for (const [row, g] of block) {
-        const t = {trial: trials.length + 1, stimulus: row.stimulus, clip: row.clip, group: g,
-                   kind: row.kind, level: row.level, repetition: rep};
-        if (row.task === '2afc') Object.assign(t, {task: '2afc', first: '', original: row.original});
-        trials.push(t);
-      }
+      for (const [row, g] of block) push(row, g, rep);
     }
     if (trials.some((t) => t.task === '2afc')) balanceFirst(trials, rng);
     return trials;

@@ -4,6 +4,10 @@
 // jsPsych's own plugins: instructions, survey-html-form, preload, html-keyboard-response,
 // video-button-response, html-button-response.
 //
+// Names.  The exported site knows its videos and groups by opaque names only (keyed hashes;
+// the map stays in the study, STUDY/web/site-map.json): a record names a trial's video and
+// group by them and carries no clip, kind or level; import-web maps them back.
+//
 // Data.  Every record (start, demographics, answer, end) is one flat JSON object.  It is
 // checkpointed in localStorage at once, then sent to the host the site was exported for:
 //   jatos     jatos.appendResultData(record as one JSON line), in order, retried
@@ -477,8 +481,8 @@
          const pb = watch.result();
          const vb = jsPsych.pluginAPI.video_buffers;
          if (vb && vb[info().video]) { URL.revokeObjectURL(vb[info().video]); delete vb[info().video]; }
-         return env.record(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group, level: t.level,
-           repetition: t.repetition, clip: t.clip, kind: t.kind, response: data.response === 0 ? 'correct' : 'incorrect',
+         return env.record(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group,
+           repetition: t.repetition, response: data.response === 0 ? 'correct' : 'incorrect',
            rt_ms: round1(tAnswer - (tEnabled === null ? tAnswer : tEnabled)), input, replays, repeat,
            refresh_hz: env.refresh, max_dropped_pct: C.max_dropped_pct}, pb));
        }},

@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 from _prolific import web_records, write_jsonl
+from _site_names import study_names
 from test_session_browser import CHROMIUM, jspsych_dir, page, pw  # noqa: F401 (fixtures)
 import test_web_browser
 
@@ -136,11 +137,14 @@ def test_ten_jatos_participants_fill_two_conditions_five_and_five(page, study, t
     export_site(study, site, host="jatos", iti_ms=20, jspsych_dir=jspsych_dir)
     states, batch, conflicts, blocked, host = _jatos_runs(page, site, [f"PP{i:02d}" for i in range(10)],
                                                          monkeypatch, race_at=3)
-    got = {p: s["condition"] for p, s in states.items()}
+    gn = study_names(study, "group")                         # the browser knows the groups' opaque names only
+    assert not set(BETWEEN) & set(batch["data"]["flipstudy-conditions"])
+    got = {p: gn[s["condition"]] for p, s in states.items()}
     for p, s in states.items():
-        assert s["groups"].count(got[p]) == 2 and not set(s["groups"]) & (set(BETWEEN) - {got[p]})
+        groups = [gn[g] for g in s["groups"]]
+        assert groups.count(got[p]) == 2 and not set(groups) & (set(BETWEEN) - {got[p]})
     assert collections.Counter(got.values()) == {BETWEEN[0]: 5, BETWEEN[1]: 5}
-    assert batch["data"]["flipstudy-conditions"] == {BETWEEN[0]: 5, BETWEEN[1]: 5}
+    assert {gn[c]: k for c, k in batch["data"]["flipstudy-conditions"].items()} == {BETWEEN[0]: 5, BETWEEN[1]: 5}
     assert blocked == [] and len(conflicts) == 1             # the conflicting set was retried
     parts = _import_runs(study, tmp_path, host)
     assert dict(zip(parts["participant"], parts["condition"])) == got
@@ -156,9 +160,10 @@ def test_jatos_latin_square_rows_are_filled_evenly(page, tmp_path, jspsych_dir, 
     states, batch, conflicts, blocked, host = _jatos_runs(page, site, [f"Q{i:02d}" for i in range(12)], monkeypatch)
     square = balanced_latin_square(3)                        # 3 groups: 6 rows (odd: each row and its mirror)
     names = [g for g, *_ in GROUPS]
+    gn = study_names(study, "group")                         # the browser knows the groups' opaque names only
     assert collections.Counter(s["row"] for s in states.values()) == {r: 2 for r in range(6)}
     for s in states.values():                               # each run's blocks follow its row
-        assert list(dict.fromkeys(s["groups"])) == [names[i] for i in square[s["row"]]]
+        assert [gn[g] for g in dict.fromkeys(s["groups"])] == [names[i] for i in square[s["row"]]]
     # over the 12 runs every group is in every position, and after every other, equally often
     firsts = collections.Counter(list(dict.fromkeys(s["groups"]))[0] for s in states.values())
     assert set(firsts.values()) == {4}

@@ -18,6 +18,7 @@ from flipstudy.study.session import load_study
 from flipstudy.study.web.importer import import_web
 from flipstudy.study.web.order import balanced_latin_square, latin_row, order_groups, web_trial_order
 from flipstudy.study.web.site import FORMAT
+from _site_names import as_site_writes
 
 JS = Path(web_pkg.__file__).parent / "static" / "flipstudy-order.js"
 GROUPS4 = (("smooth-increase", "angular-momentum", "smooth", 1), ("abrupt-decrease", "angular-momentum", "abrupt", -1),
@@ -83,13 +84,14 @@ def test_import_records_and_checks_the_row(study, tmp_path):
     base = {"format": FORMAT, "site_id": "s", "study": st.design.name, "manifest_sha256": st.manifest_sha256,
             "host": "jatos", "participant": "P01", "run_id": "r1", "run_started": "2026-01-05T10:00:00.000Z",
             "timestamp": "2026-01-05T10:00:01.000Z"}
-    start = dict(base, record="start", n_trials=len(trials), order=" ".join(t.stimulus for t in trials),
-                 block_order=blocks)
+    start, = as_site_writes(study, [dict(base, record="start", n_trials=len(trials), block_order=blocks,
+                                         order=" ".join(t.stimulus for t in trials))])
     f = tmp_path / "a.jsonl"
     f.write_text(json.dumps(start) + "\n")
     import_web(study, [f])
     assert pd.read_csv(study / "web" / "participants.csv").loc[0, "block_order"] == blocks
     bad = tmp_path / "b.jsonl"
-    bad.write_text(json.dumps(dict(start, run_id="r2", block_order=" ".join(reversed(blocks.split())))) + "\n")
+    bad.write_text(json.dumps(dict(start, run_id="r2", block_order=" ".join(reversed(start["block_order"].split()))))
+                   + "\n")
     with pytest.raises(WebImportError, match="is not P01's Latin-square row"):
         import_web(study, [bad])

@@ -21,10 +21,11 @@ from test_session_browser import CHROMIUM, TIMEOUT, page, pw  # noqa: F401 (fixt
 from test_web_browser import _config, _csv, _Host, _gate, _intro, _screen, _wait_screen, jspsych_dir  # noqa: F401
 from _kinds import INTERVAL_COLOUR_JS, colour_of, design_text, make_study, nearest
 from _screenshots import screenshot
+from _site_names import study_names
 
 from flipstudy.study.cli import main as cli
 from flipstudy.study.web.importer import import_web
-from flipstudy.study.web.order import web_trial_order
+from flipstudy.study.web.order import order_groups, web_trial_order
 from flipstudy.errors import SiteError
 from flipstudy.study.web.site import export_site, site_config
 from flipstudy.study.session import load_study
@@ -77,7 +78,12 @@ def test_2afc_site_session_import_analyze(page, tmp_path, jspsych_dir):  # noqa:
     site = tmp_path / "site"
     r = export_site(study, site, host="jatos", iti_ms=30, jspsych_dir=jspsych_dir)
     cfg = _config(site)
-    twin = web_trial_order(cfg["groups"], 2, cfg["design_seed"], PID)
+    site_twin = web_trial_order(cfg["groups"], 2, cfg["design_seed"], PID)      # in the site's opaque names
+    st = load_study(study)
+    twin = web_trial_order(order_groups(st.design, st.manifest), 2, cfg["design_seed"], PID)
+    names = study_names(study)
+    assert [(names[t.stimulus], names.get(t.original, ""), t.first) for t in site_twin] == \
+        [(t.stimulus, t.original, t.first) for t in twin]      # the same trials, named by the map
     assert r["n_trials"] == len(twin) == 2 * 2 + 2 * 2      # 2AFC: 25 and 50 (0 is the comparison)
     two = [t for t in twin if t.task == "2afc"]
     assert sorted(t.first for t in two) == ["modified", "modified", "original", "original"]
@@ -95,7 +101,7 @@ def test_2afc_site_session_import_analyze(page, tmp_path, jspsych_dir):  # noqa:
         _intro(page)
         state = page.evaluate("window.flipstudyState.trials")
         assert [(s["trial"], s["stimulus"], s.get("task", "yes-no"), s.get("first", ""), s.get("original", ""))
-                for s in state] == [(t.trial, t.stimulus, t.task, t.first, t.original) for t in twin]
+                for s in state] == [(t.trial, t.stimulus, t.task, t.first, t.original) for t in site_twin]
         for k, t in enumerate(twin, start=1):
             if k == 5:
                 page.reload()                                   # resume at trial 5

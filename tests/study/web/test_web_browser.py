@@ -48,6 +48,7 @@ from flipstudy.study.web.importer import import_web
 from flipstudy.study.web.order import web_trial_order
 from flipstudy.study.web.site import export_site
 from _screenshots import screenshot as _shot  # noqa: E402
+from _site_names import condition_words, site_name, study_names  # noqa: E402
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
                                 reason=f"needs Debian's chromium at {CHROMIUM} (apt-get install -y chromium)")
@@ -347,6 +348,8 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
         download = tmp_path / "download.jsonl"
         dl.value.save_as(download)
         assert host.ends, "the site did not end the JATOS study run"
+        kept = page.evaluate("() => JSON.stringify(Object.assign({}, window.localStorage))")
+        shown = page.get_attribute("#jspsych-target", "data-stimulus")
     assert blocked == []
     assert all(not p.startswith("/__") for p in host.paths)
 
@@ -355,6 +358,11 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
     lines = [json.loads(x) for x in jatos_file.read_text().splitlines()]
     assert [x["record"] for x in lines].count("start") == 1
     assert sorted(x["trial"] for x in lines if x["record"] == "answer") == list(range(1, 9))
+    # issue 42: what the browser keeps and sends names no stimulus, group, kind or level
+    words = condition_words(study)
+    assert not [w for w in words if w in kept or w in jatos_file.read_text() or w in shown]
+    assert not {"level", "kind", "clip"} & {k for x in lines for k in x}
+    assert {x["stimulus"] for x in lines if x["record"] == "answer"} <= set(study_names(study))
 
     # JATOS's results archive (Export results: one data.txt per component result)
     archive = tmp_path / "jatos_results.zip"
@@ -375,7 +383,8 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
     assert [r["response"] for r in rows] == RESP and [r["input"] for r in rows] == HOW
     assert {r["participant"] for r in rows} == {PID} and {r["source"] for r in rows} == {"web-jatos"}
     assert all(r["complete"] == "true" and r["simulated"] == "false" for r in rows)
-    assert [r["stimulus"] for r in rows] == [t.stimulus for t in twin]
+    names = study_names(study)                                 # the site's opaque names mapped back
+    assert [r["stimulus"] for r in rows] == [names[t.stimulus] for t in twin]
     fast = [r for r in rows if r["stimulus"] == FAST]
     slow = [r for r in rows if r["stimulus"] != FAST]
     assert len(fast) == 2 and all(r["playback_flagged"] == "true" for r in fast), fast
@@ -428,7 +437,7 @@ def test_flagged_trials_are_repeated_at_the_end(page, tmp_path, jspsych_dir):  #
     cfg = _config(site)
     assert cfg["max_dropped_pct"] == 20.0 and cfg["repeat_dropped"] is True
     twin = web_trial_order(cfg["groups"], 2, 7, PID)
-    fast = [t.trial for t in twin if t.stimulus == FAST]
+    fast = [t.trial for t in twin if t.stimulus == site_name(study, FAST)]
     assert len(fast) == 2
     again = {fast[0]: "incorrect", fast[1]: "incorrect"}        # the repeats' answers
     first = {t.trial: "correct" for t in twin}                  # every first answer: correct

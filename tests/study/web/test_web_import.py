@@ -17,6 +17,7 @@ from flipstudy.study.session import load_study, open_session, submit_answer
 from flipstudy.study.web.importer import import_web, read_records
 from flipstudy.study.web.order import order_groups, web_trial_order
 from flipstudy.study.web.site import FORMAT, site_config
+from _site_names import as_site_writes, nothing_imported
 
 
 @pytest.fixture
@@ -24,8 +25,10 @@ def study(tmp_path):
     return make_demo_study(tmp_path / "study", videos=False, levels=(0, 25), repetitions=2)
 
 
-def run_records(study_dir, pid, *, run="r1", n=None, host="jatos", responses=None, flag=()):
-    """The records a site run writes (start, demographics, answers, end)."""
+def run_records(study_dir, pid, *, run="r1", n=None, host="jatos", responses=None, flag=(), site_names=True):
+    """The records a site run writes (start, demographics, answers, end), in its opaque names
+    (``site_names=False``: in the study's names, to be changed and then given to
+    :func:`as_site_writes`)."""
     st = load_study(study_dir)
     trials = web_trial_order(order_groups(st.design, st.manifest), st.design.repetitions,
                              st.design.seed, pid)
@@ -48,7 +51,7 @@ def run_records(study_dir, pid, *, run="r1", n=None, host="jatos", responses=Non
                          max_dropped_pct=10.0, frames_seen=12))
     if n is None:
         recs.append(dict(base, record="end", answered=len(trials), n_trials=len(trials)))
-    return recs
+    return as_site_writes(study_dir, recs) if site_names else recs
 
 
 def jsonl(path, recs):
@@ -126,7 +129,10 @@ def test_a_second_run_is_a_second_session(study, tmp_path):
 
 @pytest.mark.parametrize("change, message", [
     (lambda r: r.update(response="maybe"), "response: must be one of correct, incorrect"),
-    (lambda r: r.update(stimulus="backflip_abrupt-decrease_99"), "trial 3: stimulus"),
+    (lambda r: r.update(stimulus="backflip_abrupt-decrease_25" if r["stimulus"] != "backflip_abrupt-decrease_25"
+                        else "backflip_abrupt-decrease_0"), "trial 3: stimulus"),
+    (lambda r: r.update(stimulus="backflip_abrupt-decrease_99"),    # not a stimulus: its name unknown to the map
+     r"stimulus '[0-9a-f]{16}' is not one of the opaque names in .*site-map.json"),
     (lambda r: r.update(rt_ms="fast"), "rt_ms: expected a number"),
     (lambda r: r.update(format="other/1"), "this flipstudy reads flipstudy-web/1"),
     (lambda r: r.update(manifest_sha256="0" * 64), "exported from other stimuli"),
@@ -135,13 +141,14 @@ def test_a_second_run_is_a_second_session(study, tmp_path):
     (lambda r: r.update(frames_dropped=3), "frames_dropped 3 is not frames_expected - frames_presented"),
 ])
 def test_a_malformed_row_is_refused_with_its_line_and_nothing_is_written(study, tmp_path, change, message):
-    recs = run_records(study, "W01")
+    recs = run_records(study, "W01", site_names=False)
     change(recs[4])                                        # trial 3: the file's line 5
+    recs = as_site_writes(study, recs)
     for f in (jsonl(tmp_path / "bad.jsonl", recs), pavlovia_csv(tmp_path / "bad.csv", recs)):
         with pytest.raises(WebImportError, match=message) as e:
             import_web(study, [f])
         assert f"{f}: line {5 if f.suffix == '.jsonl' else 6}:" in str(e.value)
-        assert not (study / "web").exists()
+        assert nothing_imported(study)
 
 
 def test_a_different_answer_to_an_imported_trial_is_kept_aside_never_overwritten(study, tmp_path):
@@ -251,11 +258,13 @@ def test_repeats_of_flagged_trials_are_kept_beside_the_first_answer(study, tmp_p
 # --- 2AFC records ------------------------------------------------------------------------------
 
 def _2afc_records(study_dir, pid):
-    """A 2AFC run's records: each answer carries task, first and original."""
+    """A 2AFC run's records, in the study's names (:func:`as_site_writes` gives the site's):
+    each answer carries task, first and original."""
     st = load_study(study_dir)
     trials = {t.trial: t for t in web_trial_order(order_groups(st.design, st.manifest),
                                                   st.design.repetitions, st.design.seed, pid)}
-    recs = run_records(study_dir, pid, responses={i: "first" if i % 2 else "second" for i in trials})
+    recs = run_records(study_dir, pid, responses={i: "first" if i % 2 else "second" for i in trials},
+                       site_names=False)
     for r in recs:
         if r["record"] == "answer" and trials[r["trial"]].task == "2afc":
             t = trials[r["trial"]]
@@ -264,6 +273,7 @@ def _2afc_records(study_dir, pid):
         elif r["record"] == "answer":
             r["response"] = "correct"
     return recs, trials
+
 
 
 @pytest.fixture
@@ -276,7 +286,7 @@ def study_2afc(tmp_path):
 
 def test_2afc_records_import_with_first_and_comparison(study_2afc, tmp_path):
     recs, trials = _2afc_records(study_2afc, "F01")
-    out = import_web(study_2afc, [jsonl(tmp_path / "f.jsonl", recs)])
+    out = import_web(study_2afc, [jsonl(tmp_path / "f.jsonl", as_site_writes(study_2afc, recs))])
     assert out["answers"] == len(trials) == 8
     got = rows(study_2afc)
     assert [(r["task"], r["first"], r["original_stimulus"], r["method"]) for r in got] == [
@@ -295,8 +305,8 @@ def test_a_2afc_record_that_does_not_fit_its_trial_is_refused(study_2afc, tmp_pa
     bad = next(r for r in recs if r["record"] == "answer" and r.get("task") == "2afc")
     change(bad)
     with pytest.raises(WebImportError, match=message):
-        import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", recs)])
-    assert not (study_2afc / "web").exists()
+        import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", as_site_writes(study_2afc, recs))])
+    assert nothing_imported(study_2afc)
 
 
 def test_a_yes_no_record_with_a_2afc_answer_is_refused(study_2afc, tmp_path):
@@ -304,7 +314,7 @@ def test_a_yes_no_record_with_a_2afc_answer_is_refused(study_2afc, tmp_path):
     bad = next(r for r in recs if r["record"] == "answer" and "task" not in r)
     bad["response"] = "first"
     with pytest.raises(WebImportError, match="response: must be one of correct, incorrect, got 'first'"):
-        import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", recs)])
+        import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", as_site_writes(study_2afc, recs))])
 
 
 def _add_styles(study_dir):

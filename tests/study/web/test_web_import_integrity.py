@@ -14,6 +14,7 @@ import zipfile
 import pytest
 
 from _prolific import web_records, write_jsonl
+from _site_names import nothing_imported
 
 from flipstudy.errors import WebImportError
 from flipstudy.study.cli import main as cli
@@ -102,7 +103,7 @@ def test_prolific_pid_must_be_the_participant_id(study, tmp_path):
     with pytest.raises(WebImportError, match=r"w.jsonl: line 1: PROLIFIC_PID 'SOMEONEELSE' is not the "
                                              r"participant ID 'FX1'"):
         import_web(study, [f])
-    assert not (study / "web").exists()
+    assert nothing_imported(study)
     ok = write_jsonl(tmp_path / "ok.jsonl", web_records(study, "FX1", PROLIFIC_PID="FX1"))
     assert import_web(study, [ok])["participants"] == 1
 
@@ -138,7 +139,7 @@ def test_a_string_from_the_browser_that_is_not_what_the_site_writes_is_refused(s
     recs[0][field] = value
     with pytest.raises(WebImportError, match=r"w.jsonl: line 1: " + message):
         import_web(study, [write_jsonl(tmp_path / "w.jsonl", recs)])
-    assert not (study / "web").exists()
+    assert nothing_imported(study)
 
 
 @pytest.mark.parametrize("site_id", [["s", "t"], {"s": 1}])
@@ -204,7 +205,7 @@ def test_the_total_of_one_import_is_bounded_across_zip_entries_and_files(study, 
     b.write_text(text("P2", "r2") + pad)
     with pytest.raises(WebImportError, match=r"b.jsonl: the files of one import hold more than"):
         import_web(study, [a, b])
-    assert not (study / "web").exists()
+    assert nothing_imported(study)
     assert import_web(study, [a])["participants"] == 1 and import_web(study, [b])["participants"] == 2
 
 
@@ -246,7 +247,7 @@ def test_a_zip_bomb_ends_in_one_line_within_1_gb(study, tmp_path):
     err = p.stderr.strip()
     assert "\n" not in err and "MemoryError" not in err and "Traceback" not in err
     assert "jatos_results.zip: the files of one import hold more than" in err
-    assert not (study / "web").exists()
+    assert nothing_imported(study)
 
 
 def test_runs_kept_out_at_import_are_counted_in_the_participant_flow(tmp_path):
