@@ -187,7 +187,8 @@ class Revealer:
     def __call__(self, where: str, rec: dict) -> dict:
         """``rec`` with every opaque name replaced by the stimulus or group it names, and an
         answer's ``level``, ``clip`` and ``kind`` from the manifest row of its stimulus."""
-        site = (self.sites or {}).get(rec.get("site_id"))
+        sid = rec.get("site_id")
+        site = (self.sites or {}).get(sid) if isinstance(sid, str) else None
         if isinstance(site, dict) and site.get("names") != "opaque":
             return rec
         m, out = self.map, dict(rec)
