@@ -58,3 +58,11 @@ def condition_words(study_dir):
     for r in st.manifest:
         words |= {r.stimulus} if r.group == REFERENCE_GROUP else {r.stimulus, r.group, r.kind, r.profile}
     return sorted(w for w in words if w)
+
+
+def nothing_imported(study_dir):
+    """Nothing in ``STUDY/web`` but the site map (written by whoever made the records, as
+    export-web does): no table, no kept file, no ledger."""
+    from pathlib import Path
+    web = Path(study_dir) / "web"
+    return not web.exists() or sorted(p.name for p in web.iterdir()) == ["site-map.json"]

@@ -17,7 +17,7 @@ from flipstudy.study.session import load_study, open_session, submit_answer
 from flipstudy.study.web.importer import import_web, read_records
 from flipstudy.study.web.order import order_groups, web_trial_order
 from flipstudy.study.web.site import FORMAT, site_config
-from _site_names import as_site_writes
+from _site_names import as_site_writes, nothing_imported
 
 
 @pytest.fixture
@@ -148,7 +148,7 @@ def test_a_malformed_row_is_refused_with_its_line_and_nothing_is_written(study, 
         with pytest.raises(WebImportError, match=message) as e:
             import_web(study, [f])
         assert f"{f}: line {5 if f.suffix == '.jsonl' else 6}:" in str(e.value)
-        assert _nothing_imported(study)
+        assert nothing_imported(study)
 
 
 def test_a_different_answer_to_an_imported_trial_is_refused(study, tmp_path):
@@ -270,10 +270,6 @@ def _2afc_records(study_dir, pid):
     return recs, trials
 
 
-def _nothing_imported(study):
-    """Nothing but the site map (the records' names) in STUDY/web: no table, no kept file."""
-    return sorted(p.name for p in (study / "web").iterdir()) == ["site-map.json"]
-
 
 @pytest.fixture
 def study_2afc(tmp_path):
@@ -305,7 +301,7 @@ def test_a_2afc_record_that_does_not_fit_its_trial_is_refused(study_2afc, tmp_pa
     change(bad)
     with pytest.raises(WebImportError, match=message):
         import_web(study_2afc, [jsonl(tmp_path / "bad.jsonl", as_site_writes(study_2afc, recs))])
-    assert _nothing_imported(study_2afc)
+    assert nothing_imported(study_2afc)
 
 
 def test_a_yes_no_record_with_a_2afc_answer_is_refused(study_2afc, tmp_path):
