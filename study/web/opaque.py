@@ -203,7 +203,8 @@ class Revealer:
             words("condition", GROUP)
         if rec.get("record") == "start":
             words("order", STIMULUS)
-            words("block_order", GROUP)
+            if self.study.design.online.block_order == "latin-square":
+                words("block_order", GROUP)
         elif rec.get("record") == "answer":
             words("group", GROUP)
             words("original", STIMULUS)
