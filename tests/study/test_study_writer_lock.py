@@ -16,6 +16,7 @@ import pytest
 
 from _prolific import web_records, write_jsonl
 from _study_lock import held_elsewhere, run_together
+from _site_names import nothing_imported
 
 from flipstudy.errors import StudyInUse
 from flipstudy.study import pipeline, store
@@ -59,7 +60,7 @@ def test_import_web_waits_for_the_writer_of_the_study(study, tmp_path, capsys, w
     f = write_jsonl(tmp_path / "w.jsonl", web_records(study, "W01"))
     with held_elsewhere(study) as pid:
         refused(capsys, ["import-web", study, f], pid)
-    assert not (study / "web").exists() and not (study / ".locks").exists()
+    assert nothing_imported(study) and not (study / ".locks").exists()
     assert cli(["import-web", str(study), str(f)]) == 0                  # free again
 
 
