@@ -28,10 +28,11 @@ import numpy as np
 from flipstudy.stimuli.body import Body
 from flipstudy.errors import FlipstudyValueError
 from flipstudy.stimuli.motion.clip import Clip
-from flipstudy.stimuli.physics import center_of_mass
 
-from .camera import UP, Camera, fit_camera, recentre, view_basis
+from .camera import Camera, fit_camera, recentre, view_basis
 from .geometry import body_points
+from .placement import (align_takeoff, base_clip_groups, jump_direction,  # noqa: F401
+                        nearest_axis, orient_yaws, place, takeoff_com, translate, travel_direction)
 from .style import DEFAULT_STYLE, Style
 
 
@@ -248,232 +249,6 @@ class Stage:
                 "takeoffs": list(self.takeoffs), "landings": list(self.landings)}
 
 
-def translate(clip: Clip, offset) -> Clip:
-    """The clip moved by ``offset`` (3,) metres.
-
-    Parameters
-    ----------
-    clip : Clip
-    offset : array_like, shape (3,)
-        Metres.
-
-    Returns
-    -------
-    Clip
-
-    Examples
-    --------
-    >>> from flipstudy import builtin
-    >>> from flipstudy.render import translate
-    >>> clip = builtin("jump")
-    >>> moved = translate(clip, (1.0, 0.0, 0.0))
-    >>> (moved.joint_positions() - clip.joint_positions())[0, 0].round(6).tolist()
-    [1.0, 0.0, 0.0]
-    """
-    o = np.asarray(offset, float)
-    if not np.any(o):
-        return clip
-    return clip.replace(root_pos=clip.root_pos + o)
-
-
-def place(clip: Clip, offset, yaw_deg: float = 0.0) -> Clip:
-    """The clip moved by ``offset`` (3,), then turned by ``yaw_deg`` degrees
-    about the vertical axis through the origin (the study's take-off spot).
-
-    Parameters
-    ----------
-    clip : Clip
-    offset : array_like, shape (3,)
-        Metres.
-    yaw_deg : float
-        Degrees about the vertical axis through the origin.
-
-    Returns
-    -------
-    Clip
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from flipstudy import builtin
-    >>> from flipstudy.render import place
-    >>> clip = builtin("jump")
-    >>> turned = place(clip, (0.0, 0.0, 0.0), 90.0)
-    >>> P, Q = clip.joint_positions(), turned.joint_positions()
-    >>> bool(np.allclose(P[..., 1], Q[..., 1]))                     # heights kept
-    True
-    >>> bool(np.allclose(np.hypot(P[..., 0], P[..., 2]), np.hypot(Q[..., 0], Q[..., 2])))
-    True
-    """
-    clip = translate(clip, offset)
-    if yaw_deg:
-        from scipy.spatial.transform import Rotation
-
-        from flipstudy.stimuli.edit.reposition import rotate
-        clip = rotate(clip, Rotation.from_rotvec([0.0, np.radians(yaw_deg), 0.0]), np.zeros(3))
-    return clip
-
-
-def takeoff_com(clip: Clip, body: Body, takeoff: int | None) -> np.ndarray:
-    """COM of the take-off spot: the last frame on the ground, ``takeoff − 1``
-    (``takeoff`` is the first airborne frame); frame 0 without a flight."""
-    f = 0 if takeoff is None else int(np.clip(takeoff - 1, 0, clip.num_frames - 1))
-    return center_of_mass(clip.slice(f, f + 1), body)[0]
-
-
-def align_takeoff(clips, takeoffs, bodies=None) -> tuple[list, np.ndarray]:
-    """Clips moved horizontally so each take-off COM (:func:`takeoff_com`) is at
-    x = z = 0 (heights are kept: the ground stays at its level).  Returns
-    (clips, offsets (K,3)).
-
-    Parameters
-    ----------
-    clips : list of Clip
-    takeoffs : list of int or None
-        Each clip's first airborne frame.
-    bodies : list of Body, optional
-        Default: each clip's ``Body.from_clip``.
-
-    Returns
-    -------
-    clips : list of Clip
-    offsets : ndarray, shape (K, 3)
-
-    Examples
-    --------
-    >>> from flipstudy import Body, analyse, builtin
-    >>> clip = builtin("jump")
-    >>> a = analyse(clip)
-    >>> from flipstudy.render import align_takeoff
-    >>> moved, offsets = align_takeoff([clip], [a.takeoff])
-    >>> offsets.shape, float(offsets[0, 1])              # heights are kept
-    ((1, 3), 0.0)
-    """
-    bodies = bodies or [Body.from_clip(c) for c in clips]
-    out, offs = [], []
-    for c, t, b in zip(clips, takeoffs, bodies):
-        com = takeoff_com(c, b, t)
-        o = np.array([-com[0], 0.0, -com[2]])
-        out.append(translate(c, o))
-        offs.append(o)
-    return out, np.array(offs).reshape(-1, 3)
-
-
-def travel_direction(clip: Clip, body: Body, takeoff: int | None, landing: int | None,
-                     tiny: float = 0.05) -> np.ndarray | None:
-    """Horizontal unit direction of the COM's travel from take-off to landing,
-    or ``None`` when it travels less than ``tiny`` metres or has no flight."""
-    if takeoff is None or landing is None:
-        return None
-    com = center_of_mass(clip.slice(int(takeoff), int(landing) + 1), body)
-    d = com[-1] - com[0]
-    d[1] = 0.0
-    n = np.linalg.norm(d)
-    return d / n if n >= tiny else None
-
-
-def jump_direction(clip: Clip, body: Body, takeoff: int | None, landing: int | None,
-                   tiny: float = 0.05) -> np.ndarray:
-    """Horizontal unit direction of the COM's travel from take-off to landing;
-    +Z when the travel is under ``tiny`` metres or there is no flight.
-
-    Parameters
-    ----------
-    clip : Clip
-    body : Body
-    takeoff, landing : int or None
-        The flight's frames (None: no flight).
-    tiny : float
-        Metres of travel below which the direction is +Z.
-
-    Returns
-    -------
-    ndarray, shape (3,)
-        A horizontal unit vector.
-
-    Examples
-    --------
-    >>> from flipstudy import Body, analyse, builtin
-    >>> clip = builtin("jump")
-    >>> a = analyse(clip)
-    >>> from flipstudy.render import jump_direction
-    >>> d = jump_direction(clip, a.body, a.takeoff, a.landing)
-    >>> round(float(d @ d), 6), float(d[1])
-    (1.0, 0.0)
-    """
-    d = travel_direction(clip, body, takeoff, landing, tiny)
-    return np.array([0.0, 0.0, 1.0]) if d is None else d
-
-
-def _prefix_key(clip: Clip, takeoff: int | None) -> str:
-    """Identity of a clip's motion before take-off (its first ``takeoff``
-    frames): stimuli made from one base clip by editing the flight share it."""
-    import hashlib
-    n = clip.num_frames if takeoff is None else max(1, int(takeoff))
-    h = hashlib.sha256()
-    h.update(str((n, clip.skeleton.joint_names)).encode())
-    for a in (clip.skeleton.offsets, clip.root_pos[:n], clip.rotations[:n]):
-        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
-    return h.hexdigest()
-
-
-def nearest_axis(direction) -> np.ndarray:
-    """The horizontal axis (±X or ±Z) nearest to ``direction``.
-
-    >>> nearest_axis([0.3, 0.0, -0.9]).tolist()
-    [0.0, 0.0, -1.0]
-    """
-    axes = np.array([(1.0, 0, 0), (-1.0, 0, 0), (0, 0, 1.0), (0, 0, -1.0)])
-    return axes[int(np.argmax(axes @ np.asarray(direction, float)))].copy()
-
-
-def orient_yaws(clips, bodies, takeoffs, landings, direction) -> list[float]:
-    """Degrees to turn each clip about the vertical so that it travels along
-    ``direction``.  Clips with the same motion before take-off (one base clip
-    and its edits) get one angle, from the first of them, so they stay
-    identical before take-off; clips that hardly travel are not turned.
-
-    Parameters
-    ----------
-    clips, bodies : list
-        The clips and their bodies.
-    takeoffs, landings : list of int or None
-    direction : array_like, shape (3,)
-        The horizontal direction to travel along.
-
-    Returns
-    -------
-    list of float
-        Degrees, one per clip.
-
-    Examples
-    --------
-    >>> from flipstudy import Body, analyse, builtin
-    >>> clip = builtin("jump")
-    >>> a = analyse(clip)
-    >>> from flipstudy.render import orient_yaws
-    >>> yaws = orient_yaws([clip, clip], [a.body, a.body], [a.takeoff] * 2, [a.landing] * 2, (0, 0, 1))
-    >>> len(yaws), yaws[0] == yaws[1]                   # the same motion: one angle
-    (2, True)
-    """
-    target = np.asarray(direction, float)
-    yaw_of: dict = {}
-    out = []
-    for c, b, t0, t1 in zip(clips, bodies, takeoffs, landings):
-        key = _prefix_key(c, t0)
-        if key not in yaw_of:
-            d = travel_direction(c, b, t0, t1)
-            if d is None:
-                yaw_of[key] = 0.0
-            else:
-                ang = float(np.degrees(np.arctan2(np.cross(d, target) @ UP, d @ target)))
-                # a half turn is +180 whatever the sign of a zero cross product (arctan2
-                # gives -180 for -0.0): the same rotation, one spelling in render.json
-                yaw_of[key] = ang + 360.0 if ang <= -180.0 + 1e-9 else ang
-        out.append(yaw_of[key])
-    return out
-
-
 #: Degrees :func:`stage` turns the clips about the vertical beyond travelling along
 #: the ground axis the camera looks across: the travel then goes that much away from
 #: the camera, and the camera sees the motion three-quarter.  Square to the side of a
@@ -508,28 +283,6 @@ def _extremes(points: np.ndarray, basis: np.ndarray) -> np.ndarray:
     return np.take_along_axis(points, idx[..., None], axis=1)
 
 
-def base_clip_groups(clips, takeoffs, names=None) -> dict:
-    """Indices of ``clips`` grouped by base clip: by ``names`` (one per clip,
-    e.g. the manifest's ``clip`` column) where given and not empty, else by the
-    motion before take-off (stimuli made from one base clip by editing the
-    flight share it).  Returns ``{key: [indices]}`` in first-seen order.
-
-    Examples
-    --------
-    >>> from flipstudy import builtin
-    >>> a, b = builtin("backflip"), builtin("frontflip")
-    >>> list(base_clip_groups([a, b, a], [157, 157, 157]).values())
-    [[0, 2], [1]]
-    >>> base_clip_groups([a, b], [157, 157], names=["x", "x"])
-    {'x': [0, 1]}
-    """
-    out: dict = {}
-    for k, (c, t) in enumerate(zip(clips, takeoffs)):
-        name = names[k] if names is not None else None
-        out.setdefault(name or _prefix_key(c, t), []).append(k)
-    return out
-
-
 def _bodies_for(clips, bodies):
     if bodies is not None:
         return list(bodies)
@@ -549,6 +302,42 @@ def _placed_boxes(boxes, clip: Clip, placed: Clip) -> list:
         return []
     o = placed.root_pos[0] - clip.root_pos[0]
     return [(np.asarray(lo, float) + o, np.asarray(hi, float) + o) for lo, hi in boxes]
+
+
+def _flight_frames(clips, bodies, takeoffs, landings) -> tuple[list, list]:
+    """Each clip's take-off and landing frame (int or None): as given, else what
+    :func:`flipstudy.stimuli.analyse` finds."""
+    if takeoffs is None or landings is None:
+        from flipstudy.stimuli import analyse
+        found = [analyse(c, body=b, estimate=False) for c, b in zip(clips, bodies)]
+        takeoffs = [a.takeoff for a in found] if takeoffs is None else takeoffs
+        landings = [a.landing for a in found] if landings is None else landings
+    return ([None if t is None else int(t) for t in takeoffs],
+            [None if t is None else int(t) for t in landings])
+
+
+def _oriented(placed, bodies, takeoffs, landings, direction, *, orient: bool, boxes,
+              turn: float | None) -> tuple[list, list, np.ndarray]:
+    """The step of :func:`stage` that turns the placed clips: (clips, yaws in degrees,
+    the horizontal direction the camera looks across)."""
+    auto = direction is None
+    if direction is None:
+        direction = jump_direction(placed[0], bodies[0], takeoffs[0], landings[0])
+    direction = np.asarray(direction, float)
+    if auto and orient and not boxes:
+        # travel along a ground axis, so the camera looks square at the (axis-aligned)
+        # ground and its far edge, the horizon, is level (issue 33: 87_03 travels diagonally)
+        direction = nearest_axis(direction)
+    yaws = [0.0] * len(placed)
+    if orient:
+        yaws = orient_yaws(placed, bodies, takeoffs, landings, direction)
+        if auto and not boxes:
+            turn = THREE_QUARTER_DEG if turn is None else float(turn)
+            if not np.isfinite(turn):
+                raise FlipstudyValueError(f"stage: turn must be a finite number of degrees, got {turn}")
+            yaws = [_half_open(y + turn) for y in yaws]
+        placed = [place(c, np.zeros(3), y) for c, y in zip(placed, yaws)]
+    return placed, yaws, direction
 
 
 def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | None = None,
@@ -627,13 +416,7 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
     style = style or DEFAULT_STYLE
     margin = style.frame_margin if margin is None else float(margin)
     bodies = _bodies_for(clips, bodies)
-    if takeoffs is None or landings is None:
-        from flipstudy.stimuli import analyse
-        found = [analyse(c, body=b, estimate=False) for c, b in zip(clips, bodies)]
-        takeoffs = [a.takeoff for a in found] if takeoffs is None else takeoffs
-        landings = [a.landing for a in found] if landings is None else landings
-    takeoffs = [None if t is None else int(t) for t in takeoffs]
-    landings = [None if t is None else int(t) for t in landings]
+    takeoffs, landings = _flight_frames(clips, bodies, takeoffs, landings)
     common = dict(bodies=bodies, takeoffs=takeoffs, landings=landings, size=size, style=style,
                   ground=ground_bounds)
     if camera is not None:
@@ -642,23 +425,8 @@ def stage(clips, takeoffs=None, landings=None, *, bodies=None, camera: Camera | 
         placed, offsets = align_takeoff(clips, takeoffs, bodies)
     else:
         placed, offsets = clips, np.zeros((len(clips), 3))
-    auto = direction is None
-    if direction is None:
-        direction = jump_direction(placed[0], bodies[0], takeoffs[0], landings[0])
-    direction = np.asarray(direction, float)
-    if auto and orient and not boxes:
-        # travel along a ground axis, so the camera looks square at the (axis-aligned)
-        # ground and its far edge, the horizon, is level (issue 33: 87_03 travels diagonally)
-        direction = nearest_axis(direction)
-    yaws = [0.0] * len(placed)
-    if orient:
-        yaws = orient_yaws(placed, bodies, takeoffs, landings, direction)
-        if auto and not boxes:
-            turn = THREE_QUARTER_DEG if turn is None else float(turn)
-            if not np.isfinite(turn):
-                raise FlipstudyValueError(f"stage: turn must be a finite number of degrees, got {turn}")
-            yaws = [_half_open(y + turn) for y in yaws]
-        placed = [place(c, np.zeros(3), y) for c, y in zip(placed, yaws)]
+    placed, yaws, direction = _oriented(placed, bodies, takeoffs, landings, direction,
+                                        orient=orient, boxes=boxes, turn=turn)
     if boxes and yaws[0]:
         raise FlipstudyValueError(f"stage: boxes are axis-aligned and the first clip is turned by "
                                   f"{yaws[0]:.1f}° to travel along direction; place them yourself "

@@ -18,7 +18,6 @@ MAX_FUNCTION_LINES = 100
 MODULES_BEING_MOVED = {
     "stimuli/design.py",
     "stimuli/contract.py",
-    "render/staging.py",
     "render/figures.py",
     "analysis/stats.py",
 }
@@ -27,7 +26,6 @@ FUNCTIONS_BEING_SPLIT = {
     "analysis/core.py:summarize",
     "analysis/stats.py:gee_levels",
     "render/antialias.py:fxaa",
-    "render/staging.py:stage",
     "stimuli/edit/concat/feet.py:pin_feet",
     "stimuli/edit/concat/method.py:concatenate",
     "stimuli/edit/join.py:join_in_flight",
