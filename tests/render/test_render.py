@@ -663,7 +663,8 @@ def test_builtin_backflip_renders():
 
 def test_labels_and_legend_without_a_font_file(monkeypatch):
     import flipstudy.render.figures as fg
-    monkeypatch.setattr(fg, "find_font", lambda: None)       # VTK's built-in font instead
+    import flipstudy.render.strips as strips
+    monkeypatch.setattr(strips, "find_font", lambda: None)   # VTK's built-in font instead
     clip, t0, t1 = jumper(flip=3.0)
     st = Style(anti_aliasing="none", ground=False, background="#ffffff")
     img = fg.trail_image(stage([clip], [t0], [t1], size=(320, 240), style=st), None,
