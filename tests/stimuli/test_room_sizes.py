@@ -18,12 +18,10 @@ MAX_FUNCTION_LINES = 100
 MODULES_BEING_MOVED = {
     "stimuli/design.py",
     "stimuli/contract.py",
-    "analysis/stats.py",
 }
 #: functions over the limit still to be split into named steps ("path:qualified name")
 FUNCTIONS_BEING_SPLIT = {
     "analysis/core.py:summarize",
-    "analysis/stats.py:gee_levels",
     "render/antialias.py:fxaa",
     "stimuli/edit/concat/feet.py:pin_feet",
     "stimuli/edit/concat/method.py:concatenate",
