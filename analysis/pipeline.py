@@ -210,6 +210,37 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
     ['group', 'level', 'n', 'n_incorrect', 'n_participants']
     """
     correction = normalise_correction(correction)
+    df, who, report = _select(responses, exclusions, kept_out, include_simulated, include_incomplete)
+    label = participants_label(who)
+    tasks = has_tasks(df)
+    table, participants, notes, yes_no = _describe(df, tasks, correction, n_boot, seed, ci)
+    _participant_notes(notes, who, label, report)
+    table, g = _gee_step(table, yes_no, df, notes, gee=gee, tasks=tasks, ci=ci)
+    fits, thresholds = _fit_step(df, notes, tasks=tasks, psychometric=psychometric, ci=ci, seed=seed)
+    per_participant, per_group = (_participant_threshold_step(df, fits, quest_specs, notes) if tasks
+                                  else (None, None))
+    kinds = _kinds_step(df, notes)
+    paper = paper_layout(table, kinds=kinds) if len(table) else pd.DataFrame(columns=["group"])
+    result = Result(table=table, participants=participants, gee=g, thresholds=thresholds, fits=fits,
+                    paper=paper, notes=notes, participant_thresholds=per_participant,
+                    group_thresholds=per_group, kinds=kinds, exclusions=report,
+                    settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
+                              "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
+                              "n_participants": int(df["participant"].nunique()),
+                              "participants": who, "participants_label": label,
+                              "n_trials": int((~df["shared_copy"]).sum()),
+                              "groups": (group_order(df["group"].unique()) if tasks
+                                         else list(dict.fromkeys(table["group"])))})
+    if out_dir is not None:
+        _write(result, Path(out_dir), images, tasks=tasks, gee=gee, figures=figures, ci=ci)
+    return result
+
+
+# the named steps of :func:`analyze`, in its order; each appends its notes to ``notes``
+
+def _select(responses, exclusions, kept_out, include_simulated: bool, include_incomplete: bool):
+    """The trials to analyse: (df, who, exclusion report or None); raises
+    :class:`ResponsesError` when none is left."""
     df = load_responses(responses, catch_groups=(exclusions or {}).get("catch_groups", ()))
     report = None
     if exclusions is not None:
@@ -234,8 +265,11 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                        f"(--include-incomplete)")
         raise ResponsesError(f"{responses if not isinstance(responses, pd.DataFrame) else 'responses'}: "
                              f"no trials to analyse: " + "; ".join(why or ["no participants"]))
-    label = participants_label(who)
-    tasks = has_tasks(df)
+    return df, who, report
+
+
+def _describe(df: pd.DataFrame, tasks: bool, correction: str, n_boot: int, seed, ci: float):
+    """Ratings and d′ per group and level: (table, participants, notes, the yes/no trials)."""
     if tasks:
         table, participants, notes = summarize_tasks(df, correction, n_boot, seed, ci)
         yes_no = split(df)[0]
@@ -257,7 +291,11 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
         notes.append("Shared original: the groups " + ", ".join(group_order(shared)) + " share one "
                      "original per base clip (shown `repetitions` times); its answers are the "
                      "level-0 cell of each of them, and their d′ are computed against it.")
+    return table, participants, notes, yes_no
 
+
+def _participant_notes(notes: list, who: dict, label: str, report) -> None:
+    """The notes on who was analysed, put first."""
     notes.insert(0, "Participants: " + label + "."
                  + (f" Simulated participants left out: {', '.join(who['simulated_left_out'])}."
                     if who["simulated_left_out"] else "")
@@ -276,23 +314,30 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
                         f"{MIN_PARTICIPANTS}), the intervals over participants (bootstrap), the GEE "
                         f"tests (participants as clusters) and the thresholds are not meaningful: "
                         f"read them as descriptions of these answers only.")
-    if gee and len(yes_no):
-        g = gee_levels(yes_no, ci=ci)
-        table = table.merge(g, on=["group", "level"], how="left")
-        notes.append("Each level against its group's original: GEE logistic model of P(incorrect) on "
-                     "level as a category (reference: level 0), Binomial family, exchangeable "
-                     "working correlation, participants as clusters, bias-reduced (Mancl–DeRouen) "
-                     "sandwich covariance; odds ratios with 95 % Wald CIs, p values Holm-adjusted "
-                     "over all levels of all groups in gee_p_holm.")
-        for msg in sorted(set(m for m in g["gee_note"] if m)):
-            notes.append("GEE: " + msg)
-        if tasks and len(yes_no) < len(df):
-            notes.append("GEE: yes/no constant-stimuli groups only (a 2AFC group has no level-0 cell; "
-                         "QUEST+ levels are chosen by the procedure).")
-    else:
-        g = pd.DataFrame(columns=["group", "level", "gee_or", "gee_ci_low", "gee_ci_high", "gee_p",
-                                  "gee_p_holm", "gee_note"])
 
+
+def _gee_step(table, yes_no, df, notes: list, *, gee: bool, tasks: bool, ci: float):
+    """Each level against its original: (table with the GEE columns, the GEE frame)."""
+    if not (gee and len(yes_no)):
+        return table, pd.DataFrame(columns=["group", "level", "gee_or", "gee_ci_low", "gee_ci_high",
+                                            "gee_p", "gee_p_holm", "gee_note"])
+    g = gee_levels(yes_no, ci=ci)
+    table = table.merge(g, on=["group", "level"], how="left")
+    notes.append("Each level against its group's original: GEE logistic model of P(incorrect) on "
+                 "level as a category (reference: level 0), Binomial family, exchangeable "
+                 "working correlation, participants as clusters, bias-reduced (Mancl–DeRouen) "
+                 "sandwich covariance; odds ratios with 95 % Wald CIs, p values Holm-adjusted "
+                 "over all levels of all groups in gee_p_holm.")
+    for msg in sorted(set(m for m in g["gee_note"] if m)):
+        notes.append("GEE: " + msg)
+    if tasks and len(yes_no) < len(df):
+        notes.append("GEE: yes/no constant-stimuli groups only (a 2AFC group has no level-0 cell; "
+                     "QUEST+ levels are chosen by the procedure).")
+    return table, g
+
+
+def _fit_step(df, notes: list, *, tasks: bool, psychometric: str, ci: float, seed):
+    """A psychometric function per group: (fits, thresholds frame)."""
     if tasks:
         fits, fit_notes = fit_tasks(df, psychometric, ci, seed)
         thresholds = thresholds_frame(fits)
@@ -313,110 +358,119 @@ def analyze(responses, out_dir=None, *, correction: str = "loglinear", images=No
             if not f.reached:
                 why = next((p for p in f.note.split("; ") if p.startswith("not reached")), "not reached")
                 notes.append(f"{f.group}: threshold {why}")
+    return fits, thresholds
 
-    per_participant = per_group = None
-    if tasks:
-        per_participant, t_notes = participant_thresholds(df, quest_specs)
-        per_group = group_thresholds(per_participant, fits)
-        notes += t_notes
-        notes.append("Per-participant thresholds (thresholds_participants.csv): each participant's "
-                     "answers to a group replayed through that group's QUEST+ model (the psychometric "
-                     "function above on a grid of m, width and γ; 2AFC: γ = ½; λ fixed), x* = "
-                     "posterior mean with its 95 % equal-tailed posterior interval, the same definition "
-                     "for adaptive and constant groups; thresholds_groups.csv: their distribution "
-                     "per group beside the pooled psignifit x*.")
+
+def _participant_threshold_step(df, fits, quest_specs, notes: list):
+    """Per-participant thresholds of answers with tasks: (per participant, per group)."""
+    per_participant, t_notes = participant_thresholds(df, quest_specs)
+    per_group = group_thresholds(per_participant, fits)
+    notes += t_notes
+    notes.append("Per-participant thresholds (thresholds_participants.csv): each participant's "
+                 "answers to a group replayed through that group's QUEST+ model (the psychometric "
+                 "function above on a grid of m, width and γ; 2AFC: γ = ½; λ fixed), x* = "
+                 "posterior mean with its 95 % equal-tailed posterior interval, the same definition "
+                 "for adaptive and constant groups; thresholds_groups.csv: their distribution "
+                 "per group beside the pooled psignifit x*.")
+    return per_participant, per_group
+
+
+def _kinds_step(df, notes: list) -> dict:
+    """group → error kind, with the note on pose-rate groups."""
     kinds = group_kinds(df)
     if any(is_pose_rate(k) for k in kinds.values()):
         notes.append("Pose-rate groups (" + ", ".join(g for g in group_order(kinds) if is_pose_rate(kinds[g]))
                      + "): levels are poses per second N (0: the original motion); their psychometric "
                      "function and threshold x* are against the time each pose is held, 1000/N ms "
                      "(the original at 0 ms), so x* in ms is N* = 1000/x* poses per second.")
-    paper = paper_layout(table, kinds=kinds) if len(table) else pd.DataFrame(columns=["group"])
-    result = Result(table=table, participants=participants, gee=g, thresholds=thresholds, fits=fits,
-                    paper=paper, notes=notes, participant_thresholds=per_participant,
-                    group_thresholds=per_group, kinds=kinds, exclusions=report,
-                    settings={"correction": correction, "correction_text": CORRECTION_TEXT[correction],
-                              "n_boot": n_boot, "seed": seed, "ci": ci, "psychometric": psychometric,
-                              "n_participants": int(df["participant"].nunique()),
-                              "participants": who, "participants_label": label,
-                              "n_trials": int((~df["shared_copy"]).sum()),
-                              "groups": (group_order(df["group"].unique()) if tasks
-                                         else list(dict.fromkeys(table["group"])))})
-    if out_dir is None:
-        return result
-    out = Path(out_dir)
+    return kinds
+
+
+def _write(result: Result, out: Path, images, *, tasks: bool, gee: bool, figures: bool, ci: float) -> None:
+    """Every file of ``result`` in ``out``: tables, figures, ``notes.md`` and ``summary.json``."""
     out.mkdir(parents=True, exist_ok=True)
+    _write_tables(result, out, tasks=tasks, gee=gee)
+    if figures:
+        _write_figures(result, out, images, tasks=tasks, ci=ci)
     files = result.files
+    files["notes.md"] = out / "notes.md"
+    files["summary.json"] = out / "summary.json"
+    files["notes.md"].write_text(_notes_md(result), encoding="utf-8")
+    files["summary.json"].write_text(json.dumps(result.to_dict(), indent=2, ensure_ascii=False) + "\n",
+                                     encoding="utf-8")
+
+
+def _write_tables(result: Result, out: Path, *, tasks: bool, gee: bool) -> None:
+    """The tables of ``result`` as CSV, Markdown and LaTeX files in ``out`` (into ``result.files``)."""
+    files, table, report = result.files, result.table, result.exclusions
+    correction, label = result.settings["correction"], result.settings["participants_label"]
     files["table.csv"] = out / "table.csv"
     table.to_csv(files["table.csv"], index=False)
     files["table_paper.csv"] = out / "table_paper.csv"
-    paper.to_csv(files["table_paper.csv"], index=False)
+    result.paper.to_csv(files["table_paper.csv"], index=False)
     caption = PAPER_CAPTION + f" Correction for rates of 0 or 1: {correction}. {label}."
     if tasks and (table["task"] == "2afc").any():
         caption += " 2AFC groups: percent correct choices (d′ = √2·z(P correct))."
     if len(table):
         files["table_paper.md"] = out / "table_paper.md"
-        files["table_paper.md"].write_text(to_markdown(table, caption, kinds), encoding="utf-8")
+        files["table_paper.md"].write_text(to_markdown(table, caption, result.kinds), encoding="utf-8")
         files["table_paper.tex"] = out / "table_paper.tex"
-        files["table_paper.tex"].write_text(to_latex(table, caption, kinds=kinds), encoding="utf-8")
+        files["table_paper.tex"].write_text(to_latex(table, caption, kinds=result.kinds), encoding="utf-8")
     files["participants.csv"] = out / "participants.csv"
-    participants.to_csv(files["participants.csv"], index=False)
+    result.participants.to_csv(files["participants.csv"], index=False)
     if report is not None:
         rows = report.answers()                            # the answers as given, once each
         for name, frame in (("flow.csv", report.flow), ("exclusions_participants.csv", report.participants),
                             ("responses_exclusions.csv", rows)):
             files[name] = out / name
             frame.to_csv(files[name], index=False)
-    if gee and len(g):
+    if gee and len(result.gee):
         files["levels_vs_original.csv"] = out / "levels_vs_original.csv"
-        g.to_csv(files["levels_vs_original.csv"], index=False)
-    if fits:
+        result.gee.to_csv(files["levels_vs_original.csv"], index=False)
+    if result.fits:
         files["thresholds.csv"] = out / "thresholds.csv"
-        thresholds.to_csv(files["thresholds.csv"], index=False)
-    if per_participant is not None:
-        for name, frame in (("thresholds_participants.csv", per_participant),
-                            ("thresholds_groups.csv", per_group)):
+        result.thresholds.to_csv(files["thresholds.csv"], index=False)
+    if result.participant_thresholds is not None:
+        for name, frame in (("thresholds_participants.csv", result.participant_thresholds),
+                            ("thresholds_groups.csv", result.group_thresholds)):
             files[name] = out / name
             frame.to_csv(files[name], index=False)
 
-    if figures:
-        from .figures import (dprime_figure, psychometric_figure, ratings_figure, save, sheet_figure,
-                              thresholds_figure)
-        ci_label = f"{ci:.0%} CI"
-        yn_table = table[table["task"] == "yes-no"] if tasks else table
-        yn_fits = [f for f in fits if getattr(f, "task", "yes-no") == "yes-no"]
-        afc_fits = [f for f in fits if getattr(f, "task", "yes-no") == "2afc"]
-        figs = []
-        if len(yn_table):
-            figs.append(("ratings", ratings_figure(yn_table, ci_label, kinds)))
-        if len(table):
-            figs.append(("dprime", dprime_figure(table, ci_label, kinds)))
-        if yn_fits:
-            figs.append(("psychometric", psychometric_figure(yn_fits, yn_table, "psignifit 4 (Bayesian, MAP)")))
-        if afc_fits:
-            figs.append(("psychometric_2afc", psychometric_figure(
-                afc_fits, table[table["task"] == "2afc"], "psignifit 4, 2AFC (γ = ½)",
-                ylabel="P(original chosen)")))
-        if per_participant is not None and len(per_participant):
-            figs.append(("thresholds_participants", thresholds_figure(per_participant, per_group)))
-        if report is not None:
-            from .exclusions import flow_figure
-            figs.append(("flow", flow_figure(report.flow)))
-        for name, fig in figs:
-            for p in save(_labelled(fig, label), out / name):
-                files[p.name] = p
-        imgs = _normalise_images(images)
-        fig, sheet_notes = sheet_figure(yn_fits, yn_table if len(yn_table) else table, imgs)
-        notes += sheet_notes
-        for p in save(_labelled(fig, label), out / "sheet"):
-            files[p.name] = p
 
-    files["notes.md"] = out / "notes.md"
-    files["summary.json"] = out / "summary.json"
-    files["notes.md"].write_text(_notes_md(result), encoding="utf-8")
-    files["summary.json"].write_text(json.dumps(result.to_dict(), indent=2, ensure_ascii=False) + "\n",
-                                     encoding="utf-8")
-    return result
+def _write_figures(result: Result, out: Path, images, *, tasks: bool, ci: float) -> None:
+    """The figures of ``result`` (PDF + PNG) in ``out``; the sheet's notes join ``result.notes``."""
+    from .figures import (dprime_figure, psychometric_figure, ratings_figure, save, sheet_figure,
+                          thresholds_figure)
+    files, table, fits, kinds = result.files, result.table, result.fits, result.kinds
+    per_participant, label = result.participant_thresholds, result.settings["participants_label"]
+    ci_label = f"{ci:.0%} CI"
+    yn_table = table[table["task"] == "yes-no"] if tasks else table
+    yn_fits = [f for f in fits if getattr(f, "task", "yes-no") == "yes-no"]
+    afc_fits = [f for f in fits if getattr(f, "task", "yes-no") == "2afc"]
+    figs = []
+    if len(yn_table):
+        figs.append(("ratings", ratings_figure(yn_table, ci_label, kinds)))
+    if len(table):
+        figs.append(("dprime", dprime_figure(table, ci_label, kinds)))
+    if yn_fits:
+        figs.append(("psychometric", psychometric_figure(yn_fits, yn_table, "psignifit 4 (Bayesian, MAP)")))
+    if afc_fits:
+        figs.append(("psychometric_2afc", psychometric_figure(
+            afc_fits, table[table["task"] == "2afc"], "psignifit 4, 2AFC (γ = ½)",
+            ylabel="P(original chosen)")))
+    if per_participant is not None and len(per_participant):
+        figs.append(("thresholds_participants", thresholds_figure(per_participant, result.group_thresholds)))
+    if result.exclusions is not None:
+        from .exclusions import flow_figure
+        figs.append(("flow", flow_figure(result.exclusions.flow)))
+    for name, fig in figs:
+        for p in save(_labelled(fig, label), out / name):
+            files[p.name] = p
+    imgs = _normalise_images(images)
+    fig, sheet_notes = sheet_figure(yn_fits, yn_table if len(yn_table) else table, imgs)
+    result.notes += sheet_notes
+    for p in save(_labelled(fig, label), out / "sheet"):
+        files[p.name] = p
 
 
 def _labelled(fig, label: str):

@@ -35,7 +35,6 @@ FUNCTIONS_BEING_SPLIT = {
     "study/simulate.py:simulate",
     "stimuli/edit/multiflip.py:multiflip",
     "render/study.py:render_study",
-    "analysis/pipeline.py:analyze",
 }
 
 
