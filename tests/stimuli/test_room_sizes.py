@@ -34,7 +34,6 @@ FUNCTIONS_BEING_SPLIT = {
     "study/server.py:create_app",
     "study/simulate.py:simulate",
     "stimuli/edit/multiflip.py:multiflip",
-    "render/study.py:render_study",
 }
 
 
