@@ -274,8 +274,8 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     pre = source if isinstance(source, FlipSource) else flip_source(source)
     a = pre.analysis
     clip, body, fps = a.clip, a.body, a.clip.fps
-    to, ld = a.takeoff, a.landing
-    u, frames, D, phi, theta = pre.axis, pre.frames, pre.D, pre.phi, pre.theta
+    to = a.takeoff
+    theta = pre.theta
 
     # the source must be one flip: its root turns about 360° from stand to stand
     s0, s1 = pre.stand
@@ -286,13 +286,50 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     want = 2.0 * np.pi * flips
 
     # 1. search
-    loop = find_self_loop(D, phi, frames, fps, min_turn_deg=min_turn_deg)
+    loop = find_self_loop(pre.D, pre.phi, pre.frames, fps, min_turn_deg=min_turn_deg)
     m, n, ph = loop.m, loop.n, loop.phi
     phi_S = theta[m] - theta[s0]
     phi_E = theta[s1] - theta[n]
     r = max(1, int(math.ceil((abs(want) - abs(phi_S) - abs(phi_E)) / ph)))
 
-    # 2. second search: f in copies r-1, r (source s_f, copy c) and g in [m+1, ld]
+    # 2. sequencing: the second search, the copies and the cross-fades
+    c_f, s_f, g, turn_err, d_land = _landing_join(pre, loop, r, want, flips, max_turn_error)
+    sq = _sequenced(pre, loop, c_f, s_f, g, turn_err, blend_s)
+
+    # 3. retiming by k over take-off, flight and landing
+    G = 9.81                                   # the new flight falls at earth's gravity
+    dy = sq.com[sq.landing, 1] - (sq.com[to, 1] + takeoff_height)
+    kst = k_star(G, sq.flight_s, pre.path[1, 1], dy)
+    kk = float(k) if k is not None else k_ratio * kst
+    if not (0.2 < kk < 5):
+        raise FlipEditError(f"retiming factor k = {kk:.3f} is out of range (0.2, 5)")
+    rot_n, root_n, to_n, ld_n, kL = _retime(pre, sq, kk, dy, G)
+
+    # 4. repositioning: the exact parabola, then everything after follows on
+    root_out, com_out, Tn = _reposition(pre, rot_n, root_n, to_n, ld_n, kk, takeoff_height, G)
+    out = Clip(clip.skeleton, fps, root_out, rot_n, None, derived_meta(clip.meta, f"multiflip {flips}"))
+
+    report = MultiFlipReport(
+        self_loop=SelfLoopReport(m, n, float(np.degrees(ph)), loop.distance),
+        phi_S_deg=float(np.degrees(phi_S)), phi_E_deg=float(np.degrees(phi_E)), repetitions=r,
+        landing_join=LandingJoinReport(s_f, c_f, g, d_land, float(np.degrees(turn_err))),
+        flight_s_before_retiming=sq.flight_s, k_star=kst, k=kk, k_ratio=kk / kst, k_landing=kL,
+        flight_s=Tn, takeoff=to_n, landing=ld_n, gravity=G,
+        # the output's COM: the new frames' moved by the raise and the repositioning
+        **_jumps(com_out, fps, body.total_mass, to_n, ld_n))
+    return MultiFlip(out, to_n, ld_n, report, flips=flips)
+
+
+# the named steps of :func:`multiflip` (Section 5.2–5.4)
+
+def _landing_join(pre: FlipSource, loop: SelfLoop, r: int, want: float, flips: int,
+                  max_turn_error: float) -> tuple[int, int, int, float, float]:
+    """The second search (5.2): f in copies r−1, r (source frame s_f, copy c_f) and g in
+    [m+1, landing] whose orientations differ by (flips − 1) whole turns: (c_f, s_f, g,
+    the turn error in radians, the pose distance of f and g)."""
+    a, theta, D = pre.analysis, pre.theta, pre.D
+    to, ld = a.takeoff, a.landing
+    m, n, ph = loop.m, loop.n, loop.phi
     src_f = np.arange(m, n)
     g_idx = np.arange(m + 1, ld + 1)
     Dg = D[m - to:n - to, m + 1 - to:]                                   # (|F_B|, |g|)
@@ -313,8 +350,31 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
         raise FlipEditError(f"no landing join within {max_turn_error:g}° of {flips} full turns: no frame "
                             f"of the last repetitions matches the end of the flight (try another "
                             f"--flips or a larger max_turn_error)")
-    _, c_f, s_f, g, turn_err, d_land = best
+    return best[1:]
 
+
+@dataclass(frozen=True)
+class _Sequenced:
+    """The sequenced timeline before retiming (5.2): per new frame its rotations,
+    root, source frame, cross-fade weight and COM (NaN where never read); its
+    landing frame and flight duration."""
+    rot: np.ndarray
+    root_pos: np.ndarray
+    s_src: np.ndarray
+    alpha: np.ndarray
+    com: np.ndarray
+    landing: int
+    flight_s: float
+
+
+def _sequenced(pre: FlipSource, loop: SelfLoop, c_f: int, s_f: int, g: int, turn_err: float,
+               blend_s: float) -> _Sequenced:
+    """F_S, the copies of F_B turned by kφ, the rest of the flight after g, cross-faded
+    at every join."""
+    a = pre.analysis
+    clip, body, fps = a.clip, a.body, a.clip.fps
+    to, ld = a.takeoff, a.landing
+    m, n, ph = loop.m, loop.n, loop.phi
     # segments of the new timeline: (first source frame, last source frame, copy index)
     segs = [(0, m - 1, None)] if m > 0 else []
     for c in range(c_f):
@@ -338,9 +398,39 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     # after the landing join: g's orientation must equal f's, which differs from the
     # original's by c_f·φ + θ(s_f) − θ(g) − err = (flips − 1) whole turns: no rotation
     ang[copy == -2] = 0.0
-    # cross-fades at every join: frame J+i blends the previous segment continued (A)
-    # into the next segment run backwards (B)
-    w = max(1, int(round(blend_s * fps)))
+    srcA, angA, srcB, angB, alpha = _cross_fades(src, ang, segs, max(1, int(round(blend_s * fps))))
+    # every sequenced frame is a whole source frame turned about its COM (which the
+    # turn keeps): its COM is the source's; only the cross-fades need their own
+    x = np.flatnonzero(alpha > 0)                # the cross-fades: a few frames per join
+    # A (every frame) and B (the cross-fades) turned in one batch
+    rot, root_pos = _turned(clip, pre.com, np.concatenate([srcA, srcB[x]]),
+                            pre.axis[None] * np.concatenate([angA, angB[x]])[:, None])
+    rot, rB = rot[:N], rot[N:]
+    root_pos, pB = root_pos[:N], root_pos[N:]
+    s_src = np.clip(srcA, 0, clip.num_frames - 1).astype(np.int64)
+    end0 = int(np.flatnonzero(copy == -2)[0])        # the end segment starts at g + 1
+    # landing after the join: found in the end segment; on the join frame g itself:
+    # the frame before the end segment (the last copy's f, which is g)
+    ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld > g else (end0 - 1 if ld == g else end0)
+    # the COM of the sequenced frames is read up to take-off and from landing on (the
+    # retiming's bounds); a turned source frame has the source's COM; a cross-fade
+    # there needs its own (NaN marks what is never read)
+    com_seq = pre.com[s_src]
+    if x.size:
+        rot[x] = slerp(rot[x], rB, alpha[x, None])
+        root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
+        com_seq[x] = np.nan
+        xr = x[(x <= to + 1) | (x >= ld_seq - 1)]
+        if xr.size:
+            com_seq[xr] = center_of_mass(Clip(clip.skeleton, fps, root_pos[xr], rot[xr]), body)
+    return _Sequenced(rot, root_pos, s_src, alpha, com_seq, ld_seq, (ld_seq - to) / fps)
+
+
+def _cross_fades(src: np.ndarray, ang: np.ndarray, segs: list, w: int):
+    """Cross-fades of half-width ``w`` frames at every join: frame J+i blends the
+    previous segment continued (A) into the next segment run backwards (B).  Returns
+    (source frames A, turns A, source frames B, turns B, weights of B)."""
+    N = src.size
     srcA, angA = src.copy(), ang.copy()
     srcB, angB = src.copy(), ang.copy()
     alpha = np.zeros(N)
@@ -355,42 +445,15 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
         srcB[idx] = src[Jn] + i                   # next segment, before its start
         angB[idx] = ang[Jn]
         alpha[idx] = smoothstep((i + w + 0.5) / (2 * w))
-    # every sequenced frame is a whole source frame turned about its COM (which the
-    # turn keeps): its COM is the source's; only the cross-fades need their own
-    x = np.flatnonzero(alpha > 0)                # the cross-fades: a few frames per join
-    # A (every frame) and B (the cross-fades) turned in one batch
-    rot, root_pos = _turned(clip, pre.com, np.concatenate([srcA, srcB[x]]),
-                            u[None] * np.concatenate([angA, angB[x]])[:, None])
-    rot, rB = rot[:N], rot[N:]
-    root_pos, pB = root_pos[:N], root_pos[N:]
-    s_src = np.clip(srcA, 0, clip.num_frames - 1).astype(np.int64)
-    end0 = int(np.flatnonzero(copy == -2)[0])        # the end segment starts at g + 1
-    # landing after the join: found in the end segment; on the join frame g itself:
-    # the frame before the end segment (the last copy's f, which is g)
-    ld_seq = int(np.flatnonzero((copy == -2) & (src == ld))[0]) if ld > g else (end0 - 1 if ld == g else end0)
-    T_seq = (ld_seq - to) / fps
-    # the COM of the sequenced frames is read up to take-off and from landing on (the
-    # retiming's bounds); a turned source frame has the source's COM; a cross-fade
-    # there needs its own (NaN marks what is never read)
-    com_seq = pre.com[s_src]
-    if x.size:
-        rot[x] = slerp(rot[x], rB, alpha[x, None])
-        root_pos[x] = root_pos[x] * (1 - alpha[x])[:, None] + pB * alpha[x][:, None]
-        com_seq[x] = np.nan
-        xr = x[(x <= to + 1) | (x >= ld_seq - 1)]
-        if xr.size:
-            com_seq[xr] = center_of_mass(Clip(clip.skeleton, fps, root_pos[xr], rot[xr]), body)
+    return srcA, angA, srcB, angB, alpha
 
-    # 3. retiming by k over take-off, flight and landing
-    path = pre.path
-    G = 9.81                                   # the new flight falls at earth's gravity
-    v0 = path[1, 1]
-    dy = com_seq[ld_seq, 1] - (com_seq[to, 1] + takeoff_height)
-    kst = k_star(G, T_seq, v0, dy)
-    kk = float(k) if k is not None else k_ratio * kst
-    if not (0.2 < kk < 5):
-        raise FlipEditError(f"retiming factor k = {kk:.3f} is out of range (0.2, 5)")
-    vy = np.gradient(com_seq[:, 1], 1.0 / fps)
+
+def _retime(pre: FlipSource, sq: _Sequenced, kk: float, dy: float, G: float):
+    """Retiming (5.3): take-off and flight k times faster, the landing at k_L; returns
+    (rotations, roots, take-off and landing frame of the output, k_L)."""
+    fps, to = pre.analysis.clip.fps, pre.analysis.takeoff
+    ld_seq, N = sq.landing, sq.s_src.size
+    vy = np.gradient(sq.com[:, 1], 1.0 / fps)
     pre_ = np.flatnonzero(vy[:to + 1] <= 0)
     p0 = int(pre_[-1]) if pre_.size else 0               # bottom of the crouch
     post = np.flatnonzero(vy[ld_seq:] >= 0)
@@ -398,7 +461,7 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     # the flight's rate: a whole number of output frames from take-off to landing
     n_fl = max(1, int(round((ld_seq - to) / kk)))
     k_fl = (ld_seq - to) / n_fl
-    Tn = T_seq / k_fl
+    Tn = sq.flight_s / k_fl
     # landing phase: retimed by k_L so that it continues the vertical velocity the
     # parabola lands with (k_L = k when take-off and landing are at the same height)
     vy_land_new = (dy + 0.5 * G * Tn ** 2) / Tn - G * Tn
@@ -412,13 +475,20 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     p0 = to - math.floor((to - p0) / k_fl) * k_fl
     out_src = piecewise_source([0, p0, to, ld_seq, p1, N - 1], [1.0, k_fl, k_fl, kL, 1.0])
     out_src = np.clip(out_src, 0.0, N - 1)
-    rot_n, root_n = _retimed(pre, rot, root_pos, s_src, alpha == 0, out_src)
+    rot_n, root_n = _retimed(pre, sq.rot, sq.root_pos, sq.s_src, sq.alpha == 0, out_src)
     to_n = int(np.flatnonzero(_close(out_src, to))[0])
     ld_n = int(np.flatnonzero(_close(out_src, ld_seq))[0])
+    return rot_n, root_n, to_n, ld_n, kL
 
-    # 4. repositioning: the exact parabola, then everything after follows on; the COM
-    # is needed from a frame before take-off to a frame after landing only
-    M = out_src.size
+
+def _reposition(pre: FlipSource, rot_n, root_n, to_n: int, ld_n: int, kk: float,
+                takeoff_height: float, G: float):
+    """Repositioning (5.4): the flight's COM on the exact parabola, everything after
+    following on; the COM is needed from a frame before take-off to a frame after
+    landing only.  Returns (the output's roots, its COM (NaN where not computed), the
+    flight's duration)."""
+    clip, body, fps = pre.analysis.clip, pre.analysis.body, pre.analysis.clip.fps
+    M = root_n.shape[0]
     lo, hi = max(to_n - 1, 0), min(ld_n + 1, M - 1)
     com_new = np.full((M, 3), np.nan)
     com_new[lo:hi + 1] = center_of_mass(Clip(clip.skeleton, fps, root_n[lo:hi + 1],
@@ -430,25 +500,14 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
         raise_before[:to_n + 1, 1] = takeoff_height
         c0[1] += takeoff_height
     y_end = com_new[ld_n, 1]
-    vh = kk * path[[0, 2], 1]
+    vh = kk * pre.path[[0, 2], 1]
     vyn = (y_end - c0[1] + 0.5 * G * Tn ** 2) / Tn
     tt = np.arange(ld_n - to_n + 1) / fps
     target = ballistic_path(c0, np.array([vh[0], vyn, vh[1]]), G, tt)
     shift = np.zeros_like(root_n)
     shift[to_n:ld_n + 1] = target - com_new[to_n:ld_n + 1]
     shift[ld_n + 1:] = target[-1] - com_new[ld_n]
-    out = Clip(clip.skeleton, fps, root_n + raise_before + shift, rot_n, None,
-               derived_meta(clip.meta, f"multiflip {flips}"))
-
-    report = MultiFlipReport(
-        self_loop=SelfLoopReport(m, n, float(np.degrees(ph)), loop.distance),
-        phi_S_deg=float(np.degrees(phi_S)), phi_E_deg=float(np.degrees(phi_E)), repetitions=r,
-        landing_join=LandingJoinReport(s_f, c_f, g, d_land, float(np.degrees(turn_err))),
-        flight_s_before_retiming=T_seq, k_star=kst, k=kk, k_ratio=kk / kst, k_landing=kL,
-        flight_s=Tn, takeoff=to_n, landing=ld_n, gravity=G,
-        # the output's COM: the new frames' moved by the raise and the repositioning
-        **_jumps(com_new + raise_before + shift, fps, body.total_mass, to_n, ld_n))
-    return MultiFlip(out, to_n, ld_n, report, flips=flips)
+    return root_n + raise_before + shift, com_new + raise_before + shift, Tn
 
 
 def _close(x: np.ndarray, v: float) -> np.ndarray:

@@ -33,7 +33,6 @@ FUNCTIONS_BEING_SPLIT = {
     "study/reproduce.py:reproduce",
     "study/server.py:create_app",
     "study/simulate.py:simulate",
-    "stimuli/edit/multiflip.py:multiflip",
 }
 
 
