@@ -83,20 +83,41 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None,
                     title=f"{Path(out_path).stem}: {r.rule} rule")
         out["plot"] = str(plot)
     if ghost:
-        from flipstudy.render.figures import ghost_image
-        from flipstudy.render.staging import stage
-        w0, w1 = r.blend_out
-        fps = res.clip.fps
-        t0 = max(0.0, w0 / fps - ghost_margin)
-        t1 = min(res.clip.duration, w1 / fps + ghost_margin)
-        import numpy as np
-        from flipstudy.render.camera import transition_camera
-        f0, f1 = int(t0 * fps), int(np.ceil(t1 * fps)) + 1
-        cam = transition_camera(res.clip, a, body, ghost_view, main=r.phases_a["main"],
-                                at=r.blend_out[0], frames=(f0, f1))
-        ghost_image(stage([res.clip], bodies=[body], camera=cam), ghost, span=(t0, t1),
-                    interval=ghost_interval)
+        _concat_ghost(res, a, body, ghost, ghost_margin, ghost_interval, ghost_view)
         out["ghost"] = str(ghost)
+    lines = _concat_lines(a_spec, b_spec, out_path, res, base, out)
+    for k in ("plot", "ghost"):
+        if k in out:
+            lines.append(f"  {k:<22}{out[k]}")
+    from flipstudy.stimuli.score import score
+    scored = score(res.clip).clips[0]
+    lines += ["  score: " + ln for ln in scored.summary(brief=True).splitlines()]
+    out["score"] = scored.to_dict()
+    return MotionResult(command="concat", out=Path(out_path),
+                        report=json.loads(json.dumps(out, default=float)), lines=tuple(lines))
+
+
+def _concat_ghost(res, a, body, ghost, ghost_margin: float, ghost_interval: float, ghost_view: str):
+    """The ghost composite of a concatenation's transition, written to ``ghost``."""
+    from flipstudy.render.figures import ghost_image
+    from flipstudy.render.staging import stage
+    r = res.report
+    w0, w1 = r.blend_out
+    fps = res.clip.fps
+    t0 = max(0.0, w0 / fps - ghost_margin)
+    t1 = min(res.clip.duration, w1 / fps + ghost_margin)
+    import numpy as np
+    from flipstudy.render.camera import transition_camera
+    f0, f1 = int(t0 * fps), int(np.ceil(t1 * fps)) + 1
+    cam = transition_camera(res.clip, a, body, ghost_view, main=r.phases_a["main"],
+                            at=r.blend_out[0], frames=(f0, f1))
+    ghost_image(stage([res.clip], bodies=[body], camera=cam), ghost, span=(t0, t1),
+                interval=ghost_interval)
+
+
+def _concat_lines(a_spec: str, b_spec: str, out_path, res, base, out: dict) -> list[str]:
+    """What ``flipstudy concat`` prints of a concatenation (before the paths and the score)."""
+    r = res.report
     lines = []
     pa, pb = r.phases_a, r.phases_b
     lines.append(f"{a_spec} + {b_spec} → {out_path}: {res.clip.num_frames} frames "
@@ -133,15 +154,7 @@ def concat(a_spec: str, b_spec: str, out_path, *, scale=None, fps=None,
         lines.append(f"  motion graph          transition {br.transition_a} → {br.transition_b} "
                      f"(window {br.window} frames, distance {br.distance:.2f}): {br.frames} frames "
                      f"({br.duration_s:.2f} s) → {out['baseline']['out']}")
-    for k in ("plot", "ghost"):
-        if k in out:
-            lines.append(f"  {k:<22}{out[k]}")
-    from flipstudy.stimuli.score import score
-    scored = score(res.clip).clips[0]
-    lines += ["  score: " + ln for ln in scored.summary(brief=True).splitlines()]
-    out["score"] = scored.to_dict()
-    return MotionResult(command="concat", out=Path(out_path),
-                        report=json.loads(json.dumps(out, default=float)), lines=tuple(lines))
+    return lines
 
 
 def inspect(clip_spec: str, *, scale=None, fps=None, readers=None, mass: float = 70.0, compare=None,
