@@ -366,6 +366,27 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
     study's lock (:class:`~flipstudy.study.lock.StudyLock`): a second ``simulate`` waits
     for it, then finds those participants finished.
     """
+    study, model, observers, strengths = _setup(study_dir, n, model, population, strengths)
+    done = []
+    for pid in sim_ids(n):
+        try:
+            session = open_session(study, pid, source="simulated")
+        except SessionError as e:
+            if "already finished" in str(e):
+                continue
+            raise
+        done.append(pid)
+        _answer_all(study, session, pid, seed, model, observers, population, strengths)
+        session.close()
+        if progress is not None:
+            progress(pid, session)
+    return done
+
+
+def _setup(study_dir, n, model, population, strengths):
+    """The study and who answers in :func:`simulate`: (study, observer model, whether
+    observers are drawn from a population, source strengths), checked before anything
+    is stored."""
     if isinstance(n, bool) or not isinstance(n, int) or n < 1 or n > 9999:
         raise FlipstudyValueError(f"--participants: expected 1 to 9999, got {n!r}")
     study = load_study(study_dir)
@@ -384,7 +405,6 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
         model = DEFAULT_MODEL
     elif not isinstance(model, ObserverModel):
         model = load_model(model)
-    rows = study.by_name
     if not observers and strengths is None:
         model = _pilot_model(model, study)
         groups = {r.group for r in study.manifest if not r.is_reference}
@@ -392,66 +412,59 @@ def simulate(study_dir, n: int, model: ObserverModel | str | Path | None = None,
             for r in study.manifest:
                 if r.group == g:
                     model.p_correct(g, r.level)
-    done = []
-    for pid in sim_ids(n):
-        try:
-            session = open_session(study, pid, source="simulated")
-        except SessionError as e:
-            if "already finished" in str(e):
-                continue
-            raise
-        done.append(pid)
-        rng = _rng(seed, pid)
-        shift = float(rng.normal(0.0, model.sigma)) if model.sigma > 0 else 0.0
-        state = session.state()
-        demo = {"participant": pid, "session": session.session}
-        for f in DEMOGRAPHIC_FIELDS:           # drawn even when stored: same stream on resume
-            if f["kind"] == "number":
-                age = int(rng.integers(19, 31))
-                demo[f["name"]] = age if rng.random() > 0.15 else None
-            else:
-                opts = [o[0] for o in f["options"] if o[0] != PREFER_NOT]
-                demo[f["name"]] = opts[int(rng.integers(len(opts)))]
-        if not state["demographics"]:
-            _post(submit_demographics, session, demo)
-        # draw every trial's numbers up front, so a resumed run gives the same answers
-        T = session.n_trials
-        u = rng.random(T)
-        rt = np.exp(rng.normal(np.log(1100.0), 0.4, T))
-        jitter = rng.normal(0.0, 8.0, T)
-        late = rng.poisson(0.3, T)
-        if observers:
-            obs = draw_observers(study.design, rng, population)
-            with session.db() as conn:
-                store.set_simulated_truth(conn, pid, session.session, truth_json(obs))
-        elif strengths is not None:
-            with session.db() as conn:
-                store.set_simulated_truth(conn, pid, session.session, json.dumps(
-                    {"model": "bradley-terry", "strengths": strengths}, sort_keys=True))
-        nxt = state["next_trial"]
-        for t, ui, rti, ji, li in zip(session.trials, u, rt, jitter, late):
-            if t.trial != nxt:                 # answered, or a skipped quest+ slot
-                continue
-            t = session.resolve(t.trial)
-            if strengths is not None:
-                chosen = ui < comparison_probability(strengths, rows, t)
-                response = (("first" if chosen == (t.first == "modified") else "second")
-                            if t.task == "2afc" else "correct" if chosen else "incorrect")
-            elif observers:
-                response = _observer_response(obs[t.group], t, float(ui))
-            else:
-                response = "correct" if ui < model.probability(t.group, t.level, shift) else "incorrect"
-            row = rows[t.stimulus]
-            dur = 1000.0 * row.frames / row.fps if row.fps > 0 else math.nan
-            if not math.isfinite(dur) or dur <= 0:
-                dur = 2000.0
-            nxt = _post(submit_answer, session, {
-                "participant": pid, "session": session.session, "trial": t.trial,
-                "stimulus": t.stimulus, "response": response,
-                "rt_ms": round(float(min(max(rti, 150.0), 20000.0)), 1),
-                "shown_ms": round(max(dur + float(ji), 0.0), 1),
-                "late_frames": int(li), "replays": 0, "input": "simulated"})["next_trial"]
-        session.close()
-        if progress is not None:
-            progress(pid, session)
-    return done
+    return study, model, observers, strengths
+
+
+def _answer_all(study, session, pid: str, seed, model, observers: bool, population, strengths) -> None:
+    """One simulated participant's demographics and every answer still to give."""
+    rows = study.by_name
+    rng = _rng(seed, pid)
+    shift = float(rng.normal(0.0, model.sigma)) if model.sigma > 0 else 0.0
+    state = session.state()
+    demo = {"participant": pid, "session": session.session}
+    for f in DEMOGRAPHIC_FIELDS:           # drawn even when stored: same stream on resume
+        if f["kind"] == "number":
+            age = int(rng.integers(19, 31))
+            demo[f["name"]] = age if rng.random() > 0.15 else None
+        else:
+            opts = [o[0] for o in f["options"] if o[0] != PREFER_NOT]
+            demo[f["name"]] = opts[int(rng.integers(len(opts)))]
+    if not state["demographics"]:
+        _post(submit_demographics, session, demo)
+    # draw every trial's numbers up front, so a resumed run gives the same answers
+    T = session.n_trials
+    u = rng.random(T)
+    rt = np.exp(rng.normal(np.log(1100.0), 0.4, T))
+    jitter = rng.normal(0.0, 8.0, T)
+    late = rng.poisson(0.3, T)
+    if observers:
+        obs = draw_observers(study.design, rng, population)
+        with session.db() as conn:
+            store.set_simulated_truth(conn, pid, session.session, truth_json(obs))
+    elif strengths is not None:
+        with session.db() as conn:
+            store.set_simulated_truth(conn, pid, session.session, json.dumps(
+                {"model": "bradley-terry", "strengths": strengths}, sort_keys=True))
+    nxt = state["next_trial"]
+    for t, ui, rti, ji, li in zip(session.trials, u, rt, jitter, late):
+        if t.trial != nxt:                 # answered, or a skipped quest+ slot
+            continue
+        t = session.resolve(t.trial)
+        if strengths is not None:
+            chosen = ui < comparison_probability(strengths, rows, t)
+            response = (("first" if chosen == (t.first == "modified") else "second")
+                        if t.task == "2afc" else "correct" if chosen else "incorrect")
+        elif observers:
+            response = _observer_response(obs[t.group], t, float(ui))
+        else:
+            response = "correct" if ui < model.probability(t.group, t.level, shift) else "incorrect"
+        row = rows[t.stimulus]
+        dur = 1000.0 * row.frames / row.fps if row.fps > 0 else math.nan
+        if not math.isfinite(dur) or dur <= 0:
+            dur = 2000.0
+        nxt = _post(submit_answer, session, {
+            "participant": pid, "session": session.session, "trial": t.trial,
+            "stimulus": t.stimulus, "response": response,
+            "rt_ms": round(float(min(max(rti, 150.0), 20000.0)), 1),
+            "shown_ms": round(max(dur + float(ji), 0.0), 1),
+            "late_frames": int(li), "replays": 0, "input": "simulated"})["next_trial"]

@@ -31,7 +31,6 @@ FUNCTIONS_BEING_SPLIT = {
     "stimuli/motion/bvh.py:load_bvh",
     "study/reproduce.py:reproduce",
     "study/server.py:create_app",
-    "study/simulate.py:simulate",
 }
 
 
