@@ -23,7 +23,6 @@ MODULES_BEING_MOVED = {
 FUNCTIONS_BEING_SPLIT = {
     "analysis/core.py:summarize",
     "render/antialias.py:fxaa",
-    "stimuli/edit/concat/feet.py:pin_feet",
     "stimuli/edit/concat/method.py:concatenate",
     "stimuli/edit/join.py:join_in_flight",
     "stimuli/measure.py:measure",

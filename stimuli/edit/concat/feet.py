@@ -92,6 +92,58 @@ def two_bone_ik(clip: Clip, hip: int, knee: int, ankle: int, frames: np.ndarray,
     return clip.replace(rotations=rot)
 
 
+def _floor(E0: np.ndarray, ix: dict, fl: np.ndarray, fr: np.ndarray) -> float:
+    """The floor: where the feet rest (the lowest point of a foot in contact)."""
+    hl = E0[:, [ix["ankle_l"], ix["toe_tip_l"]], 1].min(axis=1)
+    hr = E0[:, [ix["ankle_r"], ix["toe_tip_r"]], 1].min(axis=1)
+    lows = np.concatenate([hl[fl], hr[fr]])
+    return float(np.percentile(lows, 5)) if lows.size else float(min(hl.min(), hr.min()))
+
+
+def _release(idx: np.ndarray, corr: np.ndarray, to_the_end: bool, nxt: int, fade: int,
+             release_in_contact: float, fps: float) -> tuple[np.ndarray, np.ndarray, str]:
+    """How a pinned foot's offset ``corr`` (over its contact frames ``idx``) is let go:
+    (frames moved, their corrections, how it was released)."""
+    e = int(idx[-1])
+    if to_the_end:
+        return idx, corr, "none (in contact to the end)"   # in contact to the end: stays pinned
+    if np.linalg.norm(corr[-1][[0, 2]]) <= release_in_contact:
+        # a small offset is let go over the last contact frames (the foot
+        # unloading), so the airborne frames stay as they were
+        n = min(int(round(0.1 * fps)), max(1, idx.size // 3))
+        x = (np.arange(n) + 1) / (n + 1)
+        corr[-n:] *= (1.0 - smoothstep(x))[:, None]
+        return idx, corr, "in contact"
+    # a larger one (the two motions' stances differ) is released as the
+    # foot leaves the ground, eased over its swing (at most ``fade_s``),
+    # so no supporting foot slides
+    tail = np.arange(e + 1, min(nxt, e + 1 + fade))
+    x = (np.arange(tail.size) + 1) / (tail.size + 1)
+    w = 1.0 - smoothstep(x)
+    frames = np.concatenate([idx, tail])
+    corr = np.concatenate([corr, w[:, None] * corr[-1][None]])
+    return frames, corr, f"in the air ({100 * np.linalg.norm(corr[idx.size - 1][[0, 2]]):.1f} cm)"
+
+
+def _measured(out: Clip, body: Body, pinned: list, ix: dict, feet_ix: list, floor: float):
+    """The slide of the pinned points and the floor clearance, measured, after lifting
+    the frames where a foot went under the floor onto it: (clip, slide m, lowest foot)."""
+    E = effector_points(out, body)[0]
+    slide = 0.0
+    for side, idx in pinned:
+        x = E[idx, ix[f"toe_tip_{side}"]]
+        slide = max(slide, float(np.linalg.norm((x - x[0])[:, [0, 2]], axis=1).max()))
+    lo = float(E[..., 1][:, feet_ix].min())
+    if lo < floor - 1e-4:
+        lift = np.maximum(floor - E[..., 1][:, feet_ix].min(axis=1), 0.0)
+        root = out.root_pos.copy()
+        root[:, 1] += lift
+        out = out.replace(root_pos=root)
+        E = effector_points(out, body)[0]
+        lo = float(E[..., 1][:, feet_ix].min())
+    return out, slide, lo
+
+
 def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.5,
              floor: float | None = None, release_in_contact: float = 0.01) -> tuple[Clip, FeetReport]:
     """Pin every foot that is in contact during the transition ``window`` (f0, f1)
@@ -117,11 +169,7 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
     ix = {n: i for i, n in enumerate(names)}
     feet_ix = [ix["ankle_l"], ix["ankle_r"], ix["toe_tip_l"], ix["toe_tip_r"]]
     if floor is None:
-        hl = E0[:, [ix["ankle_l"], ix["toe_tip_l"]], 1].min(axis=1)
-        hr = E0[:, [ix["ankle_r"], ix["toe_tip_r"]], 1].min(axis=1)
-        lows = np.concatenate([hl[fl], hr[fr]])
-        # the floor: where the feet rest (the lowest point of a foot in contact)
-        floor = float(np.percentile(lows, 5)) if lows.size else float(min(hl.min(), hr.min()))
+        floor = _floor(E0, ix, fl, fr)
     fade = max(1, int(round(fade_s * clip.fps)))
     size = body_size(clip) / 1.7
     out = clip
@@ -153,27 +201,8 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
                     e = start + int(up[0]) - 1
             idx = np.arange(start, e + 1)
             corr = tgt[None] - toe[idx]
-            if e == F - 1:
-                frames = idx                  # in contact to the end of the clip: stays pinned
-                released.append("none (in contact to the end)")
-            elif np.linalg.norm(corr[-1][[0, 2]]) <= release_in_contact:
-                # a small offset is let go over the last contact frames (the foot
-                # unloading), so the airborne frames stay as they were
-                n = min(int(round(0.1 * clip.fps)), max(1, idx.size // 3))
-                x = (np.arange(n) + 1) / (n + 1)
-                corr[-n:] *= (1.0 - smoothstep(x))[:, None]
-                frames = idx
-                released.append("in contact")
-            else:
-                # a larger one (the two motions' stances differ) is released as the
-                # foot leaves the ground, eased over its swing (at most ``fade_s``),
-                # so no supporting foot slides
-                tail = np.arange(e + 1, min(nxt, e + 1 + fade))
-                x = (np.arange(tail.size) + 1) / (tail.size + 1)
-                w = 1.0 - smoothstep(x)
-                frames = np.concatenate([idx, tail])
-                corr = np.concatenate([corr, w[:, None] * corr[-1][None]])
-                released.append(f"in the air ({100 * np.linalg.norm(corr[idx.size - 1][[0, 2]]):.1f} cm)")
+            frames, corr, how = _release(idx, corr, e == F - 1, nxt, fade, release_in_contact, clip.fps)
+            released.append(how)
             out = two_bone_ik(out, hip, knee, ankle, frames, ank[frames] + corr, lat[frames])
             pinned.append((side, idx))
             air[frames[idx.size:]] = True
@@ -185,21 +214,7 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
         root = out.root_pos.copy()
         root[air] += d
         out = out.replace(root_pos=root)
-    # measured: the slide of the pinned points, and the floor clearance
-    E = effector_points(out, body)[0]
-    slide = 0.0
-    for side, idx in pinned:
-        x = E[idx, ix[f"toe_tip_{side}"]]
-        slide = max(slide, float(np.linalg.norm((x - x[0])[:, [0, 2]], axis=1).max()))
-    lo = float(E[..., 1][:, feet_ix].min())
-    if lo < floor - 1e-4:
-        # lift the frames where a foot went under the floor onto it
-        lift = np.maximum(floor - E[..., 1][:, feet_ix].min(axis=1), 0.0)
-        root = out.root_pos.copy()
-        root[:, 1] += lift
-        out = out.replace(root_pos=root)
-        E = effector_points(out, body)[0]
-        lo = float(E[..., 1][:, feet_ix].min())
+    out, slide, lo = _measured(out, body, pinned, ix, feet_ix, floor)
     return out, FeetReport(foot_slide_cm=100.0 * slide,
                            pinned=[f"{sd}:{int(i[0])}-{int(i[-1])}" for sd, i in pinned], released=released,
                            floor=floor, lowest_foot_above_floor_cm=100.0 * (lo - floor))
