@@ -222,21 +222,9 @@ def summarize(df: pd.DataFrame, correction: str = "loglinear", n_boot: int = 200
         d_mean = D0.sum(0) / n_part_d
     d_mean[n_part_d == 0] = np.nan
 
-    # bootstrap over participants, vectorised: one (b, P) @ (P, K) product per block
-    rating_b, dpool_b, dmean_b = [], [], []
-    Mf = M.astype(float)
-    for C in bootstrap_counts(P, n_boot, seed):
-        kb, nb = C @ cnt.k, C @ cnt.n
-        with np.errstate(invalid="ignore", divide="ignore"):
-            rating_b.append(100.0 * (1.0 - kb / nb))
-            dmean_b.append((C @ D0) / (C @ Mf))
-        d, _, _ = _dprime_c(kb, nb, kb[:, o], nb[:, o], correction)
-        d[:, ~has] = np.nan
-        dpool_b.append(d)
     level = expanded_level(ci, P)
-    r_lo, r_hi = _quantiles(np.concatenate(rating_b), level)
-    dp_lo, dp_hi = _quantiles(np.concatenate(dpool_b), level)
-    dm_lo, dm_hi = _quantiles(np.concatenate(dmean_b), level)
+    (r_lo, r_hi), (dp_lo, dp_hi), (dm_lo, dm_hi) = _bootstrap(cnt, D0, M, o, has, correction,
+                                                             n_boot, seed, level)
 
     with np.errstate(invalid="ignore", divide="ignore"):
         p_inc = Kp / Np
@@ -256,6 +244,42 @@ def summarize(df: pd.DataFrame, correction: str = "loglinear", n_boot: int = 200
     table["correction"] = correction
     table["corrected"] = corr
 
+    notes = _summary_notes(cnt, correction, corr, ci, level, n_boot, seed)
+    part = pd.DataFrame({
+        "participant": np.repeat(cnt.participants, K),
+        "group": np.tile(cnt.cells["group"].to_numpy(), P),
+        "level": np.tile(cnt.cells["level"].to_numpy(), P),
+        "n": cnt.n.ravel().astype(int),
+        "n_incorrect": cnt.k.ravel().astype(int),
+        "dprime": D.ravel(),
+    })
+    part = part[part["n"] > 0].reset_index(drop=True)
+    return table, part, notes
+
+
+def _bootstrap(cnt: Counts, D0, M, o, has, correction: str, n_boot: int, seed, level: float):
+    """Percentile intervals at ``level`` of the bootstrap over participants, vectorised
+    (one (b, P) @ (P, K) product per block): (low, high) of the rating, the pooled d′
+    and the mean of the participants' d′."""
+    P = cnt.k.shape[0]
+    rating_b, dpool_b, dmean_b = [], [], []
+    Mf = M.astype(float)
+    for C in bootstrap_counts(P, n_boot, seed):
+        kb, nb = C @ cnt.k, C @ cnt.n
+        with np.errstate(invalid="ignore", divide="ignore"):
+            rating_b.append(100.0 * (1.0 - kb / nb))
+            dmean_b.append((C @ D0) / (C @ Mf))
+        d, _, _ = _dprime_c(kb, nb, kb[:, o], nb[:, o], correction)
+        d[:, ~has] = np.nan
+        dpool_b.append(d)
+    return (_quantiles(np.concatenate(rating_b), level), _quantiles(np.concatenate(dpool_b), level),
+            _quantiles(np.concatenate(dmean_b), level))
+
+
+def _summary_notes(cnt: Counts, correction: str, corr, ci: float, level: float, n_boot: int,
+                   seed) -> list[str]:
+    """The notes :func:`summarize` returns: d′, the correction, the intervals."""
+    P, K = cnt.k.shape
     notes = ["d′ = z(P(incorrect | modified)) − z(P(incorrect | original)), the original being "
              "level 0 of the same group; criterion c = −(z(H) + z(F))/2.",
              f"Rates of 0 or 1: {CORRECTION_TEXT[correction]}; the pooled rates of "
@@ -274,16 +298,7 @@ def summarize(df: pd.DataFrame, correction: str = "loglinear", n_boot: int = 200
     if missing:
         notes.append("No original (level 0) in group(s) " + ", ".join(missing)
                      + ": their d′ and criterion are left empty.")
-    part = pd.DataFrame({
-        "participant": np.repeat(cnt.participants, K),
-        "group": np.tile(cnt.cells["group"].to_numpy(), P),
-        "level": np.tile(cnt.cells["level"].to_numpy(), P),
-        "n": cnt.n.ravel().astype(int),
-        "n_incorrect": cnt.k.ravel().astype(int),
-        "dprime": D.ravel(),
-    })
-    part = part[part["n"] > 0].reset_index(drop=True)
-    return table, part, notes
+    return notes
 
 
 def _n_corrected_participant_cells(cnt: Counts, correction: str) -> int:
