@@ -27,7 +27,6 @@ FUNCTIONS_BEING_SPLIT = {
     "stimuli/measure.py:measure",
     "stimuli/motion/_bvh_parse.py:parse_hierarchy",
     "stimuli/motion/bvh.py:load_bvh",
-    "study/reproduce.py:reproduce",
     "study/server.py:create_app",
 }
 
