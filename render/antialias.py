@@ -42,7 +42,6 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     >>> bool(((sm > 0) & (sm < 255)).any()), np.array_equal(sm[12:, :4], img[12:, :4])
     (True, True)
     """
-    o = OPTIONS
     H, W = img.shape[:2]
     if out is None:
         out = img.copy()
@@ -50,16 +49,30 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         np.copyto(out, img)
     if H < 3 or W < 3:
         return out
+    R = int(OPTIONS["endpoint_search_iterations"]) + 1
+    px = img.reshape(-1, 3) if img.flags.c_contiguous else np.ascontiguousarray(img).reshape(-1, 3)
+    Lp, k = _edges(px, H, W, R)
+    if not len(k):
+        return out
+    ys, xs, qy, qx, off = _offsets(Lp, k, W, R)
+    # blend towards the neighbour across the edge (a bilinear tap off the pixel centre)
+    c0 = px.take(k, axis=0).astype(np.float32)
+    c1 = px.take(np.clip(ys + qy, 0, H - 1) * W + np.clip(xs + qx, 0, W - 1), axis=0).astype(np.float32)
+    out[ys, xs] = np.rint(c0 + (c1 - c0) * off).astype(np.uint8)
+    return out
+
+
+def _edges(px: np.ndarray, H: int, W: int, R: int) -> tuple[np.ndarray, np.ndarray]:
+    """The whole-frame passes of :func:`fxaa`: the luma padded by ``R`` and the edge
+    pixels (flat indices in the frame)."""
+    o = OPTIONS
     # luma of every pixel in 1/255 (uint8: the whole-frame work stays on bytes), written
     # straight into a frame padded by the longest endpoint search (edge mode) so no index
     # leaves it: Lp[y + R, x + R] is pixel (y, x).  The whole-frame passes are the cost of
     # a frame with few edges: a handful of byte operations, no float copy of the frame.
-    R = int(o["endpoint_search_iterations"]) + 1
-    Wp = W + 2 * R
     # every whole-frame array is a scratch buffer kept for the next frame of the same size:
     # a fresh 300 kB array costs more in page faults than the byte operation filling it
     Lp, acc, tmp, hi, lo, thr_hi, edge = _scratch(H, W, R)
-    px = img.reshape(-1, 3) if img.flags.c_contiguous else np.ascontiguousarray(img).reshape(-1, 3)
     np.multiply(px[:, 0], _W8[0], out=acc)
     np.multiply(px[:, 1], _W8[1], out=tmp)
     acc += tmp
@@ -89,9 +102,14 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     np.maximum(thr_hi, np.uint8(round(255 * o["hard_contrast_threshold"])), out=thr_hi)
     np.subtract(hi, lo, out=hi)
     np.greater_equal(hi, thr_hi, out=edge)
-    k = np.flatnonzero(edge)                                   # edge pixels, flat in the frame
-    if not len(k):
-        return out
+    return Lp, np.flatnonzero(edge)
+
+
+def _offsets(Lp: np.ndarray, k: np.ndarray, W: int, R: int):
+    """Per edge pixel ``k`` (flat in the frame): its row and column, the step to the
+    neighbour across the edge (rows, columns) and the blend weight towards it (P, 1)."""
+    o = OPTIONS
+    Wp = W + 2 * R
     ys = k // W
     xs = k - ys * W
     c = k + ys * (2 * R) + (R * Wp + R)                        # flat index in Lp
@@ -125,50 +143,46 @@ def fxaa(img: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     half = 0.5 * (side + m)                                    # the edge's mid luma
     thr = 0.25 * grad
     m_below = (m - half) < 0
-
-    # follow the edge both ways, every step at once: the luma half a pixel to the chosen
-    # side at 1..K steps along it; each way ends at its first step whose luma left the
-    # edge's (or at K): FXAA's search loop, as (pixels, K) arrays
-    K = R - 1
-    steps = np.arange(1, K + 1)
-
-    def search(direction: int):
-        i = c + direction * along                              # the first step, every pixel
-        lum_e = 0.5 * (lum_at(i) + lum_at(i + across)) - half
-        dist = np.ones(len(ys), np.int64)
-        todo = np.nonzero(np.abs(lum_e) < thr)[0]              # still on the edge: steps 2..K
-        step = direction * along
-        # steps 2..4 for every such pixel, then 5..K for those still on it: most edges end
-        # within a few steps, the rest run the whole way (same values as all steps at once)
-        for first, last in _chunks(K):
-            if not len(todo):
-                break
-            st = steps[first - 1:last]
-            i = c[todo, None] + st[None, :] * step[todo, None]
-            far = 0.5 * (lum_at(i) + lum_at(i + across[todo, None])) - half[todo, None]
-            done = np.abs(far) >= thr[todo, None]
-            ended = done.any(1)
-            j = done.argmax(1)
-            if last == K:                                      # never left it: ends at step K
-                j[~ended] = K - first
-                ended[:] = True
-            got = todo[ended]
-            dist[got] = j[ended] + first
-            lum_e[got] = far[np.nonzero(ended)[0], j[ended]]
-            todo = todo[~ended]
-        return dist, lum_e
-
-    dn, en = search(-1)                                        # distances to the two ends
-    dp, ep = search(1)
+    edge = (c, along, across, half, thr)
+    dn, en = _search(lum_at, edge, -1, R - 1)                  # distances to the two ends
+    dp, ep = _search(lum_at, edge, 1, R - 1)
     nearer_n = dn < dp
     good = np.where(nearer_n, (en < 0) != m_below, (ep < 0) != m_below)
     off = np.where(good, 0.5 - np.minimum(dn, dp) / (dn + dp), 0.0)
-    off = np.maximum(off, sub_f)[:, None].astype(np.float32)
-    # blend towards the neighbour across the edge (a bilinear tap off the pixel centre)
-    c0 = px.take(k, axis=0).astype(np.float32)
-    c1 = px.take(np.clip(ys + qy, 0, H - 1) * W + np.clip(xs + qx, 0, W - 1), axis=0).astype(np.float32)
-    out[ys, xs] = np.rint(c0 + (c1 - c0) * off).astype(np.uint8)
-    return out
+    return ys, xs, qy, qx, np.maximum(off, sub_f)[:, None].astype(np.float32)
+
+
+def _search(lum_at, edge: tuple, direction: int, K: int):
+    """Follow the edge one way (``direction`` ±1), every step at once: the luma half a
+    pixel to the chosen side at 1..K steps along it; the way ends at its first step whose
+    luma left the edge's (or at K): FXAA's search loop, as (pixels, K) arrays.  Returns
+    (distance, luma there minus the edge's mid luma)."""
+    c, along, across, half, thr = edge
+    steps = np.arange(1, K + 1)
+    i = c + direction * along                              # the first step, every pixel
+    lum_e = 0.5 * (lum_at(i) + lum_at(i + across)) - half
+    dist = np.ones(len(c), np.int64)
+    todo = np.nonzero(np.abs(lum_e) < thr)[0]              # still on the edge: steps 2..K
+    step = direction * along
+    # steps 2..4 for every such pixel, then 5..K for those still on it: most edges end
+    # within a few steps, the rest run the whole way (same values as all steps at once)
+    for first, last in _chunks(K):
+        if not len(todo):
+            break
+        st = steps[first - 1:last]
+        i = c[todo, None] + st[None, :] * step[todo, None]
+        far = 0.5 * (lum_at(i) + lum_at(i + across[todo, None])) - half[todo, None]
+        done = np.abs(far) >= thr[todo, None]
+        ended = done.any(1)
+        j = done.argmax(1)
+        if last == K:                                      # never left it: ends at step K
+            j[~ended] = K - first
+            ended[:] = True
+        got = todo[ended]
+        dist[got] = j[ended] + first
+        lum_e[got] = far[np.nonzero(ended)[0], j[ended]]
+        todo = todo[~ended]
+    return dist, lum_e
 
 
 #: how far (pixels, either axis) a pixel's FXAA result reads from it: the endpoint
