@@ -75,6 +75,7 @@ from .analyse import Analysis, analyse
 from .ballistic import G0
 from .ballistic_measure import fit_free, pose_updates
 from .flight import contact_mask, effector_points, foot_points
+from .measure_fits import _ground_fit, _ground_velocity, _quad, split_trend_step, velocity_jolt  # noqa: F401
 from .motion.clip import Clip
 
 #: frames of a ground phase through which a quadratic gives its velocity at a contact
@@ -184,116 +185,6 @@ class Measurement:
                             columns=[f for f in Inconsistency.__dataclass_fields__])
 
 
-# ------------------------------------------------------------------ fits
-def _batched_lstsq(X: np.ndarray, y: np.ndarray, w: np.ndarray):
-    """Weighted least squares for K designs at once: ``X`` (K,n,p), ``y`` (n,d),
-    ``w`` (K,n) 0/1 weights.  Returns coefficients (K,p,d) and the residual sum
-    of squares (K,) over the weighted samples."""
-    Xw = X * w[..., None]
-    A = np.einsum("knp,knq->kpq", Xw, X)
-    b = np.einsum("knp,nd->kpd", Xw, y)
-    coef = np.linalg.solve(A + 1e-12 * np.eye(A.shape[-1]), b)
-    r = y[None] - np.einsum("knp,kpd->knd", X, coef)
-    return coef, np.einsum("kn,knd->k", w, r * r)
-
-
-def _candidates(n: int, edge: int) -> np.ndarray:
-    return np.arange(edge, n - edge + 1)
-
-
-def split_trend_step(tau: np.ndarray, L: np.ndarray, T: float) -> tuple[float, float, float, float]:
-    """|L| over a flight as ``c0 + c1·τ/T + c2·[τ ≥ τ_k]``: a trend (smooth) and a
-    step (abrupt) at the sample ``k`` that fits best (the two samples whose
-    differencing stencil straddles the step are left out of that fit; the first
-    and last sample, differenced one-sidedly, are always left out).  Returns the
-    smooth change over the flight in % of |L| at take-off, the step in % of the
-    line at the step's instant (halfway between the samples either side), that
-    instant and |L| at take-off.  A step that explains less than half of what the
-    line alone leaves is 0.
-
-    >>> tau = np.linspace(0, 0.6, 61)
-    >>> L = 40 * np.where(tau < 0.3, 1.0, 1.2)
-    >>> [round(float(x), 3) for x in split_trend_step(tau, L, 0.6)[:2]]
-    [0.0, 20.0]
-    """
-    n = tau.size
-    u = tau / T
-    base = np.ones(n)
-    base[[0, -1]] = 0.0
-    if n < 8:
-        c = np.polyfit(u[1:-1] if n > 4 else u, L[1:-1] if n > 4 else L, 1)
-        return 100.0 * c[0] / c[1], 0.0, float("nan"), float(c[1])
-    ks = _candidates(n, 3)
-    H = (np.arange(n)[None] >= ks[:, None]).astype(float)            # (K,n)
-    X = np.stack([np.broadcast_to(np.ones(n), H.shape), np.broadcast_to(u, H.shape), H], -1)
-    w = np.broadcast_to(base, H.shape).copy()
-    rows = np.arange(ks.size)
-    w[rows, ks - 1] = 0.0
-    w[rows, ks] = 0.0
-    coef, rss = _batched_lstsq(X, L[:, None], w)
-    # a step must explain more than dropping two samples does: compare with the
-    # trend alone over the same samples
-    X0 = X[..., :2]
-    _, rss0 = _batched_lstsq(X0, L[:, None], w)
-    gain = rss0 - rss
-    # a step between samples fits equally with its border sample on either side (the
-    # straddling samples are left out): of the candidates whose residual is the least
-    # (within 1e-9 of the line's) the middle one
-    best = np.flatnonzero(rss <= rss.min() + 1e-9 * max(float(rss0.max()), 1e-300))
-    j = int(best[best.size // 2])
-    c0, c1, c2 = coef[j, :, 0]
-    k = ks[j]
-    if gain[j] < 0.5 * rss0[j]:
-        # the step explains less than half of what the line leaves: no step (the line
-        # alone, over every inner sample, gives the trend)
-        c1, c0 = np.polyfit(u[1:-1], L[1:-1], 1)
-        return 100.0 * c1 / c0, 0.0, float(0.5 * (tau[k - 1] + tau[k])), float(c0)
-    t_step = 0.5 * (tau[k - 1] + tau[k])
-    before = c0 + c1 * t_step / T                     # the line at the step's instant
-    return 100.0 * c1 / c0, 100.0 * c2 / before, float(t_step), float(c0)
-
-
-def velocity_jolt(t: np.ndarray, com: np.ndarray) -> tuple[float, float]:
-    """The largest velocity step of a COM in the air: for every instant between
-    samples a parabola plus a hinge ``Δv·max(0, t − t_k)`` is fitted in every axis;
-    the instant whose hinge explains most of the residual gives |Δv| (m/s) and
-    its time.  A pure parabola gives 0."""
-    n = t.size
-    if n < 10:
-        return 0.0, float(t[n // 2]) if n else float("nan")
-    ks = _candidates(n, 3)
-    tk = 0.5 * (t[ks - 1] + t[ks])
-    s = t - t[0]
-    hinge = np.maximum(0.0, t[None] - tk[:, None])
-    K = ks.size
-    X = np.stack([np.broadcast_to(s * s, (K, n)), np.broadcast_to(s, (K, n)),
-                  np.ones((K, n)), hinge], -1)
-    coef, rss = _batched_lstsq(X, com, np.ones((K, n)))
-    j = int(np.argmin(rss))
-    return float(np.linalg.norm(coef[j, 3])), float(tk[j])
-
-
-def _quad(cf: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """(n,3) a fitted quadratic's positions at times ``t``."""
-    return cf[:, 0] * t[:, None] ** 2 + cf[:, 1] * t[:, None] + cf[:, 2]
-
-
-def _ground_fit(com: np.ndarray, fps: float, frames: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """(n,3) positions at times ``t`` of a quadratic through ``frames``."""
-    tf = frames / fps
-    A = np.stack([tf * tf, tf, np.ones_like(tf)], 1)
-    c = np.linalg.lstsq(A, com[frames], rcond=None)[0]
-    return np.stack([t * t, t, np.ones_like(t)], 1) @ c
-
-
-def _ground_velocity(com: np.ndarray, fps: float, frames: np.ndarray, t: float) -> np.ndarray:
-    """COM velocity at instant ``t`` from a quadratic through ``frames`` (a ground phase's)."""
-    tf = frames / fps - t
-    A = np.stack([tf * tf, tf, np.ones_like(tf)], 1)
-    c = np.linalg.lstsq(A, com[frames], rcond=None)[0]
-    return c[1]
-
-
 # ------------------------------------------------------------------ measure
 def _pct(a: float, b: float) -> float:
     return 100.0 * (a / b - 1.0)
@@ -330,12 +221,27 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
                         f"reads up to 7 % where it has none)")
     items: list[Inconsistency] = []
     flights = sorted(a.flights, key=lambda f: f.takeoff)
-    com, Ln = a.com, np.linalg.norm(a.L, axis=1)
-    frame_t = np.arange(F) / fps
     from .flight import body_size
     size = body_size(clip) / 1.7
 
-    # phases
+    phases = _phases(flights, dur)
+
+    def add(kind, variant, phase, size, t0, t1, worst, same_as=""):
+        unit = "%" if kind == "landing-velocity-jump" and variant else UNITS[kind]
+        items.append(Inconsistency(kind, variant, phase, float(size), unit, float(t0),
+                                   float(t1), float(worst), same_as))
+
+    for i in range(1, len(flights) + 1):
+        _measure_flight(add, warnings, a, flights, i, size)
+
+    add("pose-rate", "", "clip", 0.0, 0.0, dur, 0.0)
+
+    _ground(add, warnings, clip, a, phases, fps)
+    return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
+
+
+def _phases(flights, dur: float) -> list[tuple]:
+    """(name, "ground" or "flight", start, end) of every phase, in time order."""
     phases, edges = [], [0.0]
     for f in flights:
         edges += [float(f.takeoff_time), float(f.landing_time)]
@@ -347,99 +253,111 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
         if i < len(flights):
             phases.append((f"flight {i + 1}", "flight", edges[2 * i + 1], edges[2 * i + 2]))
     phases.sort(key=lambda p: p[2])
+    return phases
 
-    def add(kind, variant, phase, size, t0, t1, worst, same_as=""):
-        unit = "%" if kind == "landing-velocity-jump" and variant else UNITS[kind]
-        items.append(Inconsistency(kind, variant, phase, float(size), unit, float(t0),
-                                   float(t1), float(worst), same_as))
 
-    for i, f in enumerate(flights, 1):
-        ph = f"flight {i}"
-        t_to, t_ld = float(f.takeoff_time), float(f.landing_time)
-        fr = np.arange(f.takeoff, f.landing + 1)
-        t = frame_t[fr]
-        if fr.size < 5:
-            warnings.append(f"{ph}: {fr.size} frames in the air, too few to measure")
-            continue
-        cf = fit_free(com[fr], t)
-        acc = 2.0 * cf[:, 0]
-        g = -acc[1]
-        v_air = lambda s: 2.0 * cf[:, 0] * s + cf[:, 1]         # noqa: E731
-        mid = 0.5 * (t_to + t_ld)
-        add("gravity", "", ph, _pct(g, G0), t_to, t_ld, mid)
-        add("acceleration", "vertical", ph, -_pct(g, G0), t_to, t_ld, mid, "gravity")
-        if g > 0:
-            add("time-scale", "", ph, 100.0 * (np.sqrt(g / G0) - 1.0), t_to, t_ld, mid, "gravity")
-        vh = v_air(t_to)[[0, 2]]
-        ah = acc[[0, 2]]
-        if np.linalg.norm(vh) > MIN_SPEED:
-            along = float(ah @ vh / np.linalg.norm(vh))
-        else:
-            along = float(np.linalg.norm(ah))
-            warnings.append(f"{ph}: no horizontal travel at take-off; the horizontal acceleration "
-                            f"is given as a magnitude")
-        add("acceleration", "horizontal", ph, 100.0 * along / G0, t_to, t_ld, mid)
+def _measure_flight(add, warnings: list, a: Analysis, flights: list, i: int, size: float) -> None:
+    """The items of flight ``i`` (1-based) of ``flights``: gravity, acceleration, the
+    contacts either side, |L| and the jolt in the air (through ``add``)."""
+    clip, com, fps = a.clip, a.com, float(a.clip.fps)
+    Ln = np.linalg.norm(a.L, axis=1)
+    frame_t = np.arange(clip.num_frames) / fps
+    f = flights[i - 1]
+    ph = f"flight {i}"
+    t_to, t_ld = float(f.takeoff_time), float(f.landing_time)
+    fr = np.arange(f.takeoff, f.landing + 1)
+    t = frame_t[fr]
+    if fr.size < 5:
+        warnings.append(f"{ph}: {fr.size} frames in the air, too few to measure")
+        return
+    cf = fit_free(com[fr], t)
+    acc = 2.0 * cf[:, 0]
+    g = -acc[1]
+    v_air = lambda s: 2.0 * cf[:, 0] * s + cf[:, 1]         # noqa: E731
+    mid = 0.5 * (t_to + t_ld)
+    add("gravity", "", ph, _pct(g, G0), t_to, t_ld, mid)
+    add("acceleration", "vertical", ph, -_pct(g, G0), t_to, t_ld, mid, "gravity")
+    if g > 0:
+        add("time-scale", "", ph, 100.0 * (np.sqrt(g / G0) - 1.0), t_to, t_ld, mid, "gravity")
+    vh = v_air(t_to)[[0, 2]]
+    ah = acc[[0, 2]]
+    if np.linalg.norm(vh) > MIN_SPEED:
+        along = float(ah @ vh / np.linalg.norm(vh))
+    else:
+        along = float(np.linalg.norm(ah))
+        warnings.append(f"{ph}: no horizontal travel at take-off; the horizontal acceleration "
+                        f"is given as a magnitude")
+    add("acceleration", "horizontal", ph, 100.0 * along / G0, t_to, t_ld, mid)
 
-        # contacts: the ground phase before (after) against the flight.  Frames beside the
-        # flight that still lie on its parabola are the flight's (a stimulus whose feet stay
-        # at the floor a few frames after its velocity changed): the velocity changes where
-        # the COM leaves the parabola, which is where the two sides are compared
-        res = com[fr] - _quad(cf, t)
-        thr = max(3.0 * float(np.sqrt(np.mean(np.sum(res * res, 1)))), ON_PATH * size)
-        prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
-        next_start = flights[i].takeoff_time if i < len(flights) else np.inf
-        inst = {}
-        for p, t_c, side in ((f"takeoff {i}", t_to, -1), (f"landing {i}", t_ld, 1)):
-            lim = (frame_t >= prev_end - 1e-9) if side < 0 else (frame_t <= next_start + 1e-9)
-            near = (frame_t <= t_c + 1e-9) if side < 0 else (frame_t >= t_c - 1e-9)
-            g_fr = np.flatnonzero(lim & near)
-            g_fr = g_fr[::-1] if side < 0 else g_fr                  # nearest the contact first
-            k = g_fr[:int(round(EXTEND_S * fps))]
-            on = np.linalg.norm(com[k] - _quad(cf, frame_t[k]), axis=1) <= thr
-            n_on = int(np.argmin(on)) if not on.all() else on.size
-            n_on = n_on if n_on > 1 else 0          # the frame at the instant is both sides'
-            if n_on:
-                if n_on < k.size:                    # where the position meets: the instant
-                    tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
-                    gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
-                    t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-                    if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
-                        t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
-                warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
-                                f"ground phase the analyser finds; its velocity changes at "
-                                f"{t_c:.4f} s, where the sides are compared")
-            gf = np.sort(g_fr[n_on:][:GROUND_FRAMES])
-            if gf.size < 3:
-                warnings.append(f"{p}: fewer than 3 ground frames beside it; not measured")
-                continue
-            vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
-            if not n_on and np.linalg.norm(va - vg) > 0.05 and g_fr.size:
-                # the velocity changes: the instant is where the two sides' positions meet,
-                # between the nearest ground frame and the flight's nearest frame
-                tt = np.linspace(g_fr[0], g_fr[0] - side, 41) / fps
-                gq = _ground_fit(com, fps, gf, tt)
-                t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-                vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+    # contacts: the ground phase before (after) against the flight.  Frames beside the
+    # flight that still lie on its parabola are the flight's (a stimulus whose feet stay
+    # at the floor a few frames after its velocity changed): the velocity changes where
+    # the COM leaves the parabola, which is where the two sides are compared
+    res = com[fr] - _quad(cf, t)
+    thr = max(3.0 * float(np.sqrt(np.mean(np.sum(res * res, 1)))), ON_PATH * size)
+    prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
+    next_start = flights[i].takeoff_time if i < len(flights) else np.inf
+    inst = {}
+    for p, t_c, side in ((f"takeoff {i}", t_to, -1), (f"landing {i}", t_ld, 1)):
+        t_c = _measure_contact(add, warnings, com, fps, cf, thr, p, t_c, side, (prev_end, next_start))
+        if t_c is not None:
             inst[side] = t_c
-            add(f"{p.split()[0]}-velocity-jump", "", p, np.linalg.norm(va - vg), t_c, t_c, t_c)
-            _components(add, warnings, p, va, vg, t_c, takeoff=side < 0)
 
-        # |L| over the flight, from the instants where the COM joins and leaves its parabola
-        t0_, t1_ = inst.get(-1, t_to), inst.get(1, t_ld)
-        smooth, step, t_step, L0 = split_trend_step(t - t0_, Ln[fr], t1_ - t0_)
-        if L0 < SMALL_L * clip_mass(a) / 70.0:
-            warnings.append(f"{ph}: |L| is {L0:.1f} kg·m²/s, small (a flip's is 25-50): its "
-                            f"changes in % are large for small absolute changes")
-        add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
-        add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
-            t0_ + t_step if np.isfinite(t_step) else mid)
-        jolt, t_j = velocity_jolt(t, com[fr])
-        add("air-jolt", "", ph, jolt, t_to, t_ld, t_j)
+    # |L| over the flight, from the instants where the COM joins and leaves its parabola
+    t0_, t1_ = inst.get(-1, t_to), inst.get(1, t_ld)
+    smooth, step, t_step, L0 = split_trend_step(t - t0_, Ln[fr], t1_ - t0_)
+    if L0 < SMALL_L * clip_mass(a) / 70.0:
+        warnings.append(f"{ph}: |L| is {L0:.1f} kg·m²/s, small (a flip's is 25-50): its "
+                        f"changes in % are large for small absolute changes")
+    add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
+    add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
+        t0_ + t_step if np.isfinite(t_step) else mid)
+    jolt, t_j = velocity_jolt(t, com[fr])
+    add("air-jolt", "", ph, jolt, t_to, t_ld, t_j)
 
-    add("pose-rate", "", "clip", 0.0, 0.0, dur, 0.0)
 
-    _ground(add, warnings, clip, a, phases, fps)
-    return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
+def _measure_contact(add, warnings: list, com, fps: float, cf, thr: float, p: str, t_c: float, side: int,
+                     bounds: tuple) -> float | None:
+    """The velocity jump at contact ``p`` (``side`` −1: take-off, 1: landing) of a flight
+    whose COM parabola is ``cf``; the instant where the sides are compared, or None when
+    too few ground frames lie beside it.  ``bounds``: the end of the previous flight and
+    the start of the next."""
+    prev_end, next_start = bounds
+    frame_t = np.arange(com.shape[0]) / fps
+    v_air = lambda s: 2.0 * cf[:, 0] * s + cf[:, 1]         # noqa: E731
+    lim = (frame_t >= prev_end - 1e-9) if side < 0 else (frame_t <= next_start + 1e-9)
+    near = (frame_t <= t_c + 1e-9) if side < 0 else (frame_t >= t_c - 1e-9)
+    g_fr = np.flatnonzero(lim & near)
+    g_fr = g_fr[::-1] if side < 0 else g_fr                  # nearest the contact first
+    k = g_fr[:int(round(EXTEND_S * fps))]
+    on = np.linalg.norm(com[k] - _quad(cf, frame_t[k]), axis=1) <= thr
+    n_on = int(np.argmin(on)) if not on.all() else on.size
+    n_on = n_on if n_on > 1 else 0          # the frame at the instant is both sides'
+    if n_on:
+        if n_on < k.size:                    # where the position meets: the instant
+            tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
+            gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
+            t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+            if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
+                t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
+        warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
+                        f"ground phase the analyser finds; its velocity changes at "
+                        f"{t_c:.4f} s, where the sides are compared")
+    gf = np.sort(g_fr[n_on:][:GROUND_FRAMES])
+    if gf.size < 3:
+        warnings.append(f"{p}: fewer than 3 ground frames beside it; not measured")
+        return None
+    vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+    if not n_on and np.linalg.norm(va - vg) > 0.05 and g_fr.size:
+        # the velocity changes: the instant is where the two sides' positions meet,
+        # between the nearest ground frame and the flight's nearest frame
+        tt = np.linspace(g_fr[0], g_fr[0] - side, 41) / fps
+        gq = _ground_fit(com, fps, gf, tt)
+        t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+        vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+    add(f"{p.split()[0]}-velocity-jump", "", p, np.linalg.norm(va - vg), t_c, t_c, t_c)
+    _components(add, warnings, p, va, vg, t_c, takeoff=side < 0)
+    return t_c
 
 
 def clip_mass(a: Analysis) -> float:
