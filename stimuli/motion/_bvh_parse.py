@@ -38,18 +38,6 @@ _FRAME_TIME_RE = re.compile(r"Frame\s+Time\s*:\s*(.*)\Z", re.IGNORECASE)
 
 def parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
     """Parse HIERARCHY up to MOTION. Returns skeleton parts and the MOTION line index."""
-    names: list[str] = []
-    index_of: dict[str, int] = {}  # name -> joint: uniqueness checked in O(1)
-    offset_lines: list[int] = []   # 1-based line of each joint's OFFSET
-    end_lines: list[int] = []      # 1-based line of each End Site's OFFSET
-    channel_lines: dict[int, int] = {}   # joint → 1-based line of its CHANNELS
-    parents: list[int] = []
-    offsets: list[list[float]] = []
-    channels: list[tuple[str, ...]] = []
-    end_sites: list[tuple[int, np.ndarray]] = []
-    stack: list[int] = []          # joint index per open brace; -2 for an End Site block
-    pending: int | None = None     # a joint (or -2) waiting for its '{'
-    cur_end: list | None = None
     i = 0
     n = len(lines)
     # skip leading blank lines
@@ -60,7 +48,7 @@ def parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
     if lines[i].strip().upper() != "HIERARCHY":
         raise BVHError(path, i + 1, f"expected 'HIERARCHY', found {lines[i].strip()[:40]!r}")
     i += 1
-    root_seen = False
+    h = _Hierarchy(path)
     while i < n:
         raw = lines[i].strip()
         ln = i + 1
@@ -70,118 +58,175 @@ def parse_hierarchy(lines: list[str], path) -> tuple[dict, int]:
         parts = raw.split()
         key = parts[0]
         if key == "MOTION":
-            if stack:
-                raise BVHError(path, ln, f"unbalanced braces: {len(stack)} block(s) still open "
-                                         f"before MOTION (expected '}}')")
-            if pending is not None:
-                raise BVHError(path, ln, "expected '{' after the joint line before MOTION")
-            if not names:
-                raise BVHError(path, ln, "no ROOT joint in HIERARCHY")
-            return dict(names=names, parents=parents, offsets=offsets, channels=channels,
-                        end_sites=end_sites, offset_lines=offset_lines, end_lines=end_lines), i
-        if pending is not None and key != "{":
+            return h.finished(ln), i
+        if h.pending is not None and key != "{":
             raise BVHError(path, ln, f"expected '{{' after joint line, found {raw[:40]!r}")
         if key in ("ROOT", "JOINT"):
-            name = raw[len(key):].strip()
-            if not name:
-                raise BVHError(path, ln, f"{key} without a name")
-            if key == "ROOT":
-                if root_seen or stack:
-                    raise BVHError(path, ln, "a second ROOT (only one skeleton per file is read)")
-                root_seen = True
-                parent = -1
-            else:
-                if not stack or stack[-1] < 0:
-                    raise BVHError(path, ln, "JOINT outside a ROOT/JOINT block")
-                parent = stack[-1]
-            if name in index_of:
-                raise BVHError(path, ln, f"duplicate joint name {name!r} "
-                                         f"(first at joint {index_of[name]})")
-            index_of[name] = len(names)
-            names.append(name)
-            offset_lines.append(0)
-            parents.append(parent)
-            offsets.append(None)  # type: ignore[arg-type]
-            channels.append(None)  # type: ignore[arg-type]
-            pending = len(names) - 1
+            h.joint(key, raw, ln)
         elif key == "End" and len(parts) >= 2 and parts[1] == "Site":
-            if not stack or stack[-1] < 0:
-                raise BVHError(path, ln, "End Site outside a joint block")
-            pending = -2
-            cur_end = [stack[-1], None, 0]
+            h.end_site(ln)
         elif key == "{":
-            if pending is None:
-                raise BVHError(path, ln, "unexpected '{' (no ROOT, JOINT or End Site before it)")
-            stack.append(pending)
-            pending = None
+            h.open(ln)
         elif key == "}":
-            if not stack:
-                raise BVHError(path, ln, "unbalanced braces: '}' with no open block")
-            top = stack.pop()
-            if top == -2:
-                if cur_end is None or cur_end[1] is None:
-                    raise BVHError(path, ln, "End Site without OFFSET")
-                end_sites.append((cur_end[0], cur_end[1]))
-                end_lines.append(cur_end[2])
-                cur_end = None
-            else:
-                if offsets[top] is None:
-                    raise BVHError(path, ln, f"joint {names[top]!r} has no OFFSET")
-                if channels[top] is None:
-                    channels[top] = ()
+            h.close(ln)
         elif key == "OFFSET":
-            if not stack:
-                raise BVHError(path, ln, "OFFSET outside a block")
-            try:
-                vals = [float(v) for v in parts[1:]]
-            except (ValueError, OverflowError):
-                raise BVHError(path, ln, f"OFFSET needs 3 numbers, found {' '.join(parts[1:])!r}") from None
-            if len(vals) != 3 or not all(map(math.isfinite, vals)):
-                raise BVHError(path, ln, f"OFFSET needs 3 finite numbers, found {len(vals)}: "
-                                         f"{' '.join(parts[1:])!r}")
-            if stack[-1] == -2:
-                if cur_end[1] is not None:  # type: ignore[index]
-                    raise BVHError(path, ln, f"a second OFFSET in one End Site (the first at line "
-                                             f"{cur_end[2]}); a block has exactly one")  # type: ignore[index]
-                cur_end[1] = np.array(vals)  # type: ignore[index]
-                cur_end[2] = ln  # type: ignore[index]
-            else:
-                if offsets[stack[-1]] is not None:
-                    raise BVHError(path, ln, f"a second OFFSET for joint {names[stack[-1]]!r} (the first "
-                                             f"at line {offset_lines[stack[-1]]}); a joint has exactly one")
-                offsets[stack[-1]] = vals
-                offset_lines[stack[-1]] = ln
+            h.offset(parts, ln)
         elif key == "CHANNELS":
-            if not stack or stack[-1] < 0:
-                raise BVHError(path, ln, "CHANNELS outside a joint block")
-            if stack[-1] in channel_lines:
-                raise BVHError(path, ln, f"a second CHANNELS for joint {names[stack[-1]]!r} (the first "
-                                         f"at line {channel_lines[stack[-1]]}); a joint has at most one")
-            channel_lines[stack[-1]] = ln
-            try:
-                count = int(parts[1])
-            except (IndexError, ValueError, OverflowError):
-                raise BVHError(path, ln, "CHANNELS needs a count, e.g. 'CHANNELS 3 Zrotation "
-                                         "Yrotation Xrotation'") from None
-            chans = tuple(parts[2:])
-            if len(chans) != count:
-                raise BVHError(path, ln, f"CHANNELS says {count} but lists {len(chans)} names")
-            for c in chans:
-                if c not in KNOWN_CHANNELS:
-                    raise BVHError(path, ln, f"unknown channel name {c!r}; expected one of "
-                                             f"{sorted(KNOWN_CHANNELS)}")
-            rot = [c for c in chans if c in ROTATION_CHANNELS]
-            pos = [c for c in chans if c in POSITION_CHANNELS]
-            if len(set(chans)) != len(chans) or len(rot) not in (0, 3) or len(pos) not in (0, 3):
-                raise BVHError(path, ln, f"CHANNELS must list 0 or 3 distinct rotations and 0 or "
-                                         f"3 distinct positions, found {list(chans)}")
-            channels[stack[-1]] = chans
+            h.channel_line(parts, ln)
         else:
             raise BVHError(path, ln, f"unexpected {raw[:40]!r} in HIERARCHY; expected ROOT, JOINT, "
                                      f"End Site, OFFSET, CHANNELS, braces or MOTION")
-    if stack or pending is not None:
-        raise BVHError(path, n, f"unbalanced braces: file ends with {len(stack)} block(s) open")
+    if h.stack or h.pending is not None:
+        raise BVHError(path, n, f"unbalanced braces: file ends with {len(h.stack)} block(s) open")
     raise BVHError(path, n, "no MOTION section (file ends inside HIERARCHY)")
+
+
+class _Hierarchy:
+    """The state of :func:`parse_hierarchy` between lines: the joints read so far and
+    the open blocks; one method per kind of line, each raising :class:`BVHError` with
+    the line."""
+
+    def __init__(self, path):
+        self.path = path
+        self.names: list[str] = []
+        self.index_of: dict[str, int] = {}  # name -> joint: uniqueness checked in O(1)
+        self.offset_lines: list[int] = []   # 1-based line of each joint's OFFSET
+        self.end_lines: list[int] = []      # 1-based line of each End Site's OFFSET
+        self.channel_lines: dict[int, int] = {}   # joint → 1-based line of its CHANNELS
+        self.parents: list[int] = []
+        self.offsets: list[list[float]] = []
+        self.channels: list[tuple[str, ...]] = []
+        self.end_sites: list[tuple[int, np.ndarray]] = []
+        self.stack: list[int] = []          # joint index per open brace; -2 for an End Site block
+        self.pending: int | None = None     # a joint (or -2) waiting for its '{'
+        self.cur_end: list | None = None
+        self.root_seen = False
+
+    def finished(self, ln: int) -> dict:
+        """At MOTION: the skeleton parts, checked complete."""
+        path, stack = self.path, self.stack
+        if stack:
+            raise BVHError(path, ln, f"unbalanced braces: {len(stack)} block(s) still open "
+                                     f"before MOTION (expected '}}')")
+        if self.pending is not None:
+            raise BVHError(path, ln, "expected '{' after the joint line before MOTION")
+        if not self.names:
+            raise BVHError(path, ln, "no ROOT joint in HIERARCHY")
+        return dict(names=self.names, parents=self.parents, offsets=self.offsets,
+                    channels=self.channels, end_sites=self.end_sites,
+                    offset_lines=self.offset_lines, end_lines=self.end_lines)
+
+    def joint(self, key: str, raw: str, ln: int) -> None:
+        """A ROOT or JOINT line."""
+        path, stack = self.path, self.stack
+        name = raw[len(key):].strip()
+        if not name:
+            raise BVHError(path, ln, f"{key} without a name")
+        if key == "ROOT":
+            if self.root_seen or stack:
+                raise BVHError(path, ln, "a second ROOT (only one skeleton per file is read)")
+            self.root_seen = True
+            parent = -1
+        else:
+            if not stack or stack[-1] < 0:
+                raise BVHError(path, ln, "JOINT outside a ROOT/JOINT block")
+            parent = stack[-1]
+        if name in self.index_of:
+            raise BVHError(path, ln, f"duplicate joint name {name!r} "
+                                     f"(first at joint {self.index_of[name]})")
+        self.index_of[name] = len(self.names)
+        self.names.append(name)
+        self.offset_lines.append(0)
+        self.parents.append(parent)
+        self.offsets.append(None)  # type: ignore[arg-type]
+        self.channels.append(None)  # type: ignore[arg-type]
+        self.pending = len(self.names) - 1
+
+    def end_site(self, ln: int) -> None:
+        """An End Site line."""
+        if not self.stack or self.stack[-1] < 0:
+            raise BVHError(self.path, ln, "End Site outside a joint block")
+        self.pending = -2
+        self.cur_end = [self.stack[-1], None, 0]
+
+    def open(self, ln: int) -> None:
+        """A '{'."""
+        if self.pending is None:
+            raise BVHError(self.path, ln, "unexpected '{' (no ROOT, JOINT or End Site before it)")
+        self.stack.append(self.pending)
+        self.pending = None
+
+    def close(self, ln: int) -> None:
+        """A '}': the block's joint (or End Site) checked complete."""
+        path = self.path
+        if not self.stack:
+            raise BVHError(path, ln, "unbalanced braces: '}' with no open block")
+        top = self.stack.pop()
+        if top == -2:
+            cur_end = self.cur_end
+            if cur_end is None or cur_end[1] is None:
+                raise BVHError(path, ln, "End Site without OFFSET")
+            self.end_sites.append((cur_end[0], cur_end[1]))
+            self.end_lines.append(cur_end[2])
+            self.cur_end = None
+        else:
+            if self.offsets[top] is None:
+                raise BVHError(path, ln, f"joint {self.names[top]!r} has no OFFSET")
+            if self.channels[top] is None:
+                self.channels[top] = ()
+
+    def offset(self, parts: list[str], ln: int) -> None:
+        """An OFFSET line (of a joint or an End Site)."""
+        path, stack, cur_end = self.path, self.stack, self.cur_end
+        if not stack:
+            raise BVHError(path, ln, "OFFSET outside a block")
+        try:
+            vals = [float(v) for v in parts[1:]]
+        except (ValueError, OverflowError):
+            raise BVHError(path, ln, f"OFFSET needs 3 numbers, found {' '.join(parts[1:])!r}") from None
+        if len(vals) != 3 or not all(map(math.isfinite, vals)):
+            raise BVHError(path, ln, f"OFFSET needs 3 finite numbers, found {len(vals)}: "
+                                     f"{' '.join(parts[1:])!r}")
+        if stack[-1] == -2:
+            if cur_end[1] is not None:  # type: ignore[index]
+                raise BVHError(path, ln, f"a second OFFSET in one End Site (the first at line "
+                                         f"{cur_end[2]}); a block has exactly one")  # type: ignore[index]
+            cur_end[1] = np.array(vals)  # type: ignore[index]
+            cur_end[2] = ln  # type: ignore[index]
+        else:
+            if self.offsets[stack[-1]] is not None:
+                raise BVHError(path, ln, f"a second OFFSET for joint {self.names[stack[-1]]!r} (the first "
+                                         f"at line {self.offset_lines[stack[-1]]}); a joint has exactly one")
+            self.offsets[stack[-1]] = vals
+            self.offset_lines[stack[-1]] = ln
+
+    def channel_line(self, parts: list[str], ln: int) -> None:
+        """A CHANNELS line."""
+        path, stack = self.path, self.stack
+        if not stack or stack[-1] < 0:
+            raise BVHError(path, ln, "CHANNELS outside a joint block")
+        if stack[-1] in self.channel_lines:
+            raise BVHError(path, ln, f"a second CHANNELS for joint {self.names[stack[-1]]!r} (the first "
+                                     f"at line {self.channel_lines[stack[-1]]}); a joint has at most one")
+        self.channel_lines[stack[-1]] = ln
+        try:
+            count = int(parts[1])
+        except (IndexError, ValueError, OverflowError):
+            raise BVHError(path, ln, "CHANNELS needs a count, e.g. 'CHANNELS 3 Zrotation "
+                                     "Yrotation Xrotation'") from None
+        chans = tuple(parts[2:])
+        if len(chans) != count:
+            raise BVHError(path, ln, f"CHANNELS says {count} but lists {len(chans)} names")
+        for c in chans:
+            if c not in KNOWN_CHANNELS:
+                raise BVHError(path, ln, f"unknown channel name {c!r}; expected one of "
+                                         f"{sorted(KNOWN_CHANNELS)}")
+        rot = [c for c in chans if c in ROTATION_CHANNELS]
+        pos = [c for c in chans if c in POSITION_CHANNELS]
+        if len(set(chans)) != len(chans) or len(rot) not in (0, 3) or len(pos) not in (0, 3):
+            raise BVHError(path, ln, f"CHANNELS must list 0 or 3 distinct rotations and 0 or "
+                                     f"3 distinct positions, found {list(chans)}")
+        self.channels[stack[-1]] = chans
 
 
 def tokens_per_line(data: bytes, n_lines: int) -> np.ndarray:
