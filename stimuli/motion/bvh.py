@@ -172,6 +172,88 @@ def _check_bounds(path, h: dict, values: np.ndarray, first: int, s: float,
 
 
 
+def _lines(path: Path) -> list[str]:
+    """The file's lines (UTF-8, else Latin-1; any line ending)."""
+    raw = _read_regular_file(path)
+    try:
+        text = raw.decode("utf-8-sig")  # a byte-order mark is not part of 'HIERARCHY'
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    if not text.strip():
+        raise BVHError(path, 1, "empty file: expected 'HIERARCHY'")
+    return text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+
+
+def _channel_columns(channels):
+    """Per joint its rotation columns and position columns (None without), its Euler
+    order, and all rotation and position columns."""
+    col_of_rot: list[list[int]] = []
+    col_of_pos: list[list[int] | None] = []
+    c0 = 0
+    for ch in channels:
+        idx = {c: c0 + k for k, c in enumerate(ch)}
+        rot = [c for c in ch if c in ROTATION_CHANNELS]
+        col_of_rot.append([idx[c] for c in rot])
+        col_of_pos.append([idx[c] for c in POSITION_CHANNELS] if POSITION_CHANNELS[0] in idx else None)
+        c0 += len(ch)
+    orders = ["".join(c[0] for c in ch if c in ROTATION_CHANNELS) for ch in channels]
+    rot_cols = np.array([c for cols in col_of_rot for c in cols], dtype=np.int64)
+    pos_cols = np.array([c for cols in col_of_pos if cols is not None for c in cols], dtype=np.int64)
+    return col_of_rot, col_of_pos, orders, rot_cols, pos_cols
+
+
+def _scale(scale, h: dict, offsets: np.ndarray, meta: dict):
+    """Metres per file unit, given or guessed (``meta["scale_source"]`` says which), and
+    the rest skeleton the guess was made on (None when given)."""
+    skel = None
+    if scale is None:
+        rest_offsets = offsets.copy()
+        rest_offsets[0] = 0.0       # root_pos carries the root's position (see below)
+        skel = Skeleton(h["names"], h["parents"], rest_offsets, h["channels"], h["end_sites"])
+        with np.errstate(over="ignore", invalid="ignore"):   # absurd offsets: refused below
+            s, unit = guess_scale(skel)
+        meta["scale_source"] = f"guess: {unit}"
+    else:
+        try:
+            s = float(scale)
+        except (TypeError, ValueError):
+            s = float("nan")
+        if not (np.isfinite(s) and 1e-6 <= s <= 1e3):
+            raise FlipstudyValueError(f"scale: expected metres per file unit between 1e-06 and 1000 "
+                                      f"(0.01 for centimetres), got {scale!r}")
+        meta["scale_source"] = "given"
+    return s, skel
+
+
+def _translations(values, offsets, col_of_pos, names, first_frame):
+    """Translations of the root and any other joint with position channels: (root (F,3),
+    joints (F,J,3) or None, the convention read per joint)."""
+    J = len(names)
+    root_pos = np.broadcast_to(offsets[0], (values.shape[0], 3)).copy()
+    joint_pos = None
+    conventions = {}
+    for j in range(J):
+        cols = col_of_pos[j]
+        if cols is None:
+            continue
+        ch = values[:, cols]
+        off = offsets[j]
+        tol = 1e-4 * max(1.0, float(np.abs(off).max()))
+        if np.any(off != 0) and np.allclose(off, first_frame[cols], atol=tol):
+            pos = ch
+            conventions[names[j]] = "channels are absolute (OFFSET repeats frame 1)"
+        else:
+            pos = off + ch
+            conventions[names[j]] = "OFFSET + channels"
+        if j == 0:
+            root_pos = pos
+        else:
+            if joint_pos is None:
+                joint_pos = np.broadcast_to(offsets[None], (values.shape[0], J, 3)).copy()
+            joint_pos[:, j] = pos
+    return root_pos, joint_pos, conventions
+
+
 def load_bvh(path, scale: float | None = None, fps: float | None = None,
              drop_tpose: bool | str = "auto") -> Clip:
     """Read a BVH file into a :class:`Clip` in metres.
@@ -215,52 +297,16 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
     length units (1/0.45 in)'``.
     """
     path = Path(path)
-    raw = _read_regular_file(path)
-    try:
-        text = raw.decode("utf-8-sig")  # a byte-order mark is not part of 'HIERARCHY'
-    except UnicodeDecodeError:
-        text = raw.decode("latin-1")
-    if not text.strip():
-        raise BVHError(path, 1, "empty file: expected 'HIERARCHY'")
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    lines = _lines(path)
     h, motion_at = parse_hierarchy(lines, path)
     n_frames, frame_time, frame_time_text, values, first = parse_motion(
         lines, motion_at, sum(len(c) for c in h["channels"]), path)
 
     names, parents, channels = h["names"], h["parents"], h["channels"]
-    J = len(names)
     offsets = np.array(h["offsets"], dtype=np.float64)
-    # channel columns
-    col_of_rot: list[list[int]] = []
-    col_of_pos: list[list[int] | None] = []
-    c0 = 0
-    for ch in channels:
-        idx = {c: c0 + k for k, c in enumerate(ch)}
-        rot = [c for c in ch if c in ROTATION_CHANNELS]
-        col_of_rot.append([idx[c] for c in rot])
-        col_of_pos.append([idx[c] for c in POSITION_CHANNELS] if POSITION_CHANNELS[0] in idx else None)
-        c0 += len(ch)
-    orders = ["".join(c[0] for c in ch if c in ROTATION_CHANNELS) for ch in channels]
-    rot_cols = np.array([c for cols in col_of_rot for c in cols], dtype=np.int64)
-    pos_cols = np.array([c for cols in col_of_pos if cols is not None for c in cols], dtype=np.int64)
+    col_of_rot, col_of_pos, orders, rot_cols, pos_cols = _channel_columns(channels)
     meta: dict = {"name": path.stem, "path": str(path), "warnings": [], "dropped_frames": []}
-    skel = None
-    if scale is None:
-        rest_offsets = offsets.copy()
-        rest_offsets[0] = 0.0       # root_pos carries the root's position (see below)
-        skel = Skeleton(names, parents, rest_offsets, channels, h["end_sites"])
-        with np.errstate(over="ignore", invalid="ignore"):   # absurd offsets: refused below
-            s, unit = guess_scale(skel)
-        meta["scale_source"] = f"guess: {unit}"
-    else:
-        try:
-            s = float(scale)
-        except (TypeError, ValueError):
-            s = float("nan")
-        if not (np.isfinite(s) and 1e-6 <= s <= 1e3):
-            raise FlipstudyValueError(f"scale: expected metres per file unit between 1e-06 and 1000 "
-                                      f"(0.01 for centimetres), got {scale!r}")
-        meta["scale_source"] = "given"
+    s, skel = _scale(scale, h, offsets, meta)
     _check_bounds(path, h, values, first, s, pos_cols, rot_cols)
     q = _euler_to_quat(values, orders, col_of_rot)
 
@@ -274,29 +320,7 @@ def load_bvh(path, scale: float | None = None, fps: float | None = None,
             "frame 1 of the file is a calibration T-pose (rotation channels zero, a pose jump to "
             "frame 2); it was dropped, so frame indices count from the file's frame 2")
 
-    # translations: root and any other joint with position channels
-    root_pos = np.broadcast_to(offsets[0], (values.shape[0], 3)).copy()
-    joint_pos = None
-    conventions = {}
-    for j in range(J):
-        cols = col_of_pos[j]
-        if cols is None:
-            continue
-        ch = values[:, cols]
-        off = offsets[j]
-        tol = 1e-4 * max(1.0, float(np.abs(off).max()))
-        if np.any(off != 0) and np.allclose(off, first_frame[cols], atol=tol):
-            pos = ch
-            conventions[names[j]] = "channels are absolute (OFFSET repeats frame 1)"
-        else:
-            pos = off + ch
-            conventions[names[j]] = "OFFSET + channels"
-        if j == 0:
-            root_pos = pos
-        else:
-            if joint_pos is None:
-                joint_pos = np.broadcast_to(offsets[None], (values.shape[0], J, 3)).copy()
-            joint_pos[:, j] = pos
+    root_pos, joint_pos, conventions = _translations(values, offsets, col_of_pos, names, first_frame)
     meta["root_convention"] = conventions.get(names[0], "no position channels (OFFSET only)")
     meta["file_root_offset"] = offsets[0].tolist()
     offsets[0] = 0.0  # root_pos is absolute from here on

@@ -23,7 +23,6 @@ MODULES_BEING_MOVED = {
 FUNCTIONS_BEING_SPLIT = {
     "stimuli/edit/concat/method.py:concatenate",
     "stimuli/edit/join.py:join_in_flight",
-    "stimuli/motion/bvh.py:load_bvh",
     "study/server.py:create_app",
 }
 
