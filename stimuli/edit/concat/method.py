@@ -68,62 +68,16 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     peak = max(m1.main_peak, m2_raw.main_peak)
     max_cost = peak ** 2 if max_cost is None else float(max_cost)
     if best is None:
-        other = "forward" if rule == "reverse" else "reverse"
-        th, _, works, _ = _best_period(m1, m2_raw, other, body, max_facing_deg)
-        hint = (f"; --rule {other} works (θ = {np.degrees(th):.1f}°)" if works is not None else
-                f"; --rule {other} fails too (try --range-a/--range-b or --mirror-b)")
-        raise ConcatError(f"the motions cannot be concatenated under the {rule} rule: " + "; ".join(tried)
-                          + hint)
+        _refuse(m1, m2_raw, rule, body, max_facing_deg, tried)
     tmg, case, s1, s2, support, allowed = best
     if tmg.F > max_cost:
         raise ConcatError(f"the motions are too different to blend: F = {tmg.F:.1f} at the best offset "
                           f"exceeds the threshold {max_cost:.1f} (angular momenta {np.sqrt(tmg.F_dm):.1f} "
                           f"kg·m²/s apart at the blending centre)")
     T, fT = tmg.T, tmg.fT
-    # the blend window, traced from f_T while ΔL² stays small and inside both periods
-    ok1 = np.zeros(m1.clip.num_frames, bool)
-    ok1[s1] = True
-    ok2 = np.zeros(m2r.clip.num_frames, bool)
-    ok2[s2] = True
-    thr = (trace_frac * peak) ** 2
-    # frames f where both motions exist (motion 2 at f − T), and which of them lie
-    # in both blendable periods ("both") with ‖ΔL‖² under the threshold ("close")
-    lo, hi = max(0, T), min(ok1.size - 1, ok2.size - 1 + T)
-    fr = np.arange(lo, hi + 1)
-    both = ok1[fr] & ok2[fr - T]
-    close = both & (np.sum((m1.L[fr] - m2r.L[fr - T]) ** 2, axis=1) <= thr)
-    close[fT - lo] = True
-
-    def run_at(mask):
-        """The frames (first, last) of the run of ``mask`` that holds f_T."""
-        s, e = next((s, e) for s, e in _runs(mask) if s <= fT - lo <= e)
-        return lo + s, lo + e
-
-    f0, f1 = run_at(close)                      # eq. 8's tracing rule, outwards from f_T
-    want = int(round(min_blend_s * a.fps))
-
-    def grow(f0, f1, a_, b_):
-        """[f0, f1] widened towards ``want`` frames inside [a_, b_], half on each side."""
-        need = want - (f1 - f0)
-        if need <= 0:
-            return f0, f1
-        left = min(f0 - a_, (need + 1) // 2)
-        right = min(b_ - f1, need - left)
-        left = min(f0 - a_, need - right)
-        return f0 - left, f1 + right
-
-    widened = None
-    if f1 - f0 < want:
-        # a window this short would be a cut: widen it, inside the blendable
-        # periods first, then beyond them (reported)
-        f0, f1 = grow(f0, f1, *run_at(both))
-        f0, f1 = grow(f0, f1, lo, hi)
-        widened = "inside the blendable periods" if (ok1[f0] and ok1[f1] and ok2[f0 - T] and ok2[f1 - T]) \
-            else "beyond the blendable periods"
+    f0, f1, widened, fa = _blend_window(m1, m2r, T, fT, s1, s2, (trace_frac * peak) ** 2,
+                                        int(round(min_blend_s * a.fps)))
     # translate motion 2 so the centres of the feet coincide at the first blended frame
-    # (the first blended frame in both blendable periods, i.e. in support, if the
-    # window was widened beyond them)
-    fa = f0 + int(np.flatnonzero(both[f0 - lo:f1 - lo + 1])[0])
     shift = m1.feet_centre[fa] - m2r.feet_centre[fa - T]
     shift[1] = 0.0
     m2 = transformed(m2_raw, theta, shift)
@@ -140,12 +94,7 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
         out, feet = pin_feet(out, body, (w0, w1))
     mo = momentum(out, body)
     Ln = np.linalg.norm(mo.L, axis=1)
-    # what an observer of the result sees in its flights (the release of a pinned
-    # foot in the air moves a leg there): |L| coefficient of variation per flight
-    flights = [{"takeoff": fl.takeoff, "landing": fl.landing,
-                "L_cv_pct": float(100 * Ln[fl.takeoff:fl.landing + 1].std()
-                                  / max(Ln[fl.takeoff:fl.landing + 1].mean(), 1e-9))}
-               for fl in sorted(detect_flights(out, body, mo.com), key=lambda f: f.takeoff)]
+    flights = _flights(out, body, mo)
     report = ConcatReport(
         rule=rule, suggested_rule=suggested, theta_deg=float(np.degrees(theta)),
         phases_a=m1.phases.as_dict(), phases_b=m2_raw.phases.as_dict(),
@@ -170,6 +119,76 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     # the clip's flight where it has one; two flips have two (the report's flights)
     one = flights[0] if len(flights) == 1 else {"takeoff": None, "landing": None}
     return Concatenation(out, one["takeoff"], one["landing"], report)
+
+
+def _refuse(m1, m2_raw, rule: str, body, max_facing_deg: float, tried: list):
+    """No blendable period under ``rule``: raise, naming what failed and whether the
+    other rule works."""
+    other = "forward" if rule == "reverse" else "reverse"
+    th, _, works, _ = _best_period(m1, m2_raw, other, body, max_facing_deg)
+    hint = (f"; --rule {other} works (θ = {np.degrees(th):.1f}°)" if works is not None else
+            f"; --rule {other} fails too (try --range-a/--range-b or --mirror-b)")
+    raise ConcatError(f"the motions cannot be concatenated under the {rule} rule: " + "; ".join(tried)
+                      + hint)
+
+
+def _blend_window(m1, m2r, T: int, fT: int, s1, s2, thr: float, want: int):
+    """The blend window [f0, f1], traced from f_T while ‖ΔL‖² stays under ``thr`` and
+    inside both blendable periods, widened towards ``want`` frames if shorter: (f0, f1,
+    how it was widened or None, the first blended frame in both periods)."""
+    # the blend window, traced from f_T while ΔL² stays small and inside both periods
+    ok1 = np.zeros(m1.clip.num_frames, bool)
+    ok1[s1] = True
+    ok2 = np.zeros(m2r.clip.num_frames, bool)
+    ok2[s2] = True
+    # frames f where both motions exist (motion 2 at f − T), and which of them lie
+    # in both blendable periods ("both") with ‖ΔL‖² under the threshold ("close")
+    lo, hi = max(0, T), min(ok1.size - 1, ok2.size - 1 + T)
+    fr = np.arange(lo, hi + 1)
+    both = ok1[fr] & ok2[fr - T]
+    close = both & (np.sum((m1.L[fr] - m2r.L[fr - T]) ** 2, axis=1) <= thr)
+    close[fT - lo] = True
+
+    def run_at(mask):
+        """The frames (first, last) of the run of ``mask`` that holds f_T."""
+        s, e = next((s, e) for s, e in _runs(mask) if s <= fT - lo <= e)
+        return lo + s, lo + e
+
+    f0, f1 = run_at(close)                      # eq. 8's tracing rule, outwards from f_T
+
+    def grow(f0, f1, a_, b_):
+        """[f0, f1] widened towards ``want`` frames inside [a_, b_], half on each side."""
+        need = want - (f1 - f0)
+        if need <= 0:
+            return f0, f1
+        left = min(f0 - a_, (need + 1) // 2)
+        right = min(b_ - f1, need - left)
+        left = min(f0 - a_, need - right)
+        return f0 - left, f1 + right
+
+    widened = None
+    if f1 - f0 < want:
+        # a window this short would be a cut: widen it, inside the blendable
+        # periods first, then beyond them (reported)
+        f0, f1 = grow(f0, f1, *run_at(both))
+        f0, f1 = grow(f0, f1, lo, hi)
+        widened = "inside the blendable periods" if (ok1[f0] and ok1[f1] and ok2[f0 - T] and ok2[f1 - T]) \
+            else "beyond the blendable periods"
+    # translate motion 2 so the centres of the feet coincide at the first blended frame
+    # (the first blended frame in both blendable periods, i.e. in support, if the
+    # window was widened beyond them)
+    fa = f0 + int(np.flatnonzero(both[f0 - lo:f1 - lo + 1])[0])
+    return f0, f1, widened, fa
+
+
+def _flights(out: Clip, body, mo) -> list[dict]:
+    """What an observer of the result sees in its flights (the release of a pinned foot
+    in the air moves a leg there): |L| coefficient of variation per flight."""
+    Ln = np.linalg.norm(mo.L, axis=1)
+    return [{"takeoff": fl.takeoff, "landing": fl.landing,
+             "L_cv_pct": float(100 * Ln[fl.takeoff:fl.landing + 1].std()
+                               / max(Ln[fl.takeoff:fl.landing + 1].mean(), 1e-9))}
+            for fl in sorted(detect_flights(out, body, mo.com), key=lambda f: f.takeoff)]
 
 
 def _best_period(m1, m2_raw, rule: str, body, max_facing_deg: float):
