@@ -164,6 +164,52 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     report's ``L_spread_pct``)."""
     a = first if isinstance(first, Analysis) else analyse(first)
     b0 = second if isinstance(second, Analysis) else analyse(second)
+    u, yaw, axis_err, s, bc, b = _aligned_second(a, b0, max_axis_deg)
+    fa, fb, D, phi, swing, ok = _candidate_pairs(a, b, bc, u, yaw, max_turn_error, max_swing_deg)
+    from .animator import retime_flight
+    body, fps, to = a.body, a.clip.fps, a.takeoff
+    best = _best_pair(a, b, bc, u, (fa, fb, D, phi, ok), blend_s, duration_weight)
+    _, i, j, fi, gj, e, joined, ld, n_free, T_req, n_req = best
+    xf = crossfade_rotation(joined, body, fi, max(1, int(round(blend_s * fps))), u * a.L_mean)
+    if xf["unexplained_deg"] > max_unexplained_deg:
+        raise FlipEditError(
+            f"the cross-fade at frame {fi} → its frame {gj} (distance {D[i, j]:.2f}) turns the body "
+            f"{xf['turned_perp_deg']:.0f}° about the axes ⟂ L (about the vertical {xf['turned_vertical_deg']:+.0f}°), "
+            f"of which the flight's angular momentum explains {xf['explained_perp_deg']:.0f}° "
+            f"({xf['unexplained_deg']:.0f}° unexplained, at most {max_unexplained_deg:g}°): they cannot be joined")
+
+    c, grid, ratio = _spread(a, joined, to, ld, n_free, n_req)
+    out, _, ld, T, _ = retime_flight(joined, body, to, ld, grid, ratio, a.path, keep_landing_point=False)
+    m = analyse(out, body=body, estimate=False)
+    Lm = np.linalg.norm(m.L[to + 2:ld - 1], axis=1)
+    s0, s1 = standing_span(out, body, to, ld)
+    cv = float(100 * Lm.std() / Lm.mean())
+    cv_bound = max(max_L_cv_pct, a.L_cv_pct, b0.L_cv_pct)
+    report = JoinReport(
+        yaw_deg=float(np.degrees(yaw)), axis_error_deg=float(axis_err), retime=float(s),
+        join=JoinPointReport(first=fi, second=gj, distance=float(D[i, j]),
+                             turn_error_deg=float(np.degrees(e)), flight_frames_at_L_first=n_free,
+                             swing_deg=float(np.degrees(swing[i, j])), crossfade=xf),
+        turn_deg=turn_angle(out, u, s0, s1), L_cv_pct=cv,
+        L_mean=float(Lm.mean()), L_first=a.L_mean, L_second_before=b0.L_mean,
+        L_target=float(a.L_mean / c), L_spread_pct=float(100 * (1.0 / c - 1.0)),
+        flight_s=T, flight_s_required=float(T_req), takeoff=to, landing=ld,
+        analyser_flight=[m.takeoff, m.landing] if m.flight is not None else None,
+        **momentum_jumps(out, body, to, ld), L_cv_bound_pct=float(cv_bound))
+    if report.L_cv_pct > cv_bound:
+        raise FlipEditError(
+            f"the joined flight's |L| varies by CV {report.L_cv_pct:.1f} % (at most {cv_bound:.3g} %: "
+            f"{max_L_cv_pct:g} % or the two motions' own, {a.L_cv_pct:.1f} % and {b0.L_cv_pct:.1f} %; "
+            f"join at frame {fi} → its frame {gj}, distance {D[i, j]:.2f}, cross-fade turning "
+            f"{xf['turned_perp_deg']:.0f}° ⟂ L of which {xf['explained_perp_deg']:.0f}° explained): "
+            f"the angular momentum is not conserved; they cannot be joined")
+    return Join(out, to, ld, report)
+
+
+def _aligned_second(a: Analysis, b0: Analysis, max_axis_deg: float):
+    """The second motion turned about the vertical so its L lies along the first's, at
+    the first's frame rate and retimed to its |L|: (the first's axis u, the yaw, the axes'
+    angle left, the retiming factor, the second's clip, its analysis)."""
     for x, label in ((a, "first"), (b0, "second")):
         if x.flight is None:
             raise FlipEditError(f"the {label} motion has no flight phase")
@@ -190,6 +236,14 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
     b = analyse(bc, body=body, estimate=False)
     if b.flight is None:
         raise FlipEditError("the second motion has no flight after retiming")
+    return u, yaw, axis_err, s, bc, b
+
+
+def _candidate_pairs(a: Analysis, b: Analysis, bc: Clip, u, yaw: float, max_turn_error: float,
+                     max_swing_deg: float):
+    """Flight frames of the first (``fa``) and of the second (``fb``) and which pairs may
+    join (``ok``): (fa, fb, Appendix A distances, turns about L, swings ⟂ L, ok)."""
+    body = a.body
     th_a, th_b = unwrapped_turn(a.clip, u), unwrapped_turn(bc, u)
     fa = np.arange(a.takeoff + 2, a.landing - 1)
     fb = np.arange(b.takeoff + 2, b.landing - 1)
@@ -221,11 +275,20 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
             f"about an axis ⟂ L (at most {max_swing_deg:g}°; closest pair: frame {fa[k[0]]} → its frame "
             f"{fb[k[1]]}, distance {D[k]:.2f}); a cross-fade would twist the body by that much with no "
             f"angular momentum about that axis: they cannot be joined")
-    ok = agree
+    return fa, fb, D, phi, swing, agree
 
+
+def _best_pair(a: Analysis, b: Analysis, bc: Clip, u, cand: tuple, blend_s: float,
+               duration_weight: float) -> tuple:
+    """The pair of least cost (distance plus ``duration_weight`` × the duration
+    mismatch at |L| = L_first) and its joined motion: (cost, i, j, first frame, second
+    frame, turn error, joined clip, landing, frames at L_first, T required, frames
+    required)."""
+    fa, fb, D, phi, ok = cand
+    body, fps = a.body, a.clip.fps
     # the flight the first take-off implies (Appendix B's reasoning for k*: linear
     # momentum is continuous when the flight lasts what v0 and Δy give)
-    from .animator import _L_on_grid, retime_flight
+    from .animator import _L_on_grid
     to = a.takeoff
     G = -2.0 * a.path[1, 0]                      # the gravity retime_flight's parabola uses
     v0 = a.path[1, 1]
@@ -258,15 +321,14 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
         cost = float(D[i, j]) + duration_weight * abs(mismatch)
         if best is None or cost < best[0]:
             best = (cost, i, j, fi, gj, e, joined, ld, n_free, T_req, n_req)
-    _, i, j, fi, gj, e, joined, ld, n_free, T_req, n_req = best
-    xf = crossfade_rotation(joined, body, fi, max(1, int(round(blend_s * fps))), u * a.L_mean)
-    if xf["unexplained_deg"] > max_unexplained_deg:
-        raise FlipEditError(
-            f"the cross-fade at frame {fi} → its frame {gj} (distance {D[i, j]:.2f}) turns the body "
-            f"{xf['turned_perp_deg']:.0f}° about the axes ⟂ L (about the vertical {xf['turned_vertical_deg']:+.0f}°), "
-            f"of which the flight's angular momentum explains {xf['explained_perp_deg']:.0f}° "
-            f"({xf['unexplained_deg']:.0f}° unexplained, at most {max_unexplained_deg:g}°): they cannot be joined")
+    return best
 
+
+def _spread(a: Analysis, joined: Clip, to: int, ld: int, n_free: float, n_req: int):
+    """The duration mismatch left, spread over the flight: (c, the |L| grid, the rate
+    ratio on it)."""
+    from .animator import _L_on_grid
+    body = a.body
     # the mismatch left is spread over the flight: |L| towards L_first/c, the rule's
     # ratio scaled by c (≈ n_req/n_free) so that exactly n_req steps end on the
     # landing frame (bisection: the end moves back as c grows)
@@ -281,31 +343,7 @@ def join_in_flight(first: Clip | Analysis, second: Clip | Analysis, *, max_axis_
             hi = c
     c = hi
     ratio = c * base
-    out, _, ld, T, _ = retime_flight(joined, body, to, ld, grid, ratio, a.path, keep_landing_point=False)
-    m = analyse(out, body=body, estimate=False)
-    Lm = np.linalg.norm(m.L[to + 2:ld - 1], axis=1)
-    s0, s1 = standing_span(out, body, to, ld)
-    cv = float(100 * Lm.std() / Lm.mean())
-    cv_bound = max(max_L_cv_pct, a.L_cv_pct, b0.L_cv_pct)
-    report = JoinReport(
-        yaw_deg=float(np.degrees(yaw)), axis_error_deg=float(axis_err), retime=float(s),
-        join=JoinPointReport(first=fi, second=gj, distance=float(D[i, j]),
-                             turn_error_deg=float(np.degrees(e)), flight_frames_at_L_first=n_free,
-                             swing_deg=float(np.degrees(swing[i, j])), crossfade=xf),
-        turn_deg=turn_angle(out, u, s0, s1), L_cv_pct=cv,
-        L_mean=float(Lm.mean()), L_first=a.L_mean, L_second_before=b0.L_mean,
-        L_target=float(a.L_mean / c), L_spread_pct=float(100 * (1.0 / c - 1.0)),
-        flight_s=T, flight_s_required=float(T_req), takeoff=to, landing=ld,
-        analyser_flight=[m.takeoff, m.landing] if m.flight is not None else None,
-        **momentum_jumps(out, body, to, ld), L_cv_bound_pct=float(cv_bound))
-    if report.L_cv_pct > cv_bound:
-        raise FlipEditError(
-            f"the joined flight's |L| varies by CV {report.L_cv_pct:.1f} % (at most {cv_bound:.3g} %: "
-            f"{max_L_cv_pct:g} % or the two motions' own, {a.L_cv_pct:.1f} % and {b0.L_cv_pct:.1f} %; "
-            f"join at frame {fi} → its frame {gj}, distance {D[i, j]:.2f}, cross-fade turning "
-            f"{xf['turned_perp_deg']:.0f}° ⟂ L of which {xf['explained_perp_deg']:.0f}° explained): "
-            f"the angular momentum is not conserved; they cannot be joined")
-    return Join(out, to, ld, report)
+    return c, grid, ratio
 
 
 def crossfade_rotation(clip: Clip, body, f: int, w: int, L: np.ndarray, pad: int = 1) -> dict:

@@ -21,7 +21,6 @@ MODULES_BEING_MOVED = {
 }
 #: functions over the limit still to be split into named steps ("path:qualified name")
 FUNCTIONS_BEING_SPLIT = {
-    "stimuli/edit/join.py:join_in_flight",
     "study/server.py:create_app",
 }
 
