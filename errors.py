@@ -7,6 +7,8 @@ Every user-error class of the four parts is defined here (grouped by the part
 that raises it), so no part imports another only for its errors.  The concrete
 classes keep a built-in second base (``ValueError``, ``OSError``, …) so code
 written against the older classes (``except ValueError``) still catches them.
+Every class is named ``…Error``; the eleven that were not (``StudyLocked``,
+``NeedsExport``, ``Conflict``, …) keep their old names as aliases (:data:`OLD_NAMES`).
 """
 from __future__ import annotations
 
@@ -144,7 +146,7 @@ class ConcatError(FlipstudyError, ValueError):
     """Two motions that cannot be concatenated; the message says why."""
 
 
-class StudyLocked(FlipstudyError, RuntimeError):
+class StudyLockedError(FlipstudyError, RuntimeError):
     """Another build (or ``flipstudy archive``) holds the lock of this study folder."""
 
 
@@ -181,19 +183,19 @@ class ResponsesError(FlipstudyError, ValueError):
     """
 
 
-class NeedsExport(ResponsesError):
+class NeedsExportError(ResponsesError):
     """A study folder without ``responses.csv``: a step to take first (``flipstudy export``),
     reported as every user error is ("error:", exit status 1), the message naming the step
     (issue 33: a log or CI reader needs the word and the status to see that it failed).
 
     Examples
     --------
-    >>> from flipstudy.analysis import NeedsExport, load_responses
+    >>> from flipstudy.analysis import NeedsExportError, load_responses
     >>> import tempfile
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     try:
     ...         load_responses(tmp)
-    ...     except NeedsExport as e:
+    ...     except NeedsExportError as e:
     ...         print("flipstudy export" in str(e))
     True
     """
@@ -212,7 +214,7 @@ class RequestError(FlipstudyError):
         self.message = message
 
 
-class Conflict(FlipstudyError):
+class ConflictError(FlipstudyError):
     """A write that contradicts what is stored (HTTP 409)."""
 
 
@@ -220,13 +222,13 @@ class SessionError(FlipstudyError, ValueError):
     """A session that cannot be opened; the message tells the experimenter what to do."""
 
 
-class StudyChanged(SessionError):
+class StudyChangedError(SessionError):
     """The study folder a server serves was replaced or changed under it (its folder,
     ``sessions.sqlite``, ``manifest.csv`` or ``design.toml``): the server stops taking
     answers, since it could no longer store them in the study's own database."""
 
 
-class ParticipantBusy(FlipstudyError, ValueError):
+class ParticipantBusyError(FlipstudyError, ValueError):
     """Another process serves this participant of this study."""
 
 
@@ -234,7 +236,7 @@ class ModelError(FlipstudyError, ValueError):
     """An invalid observer model; the message names the file and field."""
 
 
-class StudyHasAnswers(FlipstudyError, FileExistsError):
+class StudyHasAnswersError(FlipstudyError, FileExistsError):
     """A command would replace or delete a study that holds real participants' answers."""
 
 
@@ -246,11 +248,11 @@ class ClusterError(FlipstudyError, RuntimeError):
     """A cluster that cannot run this build (address, workers, files)."""
 
 
-class VersionMismatch(ClusterError):
+class VersionMismatchError(ClusterError):
     """A worker whose Python or key packages differ from the client's."""
 
 
-class NoSharedFolder(ClusterError):
+class NoSharedFolderError(ClusterError):
     """A worker that cannot read or write the study folder at the client's path."""
 
 
@@ -261,16 +263,16 @@ class ReproduceError(FlipstudyError, RuntimeError):
 class OwnedPathError(FlipstudyError, FileExistsError):
     """An output path is a file or folder that a study folder owns."""
 
-class StudyInUse(FlipstudyError, RuntimeError):
+class StudyInUseError(FlipstudyError, RuntimeError):
     """A command would replace a study that a ``flipstudy run`` server has open, a
     server would open a study that a command is replacing right now, or another
     command held the study's writer lock (:class:`flipstudy.study.lock.StudyLock`)
     for longer than ``FLIPSTUDY_LOCK_WAIT`` seconds."""
 
-class DesignFrozen(FlipstudyError, RuntimeError):
+class DesignFrozenError(FlipstudyError, RuntimeError):
     """The design of a study with answers would change, or has changed."""
 
-class CorruptDatabase(FlipstudyStateError):
+class CorruptDatabaseError(FlipstudyStateError):
     """``sessions.sqlite`` is not a readable SQLite database (truncated, overwritten)."""
 
 
@@ -305,28 +307,28 @@ __all__ = [
     "AnimatorEditError",
     "FlipEditError",
     "ConcatError",
-    "StudyLocked",
+    "StudyLockedError",
     "StudyFolderError",
     "StudyRenderError",
     "StaleRenderError",
     "ResponsesError",
-    "NeedsExport",
+    "NeedsExportError",
     "RequestError",
-    "Conflict",
+    "ConflictError",
     "SessionError",
-    "StudyChanged",
-    "ParticipantBusy",
+    "StudyChangedError",
+    "ParticipantBusyError",
     "ModelError",
-    "StudyHasAnswers",
+    "StudyHasAnswersError",
     "ArchiveError",
     "ClusterError",
-    "VersionMismatch",
-    "NoSharedFolder",
+    "VersionMismatchError",
+    "NoSharedFolderError",
     "ReproduceError",
     "OwnedPathError",
-    "StudyInUse",
-    "DesignFrozen",
-    "CorruptDatabase",
+    "StudyInUseError",
+    "DesignFrozenError",
+    "CorruptDatabaseError",
     "SiteError",
     "WebImportError",
     "JsPsychFetchError",
@@ -362,3 +364,25 @@ class UnphysicalClipError(FlipstudyError, ValueError):
 
 
 __all__ += ["UnphysicalClipError"]
+
+
+# ---- the names before issue 40 (every class is named …Error now)
+
+StudyLocked = StudyLockedError
+NeedsExport = NeedsExportError
+Conflict = ConflictError
+StudyChanged = StudyChangedError
+ParticipantBusy = ParticipantBusyError
+StudyHasAnswers = StudyHasAnswersError
+VersionMismatch = VersionMismatchError
+NoSharedFolder = NoSharedFolderError
+StudyInUse = StudyInUseError
+DesignFrozen = DesignFrozenError
+CorruptDatabase = CorruptDatabaseError
+
+#: old name → the class: code that catches an error by its old name, and pickles that
+#: name it, keep working (a pickle names the class by its module and name); not in
+#: ``__all__``, which lists each class once, by its name
+OLD_NAMES = {n: globals()[n] for n in (
+    "StudyLocked", "NeedsExport", "Conflict", "StudyChanged", "ParticipantBusy", "StudyHasAnswers",
+    "VersionMismatch", "NoSharedFolder", "StudyInUse", "DesignFrozen", "CorruptDatabase")}

@@ -21,7 +21,7 @@ Entry points:
   thresholds; :mod:`flipstudy.analysis.plan` — the power analysis of ``flipstudy plan``.
 """
 from .core import count_cells, participant_dprimes, summarize
-from flipstudy.errors import NeedsExport, ResponsesError
+from flipstudy.errors import NeedsExport, NeedsExportError, ResponsesError  # noqa: F401  (the old name too)
 from .io import load_responses
 from .pipeline import Result, analyze
 from .sdt import CORRECTIONS, corrected_rate, criterion, dprime, dprime_2afc, rates, z
@@ -30,7 +30,7 @@ from .stats import (PsychometricFit, detection_threshold, fit_psychometric, gee_
 from .tables import fmt_cell, fmt_dprime, paper_layout, to_latex, to_markdown
 
 __all__ = ["analyze", "Result", "dprime", "dprime_2afc", "criterion", "rates", "corrected_rate", "z", "CORRECTIONS",
-           "load_responses", "ResponsesError", "NeedsExport", "summarize", "count_cells",
+           "load_responses", "ResponsesError", "NeedsExportError", "summarize", "count_cells",
            "participant_dprimes", "gee_levels", "fit_psychometric", "PsychometricFit",
            "detection_threshold", "psychometric_curve", "paper_layout", "to_markdown", "to_latex",
            "fmt_cell", "fmt_dprime"]

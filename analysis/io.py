@@ -1,7 +1,7 @@
 """Reading and checking response tables (the long format of DESIGN.md)."""
 from __future__ import annotations
 
-from flipstudy.errors import NeedsExport, ResponsesError
+from flipstudy.errors import NeedsExportError, ResponsesError
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +29,7 @@ def resolve_responses_path(path: str | Path) -> Path:
         csv = p / "responses.csv"
         if csv.is_file():
             return csv
-        raise NeedsExport(
+        raise NeedsExportError(
             f"{p} is a study folder without responses.csv: run "
             f"`{EXPORT_HINT.format(d=p)}` first, then `flipstudy analyze {p}`")
     if not p.exists():
@@ -75,7 +75,7 @@ def load_responses(source, *, name: str | None = None, catch_groups=()) -> pd.Da
     ------
     ResponsesError
         Naming the file, line and column.
-    NeedsExport
+    NeedsExportError
         For a study folder without ``responses.csv``.
 
     Examples

@@ -9,7 +9,7 @@ The folder ``out`` is handled so that a study is never lost:
 
 - A build holds an exclusive lock (``fcntl.flock`` on ``.NAME.lock`` beside
   ``out``) from start to end; a second build into the same ``out`` fails at once
-  with :class:`StudyLocked`.
+  with :class:`StudyLockedError`.
 - The set is built in ``.NAME.tmp-PID-*`` beside ``out`` and swapped into place
   with one atomic ``renameat2(RENAME_EXCHANGE)`` (Linux), so a build killed at
   any moment (even SIGKILL) leaves at ``out`` either the previous complete study
@@ -30,7 +30,7 @@ The folder ``out`` is handled so that a study is never lost:
 from __future__ import annotations
 
 from flipstudy.errors import (DesignError, FlipstudyFileExistsError, FlipstudyFileNotFoundError,
-                              StimulusError, StudyFolderError, StudyLocked)
+                              StimulusError, StudyFolderError, StudyLockedError)
 from flipstudy.results import BuildResult
 
 import ctypes
@@ -194,7 +194,7 @@ def build_stimuli(design: Design, out, force: bool = False, progress: bool = Tru
     ``force``: replace an existing ``out`` that holds only a previous build's
     files.  ``replace_check(folder, foreign_names)``: called when ``out`` holds
     anything else; it raises to refuse, returns to allow (see the module
-    docstring).  Raises :class:`StudyLocked` when another build holds ``out``.
+    docstring).  Raises :class:`StudyLockedError` when another build holds ``out``.
     ``cluster``: a :class:`flipstudy.study.cluster.Cluster` that makes the
     stimuli (:func:`make_stimulus`) on its workers, into the same staging folder.
     """
@@ -453,7 +453,7 @@ def lock_path(out) -> Path:
 @contextmanager
 def study_lock(out, what: str = "build"):
     """Hold the exclusive lock of the study folder ``out`` (``.NAME.lock`` beside
-    it, ``fcntl.flock``); raises :class:`StudyLocked` at once when another
+    it, ``fcntl.flock``); raises :class:`StudyLockedError` at once when another
     process holds it.  The kernel releases the lock when the holder dies (even
     by SIGKILL); the lock file is removed on release."""
     import fcntl
@@ -469,7 +469,7 @@ def study_lock(out, what: str = "build"):
                 holder = []
             os.close(fd)
             who = f"a {holder[1]} (pid {holder[0]})" if len(holder) >= 2 else "another build"
-            raise StudyLocked(f"{out}: {who} is writing this study folder right now (lock "
+            raise StudyLockedError(f"{out}: {who} is writing this study folder right now (lock "
                               f"{path}); wait until it has finished, or choose another --out") from None
         try:
             st, cur = os.fstat(fd), os.stat(path)

@@ -14,11 +14,11 @@ Files: the workers read and write the study folder directly (the build's
 staging folder ``.NAME.tmp-*``, the render's ``render/.partial-PID``), so client
 and workers must see it at the same path on a shared filesystem.  Before any
 work a probe file written by the client must be read back by every worker (and
-a file each worker writes read by the client); otherwise :class:`NoSharedFolder`
+a file each worker writes read by the client); otherwise :class:`NoSharedFolderError`
 names the workers that cannot see it.  Bytes are not shipped back.
 
 Versions: before any work, every worker's Python and key packages
-(:data:`KEY_PACKAGES`) must equal the client's, or :class:`VersionMismatch`
+(:data:`KEY_PACKAGES`) must equal the client's, or :class:`VersionMismatchError`
 names them; each task checks again on its worker (a worker that joins later).
 
 Stop and restart: tasks are pure functions of their inputs, so a task whose
@@ -35,7 +35,7 @@ import sys
 from contextlib import nullcontext
 from pathlib import Path
 
-from flipstudy.errors import ClusterError, NoSharedFolder, VersionMismatch
+from flipstudy.errors import ClusterError, NoSharedFolderError, VersionMismatchError
 
 #: the distributions whose versions must match between client and workers
 KEY_PACKAGES = ("flipstudy", "numpy", "scipy", "vtk", "pyvista", "imageio-ffmpeg",
@@ -83,7 +83,7 @@ def _checked(expected: dict, fn, *args):
     if _CHECKED.get("expected") != expected:
         bad = version_problems(expected, _report_versions())
         if bad:
-            raise VersionMismatch(f"worker pid {os.getpid()}: {', '.join(bad)}; install the "
+            raise VersionMismatchError(f"worker pid {os.getpid()}: {', '.join(bad)}; install the "
                                   f"client's versions on every worker")
         _CHECKED["expected"] = expected
     return fn(*args)
@@ -138,7 +138,7 @@ class Cluster:
     """A Dask client for one command: ``with Cluster("local:2") as c:`` and
     pass ``cluster=c`` to :func:`~flipstudy.stimuli.stimset.build_stimuli` and
     :func:`~flipstudy.render.study.render_study`.  Checks the workers' versions
-    on entry (:class:`VersionMismatch`)."""
+    on entry (:class:`VersionMismatchError`)."""
 
     def __init__(self, address: str, timeout: float = 60.0):
         from distributed import Client, LocalCluster
@@ -178,19 +178,19 @@ class Cluster:
         return len(self.client.scheduler_info()["workers"])
 
     def check_versions(self) -> None:
-        """Refuse (:class:`VersionMismatch`) any worker whose versions differ."""
+        """Refuse (:class:`VersionMismatchError`) any worker whose versions differ."""
         bad = []
         for addr, theirs in sorted(self.client.run(_report_versions).items()):
             p = version_problems(self.versions, theirs)
             if p:
                 bad.append(f"{addr}: {', '.join(p)}")
         if bad:
-            raise VersionMismatch(f"--cluster {self.address}: workers differ from this client "
+            raise VersionMismatchError(f"--cluster {self.address}: workers differ from this client "
                                   f"(same versions are needed for the same bytes): "
                                   + "; ".join(bad))
 
     def check_shared(self, folder) -> None:
-        """Refuse (:class:`NoSharedFolder`) unless every worker reads a probe
+        """Refuse (:class:`NoSharedFolderError`) unless every worker reads a probe
         file the client writes in ``folder`` and writes one the client reads."""
         folder = Path(folder).resolve()
         token = secrets.token_hex(8)
@@ -209,7 +209,7 @@ class Cluster:
                 if p.parent == folder and p.name.startswith(probe.name):   # only our probes
                     p.unlink(missing_ok=True)
         if bad:
-            raise NoSharedFolder(
+            raise NoSharedFolderError(
                 f"--cluster {self.address}: {len(bad)} worker(s) cannot see {folder}: "
                 + "; ".join(bad) + ". The workers read and write the study folder, so it must be "
                 "on a filesystem shared with them at the same path (NFS, Lustre, ...); build "
@@ -283,5 +283,5 @@ def open_cluster(address):
     return nullcontext(None) if not address else Cluster(address)
 
 
-__all__ = ["Cluster", "ClusterError", "VersionMismatch", "NoSharedFolder", "KEY_PACKAGES",
+__all__ = ["Cluster", "ClusterError", "VersionMismatchError", "NoSharedFolderError", "KEY_PACKAGES",
            "installed_versions", "version_problems", "parse_address", "open_cluster"]

@@ -17,7 +17,7 @@ Examples
 >>> ParticipantLock(study.name, "P01").acquire()           # a second server for P01
 Traceback (most recent call last):
     ...
-flipstudy.errors.ParticipantBusy: participant P01 of ... is already being served by another `flipstudy run` (pid ...
+flipstudy.errors.ParticipantBusyError: participant P01 of ... is already being served by another `flipstudy run` (pid ...
 >>> lock.release()
 >>> ParticipantLock(study.name, "P01").acquire().release()  # free again
 >>> study.cleanup()
@@ -31,7 +31,7 @@ import socket
 import threading
 from pathlib import Path
 
-from flipstudy.errors import ParticipantBusy, StudyInUse
+from flipstudy.errors import ParticipantBusyError, StudyInUseError
 
 LOCK_DIR = ".locks"
 
@@ -61,7 +61,7 @@ class ParticipantLock:
             return {}
 
     def acquire(self, **info) -> "ParticipantLock":
-        """Take the lock or raise :class:`ParticipantBusy` naming its holder."""
+        """Take the lock or raise :class:`ParticipantBusyError` naming its holder."""
         self.path.parent.mkdir(parents=True, exist_ok=True)
         while True:
             fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
@@ -71,7 +71,7 @@ class ParticipantLock:
                 held = self._read(fd)
                 os.close(fd)
                 who = ", ".join(f"{k} {held[k]}" for k in ("pid", "host", "url") if held.get(k))
-                raise ParticipantBusy(
+                raise ParticipantBusyError(
                     f"participant {self.participant} of {self.study_dir} is already being served "
                     f"by another `flipstudy run` ({who or 'holder unknown'}"
                     f"{', since ' + held['since'] if held.get('since') else ''}; lock file "
@@ -191,7 +191,7 @@ class StudyOpen:
             except BlockingIOError:
                 data = os.pread(fd, 4096, 0).decode(errors="replace").strip()
                 os.close(fd)
-                raise StudyInUse(f"{self.study_dir}: {data or 'another command'} is replacing this "
+                raise StudyInUseError(f"{self.study_dir}: {data or 'another command'} is replacing this "
                                  f"study right now (lock {path}); start the session when it has "
                                  f"finished") from None
             try:                              # the file a command removed on release: lock anew
@@ -211,7 +211,7 @@ class StudyOpen:
 
 class study_closed:
     """``with study_closed(STUDY_DIR, "stimuli --force"):`` hold the study closed to
-    servers while a command replaces, moves or rebuilds it; raises :class:`StudyInUse`
+    servers while a command replaces, moves or rebuilds it; raises :class:`StudyInUseError`
     naming the servers that have it open.  A path that is not an existing folder
     holds nothing (nothing can be serving it).
 
@@ -222,13 +222,13 @@ class study_closed:
     ...     pass
     Traceback (most recent call last):
         ...
-    flipstudy.errors.StudyInUse: ... is open in a `flipstudy run` server ...
+    flipstudy.errors.StudyInUseError: ... is open in a `flipstudy run` server ...
     >>> server.release()
     >>> with study_closed(tmp.name, "archive"):
     ...     StudyOpen(tmp.name).acquire()
     Traceback (most recent call last):
         ...
-    flipstudy.errors.StudyInUse: ...: flipstudy archive (pid ...) is replacing this study right now ...
+    flipstudy.errors.StudyInUseError: ...: flipstudy archive (pid ...) is replacing this study right now ...
     >>> tmp.cleanup()
     """
 
@@ -255,7 +255,7 @@ class study_closed:
         except BlockingIOError:
             os.close(fd)
             self._close_dirs()
-            raise StudyInUse(
+            raise StudyInUseError(
                 f"{d} is open in a `flipstudy run` server ({describe_servers(live_servers(d))}); "
                 f"`flipstudy {self.what}` would take the study away under the participant's "
                 f"answers. Stop the server first (Ctrl-C in its terminal), then run this again"
@@ -346,7 +346,7 @@ def lock_wait() -> float:
 class StudyLock:
     """``with StudyLock(STUDY_DIR, "import-web"):`` the one writer of a study (module text
     above).  Waits up to :func:`lock_wait` seconds for another holder, then raises
-    :class:`~flipstudy.errors.StudyInUse` naming it (command, pid, since).  A path that
+    :class:`~flipstudy.errors.StudyInUseError` naming it (command, pid, since).  A path that
     is not an existing folder, or one that cannot be written, holds nothing (the
     command then fails, or reads, on its own).
 
@@ -377,7 +377,7 @@ class StudyLock:
         try:
             with StudyLock(study_dir, command):
                 return None
-        except StudyInUse as e:
+        except StudyInUseError as e:
             return str(e)
 
     def _key(self) -> str:
@@ -460,12 +460,12 @@ class StudyLock:
         except (OSError, ValueError):
             return {}
 
-    def _refusal(self, wait: float) -> StudyInUse:
+    def _refusal(self, wait: float) -> StudyInUseError:
         h = getattr(self, "holder", {}) or {}
         who = (f"`flipstudy {h['command']}`" if h.get("command") else "another command") + " (" + \
             ", ".join(x for x in (f"pid {h['pid']}" if h.get("pid") else "",
                                   f"since {h['since']}" if h.get("since") else "") if x) + ")"
-        return StudyInUse(
+        return StudyInUseError(
             f"{self.study_dir}: {who.replace(' ()', '')} is writing this study; `flipstudy "
             f"{self.command}` waited {wait:g} s for it ({LOCK_WAIT_ENV}): run it again once that "
             f"has finished (lock {self.study_dir / LOCK_DIR / STUDY_LOCK})")

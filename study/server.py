@@ -62,7 +62,7 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChanged
+from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChangedError
 
 from .session import Session, load_study, open_session, submit_answer, submit_demographics
 from .timeline import build_timeline, is_default, trial_screen
@@ -172,7 +172,7 @@ async def _read_json(request: Request) -> dict:
 CHANGED_STATUS = 410
 
 
-def _changed_message(e: StudyChanged, stored_elsewhere: bool) -> str:
+def _changed_message(e: StudyChangedError, stored_elsewhere: bool) -> str:
     return ("This session cannot record answers any more: the study was changed on the "
             "experimenter's computer" + (", so your last answer was NOT recorded" if stored_elsewhere
                                           else "") +
@@ -246,7 +246,7 @@ class _Handlers:
         self.tagged = not is_default(study.design)
         self.replay = bool(study.design.session.replay)
 
-    def changed(self, e: StudyChanged, stored_elsewhere: bool = False) -> JSONResponse:
+    def changed(self, e: StudyChangedError, stored_elsewhere: bool = False) -> JSONResponse:
         """The refusal once the study changed (``on_changed`` told the first time)."""
         if not self.told:
             self.told.append(True)
@@ -281,7 +281,7 @@ class _Handlers:
         session = self.session
         try:
             session.check_intact()
-        except StudyChanged as e:
+        except StudyChangedError as e:
             return self.changed(e)
         tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=self.iti_ms))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
@@ -305,7 +305,7 @@ class _Handlers:
             screen = await run_in_threadpool(self.current_trial, int(raw))
         except RequestError as e:
             return _error(e.status, e.message)
-        except StudyChanged as e:
+        except StudyChangedError as e:
             return self.changed(e)
         return JSONResponse(screen, headers={"Cache-Control": "no-store"})
 
@@ -318,7 +318,7 @@ class _Handlers:
             result = submit(session, obj)
             try:
                 session.check_intact()               # committed into the study's own file?
-            except StudyChanged as e:
+            except StudyChangedError as e:
                 e.stored_elsewhere = True
                 raise
             return result
@@ -328,7 +328,7 @@ class _Handlers:
             return await run_in_threadpool(checked, obj), None
         except RequestError as e:
             return None, _error(e.status, e.message)
-        except StudyChanged as e:
+        except StudyChangedError as e:
             return None, self.changed(e, getattr(e, "stored_elsewhere", False))
 
     async def api_answer(self, request: Request):

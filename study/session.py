@@ -32,7 +32,7 @@ On a tiny study (:func:`flipstudy.study.demo.make_demo_study`):
 """
 from __future__ import annotations
 
-from flipstudy.errors import RequestError, SessionError, StudyChanged
+from flipstudy.errors import RequestError, SessionError, StudyChangedError
 import hashlib
 import threading
 from contextlib import contextmanager
@@ -205,12 +205,12 @@ class Session:
             pass
         after = study_fingerprint(self.study.dir)
         if before != after or after["sessions.sqlite"] is None:
-            raise StudyChanged(f"{self.study.dir} changed while the session was being opened; "
+            raise StudyChangedError(f"{self.study.dir} changed while the session was being opened; "
                                f"start it again")
         self._pinned = after
 
     def check_intact(self) -> None:
-        """Raise :class:`StudyChanged` when the pinned study folder was replaced or
+        """Raise :class:`StudyChangedError` when the pinned study folder was replaced or
         its database, manifest or design changed (once changed, always refused)."""
         if self._pinned is None:
             return
@@ -224,7 +224,7 @@ class Session:
                 self._changed = (f"{self.study.dir}: {what} while this server was serving "
                                  f"participant {self.participant}")
         if self._changed is not None:
-            raise StudyChanged(self._changed)
+            raise StudyChangedError(self._changed)
 
     @property
     def n_trials(self) -> int:
@@ -382,7 +382,7 @@ def _open_session(study: Study, participant: str, *, new_session: bool, source: 
             try:
                 trials = store.create_session(conn, participant, s, source, seed,
                                               study.manifest_sha256, order)
-            except store.Conflict:
+            except store.ConflictError:
                 if _retried:
                     raise SessionError(f"participant {participant}: session {s} is being created "
                                        f"by another process; try again") from None
@@ -448,7 +448,7 @@ def submit_answer(session: Session, payload: dict, *, timestamp: str | None = No
         quest = session.quest(t.group, conn)          # read inside the answer's transaction
         shown = session._pick(quest, t)
         if ans["stimulus"] != shown.stimulus:
-            raise store.Conflict(f"trial {t.trial} shows {shown.stimulus!r} (level {shown.level:g} %, "
+            raise store.ConflictError(f"trial {t.trial} shows {shown.stimulus!r} (level {shown.level:g} %, "
                                  f"chosen by QUEST+), not {ans['stimulus']!r}")
         quest.update(shown.level, detected(t, ans["response"]))
         th = quest.threshold()
@@ -463,7 +463,7 @@ def submit_answer(session: Session, payload: dict, *, timestamp: str | None = No
             status = store.insert_answer(conn, session.participant, session.session,
                                          session.n_trials, ans, timestamp, adaptive=adaptive,
                                          design_text=session.study.design_text or None)
-        except store.Conflict as e:
+        except store.ConflictError as e:
             raise RequestError(409, str(e)) from None
         nxt = store.next_open_trial(conn, session.participant, session.session)
     return {"status": status, "trial": ans["trial"], "next_trial": nxt or session.n_trials + 1,
@@ -491,6 +491,6 @@ def submit_demographics(session: Session, payload: dict) -> dict:
     with session.db() as conn:
         try:
             status = store.insert_demographics(conn, session.participant, session.session, values)
-        except store.Conflict as e:
+        except store.ConflictError as e:
             raise RequestError(409, str(e)) from None
     return {"status": status}

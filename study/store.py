@@ -44,7 +44,7 @@ responses CHECK in place, so a migrated database takes no 2AFC answers
 """
 from __future__ import annotations
 
-from flipstudy.errors import Conflict, CorruptDatabase, FlipstudyFileNotFoundError, FlipstudyStateError
+from flipstudy.errors import ConflictError, CorruptDatabaseError, FlipstudyFileNotFoundError, FlipstudyStateError
 
 import sqlite3
 from contextlib import contextmanager
@@ -195,10 +195,10 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     return conn
 
 
-def corrupt(path, e: Exception) -> CorruptDatabase:
+def corrupt(path, e: Exception) -> CorruptDatabaseError:
     """The error for a damaged database: names the file, says what to do, touches nothing."""
     why = " ".join(str(e).split())[:200]
-    return CorruptDatabase(
+    return CorruptDatabaseError(
         f"{path}: not a readable SQLite database ({why}); it was left exactly as it is. It may "
         f"have been truncated or overwritten: restore it from a backup or from the study's "
         f"archive (`flipstudy archive` keeps everything), or move the study aside with "
@@ -207,7 +207,7 @@ def corrupt(path, e: Exception) -> CorruptDatabase:
 
 def _check_readable(conn: sqlite3.Connection, path: Path) -> None:
     """Before anything is written: the file is a database whose pages read
-    (``PRAGMA quick_check``); :class:`CorruptDatabase` otherwise."""
+    (``PRAGMA quick_check``); :class:`CorruptDatabaseError` otherwise."""
     try:
         row = conn.execute("PRAGMA quick_check(1)").fetchone()
     except sqlite3.OperationalError as e:
@@ -263,7 +263,7 @@ def create_session(conn, participant: str, session: int, source: str, seed: int,
     the trials stored.  ``trials``: the order, or a function ``trials(conn)`` that
     makes it inside the transaction, so what it reads (a between-subject condition's
     count of sessions, :func:`condition_counts`) no other session can change before
-    this one is stored.  Raises :class:`Conflict` if another connection created that
+    this one is stored.  Raises :class:`ConflictError` if another connection created that
     session first (two processes opening the same new participant at once)."""
     try:
         with transaction(conn):
@@ -275,7 +275,7 @@ def create_session(conn, participant: str, session: int, source: str, seed: int,
                           utc_now()))
             _insert_trials(conn, participant, session, trials)
     except sqlite3.IntegrityError as e:
-        raise Conflict(f"session {session} of participant {participant} was created by another "
+        raise ConflictError(f"session {session} of participant {participant} was created by another "
                        f"process at the same time ({e})") from None
     return trials
 
@@ -340,14 +340,14 @@ def last_quest_state(conn, participant: str, session: int, group: str) -> str | 
 
 def set_simulated_truth(conn, participant: str, session: int, truth_json: str) -> None:
     """Record a simulated session's observer parameters (JSON) once: the same
-    value again is accepted, a different one is a :class:`Conflict`."""
+    value again is accepted, a different one is a :class:`ConflictError`."""
     with transaction(conn):
         row = conn.execute("SELECT source, simulated_truth FROM sessions WHERE participant=? AND "
                            "session=?", (participant, session)).fetchone()
         if row is None or row["source"] != "simulated":
-            raise Conflict(f"{participant}/{session} is not a simulated session")
+            raise ConflictError(f"{participant}/{session} is not a simulated session")
         if row["simulated_truth"] not in (None, truth_json):
-            raise Conflict(f"{participant}/{session}: another simulated truth is stored")
+            raise ConflictError(f"{participant}/{session}: another simulated truth is stored")
         conn.execute("UPDATE sessions SET simulated_truth=? WHERE participant=? AND session=?",
                      (truth_json, participant, session))
 
@@ -377,7 +377,7 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
     """Store one checked answer (see :func:`flipstudy.study.validate.parse_answer`).
 
     Returns ``"stored"``, or ``"duplicate"`` when the same response to the same
-    trial is already stored (nothing is written).  Raises :class:`Conflict` when
+    trial is already stored (nothing is written).  Raises :class:`ConflictError` when
     the trial was answered differently (the first answer is kept) or is not the
     participant's current trial (the first one neither answered nor skipped).
 
@@ -385,12 +385,12 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
     the transaction, after the checks, it returns ``shown_stimulus``,
     ``shown_level``, ``quest_state``, ``quest_threshold``, ``quest_ci_low``,
     ``quest_ci_high`` and ``skip`` (trial numbers of the group's slots to leave
-    out) or raises :class:`Conflict`; everything is written in the one
+    out) or raises :class:`ConflictError`; everything is written in the one
     transaction.  The session is marked finished with its last open trial.
 
     ``design_text``: the study's ``design.toml``; the first answer records it and its
     SHA-256 in ``meta`` (``design_toml``, ``design_sha256``), in the same
-    transaction; a different design with a recorded one is a :class:`Conflict`
+    transaction; a different design with a recorded one is a :class:`ConflictError`
     (:mod:`flipstudy.study.frozen`).
     """
     trial = answer["trial"]
@@ -400,23 +400,23 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
         if old is not None:
             if old["response"] == answer["response"]:
                 return "duplicate"
-            raise Conflict(f"trial {trial} is already answered ({old['response']}); "
+            raise ConflictError(f"trial {trial} is already answered ({old['response']}); "
                            f"the first answer is kept")
         current = next_open_trial(conn, participant, session)
         if trial != current:
-            raise Conflict(f"trial {trial} is not the current trial (" +
+            raise ConflictError(f"trial {trial} is not the current trial (" +
                            (f"trial {current} is next)" if current else "the session is finished)"))
         row = conn.execute("SELECT * FROM trials WHERE participant=? AND session=? AND trial=?",
                            (participant, session, trial)).fetchone()
         if row is None:
-            raise Conflict(f"trial {trial} does not exist in this session")
+            raise ConflictError(f"trial {trial} does not exist in this session")
         extra = {}
         if (row["method"] or "constant") == "quest+":
             if adaptive is None:
-                raise Conflict(f"trial {trial} is adaptive (quest+); its level is chosen by the session")
+                raise ConflictError(f"trial {trial} is adaptive (quest+); its level is chosen by the session")
             extra = adaptive(conn, row)
         elif row["stimulus"] != answer["stimulus"]:
-            raise Conflict(f"trial {trial} shows {row['stimulus']!r}, not {answer['stimulus']!r}")
+            raise ConflictError(f"trial {trial} shows {row['stimulus']!r}, not {answer['stimulus']!r}")
         ts = timestamp or utc_now()
         try:
             conn.execute(
@@ -451,7 +451,7 @@ def insert_answer(conn, participant: str, session: int, n_trials: int, answer: d
 
 def record_design(conn, design_text: str) -> None:
     """Inside a write transaction: record the design with the first answer; refuse
-    (:class:`Conflict`) an answer given under another design than the recorded one."""
+    (:class:`ConflictError`) an answer given under another design than the recorded one."""
     import hashlib
     sha = hashlib.sha256(design_text.encode()).hexdigest()
     old = conn.execute("SELECT value FROM meta WHERE key='design_sha256'").fetchone()
@@ -459,13 +459,13 @@ def record_design(conn, design_text: str) -> None:
         conn.executemany("INSERT INTO meta VALUES (?, ?)",
                          [("design_sha256", sha), ("design_toml", design_text)])
     elif old[0] != sha:
-        raise Conflict("the study's design.toml changed since its first answer; this answer was "
+        raise ConflictError("the study's design.toml changed since its first answer; this answer was "
                        "not stored (the design of a study with answers is frozen)")
 
 
 def insert_demographics(conn, participant: str, session: int, values: dict) -> str:
     """Store the demographics once; ``"duplicate"`` for the same values again,
-    :class:`Conflict` for different ones."""
+    :class:`ConflictError` for different ones."""
     cols = ("age", "gender", "animation_experience", "gymnastics_experience")
     with transaction(conn):
         old = conn.execute("SELECT * FROM demographics WHERE participant=? AND session=?",
@@ -473,7 +473,7 @@ def insert_demographics(conn, participant: str, session: int, values: dict) -> s
         if old is not None:
             if all(old[c] == values[c] for c in cols):
                 return "duplicate"
-            raise Conflict("the demographics of this session are already stored")
+            raise ConflictError("the demographics of this session are already stored")
         conn.execute("INSERT INTO demographics VALUES (?,?,?,?,?,?,?)",
                      (participant, session, *(values[c] for c in cols), utc_now()))
     return "stored"

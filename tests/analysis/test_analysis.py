@@ -184,7 +184,7 @@ def test_input_errors_name_file_line_and_expectation(tmp_path):
         load_responses(p)
     with pytest.raises(analysis.ResponsesError, match="missing column.*response"):
         load_responses(df.drop(columns="response"))
-    with pytest.raises(analysis.NeedsExport, match="flipstudy export"):
+    with pytest.raises(analysis.NeedsExportError, match="flipstudy export"):
         load_responses(tmp_path)
 
 

@@ -180,7 +180,7 @@ def test_a_worker_with_other_versions_is_refused_before_any_work(tmp_path, clust
     addr = cluster.client.scheduler.address
     cluster.client.run(setattr, cl, "_report_versions", fake)
     try:
-        with pytest.raises(cl.VersionMismatch) as e:
+        with pytest.raises(cl.VersionMismatchError) as e:
             cl.Cluster(addr)
         assert f"numpy 1.0.0 (client {mine['numpy']})" in str(e.value)
         assert "tcp://" in str(e.value)                 # names the worker
@@ -195,7 +195,7 @@ def test_a_folder_the_workers_cannot_see_is_refused(tmp_path, cluster, monkeypat
     # a probe function that looks elsewhere
     cluster.client.run(setattr, cl, "_probe", functools.partial(_probe_elsewhere, str(tmp_path)))
     try:
-        with pytest.raises(cl.NoSharedFolder, match="cannot see"):
+        with pytest.raises(cl.NoSharedFolderError, match="cannot see"):
             build_stimuli(design(), tmp_path / "study", progress=False, cluster=cluster)
     finally:
         cluster.client.run(setattr, cl, "_probe", cl._probe_files)

@@ -54,25 +54,45 @@ def test_every_exception_class_is_defined_in_errors_py():
 
 def test_errors_module_holds_the_whole_family():
     classes = {n: v for n, v in vars(errors).items()
-               if isinstance(v, type) and v.__module__ == errors.__name__}
+               if isinstance(v, type) and v.__module__ == errors.__name__ and n == v.__name__}
     assert set(classes) == set(errors.__all__)
     assert len(classes) >= 34
     for name, cls in classes.items():
         assert issubclass(cls, FlipstudyError), name
         assert cls.__doc__ and cls.__doc__.strip(), f"{name} has no docstring"
     # the request and conflict errors of the session server are in the family too
-    assert issubclass(errors.RequestError, FlipstudyError) and issubclass(errors.Conflict, FlipstudyError)
+    assert issubclass(errors.RequestError, FlipstudyError) and issubclass(errors.ConflictError, FlipstudyError)
     assert errors.RequestError(409, "stored").status == 409
 
 
 @pytest.mark.parametrize("module, name", [
     ("flipstudy.stimuli.motion", "BVHError"), ("flipstudy.stimuli.synth", "SynthError"),
     ("flipstudy.stimuli.edit.concat", "ConcatError"), ("flipstudy.analysis", "ResponsesError"),
-    ("flipstudy.analysis", "NeedsExport"), ("flipstudy.stimuli", "FlipstudyError"),
+    ("flipstudy.analysis", "NeedsExportError"), ("flipstudy.analysis", "NeedsExport"),
+    ("flipstudy.stimuli", "FlipstudyError"),
     ("flipstudy", "BVHError"),
 ])
 def test_package_entry_points_hand_out_the_same_classes(module, name):
     assert getattr(importlib.import_module(module), name) is getattr(errors, name)
+
+
+def test_every_error_class_is_named_error_and_the_old_names_still_work():
+    """Issue 40: each class's name ends in ``Error``; the eleven old names are the same
+    classes (``except errors.StudyLocked`` still catches), and a pickle that names a class
+    by its old name loads as it."""
+    import pickle
+    classes = [v for v in vars(errors).values() if isinstance(v, type) and v.__module__ == errors.__name__]
+    assert [c.__name__ for c in classes if not c.__name__.endswith("Error")] == []
+    assert len(errors.OLD_NAMES) == 11 and not set(errors.OLD_NAMES) & set(errors.__all__)
+    for old, cls in errors.OLD_NAMES.items():
+        assert cls.__name__ == old + "Error" and getattr(errors, old) is cls
+        with pytest.raises(getattr(errors, old)):
+            raise cls("x")
+        new = pickle.dumps(cls("a message"), protocol=0)
+        stored = new.replace(f"\n{cls.__name__}\n".encode(), f"\n{old}\n".encode())
+        assert stored != new                                  # the pickle named the old class
+        back = pickle.loads(stored)
+        assert type(back) is cls and str(back) == "a message"
 
 
 def test_the_transitional_module_is_gone():

@@ -50,11 +50,11 @@ def test_second_server_for_a_participant_is_refused_and_a_dead_ones_lock_taken_o
         # the first one still serves, and is the only session of P01
         assert get(port, "/api/session", f"127.0.0.1:{port}")[0] == 200
         # another participant is not blocked; the same one is, in this process too
-        from flipstudy.errors import ParticipantBusy
+        from flipstudy.errors import ParticipantBusyError
         from flipstudy.study.lock import ParticipantLock
         with ParticipantLock(demo, "P02"):
             assert json.loads((demo / ".locks" / "run-P02.lock").read_text())["pid"] == os.getpid()
-        with pytest.raises(ParticipantBusy, match=f"pid {first.proc.pid}"):
+        with pytest.raises(ParticipantBusyError, match=f"pid {first.proc.pid}"):
             ParticipantLock(demo, "P01").acquire()
         # SIGKILL leaves the lock file behind, but the kernel released the lock
         os.kill(first.proc.pid, signal.SIGKILL)
@@ -123,7 +123,7 @@ def test_two_openers_of_a_new_participant_get_one_session(demo):
 def test_session_created_between_read_and_write_is_resumed(demo, monkeypatch):
     study = load_study(demo)
     first = open_session(study, "P01")
-    with pytest.raises(store.Conflict, match="created by another process"):
+    with pytest.raises(store.ConflictError, match="created by another process"):
         conn = store.connect(demo)
         try:
             store.create_session(conn, "P01", 1, "browser", 1, study.manifest_sha256, first.trials)

@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from flipstudy.stimuli.design import parse_design
-from flipstudy.errors import StudyFolderError, StudyHasAnswers, StudyLocked
+from flipstudy.errors import StudyFolderError, StudyHasAnswersError, StudyLockedError
 from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli.stimset import (build_stimuli,
                              study_lock)
@@ -114,7 +114,7 @@ def test_force_refused_on_a_study_with_real_answers_and_nothing_changes(study, t
     # the library refuses too, without any check passed in: sessions.sqlite is not a build file
     with pytest.raises(StudyFolderError, match="sessions.sqlite"):
         build_stimuli(parse_design(DESIGN.format(seed=4)), study, force=True, progress=False)
-    with pytest.raises(StudyHasAnswers):
+    with pytest.raises(StudyHasAnswersError):
         build_stimuli(parse_design(DESIGN.format(seed=4)), study, force=True, progress=False,
                       replace_check=refuse_real_answers)
     assert snapshot(study) == before
@@ -136,13 +136,13 @@ def test_force_replaces_a_study_with_only_simulated_answers_and_says_so(study, t
 def test_an_exported_response_table_of_real_participants_also_protects(study, tmp_path):
     (study / "responses.csv").write_text("participant,group,level,response,input\n"
                                          "P07,g,0,correct,click\n")
-    with pytest.raises(StudyHasAnswers, match="1 answer of 1 real participant"):
+    with pytest.raises(StudyHasAnswersError, match="1 answer of 1 real participant"):
         build_stimuli(parse_design(DESIGN.format(seed=4)), study, force=True, progress=False,
                       replace_check=refuse_real_answers)
     # an unreadable database counts as holding answers
     (study / "responses.csv").unlink()
     (study / "sessions.sqlite").write_bytes(b"not a database at all, but maybe someone's answers")
-    with pytest.raises(StudyHasAnswers, match="could not be read"):
+    with pytest.raises(StudyHasAnswersError, match="could not be read"):
         refuse_real_answers(study)
 
 
@@ -223,9 +223,9 @@ def test_two_concurrent_builds_the_second_fails_at_once(tmp_path):
 def test_lock_is_exclusive_in_process_and_released(tmp_path):
     out = tmp_path / "s"
     with study_lock(out):
-        with pytest.raises(StudyLocked, match="is writing"):
+        with pytest.raises(StudyLockedError, match="is writing"):
             build_stimuli(parse_design(DESIGN.format(seed=3)), out, progress=False)
-        with pytest.raises(StudyLocked):
+        with pytest.raises(StudyLockedError):
             with study_lock(out):
                 pass
     build_stimuli(parse_design(DESIGN.format(seed=3)), out, progress=False)

@@ -18,7 +18,7 @@ from _prolific import web_records, write_jsonl
 from _study_lock import held_elsewhere, run_together
 from _site_names import nothing_imported
 
-from flipstudy.errors import StudyInUse
+from flipstudy.errors import StudyInUseError
 from flipstudy.study import pipeline, store
 from flipstudy.study.cli import main as cli
 from flipstudy.study.demo import make_demo_study
@@ -78,7 +78,7 @@ def test_run_creates_a_session_only_holding_the_lock(study, wait0):
     st = load_study(study)
     with held_elsewhere(study, "import-web") as pid:
         open_session(st, "P01", dry_run=True)                            # checks only: no lock
-        with pytest.raises(StudyInUse, match=rf"`flipstudy import-web` \(pid {pid}, since .*`flipstudy run` waited 0 s"):
+        with pytest.raises(StudyInUseError, match=rf"`flipstudy import-web` \(pid {pid}, since .*`flipstudy run` waited 0 s"):
             open_session(st, "P01")
     conn = store.connect(study)
     try:
@@ -97,7 +97,7 @@ def test_stimuli_render_init_archive_and_the_site_record_wait(study, tmp_path, c
         refused(capsys, ["render", study], pid)
         refused(capsys, ["init", study / "design.toml", "--force"], pid)
         refused(capsys, ["archive", study], pid)
-        with pytest.raises(StudyInUse, match=rf"\(pid {pid}, since .*`flipstudy export-web` waited 0 s"):
+        with pytest.raises(StudyInUseError, match=rf"\(pid {pid}, since .*`flipstudy export-web` waited 0 s"):
             remember_site(study, "site1", "static", tmp_path / "site")
         assert tree(study) == sorted(before + [".locks", ".locks/study.lock"])
     assert tree(study) == before                                        # the holder left no trace
