@@ -105,22 +105,87 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     >>> sorted(r.files)[:3]                      # doctest: +SKIP
     ['analysis', 'design', 'figure_dprime']
     """
+    from flipstudy.analysis.pipeline import analyze
     from flipstudy.analysis.tables import to_markdown
+    from flipstudy.render.study import render_study
+    from flipstudy.render.style import Style
+    from flipstudy.stimuli.design import PAPER_DESIGN, load_design
+    from flipstudy.stimuli.stimset import build_stimuli
+
+    from .export import export_responses
+    from .simulate import simulate
+
+    from .archive import refuse_real_answers
+    from .lock import study_closed
+
     shown, out = str(out), Path(out)
     if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
         raise ReproduceError(f"{out} exists and is not empty; choose another --out or pass --force "
                              f"to replace it")
-    _guard(out)
+
+    def guard(stack=None):         # --force never replaces real participants' answers,
+        if out.is_dir():           # nor a study a `flipstudy run` server has open
+            for d in [out, *sorted(p for p in out.iterdir() if p.is_dir() and p.name != ".locks")]:
+                hold = study_closed(d, "reproduce --force")
+                if stack is None:
+                    with hold:
+                        pass
+                else:
+                    stack.enter_context(hold)
+                refuse_real_answers(d, shown=d, command="reproduce --force")
+    guard()
     out.parent.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     seconds: dict = {}
     t_all = time.perf_counter()
     try:
-        stimuli, worst, rec, exp, result = _stages(work, seconds, participants=participants, seed=seed,
-                                                   jobs=jobs, size=size, quiet=quiet, cluster=cluster)
+        n_stages = 5
+
+        def stage(i, name):
+            _say(quiet, f"[{i}/{n_stages}] {name}")
+            return time.perf_counter()
+
+        t = stage(1, "design: the paper's study (Section 7), written to design.toml")
+        design_path = work / "design.toml"
+        design_path.write_text(PAPER_DESIGN, encoding="utf-8")
+        design = load_design(design_path)
+        seconds["design"] = time.perf_counter() - t
+
+        t = stage(2, "stimuli: inject and measure every error")
+        study = work / "study"
+        build_stimuli(design, study, progress=not quiet, cluster=cluster)
+        stimuli = StimulusSet.read(study)             # read and checked once, then handed on
+        worst = max(abs(r.measured_error_pct - r.nominal_error_pct) for r in stimuli.tests)
+        seconds["stimuli"] = time.perf_counter() - t
+
+        aa = Style.from_dict(STYLE).anti_aliasing
+        t = stage(3, f"render: videos, ghost and trail composites at {size[0]}x{size[1]} "
+                     f"({aa.upper() if aa != 'none' else 'no'} anti-aliasing)")
+        rec = render_study(stimuli, what=("video", "ghost", "trail"), size=size, jobs=jobs,
+                           style=STYLE, progress=not quiet, cluster=cluster)
+        seconds["render"] = time.perf_counter() - t
+
+        t = stage(4, f"sessions: {participants} simulated participants (observers of the paper's "
+                     f"Table 2), exported")
+        bar = Progress(participants, "participants", not quiet)
+        try:
+            simulate(stimuli, participants, seed=seed, progress=lambda pid, session: bar.step(pid))
+        finally:
+            bar.close()
+        exp = export_responses(stimuli, include_simulated=True)    # marked simulated=true
+        seconds["sessions"] = time.perf_counter() - t
+
+        t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
+        render_dir = study / "render"
+        images = sheet_images(stimuli, render_dir)
+        with Heartbeat("analysis", enabled=not quiet):
+            result = analyze(exp.responses, work / "analysis", images=images, seed=seed,
+                             include_simulated=True)
+        seconds["analysis"] = time.perf_counter() - t
+
         # move into place: nothing half-written is ever at OUT
         with contextlib.ExitStack() as held:
-            _guard(out, held)      # answers may have arrived while the run went on
+            guard(held)            # answers may have arrived while the run went on
             if out.exists():
                 old = out.with_name(f".{out.name}.old-{os.getpid()}")
                 out.rename(old)
@@ -132,97 +197,9 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         shutil.rmtree(work, ignore_errors=True)
         raise
     seconds["total"] = time.perf_counter() - t_all
-    files = _outputs(out)
-    missing = [str(p) for p in files.values() if not p.exists()]
-    if missing:
-        raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
-    return ReproduceResult(
-        out=str(shown).rstrip("/"), files={k: str(v) for k, v in files.items()},
-        seconds=dict(seconds), n_stimuli=len(stimuli), worst_gap_pct=worst,
-        n_videos=sum(1 for s in rec.record["stimuli"].values() if "video" in s["files"]),
-        n_responses=exp.rows, n_simulated=len(exp.simulated), table_md=to_markdown(result.table),
-        thresholds=tuple(result.to_dict()["thresholds"]))
 
-
-def _guard(out: Path, stack=None) -> None:
-    """--force never replaces real participants' answers, nor a study a ``flipstudy
-    run`` server has open: checked on ``out`` and its study folders (held in
-    ``stack`` when given, else taken and let go)."""
-    from .archive import refuse_real_answers
-    from .lock import study_closed
-    if out.is_dir():
-        for d in [out, *sorted(p for p in out.iterdir() if p.is_dir() and p.name != ".locks")]:
-            hold = study_closed(d, "reproduce --force")
-            if stack is None:
-                with hold:
-                    pass
-            else:
-                stack.enter_context(hold)
-            refuse_real_answers(d, shown=d, command="reproduce --force")
-
-
-def _stages(work: Path, seconds: dict, *, participants: int, seed: int, jobs, size, quiet: bool,
-            cluster):
-    """The five stages of :func:`reproduce` in ``work`` (their seconds into ``seconds``):
-    (stimuli, worst measured gap, render result, export result, analysis result)."""
-    from flipstudy.analysis.pipeline import analyze
-    from flipstudy.render.study import render_study
-    from flipstudy.render.style import Style
-    from flipstudy.stimuli.design import PAPER_DESIGN, load_design
-    from flipstudy.stimuli.stimset import build_stimuli
-
-    from .export import export_responses
-    from .simulate import simulate
-    n_stages = 5
-
-    def stage(i, name):
-        _say(quiet, f"[{i}/{n_stages}] {name}")
-        return time.perf_counter()
-
-    t = stage(1, "design: the paper's study (Section 7), written to design.toml")
-    design_path = work / "design.toml"
-    design_path.write_text(PAPER_DESIGN, encoding="utf-8")
-    design = load_design(design_path)
-    seconds["design"] = time.perf_counter() - t
-
-    t = stage(2, "stimuli: inject and measure every error")
-    study = work / "study"
-    build_stimuli(design, study, progress=not quiet, cluster=cluster)
-    stimuli = StimulusSet.read(study)             # read and checked once, then handed on
-    worst = max(abs(r.measured_error_pct - r.nominal_error_pct) for r in stimuli.tests)
-    seconds["stimuli"] = time.perf_counter() - t
-
-    aa = Style.from_dict(STYLE).anti_aliasing
-    t = stage(3, f"render: videos, ghost and trail composites at {size[0]}x{size[1]} "
-                 f"({aa.upper() if aa != 'none' else 'no'} anti-aliasing)")
-    rec = render_study(stimuli, what=("video", "ghost", "trail"), size=size, jobs=jobs,
-                       style=STYLE, progress=not quiet, cluster=cluster)
-    seconds["render"] = time.perf_counter() - t
-
-    t = stage(4, f"sessions: {participants} simulated participants (observers of the paper's "
-                 f"Table 2), exported")
-    bar = Progress(participants, "participants", not quiet)
-    try:
-        simulate(stimuli, participants, seed=seed, progress=lambda pid, session: bar.step(pid))
-    finally:
-        bar.close()
-    exp = export_responses(stimuli, include_simulated=True)    # marked simulated=true
-    seconds["sessions"] = time.perf_counter() - t
-
-    t = stage(5, "analysis: ratings, d′, GEE, psychometric fits, tables, figures")
-    render_dir = study / "render"
-    images = sheet_images(stimuli, render_dir)
-    with Heartbeat("analysis", enabled=not quiet):
-        result = analyze(exp.responses, work / "analysis", images=images, seed=seed,
-                         include_simulated=True)
-    seconds["analysis"] = time.perf_counter() - t
-    return stimuli, worst, rec, exp, result
-
-
-def _outputs(out: Path) -> dict:
-    """name → path of every output :func:`reproduce` promises."""
     a = out / "analysis"
-    return {
+    files = {
         "design": out / "design.toml",
         "manifest": out / "study" / "manifest.csv",
         "stimuli": out / "study",
@@ -241,5 +218,12 @@ def _outputs(out: Path) -> dict:
         "figure_sheet": a / "sheet.png",
         "notes": a / "notes.md",
     }
-
-
+    missing = [str(p) for p in files.values() if not p.exists()]
+    if missing:
+        raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
+    return ReproduceResult(
+        out=str(shown).rstrip("/"), files={k: str(v) for k, v in files.items()},
+        seconds=dict(seconds), n_stimuli=len(stimuli), worst_gap_pct=worst,
+        n_videos=sum(1 for s in rec.record["stimuli"].values() if "video" in s["files"]),
+        n_responses=exp.rows, n_simulated=len(exp.simulated), table_md=to_markdown(result.table),
+        thresholds=tuple(result.to_dict()["thresholds"]))

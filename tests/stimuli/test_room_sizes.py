@@ -20,8 +20,11 @@ MODULES_BEING_MOVED = {
     "stimuli/contract.py",
 }
 #: functions over the limit still to be split into named steps ("path:qualified name");
-#: empty: every function of the package is at most 100 lines, and a new one must be too
-FUNCTIONS_BEING_SPLIT: set[str] = set()
+#: every other function of the package is at most 100 lines, and a new one must be too
+FUNCTIONS_BEING_SPLIT: set[str] = {
+    "study/reproduce.py:reproduce",     # split on main already (_guard, _outputs, _move_into_place):
+                                        # leaves this list when this branch meets main
+}
 
 
 def package_files(root: Path) -> list[Path]:
