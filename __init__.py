@@ -38,23 +38,11 @@ Every user error is a :class:`FlipstudyError`:
 unknown built-in clip 'cartwheel'; valid names: backflip, frontflip, jump
 """
 from flipstudy.errors import FlipstudyError
+from flipstudy._lazy import attach
 
-_LAZY = ("BVHError", "Body", "Clip", "Skeleton", "analyse", "builtin", "load_bvh", "save_bvh", "Analysis")
-
-
-def __getattr__(name: str):
-    # imported on first use, so that ``import flipstudy.study.cli`` loads no scipy
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    import flipstudy.stimuli
-    value = getattr(flipstudy.stimuli, name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_LAZY))
-
+# imported on first use, so that ``import flipstudy.study.cli`` loads no scipy
+attach(__name__, {"flipstudy.stimuli": ["BVHError", "Body", "Clip", "Skeleton", "analyse", "builtin",
+                                        "load_bvh", "save_bvh", "Analysis"]})
 
 __version__ = "0.1.0"
 

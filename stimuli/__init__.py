@@ -4,43 +4,16 @@ Stable entry points::
 
     from flipstudy.stimuli import load_bvh, save_bvh, builtin, analyse
 """
-import importlib
-import sys
-import types
-
+from flipstudy._lazy import attach
 from flipstudy.errors import FlipstudyError
 from .loading import load_clip
 
-#: each public name and the module it is defined in, imported on first use: the
-#: motion modules need scipy, and ``import flipstudy.stimuli`` (the CLI's parser)
-#: should not load it
-_WHERE = {**dict.fromkeys(("BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh"), ".motion"),
-          "Body": ".body", "Analysis": ".analyse", "analyse": ".analyse",
-          "Stimulus": ".contract", "StimulusSet": ".contract"}
-
-
-class _Package(types.ModuleType):
-    """This package, whose names of :data:`_WHERE` load on first use."""
-
-    def __getattr__(self, name: str):
-        if name not in _WHERE:
-            raise AttributeError(f"module {self.__name__!r} has no attribute {name!r}")
-        value = getattr(importlib.import_module(_WHERE[name], self.__name__), name)
-        self.__dict__[name] = value
-        return value
-
-    def __setattr__(self, name: str, value) -> None:
-        # importing the submodule flipstudy.stimuli.analyse binds it here; the name
-        # stays the function analyse(), as when it was imported eagerly
-        if name in _WHERE and isinstance(value, types.ModuleType):
-            return
-        super().__setattr__(name, value)
-
-    def __dir__(self):
-        return sorted(set(self.__dict__) | set(_WHERE))
-
-
-sys.modules[__name__].__class__ = _Package
+# each public name and the module it is defined in, imported on first use: the
+# motion modules need scipy, and ``import flipstudy.stimuli`` (the CLI's parser)
+# should not load it
+attach(__name__, {".motion": ["BVHError", "Clip", "Skeleton", "load_bvh", "save_bvh"],
+                  ".body": ["Body"], ".analyse": ["Analysis", "analyse"],
+                  ".contract": ["Stimulus", "StimulusSet"]})
 
 
 BUILTIN_NAMES = ("backflip", "frontflip", "jump")

@@ -16,29 +16,17 @@ that makes the stages meet), :mod:`.stages` (the frames: stand, windup,
 thrust, flight, landing), :mod:`.checks` (ray casts, collisions, the landing
 point), :mod:`.controller` (:func:`jump`, its result and report).
 """
-import importlib
+from flipstudy._lazy import attach
 
-#: each public name and the module it is defined in, imported on first use (the
-#: controller needs scipy; the CLI's parser reads PRESETS, COURSES, STRENGTH only)
-_WHERE = {**dict.fromkeys(("JumpReport", "JumpResult", "jump"), ".controller"),
-          **dict.fromkeys(("COURSES", "Box", "Course", "make_course"), ".course"),
-          "plan": ".planning", "Jumper": ".model", "STRENGTH": ".muscles",
-          **dict.fromkeys(("MUSCLES", "PRESETS", "parse_k", "spring_displacement", "spring_energy",
-                           "spring_force"), ".muscles"),
-          **dict.fromkeys(("JumpPath", "estimate_path", "kinetic_energy"), ".path"),
-          "assign_energy": ".assignment", "choose": ".windup", "sample_field": ".samples"}
-
-
-def __getattr__(name: str):
-    if name not in _WHERE:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(_WHERE[name], __name__), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_WHERE))
+# each public name and the module it is defined in, imported on first use (the
+# controller needs scipy; the CLI's parser reads PRESETS, COURSES, STRENGTH only)
+attach(__name__, {".controller": ["JumpReport", "JumpResult", "jump"],
+                  ".course": ["COURSES", "Box", "Course", "make_course"],
+                  ".planning": ["plan"], ".model": ["Jumper"],
+                  ".muscles": ["STRENGTH", "MUSCLES", "PRESETS", "parse_k", "spring_displacement",
+                               "spring_energy", "spring_force"],
+                  ".path": ["JumpPath", "estimate_path", "kinetic_energy"],
+                  ".assignment": ["assign_energy"], ".windup": ["choose"], ".samples": ["sample_field"]})
 
 
 __all__ = ["COURSES", "STRENGTH", "Box", "Course", "JumpReport", "JumpResult", "jump", "make_course", "plan",
