@@ -4,7 +4,9 @@ A package ``__init__`` imports its names plainly, unless importing them costs wh
 a command that does not need them should not pay (measured: ``import
 flipstudy.study.cli`` 0.05 s; the names of ``flipstudy.stimuli`` eagerly 0.6 s,
 those of ``flipstudy.render`` 1.2 s, of ``flipstudy.stimuli.control`` 0.8 s: scipy,
-PyVista).  Those packages, and the root, call :func:`attach` with each public name
+PyVista).  Those packages, ``flipstudy.stimuli.edit`` (whose motion operations
+render re-exports: its algorithms cost 0.2 s more) and the root call :func:`attach`
+with each public name
 and the module it is defined in (the mapping of ``lazy_loader.attach``, without the
 dependency)::
 

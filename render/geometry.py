@@ -13,14 +13,16 @@ template points and normals are computed once in joint-local coordinates;
 posing a frame is one vectorised transform ``world = R_joint @ local + P_joint``
 written in place into the VTK point array (no new mesh, no new actor).
 
-Also here: sampling a clip at display times (:func:`resample`), and the world
-points of the body over frames (:func:`body_points`, used to fit cameras).
+Also here: the world points of the body over frames (:func:`body_points`, used to
+fit cameras); sampling a clip at display times (:func:`resample`, :func:`poses_at`)
+is a motion operation of :mod:`flipstudy.stimuli.edit.reposition`, re-exported here.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from flipstudy.stimuli.body import Body
+from flipstudy.stimuli.edit.reposition import poses_at, resample  # noqa: F401  (motion operations)
 from flipstudy.stimuli.motion.clip import Clip
 
 
@@ -110,77 +112,6 @@ def piece_templates(body: Body, resolution=(20, 12)):
     nrm = np.einsum("pab,pb,vb->pva", Q, 1.0 / semi, u)
     nrm /= np.linalg.norm(nrm, axis=-1, keepdims=True)
     return joint, pts, nrm, tris
-
-
-def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = None) -> Clip:
-    """The clip sampled at display times ``start, start + 1/fps, …, ≤ stop``
-    (seconds; default the whole clip): rotations slerped, root and joint
-    translations linear (no uneven frame dropping).  The result has ``fps``
-    frames per second.
-
-    Parameters
-    ----------
-    clip : Clip
-    fps : float
-        The new frame rate.
-    start, stop : float
-        Seconds (``stop`` None: the clip's end).
-
-    Returns
-    -------
-    Clip
-
-    Examples
-    --------
-    >>> from flipstudy import builtin
-    >>> clip = builtin("backflip")                    # 120 fps
-    >>> v = resample(clip, 60.0)
-    >>> v.fps, v.num_frames, v.duration <= clip.duration
-    (60.0, 199, True)
-    """
-    from flipstudy.stimuli.edit.timing import sample
-    fps = float(fps)
-    if not (np.isfinite(fps) and fps > 0):
-        raise ValueError(f"resample: fps must be a positive number, got {fps!r}")
-    stop = clip.duration if stop is None else min(float(stop), clip.duration)
-    n = int(np.floor((stop - start) * fps + 1e-9)) + 1
-    src = (start + np.arange(max(n, 1)) / fps) * clip.fps
-    if clip.num_frames == 1:
-        return clip.replace(fps=fps)
-    if np.isclose(fps, clip.fps) and abs(start * clip.fps - round(start * clip.fps)) < 1e-9:
-        i0 = int(round(start * clip.fps))
-        return clip.slice(i0, i0 + n).with_fps(fps)
-    return sample(clip, src).with_fps(fps)
-
-
-def poses_at(clip: Clip, times) -> Clip:
-    """A clip whose frames are ``clip`` at the given times (seconds, any order),
-    interpolated as in :func:`resample`.
-
-    Parameters
-    ----------
-    clip : Clip
-    times : array_like
-        Seconds.
-
-    Returns
-    -------
-    Clip
-        One frame per time.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from flipstudy import builtin
-    >>> from flipstudy.render import poses_at
-    >>> clip = builtin("jump")
-    >>> two = poses_at(clip, [0.5, 0.0])
-    >>> two.num_frames, bool(np.allclose(two.joint_positions()[1], clip.joint_positions()[0]))
-    (2, True)
-    """
-    from flipstudy.stimuli.edit.timing import sample
-    t = np.atleast_1d(np.asarray(times, dtype=float))
-    return sample(clip, np.clip(t * clip.fps, 0, clip.num_frames - 1))
 
 
 def body_points(clip: Clip, body: Body, resolution=(8, 5), frames=slice(None)) -> np.ndarray:

@@ -14,75 +14,9 @@ from flipstudy.stimuli.body import Body
 from flipstudy.stimuli.motion.clip import Clip
 from flipstudy.stimuli.physics import center_of_mass
 
+from flipstudy.stimuli.edit.reposition import place, translate  # noqa: F401  (motion operations)
+
 from .camera import UP
-
-
-def translate(clip: Clip, offset) -> Clip:
-    """The clip moved by ``offset`` (3,) metres.
-
-    Parameters
-    ----------
-    clip : Clip
-    offset : array_like, shape (3,)
-        Metres.
-
-    Returns
-    -------
-    Clip
-
-    Examples
-    --------
-    >>> from flipstudy import builtin
-    >>> from flipstudy.render import translate
-    >>> clip = builtin("jump")
-    >>> moved = translate(clip, (1.0, 0.0, 0.0))
-    >>> (moved.joint_positions() - clip.joint_positions())[0, 0].round(6).tolist()
-    [1.0, 0.0, 0.0]
-    """
-    o = np.asarray(offset, float)
-    if not np.any(o):
-        return clip
-    return clip.replace(root_pos=clip.root_pos + o)
-
-
-
-def place(clip: Clip, offset, yaw_deg: float = 0.0) -> Clip:
-    """The clip moved by ``offset`` (3,), then turned by ``yaw_deg`` degrees
-    about the vertical axis through the origin (the study's take-off spot).
-
-    Parameters
-    ----------
-    clip : Clip
-    offset : array_like, shape (3,)
-        Metres.
-    yaw_deg : float
-        Degrees about the vertical axis through the origin.
-
-    Returns
-    -------
-    Clip
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from flipstudy import builtin
-    >>> from flipstudy.render import place
-    >>> clip = builtin("jump")
-    >>> turned = place(clip, (0.0, 0.0, 0.0), 90.0)
-    >>> P, Q = clip.joint_positions(), turned.joint_positions()
-    >>> bool(np.allclose(P[..., 1], Q[..., 1]))                     # heights kept
-    True
-    >>> bool(np.allclose(np.hypot(P[..., 0], P[..., 2]), np.hypot(Q[..., 0], Q[..., 2])))
-    True
-    """
-    clip = translate(clip, offset)
-    if yaw_deg:
-        from scipy.spatial.transform import Rotation
-
-        from flipstudy.stimuli.edit.reposition import rotate
-        clip = rotate(clip, Rotation.from_rotvec([0.0, np.radians(yaw_deg), 0.0]), np.zeros(3))
-    return clip
-
 
 
 def takeoff_com(clip: Clip, body: Body, takeoff: int | None) -> np.ndarray:

@@ -1,6 +1,9 @@
-"""Moving the centre of mass (Section 5.4): the COM of a pose is an affine
-function of the root translation, so shifting the root by d shifts the COM by d
-and leaves the angular momentum about the COM untouched."""
+"""Motion operations on a whole clip, in one module: moving the centre of mass
+(Section 5.4: the COM of a pose is an affine function of the root translation, so
+shifting the root by d shifts the COM by d and leaves the angular momentum about the
+COM untouched), a ballistic path, turning about a point, translating, placing on the
+study's take-off spot, and sampling at other times (:func:`resample`,
+:func:`poses_at`).  :mod:`flipstudy.render` re-exports the ones it uses."""
 
 from __future__ import annotations
 
@@ -69,3 +72,140 @@ def rotate(clip: Clip, rotation, center: np.ndarray) -> Clip:
     pos = center + rotation.apply(clip.root_pos - center)
     jp = clip.joint_pos
     return clip.replace(root_pos=pos, rotations=rot, joint_pos=jp)
+
+
+def translate(clip: Clip, offset) -> Clip:
+    """The clip moved by ``offset`` (3,) metres.
+
+    Parameters
+    ----------
+    clip : Clip
+    offset : array_like, shape (3,)
+        Metres.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render import translate
+    >>> clip = builtin("jump")
+    >>> moved = translate(clip, (1.0, 0.0, 0.0))
+    >>> (moved.joint_positions() - clip.joint_positions())[0, 0].round(6).tolist()
+    [1.0, 0.0, 0.0]
+    """
+    o = np.asarray(offset, float)
+    if not np.any(o):
+        return clip
+    return clip.replace(root_pos=clip.root_pos + o)
+
+
+
+def place(clip: Clip, offset, yaw_deg: float = 0.0) -> Clip:
+    """The clip moved by ``offset`` (3,), then turned by ``yaw_deg`` degrees
+    about the vertical axis through the origin (the study's take-off spot).
+
+    Parameters
+    ----------
+    clip : Clip
+    offset : array_like, shape (3,)
+        Metres.
+    yaw_deg : float
+        Degrees about the vertical axis through the origin.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render import place
+    >>> clip = builtin("jump")
+    >>> turned = place(clip, (0.0, 0.0, 0.0), 90.0)
+    >>> P, Q = clip.joint_positions(), turned.joint_positions()
+    >>> bool(np.allclose(P[..., 1], Q[..., 1]))                     # heights kept
+    True
+    >>> bool(np.allclose(np.hypot(P[..., 0], P[..., 2]), np.hypot(Q[..., 0], Q[..., 2])))
+    True
+    """
+    clip = translate(clip, offset)
+    if yaw_deg:
+        from scipy.spatial.transform import Rotation
+        clip = rotate(clip, Rotation.from_rotvec([0.0, np.radians(yaw_deg), 0.0]), np.zeros(3))
+    return clip
+
+
+def resample(clip: Clip, fps: float, start: float = 0.0, stop: float | None = None) -> Clip:
+    """The clip sampled at display times ``start, start + 1/fps, …, ≤ stop``
+    (seconds; default the whole clip): rotations slerped, root and joint
+    translations linear (no uneven frame dropping).  The result has ``fps``
+    frames per second.
+
+    Parameters
+    ----------
+    clip : Clip
+    fps : float
+        The new frame rate.
+    start, stop : float
+        Seconds (``stop`` None: the clip's end).
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> clip = builtin("backflip")                    # 120 fps
+    >>> v = resample(clip, 60.0)
+    >>> v.fps, v.num_frames, v.duration <= clip.duration
+    (60.0, 199, True)
+    """
+    from .timing import sample
+    fps = float(fps)
+    if not (np.isfinite(fps) and fps > 0):
+        raise ValueError(f"resample: fps must be a positive number, got {fps!r}")
+    stop = clip.duration if stop is None else min(float(stop), clip.duration)
+    n = int(np.floor((stop - start) * fps + 1e-9)) + 1
+    src = (start + np.arange(max(n, 1)) / fps) * clip.fps
+    if clip.num_frames == 1:
+        return clip.replace(fps=fps)
+    if np.isclose(fps, clip.fps) and abs(start * clip.fps - round(start * clip.fps)) < 1e-9:
+        i0 = int(round(start * clip.fps))
+        return clip.slice(i0, i0 + n).with_fps(fps)
+    return sample(clip, src).with_fps(fps)
+
+
+
+def poses_at(clip: Clip, times) -> Clip:
+    """A clip whose frames are ``clip`` at the given times (seconds, any order),
+    interpolated as in :func:`resample`.
+
+    Parameters
+    ----------
+    clip : Clip
+    times : array_like
+        Seconds.
+
+    Returns
+    -------
+    Clip
+        One frame per time.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from flipstudy import builtin
+    >>> from flipstudy.render import poses_at
+    >>> clip = builtin("jump")
+    >>> two = poses_at(clip, [0.5, 0.0])
+    >>> two.num_frames, bool(np.allclose(two.joint_positions()[1], clip.joint_positions()[0]))
+    (2, True)
+    """
+    from .timing import sample
+    t = np.atleast_1d(np.asarray(times, dtype=float))
+    return sample(clip, np.clip(t * clip.fps, 0, clip.num_frames - 1))
