@@ -139,7 +139,18 @@ class AnimatorEditError(FlipstudyError, ValueError):
 
 
 class FlipEditError(FlipstudyError, ValueError):
-    """A flip edit (more flips, a join in flight) that cannot be made; the message says why."""
+    """A flip edit (more flips, a join in flight) that cannot be made; the message says why.
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> from flipstudy.stimuli.edit import multiflip
+    >>> try:
+    ...     multiflip(builtin("backflip"), 7)
+    ... except FlipEditError as e:
+    ...     print(e)
+    flips must be a whole number from 1 to 6, got 7
+    """
 
 
 class ConcatError(FlipstudyError, ValueError):

@@ -59,7 +59,29 @@ def straighten(a: Analysis, group: str = "legs", t0: float | None = None, t1: fl
                blend: float = 0.16) -> Clip:
     """The analysed clip with a joint group (``"legs"``: hips and knees, ``"arms"``)
     held straight — as in the clip's first frame, standing — from ``t0`` to ``t1``
-    seconds (default: 0.1 s after take-off to 0.1 s before landing)."""
+    seconds (default: 0.1 s after take-off to 0.1 s before landing).
+
+    Parameters
+    ----------
+    a : Analysis
+    group : {"legs", "arms"}
+    t0, t1 : float, optional
+        Seconds.
+    blend : float
+        Seconds over which the hold blends in and out.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy import analyse, builtin
+    >>> a = analyse(builtin("backflip"))
+    >>> straight = straighten(a)                    # the tuck's legs held straight
+    >>> straight.num_frames == a.clip.num_frames
+    True
+    """
     if group not in GROUPS:
         raise AnimatorEditError(f"unknown joint group {group!r}; expected one of {sorted(GROUPS)}")
     sk = a.clip.skeleton
@@ -137,7 +159,28 @@ def repair_momentum(original: Analysis, edited: Clip, sub: int = 8, midpoint: bo
     """Retime the flight of ``edited`` (the original's timing, poses changed by an
     animator) so its |L| follows the original's again, then reposition the COM.
     ``sub``: in-between frames per frame for the ratio; ``midpoint``: the
-    second-order variant of the paper's rule (see :func:`ratio_retime_frames`)."""
+    second-order variant of the paper's rule (see :func:`ratio_retime_frames`).
+
+    Parameters
+    ----------
+    original : Analysis
+    edited : Clip
+        The original's timing, poses changed.
+    sub : int
+    midpoint : bool
+
+    Returns
+    -------
+    Repair
+
+    Examples
+    --------
+    >>> from flipstudy import analyse, builtin
+    >>> a = analyse(builtin("backflip"))
+    >>> fixed = repair_momentum(a, straighten(a))
+    >>> type(fixed).__name__, fixed.takeoff < fixed.landing
+    ('Repair', True)
+    """
     body, fps = original.body, original.clip.fps
     to, ld = original.takeoff, original.landing
     if edited.num_frames != original.clip.num_frames:

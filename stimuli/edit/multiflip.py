@@ -56,7 +56,30 @@ from .timing import slerp, smoothstep
 def k_star(g: float, T: float, v0: float, dy: float) -> float:
     """Appendix B: the retiming factor that keeps linear momentum continuous,
     k* = sqrt(½ g T / (v0 − Δy/T)), for a flight of T seconds (before retiming)
-    that took off with vertical velocity v0 and lands Δy higher."""
+    that took off with vertical velocity v0 and lands Δy higher.
+
+    Parameters
+    ----------
+    g : float
+        Gravity, m/s².
+    T : float
+        The flight's seconds before retiming.
+    v0 : float
+        Vertical take-off velocity, m/s.
+    dy : float
+        Landing height above the take-off, m.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    A flight that already lasts what its take-off velocity gives needs no retiming:
+
+    >>> round(k_star(9.81, 1.0, 4.905, 0.0), 6)
+    1.0
+    """
     den = v0 - dy / T
     if not (T > 0 and den > 0):
         raise FlipEditError(f"k*: the flight needs T > 0 and v0 > Δy/T (T={T:.3f} s, v0={v0:.3f} m/s, "
@@ -268,6 +291,38 @@ def multiflip(source: Clip | Analysis | FlipSource, flips: int = 2, *, k_ratio: 
     take-off (everything before the flight is raised, Figure 4c), the landing
     height stays.  Returns a :class:`MultiFlip` whose ``report`` holds the
     search, sequencing, k*, k and the measured momentum jumps.
+
+    Parameters
+    ----------
+    source : Clip, Analysis or FlipSource
+        A single flip.
+    flips : int
+        1 to 6.
+    k_ratio, k : float
+        The retiming factor, as a fraction of k* or itself.
+    blend_s : float
+        Seconds, half-width of each join's cross-fade.
+    max_turn_error : float
+        Degrees the landing join may miss whole turns by.
+    takeoff_height : float
+        Metres added to the take-off.
+    min_turn_deg : float
+        The least turn of the self-looping sequence, degrees.
+
+    Returns
+    -------
+    MultiFlip
+
+    Raises
+    ------
+    FlipEditError
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> double = multiflip(builtin("backflip"), 2)
+    >>> double.flips, double.takeoff < double.landing
+    (2, True)
     """
     if isinstance(flips, bool) or not isinstance(flips, (int, np.integer)) or not 1 <= flips <= 6:
         raise FlipEditError(f"flips must be a whole number from 1 to 6, got {flips!r}")

@@ -20,6 +20,23 @@ def move_com(clip: Clip, body: Body, frames: slice, new_com: np.ndarray,
     ``carry`` every later frame is offset by the shift of the last one, so the
     motion continues from where the flight now ends.
 
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+    frames : slice
+        The frames to move.
+    new_com : ndarray, shape (n, 3)
+        Their COM, metres.
+    carry : bool
+        Offset every later frame by the last one's shift.
+    com : ndarray, optional
+        The clip's COM (F,3), when already computed.
+
+    Returns
+    -------
+    Clip
+
     Examples
     --------
     The flight of the built-in back flip 10 cm lower:
@@ -52,7 +69,28 @@ def move_com(clip: Clip, body: Body, frames: slice, new_com: np.ndarray,
 
 def ballistic_path(c0: np.ndarray, v0: np.ndarray, g: float, t: np.ndarray) -> np.ndarray:
     """(n,3) points of a ballistic path from ``c0`` with velocity ``v0`` under
-    gravity ``g`` along −Y, at times ``t`` (s)."""
+    gravity ``g`` along −Y, at times ``t`` (s).
+
+    Parameters
+    ----------
+    c0, v0 : ndarray, shape (3,)
+        Start point (m) and velocity (m/s).
+    g : float
+        m/s², along −Y.
+    t : ndarray, shape (n,)
+        Seconds.
+
+    Returns
+    -------
+    ndarray, shape (n, 3)
+
+    Examples
+    --------
+    >>> ballistic_path(np.zeros(3), np.array([1.0, 4.9, 0.0]), 9.81, np.array([0.0, 0.5, 1.0])).round(3)
+    array([[ 0.   ,  0.   ,  0.   ],
+           [ 0.5  ,  1.224,  0.   ],
+           [ 1.   , -0.005,  0.   ]])
+    """
     t = np.asarray(t, dtype=float)[:, None]
     p = np.asarray(c0, float)[None] + np.asarray(v0, float)[None] * t
     p[:, 1] -= 0.5 * g * t[:, 0] ** 2
@@ -63,7 +101,30 @@ def rotate(clip: Clip, rotation, center: np.ndarray) -> Clip:
     """The whole clip rotated rigidly by ``rotation`` (a scipy ``Rotation``, one
     for all frames or one per frame) about the point(s) ``center`` ((3,) or
     (F,3)).  Angular momentum rotates with it: rotating about an axis along L
-    through the COM leaves L unchanged (Section 5.1)."""
+    through the COM leaves L unchanged (Section 5.1).
+
+    Parameters
+    ----------
+    clip : Clip
+    rotation : scipy.spatial.transform.Rotation
+        One rotation, or one per frame.
+    center : ndarray, shape (3,) or (F, 3)
+        The point(s) turned about, metres.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    A quarter turn about the vertical keeps every height:
+
+    >>> from scipy.spatial.transform import Rotation
+    >>> from flipstudy import builtin
+    >>> clip = builtin("jump")
+    >>> turned = rotate(clip, Rotation.from_rotvec([0, np.pi / 2, 0]), np.zeros(3))
+    >>> bool(np.allclose(turned.joint_positions()[..., 1], clip.joint_positions()[..., 1]))
+    True"""
     from scipy.spatial.transform import Rotation
     center = np.broadcast_to(np.asarray(center, float), clip.root_pos.shape)
     root = Rotation.from_quat(clip.rotations[:, 0])

@@ -26,6 +26,16 @@ def sample(clip: Clip, src: np.ndarray) -> Clip:
     (clamped to the clip).  Same fps and ``meta`` (provenance only: the source
     frames are ``src``, clamped, and not stored in it).
 
+    Parameters
+    ----------
+    clip : Clip
+    src : ndarray
+        Fractional source frames, one per output frame.
+
+    Returns
+    -------
+    Clip
+
     Examples
     --------
     >>> import numpy as np
@@ -83,7 +93,24 @@ def smoothstep(x):
 
 def retime(clip: Clip, factor: float) -> Clip:
     """Uniform retiming: the motion plays ``factor`` times faster (``factor`` < 1:
-    slower) at the same frame rate, so velocities, p and L scale by ``factor``."""
+    slower) at the same frame rate, so velocities, p and L scale by ``factor``.
+
+    Parameters
+    ----------
+    clip : Clip
+    factor : float
+        How many times faster.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> clip = builtin("jump")
+    >>> clip.num_frames, retime(clip, 2.0).num_frames            # twice as fast
+    (377, 189)"""
     if not (np.isfinite(factor) and factor > 0):
         raise FlipstudyValueError(f"retime factor must be a positive number, got {factor!r}")
     n = int(np.floor((clip.num_frames - 1) / factor + 1e-9)) + 1
@@ -95,7 +122,30 @@ def source_times(rate: Callable[[np.ndarray], np.ndarray] | np.ndarray, duration
     """Integrate a rate profile r(τ) (source seconds per output second) over the
     output frames 0, 1/fps, ... up to where ``duration`` source seconds are used.
     Returns source seconds per output frame (the last one may exceed nothing:
-    frames stop at or before ``duration``)."""
+    frames stop at or before ``duration``).
+
+    Parameters
+    ----------
+    rate : callable or ndarray
+        r(τ) of output seconds τ, vectorised, or its values on the output frames.
+    duration : float
+        Source seconds to use.
+    fps : float
+        Output frames per second.
+    substeps : int
+        Integration steps per output frame.
+
+    Returns
+    -------
+    ndarray
+        Source seconds, one per output frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = source_times(lambda tau: np.full_like(tau, 0.5), 1.0, 10.0)   # half speed
+    >>> t[:4], len(t)
+    (array([0.  , 0.05, 0.1 , 0.15]), 21)"""
     dt = 1.0 / fps / substeps
     if callable(rate):
         # integrate on a fine grid (trapezoid) until the source duration is reached
@@ -121,7 +171,28 @@ def ratio_retime_frames(ratio: Callable[[float], float], start: float, stop: flo
 
     The rule is sequential by nature (each step depends on the previous one), so
     this is a scalar loop over output frames; ``ratio`` is evaluated once (twice
-    with ``midpoint``) per step."""
+    with ``midpoint``) per step.
+
+    Parameters
+    ----------
+    ratio : callable
+        ratio(f) of the source frame f.
+    start, stop : float
+        Source frames.
+    max_frames : int
+        A bound on the output frames.
+    midpoint : bool
+        The second-order step.
+
+    Returns
+    -------
+    ndarray
+        Fractional source frames.
+
+    Examples
+    --------
+    >>> ratio_retime_frames(lambda f: 2.0, 0.0, 3.0)
+    array([0. , 0.5, 1. , 1.5, 2. , 2.5, 3. ])"""
     out = [float(start)]
     f = float(start)
     while True:

@@ -37,7 +37,26 @@ def guess_scale(skeleton: Skeleton) -> tuple[float, str]:
 
     The rest pose of every file we know is standing (T- or A-pose), so its largest
     extent (height, or arm span in a T-pose) is about an adult's height.  The unit
-    whose conversion puts it closest to 1.70 m (in log scale) wins."""
+    whose conversion puts it closest to 1.70 m (in log scale) wins.
+
+    Parameters
+    ----------
+    skeleton : Skeleton
+        The rest skeleton, in file units.
+
+    Returns
+    -------
+    scale : float
+        Metres per file unit.
+    unit : str
+        Its name.
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> clip = builtin("jump")                              # metres
+    >>> guess_scale(clip.skeleton), guess_scale(clip.scaled(100).skeleton)
+    ((1.0, 'm'), (0.01, 'cm'))"""
     P = skeleton.rest_positions()
     pts = [P]
     if skeleton.end_sites:

@@ -19,7 +19,24 @@ def _fmt(x: float) -> str:
 
 
 def bvh_text(clip: Clip, scale: float = 1.0) -> str:
-    """The BVH text of a clip; lengths are written as metres / ``scale``."""
+    """The BVH text of a clip; lengths are written as metres / ``scale``.
+
+    Parameters
+    ----------
+    clip : Clip
+    scale : float
+        Metres per file unit (0.01: centimetres).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> bvh_text(builtin("jump")).splitlines()[:2]
+    ['HIERARCHY', 'ROOT Hips']
+    """
     sk = clip.skeleton
     J = sk.num_joints
     inv = 1.0 / scale

@@ -51,8 +51,11 @@ def builtin(name: str, fps: float = 120, total_mass: float = 70.0,
     0 to −360° (L_x < 0), the frontflip's from 0 to +360° (L_x > 0), the jump's
     back to 0.
 
-    Parameters (keyword, optional; defaults per clip)
-    -------------------------------------------------
+    Parameters
+    ----------
+    name : str
+        One of :data:`BUILTIN_NAMES`; the others are keywords, optional, with defaults
+        per clip.
     fps : frames per second (>= 10).  Take-off and touch-down fall on frames,
         so ``flight_time`` is rounded to whole frames.
     total_mass : kg.

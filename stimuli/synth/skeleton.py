@@ -52,6 +52,15 @@ def make_skeleton(height: float = 1.75) -> Skeleton:
     Site), the same Right*.  Other joints have channels Zrotation Yrotation
     Xrotation.
 
+    Parameters
+    ----------
+    height : float
+        Standing height, metres.
+
+    Returns
+    -------
+    Skeleton
+
     Examples
     --------
     >>> sk = make_skeleton(1.75)

@@ -23,14 +23,50 @@ PARTS = ("flipstudy.stimuli", "flipstudy.render", "flipstudy.study", "flipstudy.
 # Empty: every public function and class is documented; a new public name needs its docstring.
 KNOWN_GAP: set[str] = set()
 
+#: the sub-packages, whose ``__all__`` names are public too (issue 40)
+SUBPACKAGES = ("flipstudy.stimuli.motion", "flipstudy.stimuli.edit", "flipstudy.stimuli.edit.concat",
+               "flipstudy.stimuli.control", "flipstudy.stimuli.synth", "flipstudy.study.web")
+# their names still without a numpydoc docstring with examples; may only shrink
+# (21 of their 73 have one now: stimuli.motion, stimuli.edit, most of stimuli.synth)
+KNOWN_SUB_GAP: set[str] = {
+    "flipstudy.stimuli.edit.concat.concatenate", "flipstudy.stimuli.edit.concat.Concatenation",
+    "flipstudy.stimuli.edit.concat.ConcatReport", "flipstudy.stimuli.edit.concat.ConcatError",
+    "flipstudy.stimuli.edit.concat.Phases", "flipstudy.stimuli.edit.concat.phases",
+    "flipstudy.stimuli.edit.concat.align_angle", "flipstudy.stimuli.edit.concat.yaw",
+    "flipstudy.stimuli.edit.concat.Timing", "flipstudy.stimuli.edit.concat.optimal_timing",
+    "flipstudy.stimuli.edit.concat.optimal_timing_bruteforce",
+    "flipstudy.stimuli.edit.concat.Motion", "flipstudy.stimuli.edit.concat.motion_of",
+    "flipstudy.stimuli.edit.concat.transformed", "flipstudy.stimuli.edit.concat.suggest_rule",
+    "flipstudy.stimuli.edit.concat.torso_facing", "flipstudy.stimuli.edit.concat.foot_contacts",
+    "flipstudy.stimuli.edit.concat.blendable_periods",
+    "flipstudy.stimuli.edit.concat.support_frames", "flipstudy.stimuli.edit.concat.blend",
+    "flipstudy.stimuli.edit.concat.smoothing_factor", "flipstudy.stimuli.edit.concat.smooth",
+    "flipstudy.stimuli.edit.concat.two_bone_ik", "flipstudy.stimuli.edit.concat.pin_feet",
+    "flipstudy.stimuli.edit.concat.FeetReport", "flipstudy.stimuli.edit.concat.motion_graph_join",
+    "flipstudy.stimuli.edit.concat.point_cloud_distance",
+    "flipstudy.stimuli.edit.concat.MotionGraphReport", "flipstudy.stimuli.edit.concat.mirror",
+    "flipstudy.stimuli.edit.concat.mirror_pairs", "flipstudy.stimuli.edit.concat.rest_asymmetry",
+    "flipstudy.stimuli.control.Box", "flipstudy.stimuli.control.Course",
+    "flipstudy.stimuli.control.JumpReport", "flipstudy.stimuli.control.JumpResult",
+    "flipstudy.stimuli.control.jump", "flipstudy.stimuli.control.make_course",
+    "flipstudy.stimuli.control.plan", "flipstudy.stimuli.control.Jumper",
+    "flipstudy.stimuli.control.parse_k", "flipstudy.stimuli.control.spring_displacement",
+    "flipstudy.stimuli.control.spring_energy", "flipstudy.stimuli.control.spring_force",
+    "flipstudy.stimuli.control.JumpPath", "flipstudy.stimuli.control.estimate_path",
+    "flipstudy.stimuli.control.kinetic_energy", "flipstudy.stimuli.control.assign_energy",
+    "flipstudy.stimuli.control.choose", "flipstudy.stimuli.control.sample_field",
+    "flipstudy.stimuli.synth.SynthError"
+}
 
-def public_names() -> dict[str, object]:
-    """``module.name`` → object, for every function and class of the public API."""
+
+def public_names(parts=PARTS, stable=STABLE) -> dict[str, object]:
+    """``module.name`` → object, for every function and class of the public API
+    (``parts``: the packages whose ``__all__`` is read)."""
     out = {}
     root = importlib.import_module("flipstudy")
-    for n in STABLE:
+    for n in stable:
         out[f"flipstudy.{n}"] = getattr(root, n)
-    for part in PARTS:
+    for part in parts:
         mod = importlib.import_module(part)
         for n in getattr(mod, "__all__", ()):
             obj = getattr(mod, n)
@@ -98,3 +134,11 @@ def test_every_public_name_has_a_numpydoc_docstring_with_examples():
     fixed = sorted(KNOWN_GAP - set(missing))
     assert not fixed, f"documented now, remove from KNOWN_GAP: {fixed}"
 
+
+def test_every_public_name_of_the_subpackages_has_a_numpydoc_docstring_with_examples():
+    missing = {name: p for name, obj in public_names(SUBPACKAGES, ()).items() if (p := problems(obj))}
+    new = sorted(set(missing) - KNOWN_SUB_GAP)
+    assert not new, "public names without a numpydoc docstring with Examples:\n" + "\n".join(
+        f"  {n}: {'; '.join(missing[n])}" for n in new)
+    fixed = sorted(KNOWN_SUB_GAP - set(missing))
+    assert not fixed, f"documented now, remove from KNOWN_SUB_GAP: {fixed}"
