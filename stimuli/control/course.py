@@ -18,7 +18,19 @@ COURSES = ("forward", "sideways", "box", "over")
 
 @dataclass(frozen=True)
 class Box:
-    """An axis-aligned box (metres): corners ``lo`` and ``hi``."""
+    """An axis-aligned box (metres): corners ``lo`` and ``hi``.
+
+    Attributes
+    ----------
+    lo, hi : tuple of float
+        The lowest and the highest corner, metres.
+
+    Examples
+    --------
+    >>> b = Box((0.0, 0.0, 0.0), (1.0, 0.5, 1.0))
+    >>> b.contains(np.array([[0.5, 0.2, 0.5], [0.5, 0.7, 0.5]])).tolist(), b.to_list()[1]
+    ([True, False], [1.0, 0.5, 1.0])
+    """
 
     lo: tuple
     hi: tuple

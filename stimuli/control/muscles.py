@@ -53,7 +53,25 @@ BONE_WIDTH = 0.05
 
 
 def spring_displacement(theta, r: float = BONE_WIDTH) -> np.ndarray:
-    """s = r sin(π − θ) / sin(θ/2) for θ (radians) in (0, π], the angle between the bones."""
+    """s = r sin(π − θ) / sin(θ/2) for θ (radians) in (0, π], the angle between the bones.
+
+    Parameters
+    ----------
+    theta : float or ndarray
+        Radians.
+    r : float
+        The spring's attachment radius, metres.
+
+    Returns
+    -------
+    ndarray
+        Metres.
+
+    Examples
+    --------
+    >>> float(spring_displacement(np.pi)), float(spring_displacement(np.pi / 2).round(4))   # straight: none
+    (0.0, 0.0707)
+    """
     th = np.asarray(theta, dtype=float)
     if np.any(~np.isfinite(th)) or np.any(th <= 0) or np.any(th > np.pi + 1e-9):
         raise FlipstudyValueError("theta: the angle between the bones must be in (0, π] radians "
@@ -62,12 +80,46 @@ def spring_displacement(theta, r: float = BONE_WIDTH) -> np.ndarray:
 
 
 def spring_force(k, s) -> np.ndarray:
-    """|F| = k s (N): Hooke's law, the restoring force's magnitude."""
+    """|F| = k s (N): Hooke's law, the restoring force's magnitude.
+
+    Parameters
+    ----------
+    k : float or ndarray
+        Spring constants.
+    s : float or ndarray
+        Displacements, metres.
+
+    Returns
+    -------
+    ndarray
+
+    Examples
+    --------
+    >>> float(spring_force(100.0, 0.1))
+    10.0
+    """
     return np.asarray(k, float) * np.asarray(s, float)
 
 
 def spring_energy(k, s) -> np.ndarray:
-    """E = ½ k s² (J)."""
+    """E = ½ k s² (J).
+
+    Parameters
+    ----------
+    k : float or ndarray
+        Spring constants.
+    s : float or ndarray
+        Displacements, metres.
+
+    Returns
+    -------
+    ndarray
+
+    Examples
+    --------
+    >>> round(float(spring_energy(100.0, 0.1)), 6)
+    0.5
+    """
     return 0.5 * np.asarray(k, float) * np.asarray(s, float) ** 2
 
 
@@ -88,7 +140,21 @@ def bone_angle(a, centre, b) -> np.ndarray:
 def parse_k(spec) -> np.ndarray:
     """Spring constants (6,) from a preset name (:data:`PRESETS`), one number
     (all muscles) or six numbers (a sequence or a comma-separated string in
-    the order of :data:`MUSCLES`)."""
+    the order of :data:`MUSCLES`).
+
+    Parameters
+    ----------
+    spec : str, float or sequence of float
+        A preset name, one number, or six.
+
+    Returns
+    -------
+    ndarray, shape (6,)
+
+    Examples
+    --------
+    >>> parse_k(2.0).tolist(), parse_k("1,2,3,4,5,6").tolist()
+    ([2.0, 2.0, 2.0, 2.0, 2.0, 2.0], [1.0, 2.0, 3.0, 4.0, 5.0, 6.0])"""
     if isinstance(spec, str):
         key = spec.strip().lower()
         if key in PRESETS:

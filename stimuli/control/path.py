@@ -41,7 +41,24 @@ def gravity_vector(g) -> np.ndarray:
 
 @dataclass(frozen=True)
 class JumpPath:
-    """The estimate of Section 3.5.1 (SI units, Y up)."""
+    """The estimate of Section 3.5.1 (SI units, Y up).
+
+    Attributes
+    ----------
+    displacement : ndarray
+        Δx of the COM, take-off → touch-down (m).
+    t_air, t_windup : float
+        Seconds in the air, of the thrust.
+    g, v_i, v0, a : ndarray
+        Gravity, the velocity before the jump, the take-off velocity, the thrust
+        acceleration.
+
+    Examples
+    --------
+    >>> p = estimate_path((0.0, 0.0, 1.0), 0.5)
+    >>> p.t_air, p.g.tolist()
+    (0.5, [0.0, -9.81, 0.0])
+    """
 
     displacement: np.ndarray    # Δx of the COM, take-off → touch-down (m)
     t_air: float                # s
@@ -67,7 +84,24 @@ class JumpPath:
 
 
 def kinetic_energy(mass: float, v) -> float:
-    """½ m |v|², joules."""
+    """½ m |v|², joules.
+
+    Parameters
+    ----------
+    mass : float
+        kg.
+    v : array_like, shape (3,)
+        m/s.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> kinetic_energy(70.0, (3.0, 4.0, 0.0))
+    875.0
+    """
     v = np.asarray(v, float)
     return 0.5 * float(mass) * float(v @ v)
 
@@ -77,7 +111,30 @@ def estimate_path(displacement, t_air: float, t_windup: float = 0.2, g=G, v_i=(0
 
     ``displacement`` (3,) metres, ``t_air`` and ``t_windup`` seconds (> 0),
     ``g`` gravity (magnitude or vector), ``v_i`` the initial velocity.
-    Raises ``ValueError`` naming the parameter for bad input."""
+    Raises ``ValueError`` naming the parameter for bad input.
+
+    Parameters
+    ----------
+    displacement : array_like, shape (3,)
+        Metres.
+    t_air, t_windup : float
+        Seconds.
+    g : float or array_like
+        Gravity, m/s².
+    v_i : array_like, shape (3,)
+        m/s.
+
+    Returns
+    -------
+    JumpPath
+
+    Examples
+    --------
+    One metre forward in half a second of flight:
+
+    >>> p = estimate_path((0.0, 0.0, 1.0), 0.5)
+    >>> p.v0.tolist(), p.a.tolist()
+    ([0.0, 2.4525, 2.0], [0.0, 12.2625, 10.0])"""
     d = np.asarray(displacement, dtype=float)
     if d.shape != (3,) or not np.all(np.isfinite(d)):
         raise FlipstudyValueError(f"displacement: expected three finite numbers (x, y, z) in metres, got {displacement!r}")
