@@ -221,27 +221,12 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
                         f"reads up to 7 % where it has none)")
     items: list[Inconsistency] = []
     flights = sorted(a.flights, key=lambda f: f.takeoff)
+    com, Ln = a.com, np.linalg.norm(a.L, axis=1)
+    frame_t = np.arange(F) / fps
     from .flight import body_size
     size = body_size(clip) / 1.7
 
-    phases = _phases(flights, dur)
-
-    def add(kind, variant, phase, size, t0, t1, worst, same_as=""):
-        unit = "%" if kind == "landing-velocity-jump" and variant else UNITS[kind]
-        items.append(Inconsistency(kind, variant, phase, float(size), unit, float(t0),
-                                   float(t1), float(worst), same_as))
-
-    for i in range(1, len(flights) + 1):
-        _measure_flight(add, warnings, a, flights, i, size)
-
-    add("pose-rate", "", "clip", 0.0, 0.0, dur, 0.0)
-
-    _ground(add, warnings, clip, a, phases, fps)
-    return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
-
-
-def _phases(flights, dur: float) -> list[tuple]:
-    """(name, "ground" or "flight", start, end) of every phase, in time order."""
+    # phases
     phases, edges = [], [0.0]
     for f in flights:
         edges += [float(f.takeoff_time), float(f.landing_time)]
@@ -253,111 +238,99 @@ def _phases(flights, dur: float) -> list[tuple]:
         if i < len(flights):
             phases.append((f"flight {i + 1}", "flight", edges[2 * i + 1], edges[2 * i + 2]))
     phases.sort(key=lambda p: p[2])
-    return phases
 
+    def add(kind, variant, phase, size, t0, t1, worst, same_as=""):
+        unit = "%" if kind == "landing-velocity-jump" and variant else UNITS[kind]
+        items.append(Inconsistency(kind, variant, phase, float(size), unit, float(t0),
+                                   float(t1), float(worst), same_as))
 
-def _measure_flight(add, warnings: list, a: Analysis, flights: list, i: int, size: float) -> None:
-    """The items of flight ``i`` (1-based) of ``flights``: gravity, acceleration, the
-    contacts either side, |L| and the jolt in the air (through ``add``)."""
-    clip, com, fps = a.clip, a.com, float(a.clip.fps)
-    Ln = np.linalg.norm(a.L, axis=1)
-    frame_t = np.arange(clip.num_frames) / fps
-    f = flights[i - 1]
-    ph = f"flight {i}"
-    t_to, t_ld = float(f.takeoff_time), float(f.landing_time)
-    fr = np.arange(f.takeoff, f.landing + 1)
-    t = frame_t[fr]
-    if fr.size < 5:
-        warnings.append(f"{ph}: {fr.size} frames in the air, too few to measure")
-        return
-    cf = fit_free(com[fr], t)
-    acc = 2.0 * cf[:, 0]
-    g = -acc[1]
-    v_air = lambda s: 2.0 * cf[:, 0] * s + cf[:, 1]         # noqa: E731
-    mid = 0.5 * (t_to + t_ld)
-    add("gravity", "", ph, _pct(g, G0), t_to, t_ld, mid)
-    add("acceleration", "vertical", ph, -_pct(g, G0), t_to, t_ld, mid, "gravity")
-    if g > 0:
-        add("time-scale", "", ph, 100.0 * (np.sqrt(g / G0) - 1.0), t_to, t_ld, mid, "gravity")
-    vh = v_air(t_to)[[0, 2]]
-    ah = acc[[0, 2]]
-    if np.linalg.norm(vh) > MIN_SPEED:
-        along = float(ah @ vh / np.linalg.norm(vh))
-    else:
-        along = float(np.linalg.norm(ah))
-        warnings.append(f"{ph}: no horizontal travel at take-off; the horizontal acceleration "
-                        f"is given as a magnitude")
-    add("acceleration", "horizontal", ph, 100.0 * along / G0, t_to, t_ld, mid)
+    for i, f in enumerate(flights, 1):
+        ph = f"flight {i}"
+        t_to, t_ld = float(f.takeoff_time), float(f.landing_time)
+        fr = np.arange(f.takeoff, f.landing + 1)
+        t = frame_t[fr]
+        if fr.size < 5:
+            warnings.append(f"{ph}: {fr.size} frames in the air, too few to measure")
+            continue
+        cf = fit_free(com[fr], t)
+        acc = 2.0 * cf[:, 0]
+        g = -acc[1]
+        v_air = lambda s: 2.0 * cf[:, 0] * s + cf[:, 1]         # noqa: E731
+        mid = 0.5 * (t_to + t_ld)
+        add("gravity", "", ph, _pct(g, G0), t_to, t_ld, mid)
+        add("acceleration", "vertical", ph, -_pct(g, G0), t_to, t_ld, mid, "gravity")
+        if g > 0:
+            add("time-scale", "", ph, 100.0 * (np.sqrt(g / G0) - 1.0), t_to, t_ld, mid, "gravity")
+        vh = v_air(t_to)[[0, 2]]
+        ah = acc[[0, 2]]
+        if np.linalg.norm(vh) > MIN_SPEED:
+            along = float(ah @ vh / np.linalg.norm(vh))
+        else:
+            along = float(np.linalg.norm(ah))
+            warnings.append(f"{ph}: no horizontal travel at take-off; the horizontal acceleration "
+                            f"is given as a magnitude")
+        add("acceleration", "horizontal", ph, 100.0 * along / G0, t_to, t_ld, mid)
 
-    # contacts: the ground phase before (after) against the flight.  Frames beside the
-    # flight that still lie on its parabola are the flight's (a stimulus whose feet stay
-    # at the floor a few frames after its velocity changed): the velocity changes where
-    # the COM leaves the parabola, which is where the two sides are compared
-    res = com[fr] - _quad(cf, t)
-    thr = max(3.0 * float(np.sqrt(np.mean(np.sum(res * res, 1)))), ON_PATH * size)
-    prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
-    next_start = flights[i].takeoff_time if i < len(flights) else np.inf
-    inst = {}
-    for p, t_c, side in ((f"takeoff {i}", t_to, -1), (f"landing {i}", t_ld, 1)):
-        t_c = _measure_contact(add, warnings, com, fps, cf, thr, p, t_c, side, (prev_end, next_start))
-        if t_c is not None:
+        # contacts: the ground phase before (after) against the flight.  Frames beside the
+        # flight that still lie on its parabola are the flight's (a stimulus whose feet stay
+        # at the floor a few frames after its velocity changed): the velocity changes where
+        # the COM leaves the parabola, which is where the two sides are compared
+        res = com[fr] - _quad(cf, t)
+        thr = max(3.0 * float(np.sqrt(np.mean(np.sum(res * res, 1)))), ON_PATH * size)
+        prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
+        next_start = flights[i].takeoff_time if i < len(flights) else np.inf
+        inst = {}
+        for p, t_c, side in ((f"takeoff {i}", t_to, -1), (f"landing {i}", t_ld, 1)):
+            lim = (frame_t >= prev_end - 1e-9) if side < 0 else (frame_t <= next_start + 1e-9)
+            near = (frame_t <= t_c + 1e-9) if side < 0 else (frame_t >= t_c - 1e-9)
+            g_fr = np.flatnonzero(lim & near)
+            g_fr = g_fr[::-1] if side < 0 else g_fr                  # nearest the contact first
+            k = g_fr[:int(round(EXTEND_S * fps))]
+            on = np.linalg.norm(com[k] - _quad(cf, frame_t[k]), axis=1) <= thr
+            n_on = int(np.argmin(on)) if not on.all() else on.size
+            n_on = n_on if n_on > 1 else 0          # the frame at the instant is both sides'
+            if n_on:
+                if n_on < k.size:                    # where the position meets: the instant
+                    tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
+                    gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
+                    t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+                    if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
+                        t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
+                warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
+                                f"ground phase the analyser finds; its velocity changes at "
+                                f"{t_c:.4f} s, where the sides are compared")
+            gf = np.sort(g_fr[n_on:][:GROUND_FRAMES])
+            if gf.size < 3:
+                warnings.append(f"{p}: fewer than 3 ground frames beside it; not measured")
+                continue
+            vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+            if not n_on and np.linalg.norm(va - vg) > 0.05 and g_fr.size:
+                # the velocity changes: the instant is where the two sides' positions meet,
+                # between the nearest ground frame and the flight's nearest frame
+                tt = np.linspace(g_fr[0], g_fr[0] - side, 41) / fps
+                gq = _ground_fit(com, fps, gf, tt)
+                t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+                vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
             inst[side] = t_c
+            add(f"{p.split()[0]}-velocity-jump", "", p, np.linalg.norm(va - vg), t_c, t_c, t_c)
+            _components(add, warnings, p, va, vg, t_c, takeoff=side < 0)
 
-    # |L| over the flight, from the instants where the COM joins and leaves its parabola
-    t0_, t1_ = inst.get(-1, t_to), inst.get(1, t_ld)
-    smooth, step, t_step, L0 = split_trend_step(t - t0_, Ln[fr], t1_ - t0_)
-    if L0 < SMALL_L * clip_mass(a) / 70.0:
-        warnings.append(f"{ph}: |L| is {L0:.1f} kg·m²/s, small (a flip's is 25-50): its "
-                        f"changes in % are large for small absolute changes")
-    add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
-    add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
-        t0_ + t_step if np.isfinite(t_step) else mid)
-    jolt, t_j = velocity_jolt(t, com[fr])
-    add("air-jolt", "", ph, jolt, t_to, t_ld, t_j)
+        # |L| over the flight, from the instants where the COM joins and leaves its parabola
+        t0_, t1_ = inst.get(-1, t_to), inst.get(1, t_ld)
+        smooth, step, t_step, L0 = split_trend_step(t - t0_, Ln[fr], t1_ - t0_)
+        if L0 < SMALL_L * clip_mass(a) / 70.0:
+            warnings.append(f"{ph}: |L| is {L0:.1f} kg·m²/s, small (a flip's is 25-50): its "
+                            f"changes in % are large for small absolute changes")
+        add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
+        add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
+            t0_ + t_step if np.isfinite(t_step) else mid)
+        jolt, t_j = velocity_jolt(t, com[fr])
+        add("air-jolt", "", ph, jolt, t_to, t_ld, t_j)
 
+    add("pose-rate", "", "clip", 0.0, 0.0, dur, 0.0)
 
-def _measure_contact(add, warnings: list, com, fps: float, cf, thr: float, p: str, t_c: float, side: int,
-                     bounds: tuple) -> float | None:
-    """The velocity jump at contact ``p`` (``side`` −1: take-off, 1: landing) of a flight
-    whose COM parabola is ``cf``; the instant where the sides are compared, or None when
-    too few ground frames lie beside it.  ``bounds``: the end of the previous flight and
-    the start of the next."""
-    prev_end, next_start = bounds
-    frame_t = np.arange(com.shape[0]) / fps
-    v_air = lambda s: 2.0 * cf[:, 0] * s + cf[:, 1]         # noqa: E731
-    lim = (frame_t >= prev_end - 1e-9) if side < 0 else (frame_t <= next_start + 1e-9)
-    near = (frame_t <= t_c + 1e-9) if side < 0 else (frame_t >= t_c - 1e-9)
-    g_fr = np.flatnonzero(lim & near)
-    g_fr = g_fr[::-1] if side < 0 else g_fr                  # nearest the contact first
-    k = g_fr[:int(round(EXTEND_S * fps))]
-    on = np.linalg.norm(com[k] - _quad(cf, frame_t[k]), axis=1) <= thr
-    n_on = int(np.argmin(on)) if not on.all() else on.size
-    n_on = n_on if n_on > 1 else 0          # the frame at the instant is both sides'
-    if n_on:
-        if n_on < k.size:                    # where the position meets: the instant
-            tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
-            gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
-            t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-            if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
-                t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
-        warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
-                        f"ground phase the analyser finds; its velocity changes at "
-                        f"{t_c:.4f} s, where the sides are compared")
-    gf = np.sort(g_fr[n_on:][:GROUND_FRAMES])
-    if gf.size < 3:
-        warnings.append(f"{p}: fewer than 3 ground frames beside it; not measured")
-        return None
-    vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
-    if not n_on and np.linalg.norm(va - vg) > 0.05 and g_fr.size:
-        # the velocity changes: the instant is where the two sides' positions meet,
-        # between the nearest ground frame and the flight's nearest frame
-        tt = np.linspace(g_fr[0], g_fr[0] - side, 41) / fps
-        gq = _ground_fit(com, fps, gf, tt)
-        t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-        vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
-    add(f"{p.split()[0]}-velocity-jump", "", p, np.linalg.norm(va - vg), t_c, t_c, t_c)
-    _components(add, warnings, p, va, vg, t_c, takeoff=side < 0)
-    return t_c
+    _ground(add, warnings, clip, a, phases, fps)
+    return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
 
 
 def clip_mass(a: Analysis) -> float:

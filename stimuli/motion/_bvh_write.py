@@ -96,6 +96,19 @@ def bvh_text(clip: Clip, scale: float = 1.0) -> str:
 
     emit(0, 0)
     F = clip.num_frames
+    body = _motion_rows(clip, jp, inv)
+    out.append("MOTION")
+    out.append(f"Frames: {F}")
+    out.append(f"Frame Time: {1.0 / clip.fps:.10f}")
+    return "\n".join(out) + "\n" + body + "\n"
+
+
+def _motion_rows(clip: Clip, jp: np.ndarray, inv: float) -> str:
+    """The MOTION section's rows: per frame every channel, positions in file units
+    (``inv`` file units per metre), Euler angles in degrees unwrapped over frames."""
+    sk = clip.skeleton
+    J = sk.num_joints
+    F = clip.num_frames
     cols = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # gimbal-lock warnings: the angles stay valid
@@ -121,10 +134,7 @@ def bvh_text(clip: Clip, scale: float = 1.0) -> str:
     fmt = " ".join("%.9f" if ch in POSITION_CHANNELS else "%.7f"
                    for ch in (c for chs in sk.channels for c in chs))
     body = "\n".join(fmt % tuple(row) for row in data)
-    out.append("MOTION")
-    out.append(f"Frames: {F}")
-    out.append(f"Frame Time: {1.0 / clip.fps:.10f}")
-    return "\n".join(out) + "\n" + body + "\n"
+    return body
 
 
 def save_bvh(clip: Clip, path, scale: float = 1.0) -> Path:
