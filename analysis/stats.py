@@ -54,7 +54,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import ndtr, ndtri
 
-from .io import group_order, level_order  # noqa: F401  (level_order: as on main)
+from .io import group_order, level_order
 from .units import group_kinds, magnitude_unit, magnitudes
 from .gee import gee_levels  # noqa: F401  (GEE, re-exported here)
 
