@@ -51,6 +51,17 @@ class Course:
     (between the ankles, on the surface); ``name`` is the scene's (Chapter 5,
     the CLI's ``--scene``).
 
+    Attributes
+    ----------
+    name : str
+    start, target : tuple of float
+        The feet's midpoint at the start and at the landing, metres.
+    boxes : tuple of Box
+    tuck, t_air, t_windup : float
+        The jump's defaults on this course (seconds for the times).
+
+    Examples
+    --------
     >>> c = make_course("box")
     >>> c.name, c.target, c.boxes[0].hi
     ('box', (0.0, 0.5, 0.8), (0.5, 0.5, 1.3))
@@ -106,7 +117,26 @@ def make_course(name: str = "forward", distance: float | None = None, box_height
                  (Fig. 5.1); flight 0.9 s (a 0.5 s flight cannot clear it).
 
     ``target`` (x, y, z) overrides the landing point (y must be the height of
-    the surface there)."""
+    the surface there).
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`COURSES`.
+    distance, box_height : float, optional
+        Metres (defaults above).
+    target : tuple of float, optional
+
+    Returns
+    -------
+    Course
+
+    Examples
+    --------
+    >>> c = make_course("forward", distance=1.5)
+    >>> c.start, c.target
+    ((0.0, 0.0, 0.0), (0.0, 0.0, 1.5))
+    """
     if name not in COURSES:
         raise FlipstudyValueError(f"scene: expected one of {', '.join(COURSES)}, got {name!r}")
     if distance is not None and not (np.isfinite(distance) and distance > 0):

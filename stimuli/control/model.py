@@ -42,6 +42,15 @@ FOOT_HALF_WIDTH = 0.026      # fraction of height: half the width of a foot (0.0
 class Jumper:
     """Skeleton, body and the geometry the controller needs.
 
+    Parameters
+    ----------
+    height : float
+        Standing height, metres.
+    mass : float
+        kg.
+
+    Examples
+    --------
     >>> j = Jumper()
     >>> round(j.standing_pelvis, 3), j.skeleton.num_joints
     (0.98, 21)
