@@ -50,7 +50,25 @@ def smoothing_factor(Ln: np.ndarray, f0: int, f1: int, ends: tuple[float, float]
     ``ends`` gives |L| at the two ends; by default they are read off ``Ln``.  The
     concatenation passes the source motions' own values there (motion 1 at f_t0,
     motion 2 at f_t1 − T): a finite difference at a window end straddles the blend
-    and would carry its fast movement into the target."""
+    and would carry its fast movement into the target.
+
+    Parameters
+    ----------
+    Ln : ndarray, shape (F,)
+        |L| per frame.
+    f0, f1 : int
+        The window's first and last frame.
+    ends : tuple of float, optional
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> smoothing_factor(np.array([1.0, 2.0, 3.0]), 0, 2)      # ½(1 + 3) / 2
+    1.0
+    """
     mean = float(np.mean(Ln[f0:f1 + 1]))
     if mean <= 0:
         return 1.0

@@ -15,7 +15,24 @@ from .phases import UP
 def mirror_pairs(sk) -> np.ndarray:
     """(J,) index of each joint's left/right partner (itself for the joints on the
     midline), paired by name ('LeftArm' ↔ 'RightArm', 'CC_Base_L_Thigh' ↔
-    'CC_Base_R_Thigh', ...)."""
+    'CC_Base_R_Thigh', ...).
+
+    Parameters
+    ----------
+    sk : Skeleton
+
+    Returns
+    -------
+    ndarray, shape (J,)
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> sk = builtin("backflip").skeleton
+    >>> pairs = mirror_pairs(sk)
+    >>> sk.joint_names[pairs[sk.joint_names.index("LeftArm")]], sk.joint_names[pairs[0]]
+    ('RightArm', 'Hips')
+    """
     sp = [_split_name(n) for n in sk.joint_names]
     key = {(s, p, sk.depth()[j]): j for j, (s, p) in enumerate(sp) if s}
     out = np.arange(sk.num_joints)
@@ -50,6 +67,24 @@ def mirror(clip: Clip, plane: str = "sagittal", body: Body | None = None) -> Cli
     >>> m = mirror(c, plane="x")
     >>> m.meta["name"], bool(np.allclose(mirror(m, plane="x").joint_positions(), c.joint_positions()))
     ('backflip-mirrored', True)
+
+    Parameters
+    ----------
+    clip : Clip
+    plane : {"sagittal", "x"}
+    body : Body, optional
+        For the torso's facing (default: the skeleton's table body).
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> clip = builtin("backflip")
+    >>> mirror(clip).num_frames == clip.num_frames
+    True
     """
     sk = clip.skeleton
     pair = mirror_pairs(sk)
@@ -80,6 +115,18 @@ def rest_asymmetry(sk) -> tuple[float, str]:
     distance (metres) between a joint of the rest pose mirrored across x = 0 and
     its partner's rest position, and that joint's name (0 for a symmetric rest pose).
 
+    Parameters
+    ----------
+    sk : Skeleton
+
+    Returns
+    -------
+    distance : float
+        Metres.
+    joint : str
+
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> from flipstudy.stimuli.edit.concat import rest_asymmetry
     >>> d, joint = rest_asymmetry(builtin("backflip").skeleton)

@@ -64,7 +64,24 @@ def _lm_index(body: Body, key: str) -> int:
 
 def torso_facing(clip: Clip, body: Body) -> np.ndarray:
     """(F,3) unit facing direction of the torso projected on the ground: the
-    left-to-right axis of hips and shoulders, turned a quarter about the vertical."""
+    left-to-right axis of hips and shoulders, turned a quarter about the vertical.
+
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+
+    Returns
+    -------
+    ndarray, shape (F, 3)
+
+    Examples
+    --------
+    >>> from flipstudy import Body, builtin
+    >>> clip = builtin("backflip")
+    >>> torso_facing(clip, Body.from_clip(clip))[0].round(3)      # facing +Z
+    array([0., 0., 1.])
+    """
     P = clip.joint_positions()
     left = (P[:, _lm_index(body, "hip_l")] - P[:, _lm_index(body, "hip_r")]
             + P[:, _lm_index(body, "shoulder_l")] - P[:, _lm_index(body, "shoulder_r")])
@@ -76,7 +93,25 @@ def torso_facing(clip: Clip, body: Body) -> np.ndarray:
 
 def foot_contacts(clip: Clip, body: Body) -> tuple[np.ndarray, np.ndarray]:
     """(F,) bool left and right foot contact (ankle or toe tip still and low, the
-    flight detector's rule)."""
+    flight detector's rule).
+
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+
+    Returns
+    -------
+    left, right : ndarray of bool, shape (F,)
+
+    Examples
+    --------
+    >>> from flipstudy import Body, builtin
+    >>> clip = builtin("backflip")
+    >>> left, right = foot_contacts(clip, Body.from_clip(clip))
+    >>> bool(left[0]), bool(left[200])                           # standing, in the air
+    (True, False)
+    """
     size = body_size(clip) / 1.7
     C = contact_mask(clip, body, v_thr=1.0 * size, margin=0.10 * size, touch=0.03 * size)
     _, names = effector_points(clip, body)
@@ -88,7 +123,25 @@ def motion_of(clip: Clip, body: Body | None = None, *, tm: int | None = None,
               main: tuple[int, int] | None = None) -> Motion:
     """The :class:`Motion` of ``clip``: momenta, moment arms, contacts, facing and
     phases (``tm``, ``main``: see :func:`~flipstudy.stimuli.edit.concat.phases`);
-    ``body`` defaults to the analyser's."""
+    ``body`` defaults to the analyser's.
+
+    Parameters
+    ----------
+    clip : Clip
+    body : Body, optional
+    tm : int, optional
+    main : tuple of int, optional
+
+    Returns
+    -------
+    Motion
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> motion_of(builtin("backflip")).phases.as_dict()["main"]
+    (108, 247)
+    """
     if body is None:
         body = analyse(clip).body
     m = momentum(clip, body)
@@ -114,7 +167,24 @@ def transformed(mo: Motion, theta: float, shift: np.ndarray) -> Motion:
 
 def suggest_rule(m1: Motion, m2: Motion) -> str:
     """The rule needing the smaller turn of motion 2 about the vertical (eq. 2 for
-    both rules; the torso facing test favours the smaller turn)."""
+    both rules; the torso facing test favours the smaller turn).
+
+    Parameters
+    ----------
+    m1, m2 : Motion
+
+    Returns
+    -------
+    str
+        ``"forward"`` or ``"reverse"``.
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> m = motion_of(builtin("backflip"))
+    >>> suggest_rule(m, m)
+    'forward'
+    """
     tf = abs(align_angle(m1.main_L, m2.main_L, "forward"))
     tr = abs(align_angle(m1.main_L, m2.main_L, "reverse"))
     return "forward" if tf <= tr else "reverse"

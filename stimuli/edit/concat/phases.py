@@ -45,7 +45,29 @@ def phases(L: np.ndarray, tm: int | None = None, fps: float = 120.0, *,
     ``smooth_s`` seconds, so one noisy frame does not decide it).  From t_m the
     main phase extends backwards and forwards while L(t)·L(t_m) ≥ 0 (the paper's
     rule, Section "Typical Angular Momentum Trajectories").  ``main=(a, b)``
-    overrides the borders (the paper lets the user fine-tune them)."""
+    overrides the borders (the paper lets the user fine-tune them).
+
+    Parameters
+    ----------
+    L : ndarray, shape (F, 3)
+        Angular momentum per frame.
+    tm : int, optional
+    fps : float
+    main : tuple of int, optional
+    smooth_s : float
+        Seconds of the moving average.
+
+    Returns
+    -------
+    Phases
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> from flipstudy.stimuli.edit.concat import motion_of
+    >>> phases(motion_of(builtin("backflip")).L, fps=120.0).as_dict()["tm"]
+    234
+    """
     L = np.asarray(L, float)
     F = L.shape[0]
     n = np.linalg.norm(L, axis=1)
@@ -76,7 +98,25 @@ def align_angle(L1: np.ndarray, L2: np.ndarray, rule: str = "forward") -> float:
 
     With R_y(θ) taking (x, z) to (x cos θ + z sin θ, −x sin θ + z cos θ), the
     dot product is A cos θ + B sin θ + C with A = x₁x₂ + z₁z₂, B = x₁z₂ − z₁x₂,
-    C = y₁y₂, so the maximum is at atan2(B, A) and the minimum half a turn away."""
+    C = y₁y₂, so the maximum is at atan2(B, A) and the minimum half a turn away.
+
+    Parameters
+    ----------
+    L1, L2 : ndarray, shape (3,)
+        The two motions' main-phase angular momenta.
+    rule : {"forward", "reverse"}
+
+    Returns
+    -------
+    float
+        Radians.
+
+    Examples
+    --------
+    >>> L1, L2 = np.array([1.0, 0.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    >>> round(align_angle(L1, L2), 6), round(align_angle(L1, L2, "reverse"), 6)
+    (1.570796, -1.570796)
+    """
     a, b = np.asarray(L1, float), np.asarray(L2, float)
     A = a[0] * b[0] + a[2] * b[2]
     B = a[0] * b[2] - a[2] * b[0]
@@ -89,6 +129,21 @@ def align_angle(L1: np.ndarray, L2: np.ndarray, rule: str = "forward") -> float:
 
 
 def yaw(theta: float) -> Rotation:
-    """R_y(θ): rotation by θ about the vertical (Y) axis."""
+    """R_y(θ): rotation by θ about the vertical (Y) axis.
+
+    Parameters
+    ----------
+    theta : float
+        Radians.
+
+    Returns
+    -------
+    scipy.spatial.transform.Rotation
+
+    Examples
+    --------
+    >>> yaw(np.pi / 2).apply([1.0, 0.0, 0.0]).round(6)
+    array([ 0.,  0., -1.])
+    """
     return Rotation.from_rotvec([0.0, float(theta), 0.0])
 
