@@ -154,7 +154,19 @@ class FlipEditError(FlipstudyError, ValueError):
 
 
 class ConcatError(FlipstudyError, ValueError):
-    """Two motions that cannot be concatenated; the message says why."""
+    """Two motions that cannot be concatenated; the message says why.
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> from flipstudy.stimuli.edit.concat import concatenate
+    >>> c = builtin("backflip")
+    >>> try:
+    ...     concatenate(c, c, max_cost=1e-3)
+    ... except ConcatError as e:
+    ...     print(str(e)[:36])
+    the motions are too different to ble
+    """
 
 
 class StudyLockedError(FlipstudyError, RuntimeError):

@@ -25,7 +25,29 @@ def blend(c1: Clip, c2: Clip, T: int, f0: int, f1: int, ease: bool = True) -> Cl
     2's frame f − T), then motion 2.  ``c2`` is already aligned.  The paper's α
     falls linearly; with ``ease`` it falls as 1 − (3x² − 2x³), which has the same
     ends and mean but no kink, so joint velocities do not jump where the window
-    begins and ends."""
+    begins and ends.
+
+    Parameters
+    ----------
+    c1, c2 : Clip
+    T : int
+        Motion 2's frame offset.
+    f0, f1 : int
+        The blend window, frames of motion 1.
+    ease : bool
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> c = builtin("jump")
+    >>> out = blend(c, c, 100, 150, 160)
+    >>> out.num_frames == 100 + c.num_frames
+    True
+    """
     F2 = c2.num_frames
     f = np.arange(f0, f1 + 1)
     x = (f - f0) / max(f1 - f0, 1)

@@ -44,6 +44,32 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     has exactly one; the report's ``flights`` lists them all) and a
     :class:`ConcatReport`.
 
+    Parameters
+    ----------
+    a, b : Clip
+        The two motions, one skeleton.
+    rule : {"forward", "reverse"}, optional
+    body : Body, optional
+    tm_a, tm_b : int, optional
+        Each motion's frame of largest |L| (default: found).
+    main_a, main_b : tuple of int, optional
+        Each motion's main phase (default: found).
+    max_facing_deg, max_cost, trace_frac, min_blend_s : float
+    smoothing : str
+    ease, fix_feet : bool
+    passes : int
+    tol : float
+
+    Returns
+    -------
+    Concatenation
+
+    Raises
+    ------
+    ConcatError
+
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> from flipstudy.stimuli.edit.concat import concatenate
     >>> c = builtin("backflip")

@@ -155,7 +155,28 @@ def motion_of(clip: Clip, body: Body | None = None, *, tm: int | None = None,
 
 
 def transformed(mo: Motion, theta: float, shift: np.ndarray) -> Motion:
-    """Motion 2 turned by θ about the vertical through the origin, then shifted."""
+    """Motion 2 turned by θ about the vertical through the origin, then shifted.
+
+    Parameters
+    ----------
+    mo : Motion
+    theta : float
+        Radians.
+    shift : ndarray, shape (3,)
+        Metres.
+
+    Returns
+    -------
+    Motion
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> m = motion_of(builtin("backflip"))
+    >>> t = transformed(m, np.pi, np.zeros(3))                # half a turn: L's x flips sign
+    >>> bool(np.allclose(t.L[:, 0], -m.L[:, 0], atol=1e-6))
+    True
+    """
     R = yaw(theta)
     turned = rotate(mo.clip, R, np.zeros(3))
     clip = turned.replace(root_pos=turned.root_pos + shift)

@@ -55,6 +55,21 @@ def motion_graph_join(a: Clip, b: Clip, *, body: Body | None = None, window_s: f
     :class:`~flipstudy.stimuli.edit.concat.Concatenation` (no flight detected:
     ``takeoff`` and ``landing`` are ``None``) with a :class:`MotionGraphReport`.
 
+    Parameters
+    ----------
+    a, b : Clip
+    body : Body, optional
+    window_s : float
+        Seconds of the compared windows.
+    m1, m2 : Motion, optional
+        The motions, when already made.
+
+    Returns
+    -------
+    Concatenation
+
+    Examples
+    --------
     >>> from flipstudy.stimuli import builtin
     >>> from flipstudy.stimuli.edit.concat import motion_graph_join
     >>> c = builtin("backflip")
