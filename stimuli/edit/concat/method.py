@@ -50,23 +50,16 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
         The two motions, one skeleton.
     rule : {"forward", "reverse"}, optional
     body : Body, optional
-    tm_a, tm_b : int, optional
-        Each motion's frame of largest |L| (default: found).
-    main_a, main_b : tuple of int, optional
-        Each motion's main phase (default: found).
-    max_facing_deg, max_cost, trace_frac, min_blend_s : float
+    tm_a, tm_b, main_a, main_b : int, tuple of int, optional
+        Each motion's frame of largest |L| and main phase (default: found).
+    max_facing_deg, max_cost, trace_frac, min_blend_s, tol : float
     smoothing : str
     ease, fix_feet : bool
     passes : int
-    tol : float
 
     Returns
     -------
     Concatenation
-
-    Raises
-    ------
-    ConcatError
 
     Examples
     --------
@@ -82,10 +75,7 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     if a.skeleton.joint_names != b.skeleton.joint_names:
         raise ConcatError("the two motions must share a skeleton (the same joints, in the same order): "
                           "blending is per joint")
-    if abs(a.fps - b.fps) > 1e-9:
-        b = sample(b, np.arange(0, b.num_frames - 1 + 1e-9, b.fps / a.fps)).with_fps(a.fps)
-    if body is None:
-        body = analyse(a).body
+    b, body = _prepared(a, b, body)
     m1 = motion_of(a, body, tm=tm_a, main=main_a)
     m2_raw = motion_of(b, body, tm=tm_b, main=main_b)
     suggested = suggest_rule(m1, m2_raw)
@@ -96,10 +86,7 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     if best is None:
         _refuse(m1, m2_raw, rule, body, max_facing_deg, tried)
     tmg, case, s1, s2, support, allowed = best
-    if tmg.F > max_cost:
-        raise ConcatError(f"the motions are too different to blend: F = {tmg.F:.1f} at the best offset "
-                          f"exceeds the threshold {max_cost:.1f} (angular momenta {np.sqrt(tmg.F_dm):.1f} "
-                          f"kg·m²/s apart at the blending centre)")
+    _check_cost(tmg, max_cost)
     T, fT = tmg.T, tmg.fT
     f0, f1, widened, fa = _blend_window(m1, m2r, T, fT, s1, s2, (trace_frac * peak) ** 2,
                                         int(round(min_blend_s * a.fps)))
@@ -107,20 +94,9 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     shift = m1.feet_centre[fa] - m2r.feet_centre[fa - T]
     shift[1] = 0.0
     m2 = transformed(m2_raw, theta, shift)
-    blended = blend(m1.clip, m2.clip, T, f0, f1, ease=ease)
-    Lb = np.linalg.norm(momentum(blended, body).L, axis=1)
-    # |L| at the window's ends from the motions themselves (a difference at a
-    # window end straddles the blend)
-    ends = (float(np.linalg.norm(m1.L[f0])), float(np.linalg.norm(m2.L[f1 - T])))
-    s = smoothing_factor(Lb, f0, f1, ends)
-    out, w1, applied = smooth(blended, body, (f0, f1), Lb, ends, smoothing, passes=passes, tol=tol)
+    out, Lb, Ln, ends, s, w1, applied, feet, flights = _blended(
+        m1, m2, body, T, (f0, f1), ease=ease, smoothing=smoothing, passes=passes, tol=tol, fix_feet=fix_feet)
     w0 = f0
-    feet = None
-    if fix_feet:
-        out, feet = pin_feet(out, body, (w0, w1))
-    mo = momentum(out, body)
-    Ln = np.linalg.norm(mo.L, axis=1)
-    flights = _flights(out, body, mo)
     report = ConcatReport(
         rule=rule, suggested_rule=suggested, theta_deg=float(np.degrees(theta)),
         phases_a=m1.phases.as_dict(), phases_b=m2_raw.phases.as_dict(),
@@ -145,6 +121,44 @@ def concatenate(a: Clip, b: Clip, *, rule: str | None = None, body: Body | None 
     # the clip's flight where it has one; two flips have two (the report's flights)
     one = flights[0] if len(flights) == 1 else {"takeoff": None, "landing": None}
     return Concatenation(out, one["takeoff"], one["landing"], report)
+
+
+def _prepared(a: Clip, b: Clip, body):
+    """Motion 2 at motion 1's frame rate, and the body (default: motion 1's analysis's)."""
+    if abs(a.fps - b.fps) > 1e-9:
+        b = sample(b, np.arange(0, b.num_frames - 1 + 1e-9, b.fps / a.fps)).with_fps(a.fps)
+    if body is None:
+        body = analyse(a).body
+    return b, body
+
+
+def _check_cost(tmg, max_cost: float) -> None:
+    """Refuse a blend whose optimal F exceeds ``max_cost``."""
+    if tmg.F > max_cost:
+        raise ConcatError(f"the motions are too different to blend: F = {tmg.F:.1f} at the best offset "
+                          f"exceeds the threshold {max_cost:.1f} (angular momenta {np.sqrt(tmg.F_dm):.1f} "
+                          f"kg·m²/s apart at the blending centre)")
+
+
+def _blended(m1, m2, body, T: int, window: tuple, *, ease: bool, smoothing: str, passes: int, tol: float,
+             fix_feet: bool):
+    """The two motions blended over ``window``, smoothed (eq. 9) and the feet pinned:
+    (clip, |L| of the blend before smoothing, |L| after, |L| at the window's ends,
+    s, the window's new end, the smoothing applied, the feet's report, the flights)."""
+    f0, f1 = window
+    blended = blend(m1.clip, m2.clip, T, f0, f1, ease=ease)
+    Lb = np.linalg.norm(momentum(blended, body).L, axis=1)
+    # |L| at the window's ends from the motions themselves (a difference at a
+    # window end straddles the blend)
+    ends = (float(np.linalg.norm(m1.L[f0])), float(np.linalg.norm(m2.L[f1 - T])))
+    s = smoothing_factor(Lb, f0, f1, ends)
+    out, w1, applied = smooth(blended, body, (f0, f1), Lb, ends, smoothing, passes=passes, tol=tol)
+    feet = None
+    if fix_feet:
+        out, feet = pin_feet(out, body, (f0, w1))
+    mo = momentum(out, body)
+    Ln = np.linalg.norm(mo.L, axis=1)
+    return out, Lb, Ln, ends, s, w1, applied, feet, _flights(out, body, mo)
 
 
 def _refuse(m1, m2_raw, rule: str, body, max_facing_deg: float, tried: list):
