@@ -101,16 +101,9 @@ def load_base_clip(spec, design: Design) -> Clip:
     return clip
 
 
-def resample(clip: Clip, fps: float) -> Clip:
-    """``clip`` at ``fps`` frames per second, the same motion in time (slerp of the
-    rotations, linear root): frame k is the source at time k / fps."""
-    from .edit.timing import sample
-    n = int(np.floor((clip.num_frames - 1) * fps / clip.fps + 1e-9)) + 1
-    out = sample(clip, np.arange(n) * (clip.fps / fps))
-    meta = dict(out.meta)
-    meta["fps_read"] = clip.meta.get("fps_read", clip.fps)
-    meta["fps_source"] = f"{clip.meta.get('fps_source', 'read')}, resampled to {fps:g} ([study] fps)"
-    return Clip(out.skeleton, float(fps), out.root_pos, out.rotations, out.joint_pos, meta)
+#: a base clip at the design's frame rate: a motion operation, with the others in
+#: :mod:`flipstudy.stimuli.edit.reposition`
+from .edit.reposition import resample_to as resample  # noqa: E402
 
 
 def physics_gate(spec, a, design: Design | None = None) -> None:

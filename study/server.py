@@ -62,7 +62,7 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChangedError
+from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChanged
 
 from .session import Session, load_study, open_session, submit_answer, submit_demographics
 from .timeline import build_timeline, is_default, trial_screen
@@ -172,7 +172,7 @@ async def _read_json(request: Request) -> dict:
 CHANGED_STATUS = 410
 
 
-def _changed_message(e: StudyChangedError, stored_elsewhere: bool) -> str:
+def _changed_message(e: StudyChanged, stored_elsewhere: bool) -> str:
     return ("This session cannot record answers any more: the study was changed on the "
             "experimenter's computer" + (", so your last answer was NOT recorded" if stored_elsewhere
                                           else "") +
@@ -203,122 +203,82 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
     page shows, and an answer committed to a database that is no longer the
     study's is never acknowledged as stored.  ``on_changed(message)`` is called
     the first time (the CLI prints it)."""
-    h = _Handlers(session, iti_ms=iti_ms, on_answer=on_answer, on_changed=on_changed,
-                  jspsych_dir=jspsych_dir)
+    told = []
 
-    async def http_error(request: Request, exc: HTTPException):
-        msg = {404: "not found", 405: "method not allowed"}.get(exc.status_code, str(exc.detail))
-        return _error(exc.status_code, msg)
-
-    async def server_error(request: Request, exc: Exception):
-        return _error(500, "internal error (see the terminal running flipstudy run)")
-
-    app = Starlette(routes=[
-        Route("/", h.page, methods=["GET"]),
-        Route("/api/session", h.api_session, methods=["GET"]),
-        Route("/api/trial/{n}", h.api_trial, methods=["GET"]),
-        Route("/api/answer", h.api_answer, methods=["POST"]),
-        Route("/api/demographics", h.api_demographics, methods=["POST"]),
-        Route("/stimuli/{name:path}", h.stimulus, methods=["GET"]),
-        Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
-        Route("/lib/{name}", h.static, methods=["GET"]),
-        Route("/{name}", h.static, methods=["GET"]),
-    ], exception_handlers={HTTPException: http_error, 500: server_error})
-    app.router.redirect_slashes = False
-    hosts = None if allowed_hosts is None else {n.lower() for n in allowed_hosts} | {"[::1]"}
-    app.add_middleware(_Guard, allowed_hosts=hosts)
-    return app
-
-
-class _Handlers:
-    """The endpoints of :func:`create_app` for one session: the page, its files, the API
-    and the stimuli."""
-
-    def __init__(self, session: Session, *, iti_ms: int, on_answer, on_changed, jspsych_dir):
-        self.session, self.iti_ms = session, iti_ms
-        self.on_answer, self.on_changed, self.jspsych_dir = on_answer, on_changed, jspsych_dir
-        self.told: list = []
-        study = session.study
-        self.render_dir = study.render_dir.resolve()
-        self.videos = {f"{r.stimulus}.mp4" for r in study.manifest}
-        self.files = local_site(session, iti_ms=iti_ms, lib=False)
-        self.lib_lock = threading.Lock()
-        self.tagged = not is_default(study.design)
-        self.replay = bool(study.design.session.replay)
-
-    def changed(self, e: StudyChangedError, stored_elsewhere: bool = False) -> JSONResponse:
-        """The refusal once the study changed (``on_changed`` told the first time)."""
-        if not self.told:
-            self.told.append(True)
-            if self.on_changed is not None:
-                self.on_changed(str(e))
+    def changed(e: StudyChanged, stored_elsewhere: bool = False) -> JSONResponse:
+        if not told:
+            told.append(True)
+            if on_changed is not None:
+                on_changed(str(e))
         return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
+    study = session.study
+    render_dir = study.render_dir.resolve()
+    videos = {f"{r.stimulus}.mp4" for r in study.manifest}
+    files = local_site(session, iti_ms=iti_ms, lib=False)
+    lib_lock = threading.Lock()
 
-    def load_lib(self):
-        """jsPsych's ``lib/`` files, read when first asked for."""
-        with self.lib_lock:
-            if not any(name.startswith("lib/") for name in self.files):
-                self.files.update(lib_files(jsp.fetch(self.jspsych_dir)[0]))
+    def load_lib():
+        with lib_lock:
+            if not any(name.startswith("lib/") for name in files):
+                files.update(lib_files(jsp.fetch(jspsych_dir)[0]))
 
-    async def page(self, request: Request):
-        return Response(self.files["index.html"], media_type=MEDIA_TYPES[".html"],
+    async def page(request: Request):
+        return Response(files["index.html"], media_type=MEDIA_TYPES[".html"],
                         headers={"Content-Security-Policy": CSP, "Cache-Control": "no-store"})
 
-    async def static(self, request: Request):
+    async def static(request: Request):
         name = request.path_params["name"]
         if request.url.path.startswith("/lib/"):
             name = f"lib/{name}"
             try:
-                await run_in_threadpool(self.load_lib)
+                await run_in_threadpool(load_lib)
             except JsPsychFetchError as e:
                 return _error(503, str(e))
-        if name not in self.files or name == "index.html":     # only the site's own files, by exact name
+        if name not in files or name == "index.html":     # only the site's own files, by exact name
             return _error(404, "not found")
-        return Response(self.files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
+        return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
                         headers={"Cache-Control": "no-cache"})
 
-    async def api_session(self, request: Request):
-        session = self.session
+    async def api_session(request: Request):
         try:
             session.check_intact()
-        except StudyChangedError as e:
-            return self.changed(e)
-        tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=self.iti_ms))
+        except StudyChanged as e:
+            return changed(e)
+        tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
 
-    def current_trial(self, n: int) -> dict:
-        session = self.session
+    tagged = not is_default(study.design)
+    replay = bool(study.design.session.replay)
+
+    def current_trial(n: int) -> dict:
         nxt = session.state()["next_trial"]
         if n != nxt:
             raise RequestError(409, f"trial {n} is not the current trial (the current one is "
                                     f"{nxt if nxt <= session.n_trials else 'none: the session is finished'})")
-        return trial_screen(session.resolve(n), session.n_trials, replay=self.replay, iti_ms=self.iti_ms,
-                            tagged=self.tagged)
+        return trial_screen(session.resolve(n), session.n_trials, replay=replay, iti_ms=iti_ms,
+                            tagged=tagged)
 
-    async def api_trial(self, request: Request):
-        session = self.session
+    async def api_trial(request: Request):
         raw = request.path_params["n"]
         if not raw.isdigit() or not 1 <= int(raw) <= session.n_trials:
             return _error(404, f"no trial {raw[:20]!r} in this session (1 to {session.n_trials})")
         try:
             session.check_intact()
-            screen = await run_in_threadpool(self.current_trial, int(raw))
+            screen = await run_in_threadpool(current_trial, int(raw))
         except RequestError as e:
             return _error(e.status, e.message)
-        except StudyChangedError as e:
-            return self.changed(e)
+        except StudyChanged as e:
+            return changed(e)
         return JSONResponse(screen, headers={"Cache-Control": "no-store"})
 
-    async def _submit(self, request: Request, submit):
+    async def _submit(request: Request, submit):
         """(result, None) of ``submit(session, JSON body)``, or (None, the error response)."""
-        session = self.session
-
         def checked(obj):
             session.check_intact()                   # not into a database that is not the study's
             result = submit(session, obj)
             try:
                 session.check_intact()               # committed into the study's own file?
-            except StudyChangedError as e:
+            except StudyChanged as e:
                 e.stored_elsewhere = True
                 raise
             return result
@@ -328,29 +288,52 @@ class _Handlers:
             return await run_in_threadpool(checked, obj), None
         except RequestError as e:
             return None, _error(e.status, e.message)
-        except StudyChangedError as e:
-            return None, self.changed(e, getattr(e, "stored_elsewhere", False))
+        except StudyChanged as e:
+            return None, changed(e, getattr(e, "stored_elsewhere", False))
 
-    async def api_answer(self, request: Request):
-        result, err = await self._submit(request, submit_answer)
+    async def api_answer(request: Request):
+        result, err = await _submit(request, submit_answer)
         if err is not None:
             return err
-        if self.on_answer is not None and result["status"] == "stored":
-            self.on_answer(result)
+        if on_answer is not None and result["status"] == "stored":
+            on_answer(result)
         return JSONResponse(result, headers={"Cache-Control": "no-store"})
 
-    async def api_demographics(self, request: Request):
-        result, err = await self._submit(request, submit_demographics)
+    async def api_demographics(request: Request):
+        result, err = await _submit(request, submit_demographics)
         return err if err is not None else JSONResponse(result, headers={"Cache-Control": "no-store"})
 
-    async def stimulus(self, request: Request):
+    async def stimulus(request: Request):
         name = request.path_params["name"]
-        if name not in self.videos:                  # only the manifest's names, as given
+        if name not in videos:                       # only the manifest's names, as given
             return _error(404, "no such stimulus")
-        path = (self.render_dir / name).resolve()
-        if path.parent != self.render_dir or not path.is_file():   # symlinks out, directories
+        path = (render_dir / name).resolve()
+        if path.parent != render_dir or not path.is_file():   # symlinks out, directories
             return _error(404, "no such stimulus")
         return FileResponse(path, media_type="video/mp4", headers={"Cache-Control": "no-cache"})
+
+    async def http_error(request: Request, exc: HTTPException):
+        msg = {404: "not found", 405: "method not allowed"}.get(exc.status_code, str(exc.detail))
+        return _error(exc.status_code, msg)
+
+    async def server_error(request: Request, exc: Exception):
+        return _error(500, "internal error (see the terminal running flipstudy run)")
+
+    app = Starlette(routes=[
+        Route("/", page, methods=["GET"]),
+        Route("/api/session", api_session, methods=["GET"]),
+        Route("/api/trial/{n}", api_trial, methods=["GET"]),
+        Route("/api/answer", api_answer, methods=["POST"]),
+        Route("/api/demographics", api_demographics, methods=["POST"]),
+        Route("/stimuli/{name:path}", stimulus, methods=["GET"]),
+        Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
+        Route("/lib/{name}", static, methods=["GET"]),
+        Route("/{name}", static, methods=["GET"]),
+    ], exception_handlers={HTTPException: http_error, 500: server_error})
+    app.router.redirect_slashes = False
+    hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}
+    app.add_middleware(_Guard, allowed_hosts=hosts)
+    return app
 
 
 def bind(host: str = "127.0.0.1", port: int = 0) -> socket.socket:

@@ -3,7 +3,8 @@
 shifting the root by d shifts the COM by d and leaves the angular momentum about the
 COM untouched), a ballistic path, turning about a point, translating, placing on the
 study's take-off spot, and sampling at other times (:func:`resample`,
-:func:`poses_at`).  :mod:`flipstudy.render` re-exports the ones it uses."""
+:func:`poses_at`; :func:`resample_to`, a base clip at the design's frame rate).
+:mod:`flipstudy.render` and :mod:`flipstudy.stimuli.stimset` re-export the ones they use."""
 
 from __future__ import annotations
 
@@ -270,3 +271,35 @@ def poses_at(clip: Clip, times) -> Clip:
     from .timing import sample
     t = np.atleast_1d(np.asarray(times, dtype=float))
     return sample(clip, np.clip(t * clip.fps, 0, clip.num_frames - 1))
+
+
+def resample_to(clip: Clip, fps: float) -> Clip:
+    """``clip`` at ``fps`` frames per second, the same motion in time (slerp of the
+    rotations, linear root): frame k is the source at time k / fps; its ``meta``
+    says it was resampled to the design's ``[study] fps`` (what
+    :mod:`flipstudy.stimuli.stimset` does with a base clip of another rate).
+
+    Parameters
+    ----------
+    clip : Clip
+    fps : float
+        The new frame rate.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> c = resample_to(builtin("jump"), 60.0)                 # 120 fps in
+    >>> c.fps, c.meta["fps_source"]
+    (60.0, 'read, resampled to 60 ([study] fps)')
+    """
+    from .timing import sample
+    n = int(np.floor((clip.num_frames - 1) * fps / clip.fps + 1e-9)) + 1
+    out = sample(clip, np.arange(n) * (clip.fps / fps))
+    meta = dict(out.meta)
+    meta["fps_read"] = clip.meta.get("fps_read", clip.fps)
+    meta["fps_source"] = f"{clip.meta.get('fps_source', 'read')}, resampled to {fps:g} ([study] fps)"
+    return Clip(out.skeleton, float(fps), out.root_pos, out.rotations, out.joint_pos, meta)
