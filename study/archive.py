@@ -35,7 +35,7 @@ import sqlite3
 from datetime import datetime, timezone
 from pathlib import Path
 
-from flipstudy.errors import ArchiveError, StudyHasAnswersError
+from flipstudy.errors import ArchiveError, StudyHasAnswers
 
 from .store import DB_NAME
 
@@ -144,13 +144,13 @@ def describe(a: dict) -> str:
 
 
 def refuse_real_answers(folder, foreign=(), *, shown=None, command: str = "stimuli --force"):
-    """Raise :class:`StudyHasAnswersError` when ``folder`` holds any real answer (or a
+    """Raise :class:`StudyHasAnswers` when ``folder`` holds any real answer (or a
     file that cannot be read); return the :func:`answers_in` summary otherwise.
     Used as ``replace_check`` of :func:`flipstudy.stimuli.stimset.build_stimuli`."""
     shown = Path(shown) if shown is not None else Path(folder)
     a = answers_in(folder)
     if a["real_answers"] or a["unreadable"]:
-        raise StudyHasAnswersError(
+        raise StudyHasAnswers(
             f"{shown} holds {describe(a)}; `flipstudy {command}` never replaces a study with "
             f"participants' answers. Move it aside first with `flipstudy archive {shown}` (it "
             f"keeps everything, under {shown.name}-archived-DATE), or build into another --out")

@@ -34,7 +34,7 @@ import hashlib
 import sqlite3
 from pathlib import Path
 
-from flipstudy.errors import DesignFrozenError
+from flipstudy.errors import DesignFrozen
 
 from .store import DB_NAME
 
@@ -110,10 +110,10 @@ def design_change(study_dir) -> str | None:
 
 
 def refuse_changed_design(study_dir, command: str) -> None:
-    """Raise :class:`DesignFrozenError` when :func:`design_change` finds a change."""
+    """Raise :class:`DesignFrozen` when :func:`design_change` finds a change."""
     msg = design_change(study_dir)
     if msg is not None:
-        raise DesignFrozenError(f"{msg}; `flipstudy {command}` refuses a study whose design changed")
+        raise DesignFrozen(f"{msg}; `flipstudy {command}` refuses a study whose design changed")
 
 
 def write_design(out, text: str, *, force: bool = False) -> None:
@@ -137,7 +137,7 @@ def write_design(out, text: str, *, force: bool = False) -> None:
         a = answers_in(folder)
         if a["real_answers"] or a["simulated_answers"] or a["unreadable"] or \
                 recorded_design(folder) is not None:
-            raise DesignFrozenError(
+            raise DesignFrozen(
                 f"{out} is the design of the study {folder}, which holds {describe(a)}: a study's "
                 f"design is frozen once it has an answer (every participant must see the same "
                 f"design). Write the new design elsewhere and build a new study from it")

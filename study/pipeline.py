@@ -86,12 +86,12 @@ def _refuse_replacing_seen(study_dir, names) -> None:
     """Refuse to make again videos of a study holding real participants' answers:
     they answered the videos as they are, and the next participant would see others."""
     from .archive import answers_in, describe
-    from flipstudy.errors import StudyHasAnswersError
+    from flipstudy.errors import StudyHasAnswers
     a = answers_in(study_dir)
     if not (a["real_answers"] or a["unreadable"]):
         return
     d = Path(study_dir)
-    raise StudyHasAnswersError(
+    raise StudyHasAnswers(
         f"{d} holds {describe(a)}; rendering now would replace {len(names)} video(s) they may have "
         f"seen (first: {names[0]}), so later participants would answer other pictures. The videos "
         f"as they are still serve `flipstudy run`. For the new look, build a new study "
