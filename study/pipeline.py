@@ -143,7 +143,10 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     from flipstudy.analysis.pipeline import analyze as _analyze
     from flipstudy.analysis.tables import to_markdown
     from flipstudy.stimuli.design import load_design
+    from .export import refuse_no_answers
     responses = list(responses) if isinstance(responses, (list, tuple)) else [responses]
+    for r in responses:                    # no answers yet: the commands that give some
+        refuse_no_answers(r)
     src = resolve_responses_path(responses[0])
     from .frozen import refuse_changed_design
     for r in responses:                    # a study whose design changed after its answers
