@@ -403,7 +403,10 @@ class StatusResult(StepResult):
         lines.append(f"{len(rows)} session(s), {done} finished")
         real = sorted({r["participant"] for r in rows if not r["simulated"]})
         sim = sorted({r["participant"] for r in rows if r["simulated"]})
-        lines.append(f"{len(real)} real participant(s), {len(sim)} simulated"
+        web = sorted({r["participant"] for r in rows if str(r["source"]).startswith("web")})
+        lines.append(f"{len(real)} real participant(s)"
+                     + (f" ({len(web)} imported from the web, in web/responses.csv)" if web else "")
+                     + f", {len(sim)} simulated"
                      + (" (left out of export and analyze unless --include-simulated)" if sim else ""))
         inc = [r for r in rows if not r["complete"]]
         if inc:
