@@ -486,7 +486,7 @@
   function consentScreen(html) {
     return new Promise((resolve) => {
       setScreen('consent', 'consent');
-      app().innerHTML = `<div class="fs-card fs-consent"><h1>Consent</h1><div class="fs-consent-text">${html}</div>
+      app().innerHTML = `<div class="fs-card fs-consent">${/^\s*<h[1-6]>/.test(html) ? '' : '<h1>Consent</h1>'}<div class="fs-consent-text">${html}</div>
         <div class="fs-actions"><button id="fs-consent-no" class="jspsych-btn">I do not agree</button>
         <button id="fs-consent-yes" class="jspsych-btn fs-next">I agree to take part</button></div></div>`;
       document.getElementById('fs-consent-yes').addEventListener('click', () => { app().innerHTML = ''; resolve(true); });
