@@ -358,10 +358,6 @@ class Group:
         top, excluded = LEVEL_BOUNDS[(kind, sign)]
         lv = check_levels(self.levels, wg, kind, sign, top, excluded)
         object.__setattr__(self, "levels", lv)
-        if kind != "pose-rate" and max(lv) > 0 and max(lv) < 1:      # fractions for percent?
-            warnings.warn(f"{wg}.levels: every level is below 1 % ({_show(list(lv))}); levels are "
-                          f"percent (25 is a 25 % error): if these are fractions, multiply them "
-                          f"by 100", UserWarning, stacklevel=3)
         method = _field(self, "method", str, wg, _one_of(METHODS))
         task = _field(self, "task", str, wg, _one_of(TASKS))
         object.__setattr__(self, "quest", check_quest(self.quest, wg, method, task, lv))
