@@ -38,7 +38,7 @@ def missing_file_hint(path, spec, *, base=None, also=()) -> str:
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     _ = (pathlib.Path(tmp) / "backflip.bvh").write_text("")
     ...     hint = missing_file_hint(pathlib.Path(tmp) / "bakflip.bvh", "bakflip.bvh", base=tmp)
-    ...     print("did you mean 'backflip.bvh'?" in hint, "relative to" in hint)
+    ...     print("did you mean 'backflip.bvh'?" in hint, "resolved against" in hint)
     True True
     """
     import difflib
