@@ -381,8 +381,9 @@ class ReproduceResult(StepResult):
 @dataclass(frozen=True)
 class StatusResult(StepResult):
     """The sessions of a study, one dict per session (participant, session, source,
-    answered, total, complete, simulated, started, last_answer, finished); what
-    ``status --json`` prints."""
+    answered, total, complete, simulated, started, last_answer, finished): the local
+    ones, then those ``import-web`` imported (source ``web-…``); what ``status
+    --json`` prints."""
     study: Path
     sessions: tuple[dict, ...]
 
