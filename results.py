@@ -395,8 +395,9 @@ class ReproduceResult(StepResult):
 @dataclass(frozen=True)
 class StatusResult(StepResult):
     """The sessions of a study, one dict per session (participant, session, source,
-    answered, total, complete, simulated, started, last_answer, finished); what
-    ``status --json`` prints."""
+    answered, total, complete, simulated, started, last_answer, finished): the local
+    ones, then those ``import-web`` imported (source ``web-…``); what ``status
+    --json`` prints."""
     study: Path
     sessions: tuple[dict, ...]
 
@@ -417,7 +418,10 @@ class StatusResult(StepResult):
         lines.append(f"{len(rows)} session(s), {done} finished")
         real = sorted({r["participant"] for r in rows if not r["simulated"]})
         sim = sorted({r["participant"] for r in rows if r["simulated"]})
-        lines.append(f"{len(real)} real participant(s), {len(sim)} simulated"
+        web = sorted({r["participant"] for r in rows if str(r["source"]).startswith("web")})
+        lines.append(f"{len(real)} real participant(s)"
+                     + (f" ({len(web)} imported from the web, in web/responses.csv)" if web else "")
+                     + f", {len(sim)} simulated"
                      + (" (left out of export and analyze unless --include-simulated)" if sim else ""))
         inc = [r for r in rows if not r["complete"]]
         if inc:

@@ -230,6 +230,8 @@ def flow_figure(flow: pd.DataFrame):
         ax.set_yticks(y, flow["stage"])
         ax.set_xlabel("participants")
         ax.set_xlim(0, max(1, int(flow["n"].max())) * 1.15)
+        from matplotlib.ticker import MaxNLocator
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))     # whole participants
         ax.set_title("Participant flow (exclusion rules stated in the design)")
         fig.tight_layout()
     return fig

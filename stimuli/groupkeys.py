@@ -106,7 +106,8 @@ def levels_table(levels) -> list | dict:
 def check_levels(values, where: str, kind: str, sign: int, top: float, excluded: bool) -> tuple:
     """A group's levels checked: at least one, at most :data:`GRID_MAX`, each in
     0..``top`` percent (``top`` itself refused when ``excluded``), no two alike or
-    naming the same stimulus; returned sorted, as a tuple of floats."""
+    naming the same stimulus; returned sorted, as a tuple of floats.  Levels all
+    below 1 % (fractions where percent was meant) warn (a ``UserWarning``)."""
     if isinstance(values, (str, bytes, dict)) or not hasattr(values, "__len__"):
         raise DesignError(f"{where}.levels: expected an array of levels or a grid table "
                           f"{{from, to, step}}, got {_show(values)}")
@@ -138,6 +139,11 @@ def check_levels(values, where: str, kind: str, sign: int, top: float, excluded:
             raise DesignError(f"{where}.levels: {names[f'{v:g}']!r} and {v!r} % give the same "
                               f"stimulus name ({v:g}); levels differ in their first 6 digits")
         names[f"{v:g}"] = v
+    if kind != "pose-rate" and 0 < max(lv) < 1:          # fractions where percent was meant?
+        import warnings
+        warnings.warn(f"{where}.levels: every level is below 1 % ({_show(sorted(lv))}); levels are "
+                      f"percent (25 is a 25 % error): if these are fractions, multiply them by 100",
+                      UserWarning, stacklevel=4)
     return tuple(sorted(lv))
 
 

@@ -78,8 +78,11 @@ def load_base_clip(spec, design: Design) -> Clip:
         if not p.is_absolute() and design.path is not None:
             p = design.path.parent / p
         if not p.exists():
+            from ._io import missing_file_hint
+            hint = missing_file_hint(p, spec.source, also=BUILTIN_NAMES,
+                                     base=design.path.parent if design.path is not None else None)
             raise DesignError(f"{where}clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
-                              f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
+                              f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p}; {hint})")
         from .loading import POSITION_SUFFIXES, check_up_axis, load_clip
         if p.suffix.lower() in POSITION_SUFFIXES:   # joint positions (22: humanml3d-22); the design's gate runs below
             clip = load_clip(str(p), scale=spec.scale, fps=spec.fps, gate=False)

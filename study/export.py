@@ -234,3 +234,56 @@ def status(study_dir) -> list[dict]:
         return store.status_rows(conn)
     finally:
         conn.close()
+
+
+def _has_rows(path: Path) -> bool:
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = csv.reader(f)
+        next(rows, None)                                   # the header
+        return any(any(cell.strip() for cell in row) for row in rows)
+
+
+def refuse_no_answers(path) -> None:
+    """Before ``flipstudy analyze``: a study folder without ``responses.csv``, or a
+    study's ``responses.csv`` without a row, raises :class:`~flipstudy.errors.NeedsExport`
+    whose message names the commands that work from what the study's sessions hold
+    (none yet: ``run`` or ``simulate``; only simulated ones: ``--include-simulated``).
+    Anything else (a table with rows, a file outside a study) passes.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from flipstudy.errors import NeedsExport
+    >>> from flipstudy.study.demo import make_demo_study
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     study = make_demo_study(pathlib.Path(tmp) / "s", videos=False)
+    ...     try:
+    ...         refuse_no_answers(study)
+    ...     except NeedsExport as e:
+    ...         print("no sessions yet" in str(e), "flipstudy simulate" in str(e))
+    True True
+    """
+    from flipstudy.errors import NeedsExport
+    p = Path(path)
+    d, csv_path = (p, p / "responses.csv") if p.is_dir() else (p.parent, p)
+    if not (d / "manifest.csv").is_file() or (not p.is_dir() and not p.is_file()):
+        return
+    if csv_path.is_file() and _has_rows(csv_path):
+        return
+    what = f"{csv_path} holds no answers" if csv_path.is_file() else \
+        f"{d} is a study folder without responses.csv"
+    sessions = status(d) if store.db_path(d).exists() else []
+    n_real = sum(1 for s in sessions if not s["simulated"])
+    n_sim = len(sessions) - n_real
+    if n_real:
+        raise NeedsExport(f"{what}: run `flipstudy export {d}` first, then `flipstudy analyze {d}`")
+    if n_sim:
+        raise NeedsExport(f"{what}: its {n_sim} session(s) are all simulated, which export and "
+                          f"analyze leave out by default: run `flipstudy export {d} "
+                          f"--include-simulated`, then `flipstudy analyze {d} --include-simulated`")
+    web = (f"; answers imported from the web are analysed with `flipstudy analyze {d / 'web'}`"
+           if (d / "web" / "responses.csv").is_file() else "")
+    raise NeedsExport(f"{what} and no sessions yet: run `flipstudy run {d} --participant ID`, then "
+                      f"`flipstudy export {d}` and `flipstudy analyze {d}`; or pilot it with "
+                      f"`flipstudy simulate {d} --participants 4`, `flipstudy export {d} "
+                      f"--include-simulated` and `flipstudy analyze {d} --include-simulated`{web}")

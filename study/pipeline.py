@@ -100,7 +100,8 @@ def _refuse_replacing_seen(study_dir, names) -> None:
 
 
 def status(study_dir) -> StatusResult:
-    """``flipstudy status``: the sessions of a study (none before the first)."""
+    """``flipstudy status``: the sessions of a study (none before the first), the
+    local ones and those ``import-web`` imported (source ``web-…``)."""
     from flipstudy.errors import FlipstudyFileNotFoundError
 
     from .export import status as _status
@@ -108,7 +109,9 @@ def status(study_dir) -> StatusResult:
     d = Path(study_dir)
     if not (d / "manifest.csv").is_file():
         raise FlipstudyFileNotFoundError(f"{d} is not a study folder (no manifest.csv)")
-    return StatusResult(study=d, sessions=tuple(_status(d)) if db_path(d).exists() else ())
+    from .web.status import web_status
+    local = _status(d) if db_path(d).exists() else []
+    return StatusResult(study=d, sessions=tuple(local + web_status(d)))     # web: import-web's
 
 
 def simulate(study_dir, participants: int, *, model=None, seed: int = 0, strengths=None) -> SimulateResult:
@@ -144,7 +147,10 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     from flipstudy.analysis.pipeline import analyze as _analyze
     from flipstudy.analysis.tables import to_markdown
     from flipstudy.stimuli.design import load_design
+    from .export import refuse_no_answers
     responses = list(responses) if isinstance(responses, (list, tuple)) else [responses]
+    for r in responses:                    # no answers yet: the commands that give some
+        refuse_no_answers(r)
     src = resolve_responses_path(responses[0])
     from .frozen import refuse_changed_design
     for r in responses:                    # a study whose design changed after its answers

@@ -25,6 +25,7 @@ comes out should resemble the paper's, within the noise of 19 participants.
 from __future__ import annotations
 
 import contextlib
+import json
 
 from flipstudy.errors import ReproduceError
 from flipstudy.results import ReproduceResult
@@ -89,6 +90,33 @@ def sheet_images(stimuli: StimulusSet, render_dir) -> dict:
 def _say(quiet: bool, text: str) -> None:
     if not quiet:
         print(text, file=sys.stderr, flush=True)
+
+
+def _swap(value, pairs):
+    if isinstance(value, str):
+        for old, new in pairs:
+            value = value.replace(old, new)
+        return value
+    if isinstance(value, list):
+        return [_swap(v, pairs) for v in value]
+    if isinstance(value, dict):
+        return {k: _swap(v, pairs) for k, v in value.items()}
+    return value
+
+
+def _repoint(work: Path, out: Path) -> None:
+    """Make the records written during the build (``render.json``, ``summary.json``,
+    ``notes.md``) name ``out``, where the build is moved, instead of the temporary
+    ``work`` folder, which is gone once the build is in place."""
+    pairs = [(str(work.resolve()), str(out.resolve())), (str(work), str(out))]
+    for rel in ("study/render/render.json", "analysis/summary.json"):
+        p = work / rel
+        if p.is_file():
+            data = _swap(json.loads(p.read_text(encoding="utf-8")), pairs)
+            p.write_text(json.dumps(data, indent=2, ensure_ascii=rel.startswith("study")) + "\n", encoding="utf-8")
+    notes = work / "analysis" / "notes.md"
+    if notes.is_file():
+        notes.write_text(_swap(notes.read_text(encoding="utf-8"), pairs), encoding="utf-8")
 
 
 def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = None,
@@ -183,6 +211,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
                              include_simulated=True)
         seconds["analysis"] = time.perf_counter() - t
 
+        _repoint(work, out)        # the records name OUT, not the build folder
         # move into place: nothing half-written is ever at OUT
         with contextlib.ExitStack() as held:
             guard(held)            # answers may have arrived while the run went on

@@ -58,6 +58,7 @@ from ..validate import DEMOGRAPHIC_FIELDS
 from . import jspsych as jsp
 from .opaque import hide_config, site_map
 from .order import RULE, order_groups
+from .sides import sides_config
 
 FORMAT = "flipstudy-web/1"
 HOSTS = ("static", "jatos", "pavlovia")
@@ -228,6 +229,7 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
         "videos": vids, "demographic_fields": DEMOGRAPHIC_FIELDS, "texts": _texts(study, n),
         "jspsych_version": jsp.PACKAGES["jspsych"],
         "online": online_config(study),
+        "sides": sides_config(study),          # which tone is the left side (a sentence, a picture)
     }
     if not local_timeline.is_default(design):
         cfg.update(keys_2afc=dict(local_timeline.KEYS_2AFC), gap_ms=local_timeline.GAP_MS)

@@ -193,6 +193,9 @@ def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
     with ServerThread(create_app(session, iti_ms=50)) as srv:
         page.goto(srv.url)
         screen(page, "instructions")
+        # which tone is the left side: the sentence and the picture (issue 42)
+        assert "left arm and leg are the lighter tone" in page.inner_text(".fs-sides figcaption")
+        assert page.eval_on_selector(".fs-sides img", "i => i.complete && i.naturalWidth") == 520
         shot = screenshot(page, "session_instructions.png", tmp_path)
         assert shot.stat().st_size <= 150_000
         do_intro(page)

@@ -295,8 +295,17 @@
   }
 
   // ---- screens -----------------------------------------------------------------------------
-  function card(title, paragraphs) {
-    return `<div class="fs-card"><h1>${esc(title)}</h1>${paragraphs.map((p) => `<p>${esc(p)}</p>`).join('')}</div>`;
+  function card(title, paragraphs, extra = '') {
+    return `<div class="fs-card"><h1>${esc(title)}</h1>${paragraphs.map((p) => `<p>${esc(p)}</p>`).join('')}${extra}</div>`;
+  }
+
+  // which tone is the left side: the sentence and the picture of config.sides (left and
+  // right limbs differ only by tone)
+  function sidesHtml() {
+    const S = C.sides;
+    if (!S) return '';
+    const img = S.image ? `<img src="${S.image}" alt="${esc(S.alt)}" width="${S.width}" height="${S.height}">` : '';
+    return `<figure class="fs-sides">${img}<figcaption>${esc(S.text)}</figcaption></figure>`;
   }
 
   function demographicsHtml(fields) {
@@ -343,7 +352,7 @@
 
   function instructionsNode(id, title, paragraphs, button) {
     if (id === 'instructions') {
-      return {type: jsPsychInstructions, pages: [card(title, paragraphs)], show_clickable_nav: true, allow_keys: false, allow_backward: false,
+      return {type: jsPsychInstructions, pages: [card(title, paragraphs, sidesHtml())], show_clickable_nav: true, allow_keys: false, allow_backward: false,
               button_label_next: button || 'Continue', on_load: () => setScreen('instructions', 'instructions')};
     }
     return {type: jsPsychHtmlButtonResponse, choices: [button || 'Continue'], stimulus: card(title, paragraphs),
@@ -494,7 +503,7 @@
   function consentScreen(html) {
     return new Promise((resolve) => {
       setScreen('consent', 'consent');
-      app().innerHTML = `<div class="fs-card fs-consent"><h1>Consent</h1><div class="fs-consent-text">${html}</div>
+      app().innerHTML = `<div class="fs-card fs-consent">${/^\s*<h[1-6]>/.test(html) ? '' : '<h1>Consent</h1>'}<div class="fs-consent-text">${html}</div>
         <div class="fs-actions"><button id="fs-consent-no" class="jspsych-btn">I do not agree</button>
         <button id="fs-consent-yes" class="jspsych-btn fs-next">I agree to take part</button></div></div>`;
       document.getElementById('fs-consent-yes').addEventListener('click', () => { app().innerHTML = ''; resolve(true); });

@@ -128,6 +128,8 @@ def test_prolific_link_end_to_end_ids_redirect_catch_exclusion(page, study, tmp_
         page.goto(f"http://{origin}/index.html?PROLIFIC_PID={PID}&STUDY_ID={STUDY_ID}&SESSION_ID={SESSION_ID}")
         page.wait_for_selector('#jspsych-target[data-screen-id="consent"]')
         assert "Prolific ID only" in page.inner_text("#jspsych-target")
+        # the text's own heading is the page's title: no "Consent" above it (issue 42)
+        assert page.locator(".fs-consent h1, .fs-consent h2").all_inner_texts() == ["Taking part"]
         assert host.bodies == []                                   # nothing before consent
         _shot(page, "web_consent.png", tmp_path)
         page.click("#fs-consent-yes")

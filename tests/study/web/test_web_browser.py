@@ -309,6 +309,9 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
         page.goto(f"http://{origin}/index.html?PROLIFIC_PID={PID}&STUDY_ID=s1")
         _wait_screen(page, "instructions")
         assert "some of them are not" in page.inner_text("#jspsych-target")
+        # which tone is the left side: the sentence and the picture, as in the local runner
+        assert "left arm and leg are the lighter tone" in page.inner_text(".fs-sides figcaption")
+        assert page.eval_on_selector(".fs-sides img", "i => i.complete && i.naturalWidth") == 520
         page.click("#jspsych-instructions-next")
         _wait_screen(page, "demographics")
         page.check("#fs-age-none")
