@@ -44,19 +44,29 @@ TRUE = {"1", "true", "yes", "y", "t"}
 
 def _db_answers(path: Path) -> tuple[dict, dict]:
     """(real, simulated): participant → number of answers, from ``sessions.sqlite``."""
+    from .storefile import file_problem, missing_tables, what_is_missing
     real: dict = {}
     sim: dict = {}
+    problem = file_problem(path)
+    if problem is not None:
+        raise sqlite3.DatabaseError(problem)
     uri = f"file:{path}?mode=rw"           # never creates; as the last reader it removes the -wal/-shm it made
     conn = sqlite3.connect(uri, uri=True, timeout=30.0)
     try:
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-        if not {"sessions", "responses"} <= tables:
-            return real, sim
-        for pid, source, n in conn.execute(
-                "SELECT r.participant, s.source, COUNT(*) FROM responses r JOIN sessions s "
+        if not tables:
+            return real, sim                 # an empty database: a store not used yet
+        gone = missing_tables(conn)          # a version-1 store lacks version 2's columns only
+        if conn.execute("PRAGMA user_version").fetchone()[0] == 1:
+            gone = [g for g in gone if "." not in g]
+        if gone:                             # answers may be in what is left: never "none"
+            raise sqlite3.DatabaseError(what_is_missing(gone))
+        for pid, source, n in conn.execute(  # an answer without its session row is a real one
+                "SELECT r.participant, s.source, COUNT(*) FROM responses r LEFT JOIN sessions s "
                 "ON s.participant = r.participant AND s.session = r.session "
                 "GROUP BY r.participant, s.source"):
-            (sim if source == "simulated" else real)[pid] = n
+            d = sim if source == "simulated" else real
+            d[pid] = d.get(pid, 0) + n
     finally:
         conn.close()
     return real, sim
@@ -91,7 +101,7 @@ def answers_in(study_dir) -> dict:
     sim: dict = {}
     where, unreadable = [], []
     db = d / DB_NAME
-    if db.exists():
+    if db.exists() or db.is_symlink():
         try:
             r, s = _db_answers(db)
         except sqlite3.Error as e:

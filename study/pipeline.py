@@ -108,7 +108,8 @@ def status(study_dir) -> StatusResult:
     d = Path(study_dir)
     if not (d / "manifest.csv").is_file():
         raise FlipstudyFileNotFoundError(f"{d} is not a study folder (no manifest.csv)")
-    return StatusResult(study=d, sessions=tuple(_status(d)) if db_path(d).exists() else ())
+    return StatusResult(study=d, sessions=tuple(_status(d)) if (db_path(d).exists() or db_path(d).is_symlink())
+                       else ())
 
 
 def simulate(study_dir, participants: int, *, model=None, seed: int = 0, strengths=None) -> SimulateResult:

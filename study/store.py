@@ -52,6 +52,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .order import Trial
+from .storefile import check_file, check_tables
 
 DB_NAME = "sessions.sqlite"
 SCHEMA_VERSION = 2
@@ -157,6 +158,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     in autocommit mode; use :func:`transaction` for writes.  It may be shared
     between threads if the caller serialises its use (the server does)."""
     path = db_path(study_dir)
+    check_file(path)                      # a dangling link, a folder, /dev/zero: damaged, not new
     if not create and not path.exists():
         raise FlipstudyFileNotFoundError(f"{path}: no sessions yet (run `flipstudy run` or `flipstudy simulate`)")
     existed = path.exists() and path.stat().st_size > 0
@@ -169,6 +171,8 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
         conn.execute("PRAGMA synchronous=FULL")
         conn.execute("PRAGMA foreign_keys=ON")
         version = conn.execute("PRAGMA user_version").fetchone()[0]
+        if version in (0, SCHEMA_VERSION):
+            check_tables(conn, path)          # some table missing: damaged, never taken for empty
         if version == 0:
             with transaction(conn):
                 if conn.execute("PRAGMA user_version").fetchone()[0] == 0:   # not raced
@@ -186,9 +190,15 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
                     conn.execute("INSERT OR REPLACE INTO meta VALUES ('schema_version', ?)",
                                  (str(SCHEMA_VERSION),))
                     conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+            check_tables(conn, path)
         elif version != SCHEMA_VERSION:
             raise FlipstudyStateError(f"{path}: schema version {version}; this flipstudy reads versions "
                                f"1 and {SCHEMA_VERSION}")
+    except sqlite3.DatabaseError as e:    # a table or column gone under a migration, ...
+        conn.close()
+        if "locked" in str(e) or "busy" in str(e):
+            raise
+        raise corrupt(path, e) from None
     except BaseException:
         conn.close()
         raise
