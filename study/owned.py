@@ -35,6 +35,7 @@ flipstudy.errors.OwnedPathError: .../st/manifest.csv is the stimulus list of the
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from flipstudy.errors import OwnedPathError
@@ -47,6 +48,8 @@ STUDY_FILES = {
     "sessions.sqlite-journal": "the answer database's journal",
     "manifest.csv": "the stimulus list",
     "design.toml": "the design",
+    "consent.md": "the researcher's consent text",
+    "debrief.md": "the researcher's debrief text",
 }
 #: what ``flipstudy export`` writes into the study it exports (only it may)
 EXPORT_FILES = {
@@ -56,6 +59,10 @@ EXPORT_FILES = {
     "dataset_description.json": "the exported tables' description",
     "data": "the exported tables as Psych-DS data files (data/*_data.csv)",
 }
+#: at most this many files and folders are looked through below an output folder
+WALK_LIMIT = 200_000
+#: what SQLite writes beside a database, which goes with it
+SIDE_FILES = ("-wal", "-shm", "-journal")
 #: folders of a study folder whose every file it owns
 STUDY_DIRS = {"render": "the rendered videos", "web": "the web results",
               ".locks": "the server locks"}
@@ -105,14 +112,55 @@ def owner(path) -> tuple[Path, str, str] | None:
         elif top in EXPORT_FILES:           # data/: export's Psych-DS data files
             return parent, f"one of {EXPORT_FILES[top]}", str(rel)
         return None                       # inside a study, but the user's (analysis/, ...)
-    if p.is_dir():                        # a folder holding a study one level down
-        try:
-            for child in p.iterdir():
-                if child.is_dir() and is_study(child):
-                    return child, "inside the output folder", "."
-        except OSError:
-            pass
+    if p.is_dir():                        # a folder holding a study at any depth below
+        inner = study_below(p)
+        if inner is not None:
+            return inner, "inside the output folder", "."
     return None
+
+
+def _walk(folder: Path, limit: int):
+    """``(folder, dirnames, filenames)`` below ``folder`` (symbolic links to folders are
+    not followed: they are files here); more than ``limit`` entries refuse."""
+    seen = 0
+    for top, dirs, files in os.walk(folder, followlinks=False):
+        seen += len(dirs) + len(files)
+        if seen > limit:
+            raise OwnedPathError(f"{folder} holds more than {limit} files and folders; flipstudy does "
+                                 f"not replace or write into a folder it cannot look through for a "
+                                 f"study's files: choose a new or smaller folder")
+        links = [d for d in dirs if os.path.islink(os.path.join(top, d))]
+        dirs[:] = [d for d in dirs if d not in links]
+        yield Path(top), dirs, files + links
+
+
+def study_below(folder, *, limit: int = WALK_LIMIT) -> Path | None:
+    """The first study folder (:func:`is_study`) at any depth strictly below ``folder``,
+    recognised by its files (``sessions.sqlite``, or ``manifest.csv`` with
+    ``design.toml``); None when there is none."""
+    folder = Path(folder)
+    for top, dirs, files in _walk(folder, limit):
+        names = set(dirs) | set(files)
+        if top != folder and ("sessions.sqlite" in names or {"manifest.csv", "design.toml"} <= names):
+            return top
+    return None
+
+
+def files_below(folder, *, limit: int = WALK_LIMIT) -> list[str]:
+    """Every file (and symbolic link) at any depth below ``folder``, as sorted relative
+    POSIX names (``render/a.mp4``)."""
+    folder = Path(folder)
+    return sorted((top / f).relative_to(folder).as_posix() for top, _, files in _walk(folder, limit)
+                  for f in files)
+
+
+def not_made(folder, made, *, limit: int = WALK_LIMIT) -> list[str]:
+    """The files below ``folder`` that are not in ``made`` (relative POSIX names: what a
+    command recorded as it made them); a database's ``-wal``/``-shm``/``-journal``
+    go with it.  What a ``--force`` may replace is a folder where this is empty."""
+    made = set(made)
+    return [f for f in files_below(folder, limit=limit)
+            if f not in made and not any(f == m + side for m in made for side in SIDE_FILES)]
 
 
 def refuse_owned(path, command: str, *, study=None, allow=()) -> None:
@@ -135,8 +183,25 @@ def refuse_owned(path, command: str, *, study=None, allow=()) -> None:
                          f"choose a path outside it (or under {folder}/analysis/)")
 
 
+def refuse_not_made(folder, made, command: str, what: str) -> None:
+    """Raise :class:`OwnedPathError` when ``folder`` holds a file not in ``made``
+    (:func:`not_made`) or a study at any depth: ``command`` replaces ``folder`` only
+    when everything in it is what it made itself (``what``: "the earlier site")."""
+    folder = Path(folder)
+    inner = study_below(folder)
+    if inner is not None:
+        raise OwnedPathError(f"{folder} holds the study {inner}; `flipstudy {command}` never deletes "
+                             f"a study: move it out first, or choose another --out")
+    extra = not_made(folder, made)
+    if extra:
+        listed = ", ".join(extra[:4]) + (f" and {len(extra) - 4} more" if len(extra) > 4 else "")
+        raise OwnedPathError(f"{folder} holds file(s) that {what} did not have ({listed}); `flipstudy "
+                             f"{command}` replaces only what it made itself: move them out first, "
+                             f"or choose another --out")
+
+
 #: the options whose values are paths a command writes (checked before every command runs)
-OUTPUT_OPTIONS = ("out", "participants_out", "plot", "ghost", "strip")
+OUTPUT_OPTIONS = ("out", "participants_out", "plot", "ghost", "strip", "figure", "composite")
 #: commands whose ``--out`` is a study they build themselves (they guard it their own way)
 BUILDS_STUDY = ("stimuli", "reproduce")
 
