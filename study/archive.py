@@ -2,11 +2,13 @@
 and ``flipstudy archive`` (move a whole study aside, under a dated name).
 
 "Real answers" are answers of participants who are not simulated: rows of
-``sessions.sqlite`` whose session's ``source`` is not ``simulated``, and rows of
+``sessions.sqlite`` whose session's ``source`` is not ``simulated`` (or that have no
+session row), the raw web results ``import-web`` keeps (``web/imports/*``), and rows of
 any exported or imported response table in the folder (a ``*.csv`` with
 ``participant`` and ``response`` columns) that are not marked simulated (column
 ``simulated`` true, or ``input`` = ``simulated`` in tables exported before that
-column existed).  A database that cannot be read counts as holding real answers.
+column existed).  A database that cannot be read, or that lacks one of its tables,
+counts as holding real answers.
 
 Examples
 --------
@@ -40,6 +42,8 @@ from flipstudy.errors import ArchiveError, StudyHasAnswers
 from .store import DB_NAME
 
 TRUE = {"1", "true", "yes", "y", "t"}
+#: where ``import-web`` keeps the raw web results it read
+RAW_DIR = "web/imports"
 
 
 def _db_answers(path: Path) -> tuple[dict, dict]:
@@ -131,9 +135,28 @@ def answers_in(study_dir) -> dict:
                 real[k] = max(real.get(k, 0), v)
             for k, v in s.items():
                 sim[k] = max(sim.get(k, 0), v)
+    raw = _raw_imports(d)
+    if raw:
+        where.append(f"{RAW_DIR}/")
     return {"real_answers": sum(real.values()), "real_participants": sorted(real),
             "simulated_answers": sum(sim.values()), "simulated_participants": sorted(sim),
-            "where": where, "unreadable": unreadable}
+            "where": where, "unreadable": unreadable, "raw_imports": raw}
+
+
+def _raw_imports(d: Path) -> list[str]:
+    """The raw web results ``import-web`` keeps (``web/imports/*``): participants'
+    answers as they came, whatever the tables say."""
+    from .owned import files_below
+    imports = d / RAW_DIR
+    if not imports.is_dir() or imports.is_symlink():
+        return [RAW_DIR] if imports.exists() or imports.is_symlink() else []
+    return [f"{RAW_DIR}/{f}" for f in files_below(imports)]
+
+
+def holds_answers(a: dict) -> bool:
+    """Does the :func:`answers_in` summary ``a`` count anything a command must not
+    replace: a real answer, a file that could not be read, a raw web result?"""
+    return bool(a["real_answers"] or a["unreadable"] or a.get("raw_imports"))
 
 
 def describe(a: dict) -> str:
@@ -147,6 +170,8 @@ def describe(a: dict) -> str:
                      f"participant(s) ({', '.join(a['where'])})")
     if a["unreadable"]:
         parts.append(f"file(s) that could not be read ({', '.join(a['unreadable'])})")
+    if a.get("raw_imports"):
+        parts.append(f"{len(a['raw_imports'])} raw web result file(s) kept by import-web ({RAW_DIR}/)")
     if a["simulated_answers"]:
         parts.append(f"{answers(a['simulated_answers'])} of {len(a['simulated_participants'])} "
                      f"simulated participant(s)")
@@ -159,7 +184,7 @@ def refuse_real_answers(folder, foreign=(), *, shown=None, command: str = "stimu
     Used as ``replace_check`` of :func:`flipstudy.stimuli.stimset.build_stimuli`."""
     shown = Path(shown) if shown is not None else Path(folder)
     a = answers_in(folder)
-    if a["real_answers"] or a["unreadable"]:
+    if holds_answers(a):
         raise StudyHasAnswers(
             f"{shown} holds {describe(a)}; `flipstudy {command}` never replaces a study with "
             f"participants' answers. Move it aside first with `flipstudy archive {shown}` (it "

@@ -183,6 +183,34 @@ def refuse_owned(path, command: str, *, study=None, allow=()) -> None:
                          f"choose a path outside it (or under {folder}/analysis/)")
 
 
+#: what ``import-web`` and ``export-web`` write under ``web/`` (``web/imports/``: never)
+WEB_MADE = ("sites.json", "imports.json", "responses.csv", "participants.csv",
+            "dataset_description.json")
+
+
+def recorded_outputs(study_dir) -> set[str]:
+    """The files below a study folder that flipstudy commands made and recorded, which
+    go with its stimulus set when ``stimuli --force`` replaces it (relative POSIX
+    names): ``render/render.json`` and the outputs it lists, ``sessions.sqlite`` and
+    its side files, ``export``'s tables (:data:`EXPORT_FILES`, ``data/*_data.csv``) and
+    the tables of ``web/`` (:data:`WEB_MADE`, ``web/data/*_data.csv``).  Raw web
+    results (``web/imports/``) are never among them: they are answers."""
+    d = Path(study_dir)
+    made = {"sessions.sqlite" + side for side in ("", *SIDE_FILES)}
+    try:
+        import json
+        outputs = json.loads((d / "render" / "render.json").read_text(encoding="utf-8")).get("outputs")
+        if isinstance(outputs, dict):
+            made |= {"render/render.json"} | {f"render/{k}" for k in outputs if isinstance(k, str)}
+    except (OSError, ValueError, AttributeError):
+        pass
+    made |= {k for k in EXPORT_FILES if k != "data"} | {f"web/{k}" for k in WEB_MADE}
+    for sub in ("data", "web/data"):
+        if (d / sub).is_dir():
+            made |= {f"{sub}/{f}" for f in files_below(d / sub) if f.endswith("_data.csv") and "/" not in f}
+    return made
+
+
 def refuse_not_made(folder, made, command: str, what: str) -> None:
     """Raise :class:`OwnedPathError` when ``folder`` holds a file not in ``made``
     (:func:`not_made`) or a study at any depth: ``command`` replaces ``folder`` only
