@@ -39,7 +39,7 @@ from pathlib import Path
 
 from flipstudy.errors import ArchiveError, StudyHasAnswers
 
-from .store import DB_NAME
+from .store import DB_NAME, SCHEMA
 
 TRUE = {"1", "true", "yes", "y", "t"}
 #: where ``import-web`` keeps the raw web results it read
@@ -60,7 +60,7 @@ def _db_answers(path: Path) -> tuple[dict, dict]:
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
         if not tables:
             return real, sim                 # an empty database: a store not used yet
-        gone = missing_tables(conn)          # a version-1 store lacks version 2's columns only
+        gone = missing_tables(conn, SCHEMA)        # a version-1 store lacks version 2's columns only
         if conn.execute("PRAGMA user_version").fetchone()[0] == 1:
             gone = [g for g in gone if "." not in g]
         if gone:                             # answers may be in what is left: never "none"

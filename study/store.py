@@ -172,7 +172,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
         conn.execute("PRAGMA foreign_keys=ON")
         version = conn.execute("PRAGMA user_version").fetchone()[0]
         if version in (0, SCHEMA_VERSION):
-            check_tables(conn, path)          # some table missing: damaged, never taken for empty
+            check_tables(conn, path, SCHEMA)          # some table missing: damaged, never taken for empty
         if version == 0:
             with transaction(conn):
                 if conn.execute("PRAGMA user_version").fetchone()[0] == 0:   # not raced
@@ -190,7 +190,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
                     conn.execute("INSERT OR REPLACE INTO meta VALUES ('schema_version', ?)",
                                  (str(SCHEMA_VERSION),))
                     conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
-            check_tables(conn, path)
+            check_tables(conn, path, SCHEMA)
         elif version != SCHEMA_VERSION:
             raise FlipstudyStateError(f"{path}: schema version {version}; this flipstudy reads versions "
                                f"1 and {SCHEMA_VERSION}")

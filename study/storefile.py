@@ -29,7 +29,8 @@ flipstudy.errors.CorruptDatabase: .../sessions.sqlite: a symbolic link to .../go
 >>> db.unlink()
 >>> conn = sqlite3.connect(db)
 >>> _ = conn.execute("CREATE TABLE responses (participant TEXT)")
->>> check_tables(conn, db)
+>>> from flipstudy.study.store import SCHEMA
+>>> check_tables(conn, db, SCHEMA)
 Traceback (most recent call last):
     ...
 flipstudy.errors.CorruptDatabase: .../sessions.sqlite: table sessions is missing (and ... more), ...
@@ -84,24 +85,24 @@ def check_file(path) -> None:
 FIRST = ("sessions", "responses", "trials")
 
 
-@lru_cache(maxsize=1)
-def expected_columns() -> dict[str, frozenset]:
-    """Table → column names of a new store (:data:`flipstudy.study.store.SCHEMA`)."""
-    from .store import SCHEMA
+@lru_cache(maxsize=2)
+def expected_columns(schema: str) -> dict[str, frozenset]:
+    """Table → column names of a new store made by ``schema`` (SQL, e.g.
+    :data:`flipstudy.study.store.SCHEMA`)."""
     conn = sqlite3.connect(":memory:")
     try:
-        conn.executescript(SCHEMA)
+        conn.executescript(schema)
         return {t: frozenset(r[1] for r in conn.execute(f"PRAGMA table_info({t})"))
                 for (t,) in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
     finally:
         conn.close()
 
 
-def missing_tables(conn: sqlite3.Connection, tables=None) -> list[str]:
-    """``"sessions"``, ``"responses.rt_ms"``, ...: the tables (or columns) of a store
-    that ``conn`` lacks; ``[]`` for a whole store and for a database with no table at
-    all (a new store).  ``tables``: only these (default: every table of the schema)."""
-    want = expected_columns()
+def missing_tables(conn: sqlite3.Connection, schema: str, tables=None) -> list[str]:
+    """``"sessions"``, ``"responses.rt_ms"``, ...: the tables (or columns) of ``schema``
+    that the database of ``conn`` lacks; ``[]`` for a whole store and for a database
+    with no table at all (a new store).  ``tables``: only these (default: all)."""
+    want = expected_columns(schema)
     have = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
     if not have:
         return []
@@ -115,9 +116,9 @@ def missing_tables(conn: sqlite3.Connection, tables=None) -> list[str]:
     return gone
 
 
-def check_tables(conn: sqlite3.Connection, path, tables=None) -> None:
-    """Raise :func:`damaged` naming the first missing table (or column) of the store."""
-    gone = missing_tables(conn, tables)
+def check_tables(conn: sqlite3.Connection, path, schema: str, tables=None) -> None:
+    """Raise :func:`damaged` naming the first missing table (or column) of ``schema``."""
+    gone = missing_tables(conn, schema, tables)
     if gone:
         raise damaged(path, f"{what_is_missing(gone)}, so it is not a whole flipstudy answer database")
 
