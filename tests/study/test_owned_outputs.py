@@ -1,0 +1,143 @@
+"""Issue 45, items 1, 3 and 6: a command deletes or replaces only what it made itself.
+
+Each failed on the code before this change (checked by stashing it):
+
+1. ``export-web --force`` deleted a study two folders inside the old site folder
+   (``proj/studies/s1`` with its answers); the owned-path check looked one level down.
+3. ``stimuli --force`` deleted the researcher's ``consent.md`` / ``debrief.md`` (even
+   with no answers at all) and the raw web results ``web/imports/*`` once
+   ``web/responses.csv`` was gone.
+6. ``score --figure`` and ``jump --composite`` wrote over a study's render
+   (``STUDY/render/<stimulus>_ghost.png``).
+"""
+import hashlib
+import shutil
+
+import pytest
+
+from flipstudy.study.cli import main as cli
+from flipstudy.study.demo import make_demo_study
+from flipstudy.study.session import load_study, open_session, submit_answer
+from flipstudy.study.simulate import simulate
+from flipstudy.study.web.importer import import_web
+from test_web_import import jsonl, run_records
+
+
+def snapshot(folder):
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def answer(study, pid, n):
+    s = open_session(load_study(study), pid)
+    for t in s.trials[:n]:
+        submit_answer(s, {"participant": pid, "session": s.session, "trial": t.trial,
+                          "stimulus": t.stimulus, "response": "correct", "rt_ms": 500.0,
+                          "shown_ms": 900.0, "late_frames": 0})
+    s.close()
+
+
+def one_line(err: str) -> str:
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err, err
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def jspsych(tmp_path_factory):
+    from flipstudy.study.web import jspsych as jsp
+    if shutil.which("npm") is None and not jsp.cache_root().is_dir():
+        pytest.skip("needs npm to fetch jsPsych (apt-get install npm)")
+    try:
+        return str(jsp.fetch()[0])
+    except jsp.JsPsychFetchError as e:
+        pytest.skip(f"npm could not fetch jsPsych: {e}")
+
+
+# --- 1: export-web --force and what is below its --out ------------------------------------------
+
+def test_export_web_force_never_deletes_a_study_two_folders_down(tmp_path, jspsych, capsys):
+    demo = make_demo_study(tmp_path / "demo")
+    proj = tmp_path / "proj"
+    assert cli(["export-web", str(demo), "--out", str(proj), "--jspsych-dir", jspsych]) == 0
+    s1 = make_demo_study(proj / "studies" / "s1")
+    answer(s1, "P01", 2)
+    before = snapshot(proj)
+    capsys.readouterr()
+    code = cli(["export-web", str(s1), "--out", str(proj), "--force", "--jspsych-dir", jspsych])
+    line = one_line(capsys.readouterr().err)
+    assert code == 1 and str(s1) in line and "holds the study" in line
+    assert snapshot(proj) == before                 # the site, the study and its answers
+
+
+def test_export_web_force_replaces_only_the_earlier_sites_files(tmp_path, jspsych, capsys):
+    demo = make_demo_study(tmp_path / "demo")
+    site = tmp_path / "site"
+    assert cli(["export-web", str(demo), "--out", str(site), "--jspsych-dir", jspsych]) == 0
+    (site / "notes" / "deep").mkdir(parents=True)
+    (site / "notes" / "deep" / "mine.txt").write_text("not the site's")
+    capsys.readouterr()
+    assert cli(["export-web", str(demo), "--out", str(site), "--force", "--jspsych-dir", jspsych]) == 1
+    line = one_line(capsys.readouterr().err)
+    assert "notes/deep/mine.txt" in line and "replaces only what it made itself" in line
+    assert (site / "notes" / "deep" / "mine.txt").read_text() == "not the site's"
+    (site / "notes" / "deep" / "mine.txt").unlink()
+    assert cli(["export-web", str(demo), "--out", str(site), "--force", "--jspsych-dir", jspsych]) == 0
+
+
+def test_a_study_is_recognised_at_any_depth(tmp_path):
+    from flipstudy.study.owned import files_below, not_made, study_below
+    deep = make_demo_study(tmp_path / "a" / "b" / "c" / "d", videos=False)
+    assert study_below(tmp_path) == deep
+    assert study_below(deep) is None and study_below(tmp_path / "a" / "b" / "c" / "d" / "render") is None
+    (tmp_path / "x.txt").write_text("x")
+    assert not_made(tmp_path, set(files_below(tmp_path)) - {"x.txt"}) == ["x.txt"]
+
+
+# --- 3: stimuli --force keeps what the researcher wrote and refuses raw web results --------------
+
+def test_stimuli_force_keeps_the_researchers_files(tmp_path, capsys):
+    st = make_demo_study(tmp_path / "st", videos=False)
+    assert cli(["stimuli", str(st / "design.toml"), "--out", str(st), "--force", "--quiet"]) == 0
+    simulate(st, 1, seed=1)                        # only simulated answers: the study may go
+    (st / "consent.md").write_text("# Consent\n\nI agree.\n")
+    (st / "debrief.md").write_text("Thank you.\n")
+    (st / "analysis").mkdir()
+    (st / "analysis" / "notes.txt").write_text("my notes")
+    capsys.readouterr()
+    assert cli(["stimuli", str(st / "design.toml"), "--out", str(st), "--force", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "sessions.sqlite" in out and "kept" in out and "consent.md" in out
+    assert (st / "consent.md").read_text() == "# Consent\n\nI agree.\n"
+    assert (st / "debrief.md").read_text() == "Thank you.\n"
+    assert (st / "analysis" / "notes.txt").read_text() == "my notes"
+    assert not (st / "sessions.sqlite").exists()    # the simulated answers went with the old set
+    assert not [p for p in tmp_path.iterdir() if p.name != "st"]     # nothing left beside it
+
+
+def test_stimuli_force_refuses_a_study_with_raw_web_results(tmp_path, capsys):
+    st = make_demo_study(tmp_path / "st", videos=False)
+    import_web(st, [jsonl(tmp_path / "w.jsonl", run_records(st, "W01"))])
+    (st / "web" / "responses.csv").unlink()        # as in the issue: the table is gone
+    before = snapshot(st)
+    assert [f for f in before if f.startswith("web/imports/")]
+    capsys.readouterr()
+    assert cli(["stimuli", str(st / "design.toml"), "--out", str(st), "--force", "--quiet"]) == 1
+    line = one_line(capsys.readouterr().err)
+    assert "raw web result" in line and "web/imports/" in line
+    assert snapshot(st) == before
+
+
+# --- 6: score --figure and jump --composite onto a study's render ------------------------------
+
+@pytest.mark.parametrize("argv", [["score", "backflip", "--figure"],
+                                  ["jump", "--out", "{tmp}/j.bvh", "--composite"]])
+def test_figures_never_write_over_a_studys_render(tmp_path, argv, capsys):
+    st = make_demo_study(tmp_path / "st")
+    target = st / "render" / "backflip_reference_ghost.png"
+    target.write_bytes(b"the study's ghost")
+    capsys.readouterr()
+    assert cli([a.format(tmp=tmp_path) for a in argv] + [str(target)]) == 1
+    line = one_line(capsys.readouterr().err)
+    assert str(target) in line and "does not write over a study's own files" in line
+    assert target.read_bytes() == b"the study's ghost"
