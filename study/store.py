@@ -166,13 +166,13 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     try:
         if existed:
             _check_readable(conn, path)
+            if conn.execute("PRAGMA user_version").fetchone()[0] in (0, SCHEMA_VERSION):
+                check_tables(conn, path, SCHEMA)  # a table missing: damaged, never taken for empty
         conn.row_factory = sqlite3.Row
         _set_wal(conn)
         conn.execute("PRAGMA synchronous=FULL")
         conn.execute("PRAGMA foreign_keys=ON")
         version = conn.execute("PRAGMA user_version").fetchone()[0]
-        if version in (0, SCHEMA_VERSION):
-            check_tables(conn, path, SCHEMA)          # some table missing: damaged, never taken for empty
         if version == 0:
             with transaction(conn):
                 if conn.execute("PRAGMA user_version").fetchone()[0] == 0:   # not raced
