@@ -157,10 +157,12 @@ def files_below(folder, *, limit: int = WALK_LIMIT) -> list[str]:
 def not_made(folder, made, *, limit: int = WALK_LIMIT) -> list[str]:
     """The files below ``folder`` that are not in ``made`` (relative POSIX names: what a
     command recorded as it made them); a database's ``-wal``/``-shm``/``-journal``
-    go with it.  What a ``--force`` may replace is a folder where this is empty."""
+    go with it, and lock files (``.locks/``) are no one's.  What a ``--force`` may
+    replace is a folder where this is empty."""
     made = set(made)
     return [f for f in files_below(folder, limit=limit)
-            if f not in made and not any(f == m + side for m in made for side in SIDE_FILES)]
+            if f not in made and ".locks" not in f.split("/")[:-1]      # locks: no one's data
+            and not any(f == m + side for m in made for side in SIDE_FILES)]
 
 
 def refuse_owned(path, command: str, *, study=None, allow=()) -> None:
@@ -209,6 +211,31 @@ def recorded_outputs(study_dir) -> set[str]:
         if (d / sub).is_dir():
             made |= {f"{sub}/{f}" for f in files_below(d / sub) if f.endswith("_data.csv") and "/" not in f}
     return made
+
+
+#: the record of a folder a command makes whole (``reproduce``'s OUT): every file it wrote
+MADE_RECORD = ".flipstudy-made.json"
+
+
+def record_made(folder, command: str) -> None:
+    """Write :data:`MADE_RECORD` into ``folder``: ``command`` and every file below it
+    now, the files that command may replace later (:func:`made_by_record`)."""
+    import json
+    files = [f for f in files_below(folder) if f != MADE_RECORD]
+    (Path(folder) / MADE_RECORD).write_text(json.dumps({"command": command, "files": files},
+                                                       indent=1) + "\n", encoding="utf-8")
+
+
+def made_by_record(folder) -> set[str]:
+    """The files :func:`record_made` recorded in ``folder`` (and the record), or only
+    the record when there is none: then nothing else is known to be the command's."""
+    import json
+    try:
+        files = json.loads((Path(folder) / MADE_RECORD).read_text(encoding="utf-8")).get("files")
+    except (OSError, ValueError, AttributeError):
+        files = None
+    return {f for f in files if isinstance(f, str)} | {MADE_RECORD} if isinstance(files, list) \
+        else {MADE_RECORD}
 
 
 def refuse_not_made(folder, made, command: str, what: str) -> None:

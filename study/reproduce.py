@@ -117,6 +117,7 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
 
     from .archive import refuse_real_answers
     from .lock import study_closed
+    from .owned import made_by_record, record_made, refuse_not_made
 
     shown, out = str(out), Path(out)
     if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
@@ -134,6 +135,8 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
                     stack.enter_context(hold)
                 refuse_real_answers(d, shown=d, command="reproduce --force")
     guard()
+    if out.is_dir():               # --force replaces only what an earlier run made
+        refuse_not_made(out, made_by_record(out), "reproduce --force", "the earlier reproduce run")
     out.parent.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     seconds: dict = {}
@@ -184,9 +187,11 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
         seconds["analysis"] = time.perf_counter() - t
 
         # move into place: nothing half-written is ever at OUT
+        record_made(work, "reproduce")
         with contextlib.ExitStack() as held:
             guard(held)            # answers may have arrived while the run went on
             if out.exists():
+                refuse_not_made(out, made_by_record(out), "reproduce --force", "the earlier reproduce run")
                 old = out.with_name(f".{out.name}.old-{os.getpid()}")
                 out.rename(old)
                 work.rename(out)

@@ -94,6 +94,23 @@ def test_a_study_is_recognised_at_any_depth(tmp_path):
     assert not_made(tmp_path, set(files_below(tmp_path)) - {"x.txt"}) == ["x.txt"]
 
 
+def test_reproduce_force_never_deletes_a_study_deep_inside_or_a_file_it_did_not_make(tmp_path):
+    from flipstudy.errors import FlipstudyError
+    from flipstudy.study.reproduce import reproduce
+    out = tmp_path / "paper"
+    s1 = make_demo_study(out / "a" / "b" / "s1", videos=False)
+    answer(s1, "P01", 2)
+    before = snapshot(out)
+    with pytest.raises(FlipstudyError, match=f"holds the study {s1}"):
+        reproduce(out, participants=2, size=(160, 120), quiet=True, force=True)
+    assert snapshot(out) == before
+    shutil.rmtree(out / "a")
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(FlipstudyError, match="notes.txt"):
+        reproduce(out, participants=2, size=(160, 120), quiet=True, force=True)
+    assert (out / "notes.txt").read_text() == "mine"
+
+
 # --- 3: stimuli --force keeps what the researcher wrote and refuses raw web results --------------
 
 def test_stimuli_force_keeps_the_researchers_files(tmp_path, capsys):
