@@ -5,17 +5,25 @@ A *study folder* is a folder with ``manifest.csv`` and ``design.toml`` (what
 ``flipstudy stimuli`` writes) or with ``sessions.sqlite``.  It owns:
 
 * ``sessions.sqlite`` (and its ``-wal``, ``-shm``, ``-journal``), ``manifest.csv``,
-  ``design.toml`` and the stimulus files (``*.bvh``, ``*.npz``) at its top;
+  ``design.toml``, the researcher's ``consent.md`` and ``debrief.md`` and the
+  stimulus files (``*.bvh``, ``*.npz``) at its top;
 * everything under ``render/`` (videos, ``render.json``), ``web/`` (imported
   results, ``web/responses.csv``, ``web/participants.csv``) and ``.locks/``;
 * the tables ``flipstudy export`` writes there (``responses.csv``,
   ``participants.csv``, ``simulated_truth.csv``, ``dataset_description.json``):
   only ``export`` of that study may write them;
-* the folder itself (an output folder may not be a study, hold one, or be one of
-  the owned folders above).
+* the folder itself (an output folder may not be a study, hold one at any depth,
+  or be one of the owned folders above).
 
 ``analysis/`` and any other name are the user's: ``analyze`` and ``figure`` write
 there freely.
+
+What a ``--force`` may delete or replace is one rule: only what the command made
+itself, as recorded when it made it (``export-web``: its ``flipstudy-site.json``;
+``reproduce``: :data:`MADE_RECORD`; ``stimuli``: its ``manifest.csv`` and the
+outputs other commands recorded, :func:`recorded_outputs`), never a file it did
+not write, at any depth (:func:`not_made`, :func:`refuse_not_made`); a study is
+recognised by its files at any depth below (:func:`study_below`).
 
 Examples
 --------
