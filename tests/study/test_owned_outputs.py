@@ -135,13 +135,17 @@ def test_stimuli_force_keeps_the_researchers_files(tmp_path, capsys):
 def test_stimuli_force_refuses_a_study_with_raw_web_results(tmp_path, capsys):
     st = make_demo_study(tmp_path / "st", videos=False)
     import_web(st, [jsonl(tmp_path / "w.jsonl", run_records(st, "W01"))])
-    (st / "web" / "responses.csv").unlink()        # as in the issue: the table is gone
+    (st / "web" / "responses.csv").unlink()        # as in the issue: the tables are gone,
+    shutil.rmtree(st / "web" / "data")              # only the raw results are left
     before = snapshot(st)
     assert [f for f in before if f.startswith("web/imports/")]
     capsys.readouterr()
     assert cli(["stimuli", str(st / "design.toml"), "--out", str(st), "--force", "--quiet"]) == 1
     line = one_line(capsys.readouterr().err)
     assert "raw web result" in line and "web/imports/" in line
+    assert snapshot(st) == before
+    assert cli(["init", str(st / "design.toml"), "--force", "--preset", "gravity"]) == 1   # frozen
+    assert "raw web result" in one_line(capsys.readouterr().err)
     assert snapshot(st) == before
 
 
