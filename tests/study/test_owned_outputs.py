@@ -111,6 +111,23 @@ def test_reproduce_force_never_deletes_a_study_deep_inside_or_a_file_it_did_not_
     assert (out / "notes.txt").read_text() == "mine"
 
 
+def test_what_a_run_recorded_making_may_be_replaced_and_nothing_else(tmp_path):
+    from flipstudy.errors import OwnedPathError
+    from flipstudy.study.owned import made_by_record, record_made, refuse_not_made
+    out = tmp_path / "paper"
+    (out / "study" / ".locks").mkdir(parents=True)
+    (out / "design.toml").write_text("x")
+    (out / "analysis").mkdir()
+    (out / "analysis" / "table.csv").write_text("x")
+    record_made(out, "reproduce")
+    (out / "study" / ".locks" / "open.lock").write_text("")      # a server's lock: no one's data
+    (out / "analysis" / "table.csv").write_text("changed")          # its own file, changed: its own
+    refuse_not_made(out, made_by_record(out), "reproduce --force", "the earlier run")
+    (out / "analysis" / "mine.png").write_bytes(b"png")
+    with pytest.raises(OwnedPathError, match="analysis/mine.png"):
+        refuse_not_made(out, made_by_record(out), "reproduce --force", "the earlier run")
+
+
 # --- 3: stimuli --force keeps what the researcher wrote and refuses raw web results --------------
 
 def test_stimuli_force_keeps_the_researchers_files(tmp_path, capsys):
