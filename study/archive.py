@@ -60,9 +60,8 @@ def _db_answers(path: Path) -> tuple[dict, dict]:
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
         if not tables:
             return real, sim                 # an empty database: a store not used yet
-        gone = missing_tables(conn, SCHEMA)        # a version-1 store lacks version 2's columns only
-        if conn.execute("PRAGMA user_version").fetchone()[0] == 1:
-            gone = [g for g in gone if "." not in g]
+        gone = missing_tables(conn, SCHEMA,        # a version-1 store lacks version 2's columns
+                              columns=conn.execute("PRAGMA user_version").fetchone()[0] != 1)
         if gone:                             # answers may be in what is left: never "none"
             raise sqlite3.DatabaseError(what_is_missing(gone))
         for pid, source, n in conn.execute(  # an answer without its session row is a real one

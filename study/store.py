@@ -166,8 +166,9 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     try:
         if existed:
             _check_readable(conn, path)
-            if conn.execute("PRAGMA user_version").fetchone()[0] in (0, SCHEMA_VERSION):
-                check_tables(conn, path, SCHEMA)  # a table missing: damaged, never taken for empty
+            v = conn.execute("PRAGMA user_version").fetchone()[0]
+            if v in (0, 1, SCHEMA_VERSION):       # a table missing: damaged, never taken for empty
+                check_tables(conn, path, SCHEMA, columns=v != 1)   # version 1: before migrating
         conn.row_factory = sqlite3.Row
         _set_wal(conn)
         conn.execute("PRAGMA synchronous=FULL")
@@ -194,11 +195,6 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
         elif version != SCHEMA_VERSION:
             raise FlipstudyStateError(f"{path}: schema version {version}; this flipstudy reads versions "
                                f"1 and {SCHEMA_VERSION}")
-    except sqlite3.DatabaseError as e:    # a table or column gone under a migration, ...
-        conn.close()
-        if "locked" in str(e) or "busy" in str(e):
-            raise
-        raise corrupt(path, e) from None
     except BaseException:
         conn.close()
         raise

@@ -98,10 +98,12 @@ def expected_columns(schema: str) -> dict[str, frozenset]:
         conn.close()
 
 
-def missing_tables(conn: sqlite3.Connection, schema: str, tables=None) -> list[str]:
+def missing_tables(conn: sqlite3.Connection, schema: str, tables=None, *,
+                   columns: bool = True) -> list[str]:
     """``"sessions"``, ``"responses.rt_ms"``, ...: the tables (or columns) of ``schema``
     that the database of ``conn`` lacks; ``[]`` for a whole store and for a database
-    with no table at all (a new store).  ``tables``: only these (default: all)."""
+    with no table at all (a new store).  ``tables``: only these (default: all);
+    ``columns`` False: the tables only (a version-1 store lacks version 2's columns)."""
     want = expected_columns(schema)
     have = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
     if not have:
@@ -109,16 +111,17 @@ def missing_tables(conn: sqlite3.Connection, schema: str, tables=None) -> list[s
     tables = list(tables or sorted(want, key=lambda t: (t not in FIRST, FIRST.index(t) if t in FIRST
                                                         else 0, t)))
     gone = [t for t in tables if t not in have]
-    for t in tables:
+    for t in tables if columns else ():
         if t in have:
             cols = {r[1] for r in conn.execute(f"PRAGMA table_info({t})")}
             gone += [f"{t}.{c}" for c in sorted(want[t] - cols)]
     return gone
 
 
-def check_tables(conn: sqlite3.Connection, path, schema: str, tables=None) -> None:
+def check_tables(conn: sqlite3.Connection, path, schema: str, tables=None, *,
+                 columns: bool = True) -> None:
     """Raise :func:`damaged` naming the first missing table (or column) of ``schema``."""
-    gone = missing_tables(conn, schema, tables)
+    gone = missing_tables(conn, schema, tables, columns=columns)
     if gone:
         raise damaged(path, f"{what_is_missing(gone)}, so it is not a whole flipstudy answer database")
 
