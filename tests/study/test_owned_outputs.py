@@ -149,6 +149,18 @@ def test_stimuli_force_keeps_the_researchers_files(tmp_path, capsys):
     assert not [p for p in tmp_path.iterdir() if p.name != "st"]     # nothing left beside it
 
 
+def test_stimuli_force_never_deletes_a_study_inside_it(tmp_path, capsys):
+    st = make_demo_study(tmp_path / "st", videos=False)
+    inner = make_demo_study(st / "old" / "pilot", videos=False)
+    answer(inner, "P01", 2)
+    before = snapshot(st)
+    capsys.readouterr()
+    assert cli(["stimuli", str(st / "design.toml"), "--out", str(st), "--force", "--quiet"]) == 1
+    line = one_line(capsys.readouterr().err)
+    assert f"holds the study {inner}" in line
+    assert snapshot(st) == before
+
+
 def test_stimuli_force_refuses_a_study_with_raw_web_results(tmp_path, capsys):
     st = make_demo_study(tmp_path / "st", videos=False)
     import_web(st, [jsonl(tmp_path / "w.jsonl", run_records(st, "W01"))])
