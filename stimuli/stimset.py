@@ -554,16 +554,19 @@ def _install(tmp: Path, out: Path, force: bool, replace_check) -> None:
                               f"(pass --force to replace it)")
     removable = _check_replaceable(out, replace_check, out)
     carry(out, tmp, kept_files(out, removable))           # the researcher's files go along
+    old = out.parent / f".{out.name}.old-{os.getpid()}"   # a killed build's: sorted out by the next
     if _renameat2(tmp, out, RENAME_EXCHANGE):             # atomic: out is always a complete study
+        os.rename(tmp, old)                              # the old study, never taken for a new build
         try:                                             # what was swapped out, checked once more
-            removable = _check_replaceable(tmp, replace_check, out)
+            removable = _check_replaceable(old, replace_check, out)
         except BaseException:                          # answers arrived in the last instant
-            if not _renameat2(tmp, out, RENAME_EXCHANGE):  # swap back; never delete them
-                os.rename(tmp, out.parent / f"{out.name}.previous-{os.getpid()}")
+            if _renameat2(old, out, RENAME_EXCHANGE):      # swap back; never delete them
+                shutil.rmtree(old, ignore_errors=True)    # the new build (links to kept files)
+            else:
+                os.rename(old, out.parent / f"{out.name}.previous-{os.getpid()}")
             raise
-        discard_old(tmp, out, removable)
+        discard_old(old, out, removable)
         return
-    old = out.parent / f".{out.name}.old-{os.getpid()}"   # fallback: restored by the next build
     os.rename(out, old)
     os.rename(tmp, out)
     discard_old(old, out, removable)
