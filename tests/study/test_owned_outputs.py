@@ -149,6 +149,19 @@ def test_stimuli_force_keeps_the_researchers_files(tmp_path, capsys):
     assert not [p for p in tmp_path.iterdir() if p.name != "st"]     # nothing left beside it
 
 
+def test_a_killed_replace_leaves_the_researchers_files_to_the_next_build(tmp_path):
+    st = make_demo_study(tmp_path / "st", videos=False)
+    assert cli(["stimuli", str(st / "design.toml"), "--out", str(st), "--force", "--quiet"]) == 0
+    old = tmp_path / ".st.old-4242"                # what a build SIGKILLed after the swap leaves
+    shutil.copytree(st, old)
+    (old / "late.txt").write_text("written while the killed build ran")
+    assert cli(["stimuli", str(st / "design.toml"), "--out", str(st), "--force", "--quiet"]) == 0
+    kept = [p for p in tmp_path.iterdir() if p.name.startswith("st.kept-")]
+    assert len(kept) == 1 and (kept[0] / "late.txt").read_text() == "written while the killed build ran"
+    assert sorted(p.name for p in kept[0].rglob("*") if p.is_file()) == ["late.txt"]
+    assert not old.exists()
+
+
 def test_stimuli_force_never_deletes_a_study_inside_it(tmp_path, capsys):
     st = make_demo_study(tmp_path / "st", videos=False)
     inner = make_demo_study(st / "old" / "pilot", videos=False)
