@@ -204,3 +204,17 @@ def test_figures_never_write_over_a_studys_render(tmp_path, argv, capsys):
     line = one_line(capsys.readouterr().err)
     assert str(target) in line and "does not write over a study's own files" in line
     assert target.read_bytes() == b"the study's ghost"
+
+
+def test_render_never_writes_over_a_file_it_did_not_make(tmp_path, capsys):
+    demo = make_demo_study(tmp_path / "demo", videos=False)
+    st = tmp_path / "st"
+    assert cli(["stimuli", str(demo / "design.toml"), "--out", str(st), "--quiet"]) == 0
+    mine = st / "render" / "backflip_reference_ghost.png"
+    mine.parent.mkdir()
+    mine.write_bytes(b"the researcher's picture")
+    capsys.readouterr()
+    assert cli(["render", str(st), "--what", "ghost", "--size", "64x48", "--quiet"]) == 1
+    line = one_line(capsys.readouterr().err)
+    assert str(mine) in line and "not made by `flipstudy render`" in line
+    assert mine.read_bytes() == b"the researcher's picture"
