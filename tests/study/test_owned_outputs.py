@@ -9,6 +9,12 @@ Each failed on the code before this change (checked by stashing it):
    ``web/responses.csv`` was gone.
 6. ``score --figure`` and ``jump --composite`` wrote over a study's render
    (``STUDY/render/<stimulus>_ghost.png``).
+
+The same rule for the other replacing paths, each failing before too:
+``reproduce --force`` deleted a study deep inside OUT and a file it did not make,
+``stimuli --force`` deleted a study inside its --out and (after a build killed
+after the swap) a file written meanwhile, and ``render`` wrote over a file in
+``render/`` that its ``render.json`` does not list.
 """
 import hashlib
 import shutil
