@@ -126,6 +126,20 @@ def _methods(style) -> dict:
 FRAMINGS = ("clip", "stimulus")
 
 
+def _refuse_unrecorded(out: Path, tasks: list, old: dict) -> None:
+    """Render writes over only what it made: an output file already at ``out`` that
+    ``render.json`` does not list (a file of the researcher's, a figure another command
+    put there) is refused before anything is made, naming it."""
+    listed = old.get("outputs") if isinstance(old.get("outputs"), dict) else {}
+    for t in tasks:
+        for kind in t["what"]:
+            p = out / RENDER_KINDS[kind].format(s=t["stimulus"])
+            if (p.exists() or p.is_symlink()) and p.name not in listed:
+                raise StudyRenderError(
+                    f"{p}: not made by `flipstudy render` ({out / 'render.json'} does not list it), "
+                    f"so it is not written over: move it aside, then render again")
+
+
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
@@ -309,6 +323,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
             tasks.append({"stimulus": name, "bvh": p, "offset": o.tolist(), "yaw": y,
                           "takeoff": t0, "landing": t1, "what": todo, "reference": ref,
                           "body": body, "style": character, "camera": cam})
+    _refuse_unrecorded(out, tasks, old)
     if replace_check is not None:
         again = [RENDER_KINDS["video"].format(s=t["stimulus"]) for t in tasks if "video" in t["what"]]
         again = [f for f in again if (out / f).is_file()]

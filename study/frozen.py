@@ -122,7 +122,7 @@ def write_design(out, text: str, *, force: bool = False) -> None:
     without ``force``."""
     from flipstudy.stimuli._io import atomic_write_text
 
-    from .archive import answers_in, describe
+    from .archive import answers_in, describe, holds_answers
     from .lock import StudyLock, study_closed
     from .owned import is_study
     out = Path(out)
@@ -135,8 +135,7 @@ def write_design(out, text: str, *, force: bool = False) -> None:
         return
     with StudyLock(folder, "init"), study_closed(folder, "init --force"):
         a = answers_in(folder)
-        if a["real_answers"] or a["simulated_answers"] or a["unreadable"] or \
-                recorded_design(folder) is not None:
+        if holds_answers(a) or a["simulated_answers"] or recorded_design(folder) is not None:
             raise DesignFrozen(
                 f"{out} is the design of the study {folder}, which holds {describe(a)}: a study's "
                 f"design is frozen once it has an answer (every participant must see the same "

@@ -51,19 +51,43 @@ def build(design, out, *, force: bool = False, progress: bool = True, cluster: s
     replaced = {}
 
     def replace_check(folder, foreign):
-        # refuses while the study holds any real answer; otherwise notes what goes
+        # refuses while the study holds any real answer or another study; what other
+        # commands made and recorded goes with the old set, every other file is kept
         replaced["answers"] = refuse_real_answers(folder, foreign, shown=Path(out))
-        replaced["foreign"] = foreign
+        replaced.update(_replaceable(folder, Path(out)))
+        return replaced["removed"]
 
     from .lock import StudyLock, study_closed
     with StudyLock(out, "stimuli"), study_closed(out, "stimuli --force"), open_cluster(cluster) as c:
         res = build_stimuli(design, out, force=force, progress=progress, replace_check=replace_check,
                             cluster=c)
     if replaced:
+        kept = replaced["kept"]
         res = dataclasses.replace(res, replaced=(
             f"replaced {out}: it held no real participant's answers ({describe(replaced['answers'])}); "
-            f"removed with it: {', '.join(replaced['foreign'])}"))
+            f"removed with it: {', '.join(replaced['gone']) or 'nothing else'}"
+            + (f"; kept, as they were: {', '.join(kept[:6])}{' ...' if len(kept) > 6 else ''}"
+               if kept else "")))
     return res
+
+
+def _replaceable(folder: Path, shown: Path) -> dict:
+    """What ``stimuli --force`` does with the old study ``folder``: ``removed`` (the
+    recorded outputs that go with the old set), ``gone`` (those present, by top-level
+    name) and ``kept`` (every other file, which stays); refuses a study inside it."""
+    from flipstudy.errors import StudyHasAnswers
+    from flipstudy.stimuli.replace import kept_files, own_files
+
+    from .owned import files_below, recorded_outputs, study_below
+    inner = study_below(folder)
+    if inner is not None:
+        raise StudyHasAnswers(f"{shown} holds the study {inner}; `flipstudy stimuli --force` never "
+                              f"deletes a study: move it out first, or build into another --out")
+    removed = recorded_outputs(folder)
+    own = own_files(folder)
+    gone = sorted({f.split("/")[0] + ("/" if "/" in f else "") for f in files_below(folder)
+                   if f in removed and f.split("/")[0] not in own})
+    return {"removed": removed, "gone": gone, "kept": kept_files(folder, removed)}
 
 
 def render(study_dir, *, cluster: str | None = None, **options) -> RenderResult:
@@ -85,10 +109,10 @@ def render(study_dir, *, cluster: str | None = None, **options) -> RenderResult:
 def _refuse_replacing_seen(study_dir, names) -> None:
     """Refuse to make again videos of a study holding real participants' answers:
     they answered the videos as they are, and the next participant would see others."""
-    from .archive import answers_in, describe
+    from .archive import answers_in, describe, holds_answers
     from flipstudy.errors import StudyHasAnswers
     a = answers_in(study_dir)
-    if not (a["real_answers"] or a["unreadable"]):
+    if not holds_answers(a):
         return
     d = Path(study_dir)
     raise StudyHasAnswers(
@@ -110,7 +134,7 @@ def status(study_dir) -> StatusResult:
     if not (d / "manifest.csv").is_file():
         raise FlipstudyFileNotFoundError(f"{d} is not a study folder (no manifest.csv)")
     from .web.status import web_status
-    local = _status(d) if db_path(d).exists() else []
+    local = _status(d) if (db_path(d).exists() or db_path(d).is_symlink()) else []
     return StatusResult(study=d, sessions=tuple(local + web_status(d)))     # web: import-web's
 
 

@@ -398,7 +398,8 @@ def _table_text(columns, rows) -> str:
 
 
 def _local_participants(study_dir: Path) -> set:
-    if not store.db_path(study_dir).exists():
+    db = store.db_path(study_dir)
+    if not (db.exists() or db.is_symlink()):        # a dangling link is a damaged store, not none
         return set()
     conn = store.connect(study_dir, create=False)
     try:
