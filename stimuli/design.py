@@ -58,8 +58,8 @@ except ModuleNotFoundError:  # Python 3.10
 
 from .groupkeys import (GRID_MAX, LEVELS_MAX, METHODS, QUEST_KEYS, TASKS, QuestSpec,  # noqa: F401
                         check_levels, check_quest, levels_table, quest_table, read_levels)
-from .ballistic import BALLISTIC_LEVEL_BOUNDS, KIND_OPTIONS
-from .injection import COM_POLICIES, KINDS, PROFILES
+from flipstudy.vocab import kinds
+from flipstudy.vocab.kinds import COM_POLICIES
 from .online import Exclusions, OnlineSettings
 from ._sourcelimits import check_sources
 
@@ -111,7 +111,7 @@ clips = ["backflip", "frontflip"]
 
 """ + "".join(f"""[[groups]]
 name = "{profile}-{'increase' if sign > 0 else 'decrease'}"
-kind = "angular-momentum"
+kind = "{kinds.AM.name}"
 profile = "{profile}"
 sign = {sign}
 levels = [0, 17, 25, 37, 50]
@@ -119,7 +119,7 @@ levels = [0, 17, 25, 37, 50]
 """ for profile in ("smooth", "abrupt") for sign in (1, -1)) + """\
 [[groups]]
 name = "takeoff-increase"
-kind = "takeoff-angle"
+kind = \"""" + kinds.TAKEOFF_ANGLE.name + """\"
 sign = 1
 levels = [0, 10, 20, 30, 40]
 """
@@ -149,11 +149,9 @@ TOLERANCE_MIN = 1e-6
 BREAK_EVERY_MAX = 10000
 SCALE_RANGE = (1e-4, 100.0)           # metres per file unit (mm is 0.001, m is 1)
 #: level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
-LEVEL_BOUNDS = {("angular-momentum", 1): (500.0, True),     # |L| below 6× the original
-                ("angular-momentum", -1): (90.0, True),     # a decrease of 90 % stops the rotation
-                ("takeoff-angle", 1): (100.0, False),       # horizontal velocity up to doubled
-                ("takeoff-angle", -1): (100.0, True),       # −100 % leaves no horizontal velocity
-                **BALLISTIC_LEVEL_BOUNDS}                   # gravity, velocities, ... pose rate
+#: (the built-in kinds' as this module was imported; a group reads its kind's entry of
+#: the registry, :mod:`flipstudy.vocab.kinds`)
+LEVEL_BOUNDS = kinds.level_bounds()
 MAX_DESIGN_BYTES = 1_000_000
 
 
@@ -167,6 +165,11 @@ def _field(obj, key: str, typ, where: str, check=None, optional: bool = False):
     v = _get({key: v}, key, typ, where, check=check)
     object.__setattr__(obj, key, v)
     return v
+
+
+def _kinds_that(flag: str) -> str:
+    """The names of the injected kinds with ``flag`` set, for a refusal's message."""
+    return ", ".join(k.name for k in kinds.study_kinds() if getattr(k, flag))
 
 
 def _one_of(values):
@@ -295,8 +298,8 @@ class SourceGroup:
 
 
 GROUP_FIELDS = {
-    "name": (str, ..., None), "kind": (str, ..., _one_of(KINDS)),
-    "profile": (str, None, _one_of(PROFILES)), "sign": (int, 1, lambda v: None if v in (1, -1) else "must be 1 or -1"),
+    "name": (str, ..., None), "kind": (str, ..., lambda v: _one_of(kinds.study_kind_names())(v)),
+    "profile": (str, None, _one_of(kinds.AM.variants)), "sign": (int, 1, lambda v: None if v in (1, -1) else "must be 1 or -1"),
     "levels": (list, ..., None), "original": (str, "own", _one_of(GROUP_ORIGINAL)),
     "style": (str, None, None), "method": (str, "constant", _one_of(METHODS)),
     "task": (str, "yes-no", _one_of(TASKS)),
@@ -312,7 +315,7 @@ class Group:
     and group in errors).  What depends on the whole design (a reserved or repeated
     name, a shared original in another style) is checked by :class:`Design`."""
     name: str
-    kind: str                   # "angular-momentum" | "takeoff-angle" | a ballistic kind
+    kind: str                   # an injected kind of the registry (flipstudy.vocab.kinds)
     profile: str | None         # "smooth" | "abrupt" (angular momentum only)
     sign: int                   # +1 increase, -1 decrease
     levels: tuple[float, ...]   # nominal error in percent (magnitude; 0 = original), sorted
@@ -330,37 +333,41 @@ class Group:
         w0 = where or "groups"
         name = _field(self, "name", str, w0, _name_ok)
         wg = f"{w0} ({name})"
-        kind = _field(self, "kind", str, wg, _one_of(KINDS))
-        if kind == "angular-momentum":
+        kind = _field(self, "kind", str, wg, _one_of(kinds.study_kind_names()))
+        entry = kinds.get(kind)
+        if entry.profiled:
             only_original = isinstance(self.levels, (list, tuple)) and list(self.levels) == [0]
             if self.profile is None and not only_original:    # (the shared original has none)
                 raise DesignError(f"{wg}: missing field 'profile'")
-            _field(self, "profile", str, wg, _one_of(PROFILES), optional=only_original)
+            _field(self, "profile", str, wg, _one_of(entry.variants), optional=only_original)
         elif self.profile is not None:
-            raise DesignError(f"{wg}.profile: only angular-momentum groups have a profile")
+            raise DesignError(f"{wg}.profile: only {_kinds_that('profiled')} groups have a profile")
         sign = _field(self, "sign", int, wg, GROUP_FIELDS["sign"][2])
-        key = KIND_OPTIONS.get(kind, (None,))[0]
+        options = kinds.kind_options()
+        key = options.get(kind, (None,))[0]
         for other in ("policy", "axis", "span"):
             if getattr(self, other) is not None and other != key:
-                owner = [k for k, v in KIND_OPTIONS.items() if v[0] == other][0]
+                owner = [k for k, v in options.items() if v[0] == other][0]
                 raise DesignError(f"{wg}.{other}: only {owner} groups have a{'n' if other[0] in 'a' else ''} "
                                   f"{other}")
-        if kind == "pose-rate" and sign != 1:
+        if kind == kinds.POSE_RATE.name and sign != 1:
             raise DesignError(f"{wg}.sign: a pose-rate group's levels are poses per second; its sign is 1")
         if key is not None:
-            _, default, values = KIND_OPTIONS[kind]
+            _, default, values = options[kind]
             if getattr(self, key) is None:
                 if default is None:
                     raise DesignError(f"{wg}: missing field '{key}'")
                 object.__setattr__(self, key, default)
             _field(self, key, str, wg, _one_of(values))
-        top, excluded = LEVEL_BOUNDS[(kind, sign)]
+        if sign not in entry.bounds:
+            raise DesignError(f"{wg}.sign: a {kind} group's sign is {_show(entry.signs[0])}")
+        top, excluded = entry.bounds[sign]
         lv = check_levels(self.levels, wg, kind, sign, top, excluded)
         object.__setattr__(self, "levels", lv)
         method = _field(self, "method", str, wg, _one_of(METHODS))
         task = _field(self, "task", str, wg, _one_of(TASKS))
         object.__setattr__(self, "quest", check_quest(self.quest, wg, method, task, lv))
-        if method == "quest+" and kind == "pose-rate":
+        if method == "quest+" and kind == kinds.POSE_RATE.name:
             raise DesignError(f"{wg}.method: QUEST+ assumes the error grows with the level, and a "
                               f"pose rate's error grows as the level (poses per second) falls; run "
                               f"pose-rate groups with method = \"constant\"")
@@ -369,8 +376,8 @@ class Group:
                               f"its levels need 0 (the original) and at least one error level, got "
                               f"{_show(list(lv))}")
         orig = _field(self, "original", str, wg, _one_of(GROUP_ORIGINAL))
-        if orig == "shared" and kind != "angular-momentum":
-            raise DesignError(f"{wg}.original: only angular-momentum groups share their original "
+        if orig == "shared" and not entry.shares_original:
+            raise DesignError(f"{wg}.original: only {_kinds_that('shares_original')} groups share their original "
                               f"(the paper's take-off group had its own); use original = \"own\"")
         _field(self, "style", str, wg, _style_ok, optional=True)
 
@@ -385,15 +392,15 @@ class Group:
         _check_keys(g, GROUP_KEYS, where + (f" ({g['name']})" if isinstance(g.get("name"), str) else ""))
         name = _get(g, "name", str, where, check=_name_ok)
         wg = f"{where} ({name})"
-        kind = _get(g, "kind", str, wg, check=_one_of(KINDS))
-        if kind == "angular-momentum":
-            _get(g, "profile", str, wg, check=_one_of(PROFILES))
+        kind = _get(g, "kind", str, wg, check=_one_of(kinds.study_kind_names()))
+        if kinds.get(kind).profiled:
+            _get(g, "profile", str, wg, check=_one_of(kinds.get(kind).variants))
         kw = {k: g[k] for k in GROUP_FIELDS if k in g and k != "levels"}
         kw["levels"] = read_levels(g, wg)
         kw.setdefault("profile", None)
         kw.setdefault("sign", 1)
         kw.setdefault("task", study_task)
-        kw.setdefault("original", "shared" if study_original == "shared" and kind == "angular-momentum"
+        kw.setdefault("original", "shared" if study_original == "shared" and kinds.get(kind).shares_original
                       else "own")
         return cls(**kw, quest=quest_table(g), where=where)
 

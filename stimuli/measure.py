@@ -76,6 +76,7 @@ from .ballistic import G0
 from .ballistic_measure import fit_free, pose_updates
 from .flight import contact_mask, effector_points, foot_points
 from .motion.clip import Clip
+from flipstudy.vocab import kinds
 
 #: frames of a ground phase through which a quadratic gives its velocity at a contact
 #: instant (the last three before take-off, the first three after touchdown: on the
@@ -111,11 +112,8 @@ SMALL_L = 10.0
 #: a foot point is on the floor while within this (m, for a 1.7 m body) of its contact level
 SKATE_TOUCH = 0.02
 
-UNITS = {"gravity": "% of 9.81", "acceleration": "% of 9.81", "time-scale": "%",
-         "angular-momentum": "%", "air-jolt": "m/s", "takeoff-angle": "%",
-         "horizontal-velocity": "%", "vertical-velocity": "%",
-         "takeoff-velocity-jump": "m/s", "landing-velocity-jump": "m/s",
-         "pose-rate": "poses/s", "foot-skate": "mm", "penetration": "mm", "floating": "mm"}
+#: kind -> the unit of its measured sizes (the registry's, :mod:`flipstudy.vocab.kinds`)
+UNITS = kinds.measured_units()
 
 
 @dataclass(frozen=True)
@@ -349,7 +347,7 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
     phases.sort(key=lambda p: p[2])
 
     def add(kind, variant, phase, size, t0, t1, worst, same_as=""):
-        unit = "%" if kind == "landing-velocity-jump" and variant else UNITS[kind]
+        unit = "%" if kind == "landing-velocity-jump" and variant else kinds.get(kind).unit
         items.append(Inconsistency(kind, variant, phase, float(size), unit, float(t0),
                                    float(t1), float(worst), same_as))
 
@@ -430,8 +428,8 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
         if L0 < SMALL_L * clip_mass(a) / 70.0:
             warnings.append(f"{ph}: |L| is {L0:.1f} kg·m²/s, small (a flip's is 25-50): its "
                             f"changes in % are large for small absolute changes")
-        add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
-        add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
+        add(kinds.AM.name, "smooth", ph, smooth, t_to, t_ld, t_ld)
+        add(kinds.AM.name, "abrupt", ph, step, t_to, t_ld,
             t0_ + t_step if np.isfinite(t_step) else mid)
         jolt, t_j = velocity_jolt(t, com[fr])
         add("air-jolt", "", ph, jolt, t_to, t_ld, t_j)
@@ -439,6 +437,10 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
     add("pose-rate", "", "clip", 0.0, 0.0, dur, 0.0)
 
     _ground(add, warnings, clip, a, phases, fps)
+    for entry in kinds.all_kinds():        # the kinds registered with a measure of their own
+        extra = entry.measurer()
+        if extra is not None:
+            extra(clip, a, add)
     return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
 
 

@@ -27,7 +27,7 @@ import platform
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
-from flipstudy.stimuli.injection import KINDS
+from flipstudy.vocab.kinds import study_kind_names
 
 FILE = "dataset_description.json"
 DATA_DIR = "data"              # Psych-DS: every data file lives under data/
@@ -48,7 +48,7 @@ COLUMNS = {
     "shown_ms": "how long the motion was shown, milliseconds ('playing' to 'ended')",
     "timestamp": "when the answer was stored (ISO 8601, UTC)",
     "clip": "base clip of the stimulus",
-    "kind": "kind of error (" + ", ".join(KINDS) + ")",
+    "kind": "kind of error (" + ", ".join(study_kind_names()) + ")",
     "style": "character style the stimulus was drawn in (ellipsoids, capsules, stick, "
              "point-light, mannequin; from manifest.csv)",
     "late_frames": "frames shown late or dropped during the motion",
