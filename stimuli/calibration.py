@@ -11,8 +11,8 @@ the package (:func:`default_calibration`, made from real human data only).  Sche
      "include_simulated": false,            # true only with --include-simulated
      "sources": [{"name", "citation" | "path", "sha256": {file: hash}, ...}],
      "functions": [{
-        "kind": "angular-momentum",         # a study kind (stimuli.injection.KINDS) or a
-                                            # measured kind (stimuli.measure)
+        "kind": "takeoff-angle",            # a kind of the registry (flipstudy.vocab.kinds):
+                                            # injected, or measured only
         "variant": "smooth" | null,         # e.g. the angular-momentum profile
         "sign": 1 | -1 | 0,                 # 0: fitted on both signs pooled
         "task": "yes-no" | "2afc",
@@ -33,7 +33,8 @@ says "incorrect"; one who does not says so at the base rate γ), 0 for no error;
 p and its 95 % interval are the median and quantiles over the posterior ``samples``.
 
 >>> cal = default_calibration()
->>> f = cal.lookup("angular-momentum", "abrupt", -1)
+>>> from flipstudy.vocab.kinds import AM
+>>> f = cal.lookup(AM.name, "abrupt", -1)
 >>> f.source_name
 'Majkowska & Faloutsos 2007, Table 2'
 >>> p, lo, hi = f.p_noticed(50.0)

@@ -14,7 +14,8 @@ Examples
 >>> import tempfile
 >>> from pathlib import Path
 >>> from flipstudy.stimuli.contract import Stimulus, StimulusSet
->>> s = Stimulus("b_am_10", "b", "am", "angular-momentum", "smooth", level=10.0,
+>>> from flipstudy.vocab.kinds import AM
+>>> s = Stimulus("b_am_10", "b", "am", AM.name, "smooth", level=10.0,
 ...              nominal_error_pct=10.0, measured_error_pct=9.9999996, takeoff=5, landing=30)
 >>> s.level, s.bvh, s.measured_error_pct
 (10.0, PurePosixPath('b_am_10.bvh'), 9.9999996)
@@ -241,8 +242,9 @@ class Stimulus(_Record):
     Examples
     --------
     >>> from flipstudy.stimuli import Stimulus
+    >>> from flipstudy.vocab.kinds import AM
     >>> s = Stimulus("bf_abrupt_inc_50", clip="backflip", group="abrupt-increase",
-    ...              kind="angular-momentum", level=50, frames=397, fps=120)
+    ...              kind=AM.name, level=50, frames=397, fps=120)
     >>> s.level, str(s.bvh), round(s.duration_s, 3)
     (50.0, 'bf_abrupt_inc_50.bvh', 3.308)
     >>> s.as_dict()["group"]
@@ -383,8 +385,9 @@ class StimulusSet:
     --------
     >>> import tempfile
     >>> from flipstudy.stimuli import Stimulus, StimulusSet
-    >>> rows = [Stimulus("bf_0", "backflip", "original", "angular-momentum", level=0),
-    ...         Stimulus("bf_50", "backflip", "abrupt-increase", "angular-momentum", level=50)]
+    >>> from flipstudy.vocab.kinds import AM
+    >>> rows = [Stimulus("bf_0", "backflip", "original", AM.name, level=0),
+    ...         Stimulus("bf_50", "backflip", "abrupt-increase", AM.name, level=50)]
     >>> with tempfile.TemporaryDirectory() as tmp:
     ...     s = StimulusSet(tmp, rows)
     ...     _ = s.write()

@@ -21,6 +21,7 @@ import math
 from dataclasses import dataclass
 
 from flipstudy.errors import DesignError
+from flipstudy.vocab import kinds
 from ._designkeys import _check_keys, _get, _pct, _show
 
 METHODS = ("constant", "quest+")
@@ -124,8 +125,8 @@ def check_levels(values, where: str, kind: str, sign: int, top: float, excluded:
                               f"percent, 0 or more (the direction is the group's sign = {sign})")
         if v > top or (excluded and v >= top):
             limit = f"below {top:g} %" if excluded else f"at most {top:g} %"
-            why = " (it stops the rotation)" if kind == "angular-momentum" and sign < 0 else ""
-            if kind == "pose-rate":
+            why = " (it stops the rotation)" if kind == kinds.AM.name and sign < 0 else ""
+            if kind == kinds.POSE_RATE.name:
                 what, limit = "a pose rate", f"at most {top:g} poses per second"
             raise DesignError(f"{where}.levels: {_pct(v)} % is out of range: {what} must be "
                               f"{limit}{why}")
