@@ -7,9 +7,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from flipstudy.vocab import answers
+
 REQUIRED = ("participant", "group", "level", "response")
-DESIGN_COLUMNS = ("participant", "session", "trial", "stimulus", "group", "level", "repetition",
-                  "response", "rt_ms", "shown_ms", "timestamp")
+#: DESIGN.md's long format, as the answer record declares it (flipstudy.vocab.answers)
+DESIGN_COLUMNS = answers.DESIGN_COLUMNS
 #: display order of the default design's groups; other names follow in order of appearance
 DEFAULT_GROUP_ORDER = ("smooth-increase", "smooth-decrease", "abrupt-increase",
                        "abrupt-decrease", "takeoff-increase")
