@@ -40,16 +40,7 @@ COLUMNS = {
     "style": "character style the stimulus was drawn in (ellipsoids, capsules, stick, "
              "point-light, mannequin; from manifest.csv)",
     "run_id": "the browser run the answer came from (web sessions)",
-    "frames_expected": "frames of the video",
-    "frames_presented": "video frames presented (requestVideoFrameCallback presentedFrames)",
-    "frames_dropped": "video frames never presented (frames_expected - frames_presented)",
-    "dropped_pct": "frames_dropped in percent of frames_expected",
-    "playback_ms": "milliseconds from the first presented frame to the end of playback",
-    "video_ms": "duration of the video in milliseconds",
     "refresh_hz": "display refresh rate measured at the start of the run",
-    "timing": "how frames were counted: rvfc (requestVideoFrameCallback) or raf (fallback)",
-    "playback_flagged": "true when dropped_pct exceeds max_dropped_pct",
-    "max_dropped_pct": "the site's dropped-frame threshold, percent",
     "repeat": "1: a trial flagged for dropped frames shown once more at the end (its first "
               "answer, repeat 0, is the row before); the analysis uses the repeat in its place",
     "source_file": "the imported file the answer was first read from",

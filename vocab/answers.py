@@ -6,7 +6,8 @@ of ``responses.csv`` (:data:`RESPONSES`; a study with a quest+ or 2AFC group add
 :data:`ADAPTIVE`), ``participants.csv`` (:data:`PARTICIPANTS`) and
 ``simulated_truth.csv`` (:data:`TRUTH`).  The export
 (:mod:`flipstudy.study.export`), the web import, the Psych-DS description
-(:mod:`flipstudy.study.psychds`) and the analysis (:mod:`flipstudy.analysis.io`) read
+(:mod:`flipstudy.study.psychds`), the local runner's answer check
+(:data:`POSTED`) and the analysis (:mod:`flipstudy.analysis.io`) read
 the column names from here; the first :data:`DESIGN_COLUMNS` are DESIGN.md's long
 format.
 
@@ -103,6 +104,37 @@ TRUTH = _cols(
     ("gamma", float, "simulate", "its guess rate"),
     ("lapse", float, "simulate", "its lapse rate"))
 
+#: what a browser records of one answer besides the columns of :data:`RESPONSES` (the
+#: web site's answer record, checked by ``import-web``)
+WEB = _cols(
+    ("frames_expected", int, "run", "frames of the video"),
+    ("frames_presented", int, "run", "video frames presented (requestVideoFrameCallback presentedFrames)"),
+    ("frames_dropped", int, "run", "video frames never presented (frames_expected - frames_presented)"),
+    ("dropped_pct", float, "run", "frames_dropped in percent of frames_expected"),
+    ("playback_ms", float, "run", "milliseconds from the first presented frame to the end of playback"),
+    ("video_ms", float, "run", "duration of the video in milliseconds"),
+    ("timing", str, "run", "how frames were counted: rvfc (requestVideoFrameCallback) or raf (fallback)"),
+    ("playback_flagged", bool, "run", "true when dropped_pct exceeds max_dropped_pct"),
+    ("max_dropped_pct", float, "run", "the site's dropped-frame threshold, percent"))
+
+
+def _names(cols, *names) -> tuple:
+    """The names of ``cols`` (all, or these, in this order, each one declared)."""
+    declared = [c.name for c in cols]
+    missing = [n for n in names if n not in declared]
+    if missing:
+        raise KeyError(missing)
+    return tuple(names) if names else tuple(declared)
+
+
+#: the fields the local runner's page posts for one answer (required), and may post
+POSTED = _names(RESPONSES, "participant", "session", "trial", "stimulus", "response", "rt_ms",
+                "shown_ms", "late_frames")
+POSTED_OPTIONAL = _names(RESPONSES, "replays", "input")
+#: the fields of a web answer record, in the order ``import-web`` checks them
+WEB_ANSWER = _names(RESPONSES, "trial", "stimulus", "group", "level", "repetition", "response", "rt_ms",
+                    "shown_ms", "input", "replays") + _names(WEB)
+
 RESPONSE_COLUMNS = [c.name for c in RESPONSES]
 ADAPTIVE_COLUMNS = [c.name for c in ADAPTIVE]
 PARTICIPANT_COLUMNS = [c.name for c in PARTICIPANTS]
@@ -114,7 +146,7 @@ DESIGN_COLUMNS = tuple(RESPONSE_COLUMNS[:RESPONSE_COLUMNS.index("timestamp") + 1
 def column(name: str) -> Column:
     """The declaration of a column of ``responses.csv`` (or its adaptive or participants'
     columns), by name."""
-    for c in RESPONSES + ADAPTIVE + PARTICIPANTS:
+    for c in RESPONSES + ADAPTIVE + PARTICIPANTS + WEB:
         if c.name == name:
             return c
     raise KeyError(name)
@@ -123,10 +155,11 @@ def column(name: str) -> Column:
 def meanings() -> dict:
     """Column name → meaning, of every declared column (the first declaration wins)."""
     out: dict = {}
-    for c in RESPONSES + ADAPTIVE + PARTICIPANTS:
+    for c in RESPONSES + ADAPTIVE + PARTICIPANTS + WEB:
         out.setdefault(c.name, c.meaning)
     return out
 
 
 __all__ = ["ADAPTIVE", "ADAPTIVE_COLUMNS", "Column", "DESIGN_COLUMNS", "PARTICIPANTS", "PARTICIPANT_COLUMNS",
-           "RESPONSES", "RESPONSE_COLUMNS", "STEPS", "TRUTH", "TRUTH_COLUMNS", "column", "meanings"]
+           "POSTED", "POSTED_OPTIONAL", "RESPONSES", "RESPONSE_COLUMNS", "STEPS", "TRUTH", "TRUTH_COLUMNS",
+           "WEB", "WEB_ANSWER", "column", "meanings"]
