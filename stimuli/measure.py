@@ -120,7 +120,7 @@ UNITS = kinds.measured_units()
 class Inconsistency:
     """One physical inconsistency of a motion.
 
-    ``kind``: the study kind that injects it (:data:`flipstudy.stimuli.injection.KINDS`)
+    ``kind``: the study kind that injects it (a kind of the registry, :mod:`flipstudy.vocab.kinds`)
     or one of the extra kinds; ``variant``: "smooth"/"abrupt" (angular momentum),
     "horizontal"/"vertical" (acceleration, landing components), else "";
     ``phase``: "flight 1", "takeoff 1", "landing 1", "ground 0", "clip";

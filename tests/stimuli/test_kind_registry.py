@@ -105,3 +105,11 @@ def test_every_kind_is_declared_once_with_its_unit_and_the_design_reads_it():
     assert all(k.injected == (k.family != "measured") for k in kinds.all_kinds())
     with pytest.raises(Exception, match="already registered"):
         kinds.register(dataclasses.replace(kinds.AM, unit="mm"))
+
+
+def test_the_declared_calibration_sources_are_the_shipped_ones():
+    """A kind that declares the FwP Table 2 source has functions in the shipped default
+    calibration, and only those kinds have."""
+    from flipstudy.vocab.calibration import default_calibration
+    shipped = {f.kind for f in default_calibration().functions}
+    assert shipped == {k.name for k in kinds.all_kinds() if kinds.FWP_TABLE2 in k.calibration}
