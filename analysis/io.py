@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from flipstudy.vocab import answers
+from flipstudy.vocab import answers, groupkeys
+from flipstudy.vocab.design import SHARED_ORIGINAL_GROUP
 
 REQUIRED = ("participant", "group", "level", "response")
 #: DESIGN.md's long format, as the answer record declares it (flipstudy.vocab.answers)
@@ -16,12 +17,13 @@ DESIGN_COLUMNS = answers.DESIGN_COLUMNS
 DEFAULT_GROUP_ORDER = ("smooth-increase", "smooth-decrease", "abrupt-increase",
                        "abrupt-decrease", "takeoff-increase")
 IGNORED_GROUPS = ("reference",)
-#: the group of the shared originals (stimuli.design.SHARED_ORIGINAL_GROUP)
-SHARED_ORIGINAL = "original"
+#: the group of the shared originals (the design's, flipstudy.vocab.design)
+SHARED_ORIGINAL = SHARED_ORIGINAL_GROUP
 EXPORT_HINT = "flipstudy export {d} --out {d}/responses.csv"
-#: the values of the optional columns ``task`` and ``method`` (missing: yes-no, constant)
-TASKS = ("yes-no", "2afc")
-METHODS = ("constant", "quest+")
+#: the values of the optional columns ``task`` and ``method`` (missing: yes-no, constant):
+#: the design's (flipstudy.vocab.groupkeys)
+TASKS = groupkeys.TASKS
+METHODS = groupkeys.METHODS
 
 
 def resolve_responses_path(path: str | Path) -> Path:
