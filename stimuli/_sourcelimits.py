@@ -1,7 +1,7 @@
-"""Moved to :mod:`flipstudy.vocab._sourcelimits`, the study's vocabulary below the physics;
-this name stays, for the callers that import it from here (the same module object)."""
-import sys
+"""Moved to :mod:`flipstudy.vocab._sourcelimits`, the study's vocabulary below the physics.
 
+This name stays for the callers that import from it: every name of that module is
+bound here too (the same objects)."""
 from flipstudy.vocab import _sourcelimits as _moved
 
-sys.modules[__name__] = _moved
+globals().update({k: v for k, v in vars(_moved).items() if not k.startswith("__") or k == "__all__"})
