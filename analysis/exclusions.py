@@ -35,10 +35,11 @@ import numpy as np
 import pandas as pd
 
 from flipstudy.errors import ResponsesError
+from flipstudy.vocab.online import EXCLUSION_FIELDS
 
 RULES = ("incomplete", "catch accuracy", "dropped frames", "response time")
-DEFAULTS = {"catch_groups": [], "min_catch_accuracy_pct": 0.0, "max_flagged_pct": 100.0,
-            "require_complete": False, "min_median_rt_ms": 0.0}
+#: each rule's default (no participant excluded): the design's ``[exclusions]`` table's own
+DEFAULTS = {k: list(d) if isinstance(d, list) else d for k, (_, d, _) in EXCLUSION_FIELDS.items()}
 
 
 def _truthy(col: pd.Series) -> pd.Series:

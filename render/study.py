@@ -206,7 +206,8 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     >>> import tempfile, pathlib
     >>> from flipstudy.stimuli.design import parse_design
     >>> from flipstudy.stimuli.stimset import build_stimuli
-    >>> design = parse_design('''
+    >>> from flipstudy.vocab.kinds import AM
+    >>> design = parse_design(f'''
     ... [study]
     ... name = "tiny"
     ... seed = 7
@@ -215,7 +216,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     ... source = "backflip"
     ... [[groups]]
     ... name = "smooth-increase"
-    ... kind = "angular-momentum"
+    ... kind = "{AM.name}"
     ... profile = "smooth"
     ... sign = 1
     ... levels = [0, 25]

@@ -55,8 +55,9 @@ from ._progress import Progress
 from .replace import BUILD_FILES, carry, discard_old, kept_files, own_files  # noqa: F401 (BUILD_FILES)
 from .analyse import analyse
 from .design import GIVEN_KIND, SHARED_ORIGINAL_GROUP, Design, Group, SourceGroup, SourceSpec
-from .injection import Injected, check, inject_angular_momentum, inject_takeoff_angle, measure
-from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
+from .injection import Injected, check, measure
+from .ballistic import check_design_flights
+from flipstudy.vocab import kinds
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
 from .contract import MANIFEST_COLUMNS, StimulusSet  # noqa: F401  (MANIFEST_COLUMNS: re-exported)
 from flipstudy.errors import ManifestError
@@ -163,7 +164,7 @@ def clip_arrays(clip: Clip, takeoff: int, landing: int) -> dict:
 
 
 #: the pseudo-group of a clip's shared original (level 0 of every sharing group)
-SHARED_ORIGINAL = Group(SHARED_ORIGINAL_GROUP, "angular-momentum", None, 1, [0.0], "shared")
+SHARED_ORIGINAL = Group(SHARED_ORIGINAL_GROUP, kinds.AM.name, None, 1, [0.0], "shared")
 
 
 def plan(design: Design) -> list[tuple]:
@@ -354,7 +355,7 @@ def uses_ballistic_kinds(design: Design) -> bool:
     """Does a design use a kind of :mod:`flipstudy.stimuli.ballistic`?  Its
     manifest then has the columns of :data:`flipstudy.stimuli.ballistic_measure.EXTRA_COLUMNS`
     (after ``style``), for every row."""
-    return any(g.kind in BALLISTIC_KINDS for g in design.groups)
+    return any(g.kind in kinds.ballistic_kind_names() for g in design.groups)
 
 
 def _options(group) -> dict:
@@ -373,33 +374,28 @@ def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
     name, spec, group, level = item
     tmp = Path(folder)
     extended = uses_ballistic_kinds(design)
+    entry = kinds.find(group.kind) if group is not None else None
     if group is None or level == 0:
         inj = Injected(a.clip, group.kind if group else "reference",
                        group.profile if group else None, 0.0, a.takeoff, a.landing,
                        np.arange(a.clip.num_frames, dtype=float), a.flight_s,
                        a.takeoff_time, a.landing_time, opts=_options(group))
-    elif group.kind == "angular-momentum":
-        inj = inject_angular_momentum(a, group.sign * level / 100.0, group.profile,
-                                      design.com_policy)
-    elif group.kind in BALLISTIC_KINDS:
-        try:
-            inj = inject_kind(a, group.kind, group.sign * level / 100.0,
-                              group.policy or group.axis or group.span, rate=level)
-        except StimulusError as e:
-            raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
     else:
-        inj = inject_takeoff_angle(a, group.sign * level / 100.0)
+        try:
+            inj = entry.injector()(a, group, level, design)
+        except StimulusError as e:
+            if entry.family != "ballistic":
+                raise
+            raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
+    ballistic = inj.kind in kinds.ballistic_kind_names()
     if inj.kind == "reference":
-        m = measure(a, Injected(a.clip, "takeoff-angle", None, 0.0, a.takeoff, a.landing,
+        m = measure(a, Injected(a.clip, kinds.TAKEOFF_ANGLE.name, None, 0.0, a.takeoff, a.landing,
                                 None, a.flight_s, a.takeoff_time, a.landing_time))
         m["measured_error_pct"] = 0.0
-    elif inj.kind in BALLISTIC_KINDS:
-        m = measure_ballistic(a, inj)
-        check(m, inj, design.tolerance_pct, name, "[study] tolerance_pct")
     else:
-        m = measure(a, inj)
+        m = kinds.get(inj.kind).checker()(a, inj)
         check(m, inj, design.tolerance_pct, name, "[study] tolerance_pct")
-    if extended and inj.kind not in BALLISTIC_KINDS:
+    if extended and not ballistic:
         m = {**measure_ballistic(a, inj), **m}
         m["nominal_value"], m["measured_value"] = (group.sign * level if group else 0.0), \
             m["measured_error_pct"]
@@ -414,7 +410,7 @@ def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
         "kind": group.kind if group else "reference",
         "profile": (group.profile or "") if group else "",
         "level": level,
-        "nominal_error_pct": 100.0 * inj.error if group and group.kind in BALLISTIC_KINDS
+        "nominal_error_pct": 100.0 * inj.error if group and entry is not None and entry.family == "ballistic"
         else (group.sign * level if level else 0.0) if group else 0.0,
         "measured_error_pct": m["measured_error_pct"],
         "takeoff_angle_deg": m["takeoff_angle_deg"],

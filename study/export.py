@@ -52,20 +52,17 @@ from pathlib import Path
 
 from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli._io import atomic_write_text
+from flipstudy.vocab import answers
 
 from . import store
 from .lock import study_writer
 
-RESPONSE_COLUMNS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
-                    "response", "rt_ms", "shown_ms", "timestamp", "clip", "kind", "late_frames",
-                    "replays", "input", "simulated", "complete"]
-ADAPTIVE_COLUMNS = ["method", "task", "first", "original_stimulus", "quest_threshold",
-                    "quest_ci_low", "quest_ci_high"]
+#: the columns, as the answer record declares them (:mod:`flipstudy.vocab.answers`)
+RESPONSE_COLUMNS = list(answers.RESPONSE_COLUMNS)
+ADAPTIVE_COLUMNS = list(answers.ADAPTIVE_COLUMNS)
 TRUTH_FILE = "simulated_truth.csv"
-TRUTH_COLUMNS = ["participant", "session", "group", "task", "threshold", "width", "gamma", "lapse"]
-PARTICIPANT_COLUMNS = ["participant", "session", "source", "age", "gender", "animation_experience",
-                       "gymnastics_experience", "started", "finished", "answered", "n_trials",
-                       "simulated", "complete"]
+TRUTH_COLUMNS = list(answers.TRUTH_COLUMNS)
+PARTICIPANT_COLUMNS = list(answers.PARTICIPANT_COLUMNS)
 
 
 def _flag(v) -> str:

@@ -54,8 +54,9 @@ def sheet_label(row: Stimulus) -> str:
     r"""A sheet panel's title: the stimulus and its error (kind, profile, signed
     nominal level).
 
+    >>> from flipstudy.vocab.kinds import AM
     >>> sheet_label(Stimulus("backflip_abrupt-decrease_50", "backflip", "abrupt-decrease",
-    ...                      "angular-momentum", "abrupt", 50.0, nominal_error_pct=-50.0))
+    ...                      AM.name, "abrupt", 50.0, nominal_error_pct=-50.0))
     'backflip_abrupt-decrease_50\nangular momentum, abrupt, −50 %'
     >>> sheet_label(Stimulus("backflip_reference", "backflip", "reference", "reference"))
     'backflip_reference\noriginal (no error)'

@@ -57,6 +57,7 @@ import re
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
+from flipstudy.vocab import answers
 
 from .. import store
 from ..lock import study_writer
@@ -109,9 +110,8 @@ RESPONSES_BY_TASK = {"yes-no": ("correct", "incorrect"), "2afc": ("first", "seco
 
 COMMON = ("format", "record", "site_id", "study", "manifest_sha256", "host", "participant", "run_id",
           "run_started", "timestamp")
-ANSWER = ("trial", "stimulus", "group", "level", "repetition", "response", "rt_ms", "shown_ms",
-          "input", "replays", "frames_expected", "frames_presented", "frames_dropped", "dropped_pct",
-          "playback_ms", "video_ms", "timing", "playback_flagged", "max_dropped_pct")
+#: a web answer record's fields, as the answer record declares them (flipstudy.vocab.answers)
+ANSWER = answers.WEB_ANSWER
 
 
 class _Checker:
