@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from flipstudy import results
 from flipstudy.errors import FlipstudyError
+from flipstudy.records import Record, ReproduceFiles, StageSeconds, Threshold
 from flipstudy.results import (AnalyzeResult, BuildResult, MotionResult, ExportResult, ImportResult,
                                PlanResult, RenderResult, ReproduceResult, SimulateResult, StatusResult,
                                StepResult)
@@ -46,6 +47,10 @@ def strategy(hint):
         return st.floats(-1e6, 1e6, allow_nan=False)
     if hint is dict:
         return st.dictionaries(text, json_doc, max_size=4)
+    if hint is bool:
+        return st.booleans()
+    if isinstance(hint, type) and issubclass(hint, Record):
+        return records_of(hint)
     if origin in (typing.Union, getattr(__import__("types"), "UnionType")):
         args = [a for a in typing.get_args(hint) if a is not type(None)]
         return st.none() | strategy(args[0])
@@ -58,6 +63,16 @@ def strategy(hint):
         k, v = typing.get_args(hint)
         return st.dictionaries(strategy(k), strategy(v), max_size=4)
     raise AssertionError(f"no strategy for {hint}")
+
+
+def records_of(cls):
+    """Any record of ``cls``, its open columns (``extra``) named unlike its fields."""
+    hints = typing.get_type_hints(cls)
+    declared = {f.name for f in dataclasses.fields(cls)} - {"extra"}
+    kw = {n: strategy(hints[n]) for n in declared}
+    if "extra" in hints:
+        kw["extra"] = st.dictionaries(text.filter(lambda k: k not in declared), json_doc, max_size=3)
+    return st.builds(cls, **kw)
 
 
 def instances(cls):
@@ -145,7 +160,7 @@ def test_simulate_export_analyze_print_their_results_summaries(tmp_path, capsys)
                            include_simulated=True)
     assert out == ana.summary().replace(str(twin), str(study)) + "\n"
     assert ana.out == twin / "analysis" and (ana.out / "table.csv").is_file()
-    assert ana.report["settings"]["n_trials"] == exp.rows
+    assert ana.report.settings.n_trials == exp.rows
     back = AnalyzeResult.load_json(ana.save_json(tmp_path / "analyze.json"))
     assert back.summary() == ana.summary()
 
@@ -156,14 +171,10 @@ def test_simulate_export_analyze_print_their_results_summaries(tmp_path, capsys)
 def test_reproduce_summary_matches_the_counts_it_states():
     """A ReproduceResult's summary states its counts and files (thresholds of None shown
     as not reached)."""
-    files = {k: f"p/{k}" for k in ("design", "manifest", "videos", "sessions", "responses",
-                                  "table_paper", "figure_ratings", "figure_dprime",
-                                  "figure_psychometric", "figure_sheet", "notes", "stimuli")}
-    r = ReproduceResult(out="p", files=files, seconds=dict.fromkeys(
-        ("total", "stimuli", "render", "sessions", "analysis"), 1.0), n_stimuli=46, worst_gap_pct=0.25,
-        n_videos=46, n_responses=88, n_simulated=1, table_md="| t |",
-        thresholds=({"group": "g", "reached": False, "threshold": None},
-                    {"group": "h", "reached": True, "threshold": 12.34}))
+    files = ReproduceFiles(**{f.name: f"p/{f.name}" for f in dataclasses.fields(ReproduceFiles)})
+    r = ReproduceResult(out="p", files=files, seconds=StageSeconds(*[1.0] * 6), n_stimuli=46,
+                        worst_gap_pct=0.25, n_videos=46, n_responses=88, n_simulated=1, table_md="| t |",
+                        thresholds=(Threshold("g", reached=False), Threshold("h", True, 12.34)))
     s = r.summary()
     assert "p/manifest  46 stimuli" in s and "(largest gap 0.25 points)" in s
     assert "  g                  not reached within the tested levels" in s
