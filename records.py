@@ -297,6 +297,85 @@ class StageSeconds(Record):
     total: float
 
 
-__all__ = ["Record", "to_json", "from_json", "SessionStatus", "ImportedFile", "PlanRow", "Threshold",
+# ---- analyze of a comparison study (flipstudy.analysis.compare.ComparisonAnalysis.to_dict)
+
+@dataclass(frozen=True)
+class Strength(Record):
+    """One source's Bradley–Terry strength θ (logits) and its interval."""
+    source: str
+    strength: float
+    low: float
+    high: float
+    wins: int
+    n: int
+    extra: dict = _extra()
+
+
+@dataclass(frozen=True)
+class Agreement(Record):
+    """How well one per-clip number predicts people's choices (None where not measured)."""
+    metric: str
+    n: int | None = None
+    accuracy: float | None = None
+    accuracy_low: float | None = None
+    accuracy_high: float | None = None
+    auc: float | None = None
+    auc_low: float | None = None
+    auc_high: float | None = None
+    extra: dict = _extra()
+
+
+@dataclass(frozen=True)
+class CompareReport(Record):
+    """What ``flipstudy analyze --json`` prints for a comparison study."""
+    participants: int
+    choices: int
+    ranking: tuple[Strength, ...]
+    reference: str
+    ci: float
+    method: str
+    agreement: tuple[Agreement, ...]
+    files: dict[str, str]
+    notes: tuple[str, ...]
+
+
+# ---- render: the render.json record (flipstudy.render.study.render_study)
+
+@dataclass(frozen=True)
+class RenderedStimulus(Record):
+    """One stimulus of a render: its files (kind → file name) and what it was made from."""
+    files: dict[str, str]
+    style: object = None
+    extra: dict = _extra()
+
+
+@dataclass(frozen=True)
+class RenderedOutput(Record):
+    """One output file of a render, its content hash and what rendered it."""
+    sha256: str
+    renderer: dict | None = None
+    extra: dict = _extra()
+
+
+@dataclass(frozen=True)
+class RenderRecord(Record):
+    """``render/render.json``: the settings of a render (``camera`` and ``style`` as the
+    render part writes them), the stimuli and the outputs."""
+    study: str
+    what: tuple[str, ...]
+    size: tuple[int, int]
+    fps: float
+    jobs: int
+    camera: dict
+    style: dict
+    seconds: float
+    made: int
+    up_to_date: int
+    stimuli: dict[str, RenderedStimulus]
+    outputs: dict[str, RenderedOutput]
+    extra: dict = _extra()
+
+
+__all__ = ["RenderedStimulus", "RenderedOutput", "RenderRecord", "Strength", "Agreement", "CompareReport", "Record", "to_json", "from_json", "SessionStatus", "ImportedFile", "PlanRow", "Threshold",
            "GroupThresholds", "ParticipantThreshold", "FlowStage", "Participants", "AnalyzeSettings", "TableRow", "AnalyzeReport",
            "ReproduceFiles", "StageSeconds"]

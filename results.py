@@ -29,7 +29,7 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .records import (AnalyzeReport, ImportedFile, PlanRow, ReproduceFiles, SessionStatus, StageSeconds,
+from .records import (AnalyzeReport, CompareReport, RenderRecord, ImportedFile, PlanRow, ReproduceFiles, SessionStatus, StageSeconds,
                       Threshold, from_json, to_json)
 
 
@@ -123,7 +123,7 @@ class RenderResult(StepResult):
     seconds: float
     n_stimuli: int
     record_path: Path
-    record: dict = field(repr=False, default_factory=dict)
+    record: RenderRecord | None = field(repr=False, default=None)
 
     def summary(self) -> str:
         return (f"rendered {self.n_stimuli} stimuli ({', '.join(self.what)}) at {self.size[0]}x"
@@ -425,7 +425,7 @@ class MotionResult(StepResult):
 
 __all__ = ["StepResult", "BuildResult", "RenderResult", "SimulateResult", "ExportResult",
            "ImportResult", "AnalyzeResult", "ReproduceResult", "StatusResult", "PlanResult",
-           "MotionResult"]
+           "MotionResult", "CompareResult"]
 
 
 # ---- analyze of a comparison study: the ranking of its sources (flipstudy.study.compare)
@@ -436,24 +436,24 @@ class CompareResult(StepResult):
     --json`` prints (participants, the Bradley–Terry ranking, the agreement of the
     clips' numbers with the choices, notes, files)."""
     out: Path
-    report: dict
+    report: CompareReport
 
     def summary(self) -> str:
         r = self.report
-        rank = sorted(r["ranking"], key=lambda x: -x["strength"])
-        lines = [f"comparison study: {r['participants']} participant(s)",
-                 f"Bradley–Terry ranking ({r['choices']} choices; θ in logits, {r['reference']} = 0, "
-                 f"{100 * r['ci']:g} % intervals):"]
-        lines += [f"  {x['source']:16s} θ = {x['strength']:+.2f} [{x['low']:+.2f}, {x['high']:+.2f}]   "
-                  f"won {x['wins']}/{x['n']}" for x in rank]
-        if r["agreement"]:
+        rank = sorted(r.ranking, key=lambda x: -x.strength)
+        lines = [f"comparison study: {r.participants} participant(s)",
+                 f"Bradley–Terry ranking ({r.choices} choices; θ in logits, {r.reference} = 0, "
+                 f"{100 * r.ci:g} % intervals):"]
+        lines += [f"  {x.source:16s} θ = {x.strength:+.2f} [{x.low:+.2f}, {x.high:+.2f}]   "
+                  f"won {x.wins}/{x.n}" for x in rank]
+        if r.agreement:
             lines.append("agreement with people's choices (smaller number predicted chosen; "
                          "bootstrap over participants):")
-            for a in r["agreement"]:
-                lines.append(f"  {a['metric']:22s} accuracy {a['accuracy']:.2f} [{a['accuracy_low']:.2f}, "
-                             f"{a['accuracy_high']:.2f}]  AUC {a['auc']:.2f} [{a['auc_low']:.2f}, "
-                             f"{a['auc_high']:.2f}]  ({a['n']} trials)" if a.get("n")
-                             else f"  {a['metric']:22s} not measured on these clips")
-        lines += [f"note: {n}" for n in r["notes"]]
-        lines += [f"wrote {p}" for p in r["files"].values()]
+            for a in r.agreement:
+                lines.append(f"  {a.metric:22s} accuracy {a.accuracy:.2f} [{a.accuracy_low:.2f}, "
+                             f"{a.accuracy_high:.2f}]  AUC {a.auc:.2f} [{a.auc_low:.2f}, "
+                             f"{a.auc_high:.2f}]  ({a.n} trials)" if a.n
+                             else f"  {a.metric:22s} not measured on these clips")
+        lines += [f"note: {n}" for n in r.notes]
+        lines += [f"wrote {p}" for p in r.files.values()]
         return "\n".join(lines)

@@ -225,6 +225,6 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     return ReproduceResult(
         out=str(shown).rstrip("/"), files=ReproduceFiles.from_dict({k: str(v) for k, v in files.items()}),
         seconds=StageSeconds.from_dict(dict(seconds)), n_stimuli=len(stimuli), worst_gap_pct=worst,
-        n_videos=sum(1 for s in rec.record["stimuli"].values() if "video" in s["files"]),
+        n_videos=sum(1 for s in rec.record.stimuli.values() if "video" in s.files),
         n_responses=exp.rows, n_simulated=len(exp.simulated), table_md=to_markdown(result.table),
         thresholds=tuple(Threshold.from_dict(t) for t in result.to_dict()["thresholds"]))

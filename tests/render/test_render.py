@@ -361,7 +361,7 @@ def test_render_study_one_camera_identical_frames_before_takeoff(tmp_path):
     assert (out / "ref.mp4").exists() and (out / "edit_ghost.png").exists()
     assert (out / "edit_overlay.png").exists() and not (out / "ref_overlay.png").exists()
     saved = json.loads((out / "render.json").read_text())
-    assert Camera.from_dict(saved["camera"]) == Camera.from_dict(rec.record["camera"])
+    assert Camera.from_dict(saved["camera"]) == Camera.from_dict(rec.record.camera)
     assert saved["size"] == [160, 120] and saved["fps"] == 60.0
     assert {"pyvista", "vtk", "openimageio"} <= set(saved["versions"])
     assert Style.from_dict(saved["style"]) == Style()

@@ -99,10 +99,10 @@ def test_cluster_build_and_render_are_the_local_bytes(tmp_path, cluster):
     for r in rows_here:
         f = f"{r['stimulus']}.mp4"
         np.testing.assert_array_equal(frames(out1 / f), frames(out2 / f))
-    for name, o in rec_there.record["outputs"].items():
-        assert o["sha256"] == rec_here.record["outputs"][name]["sha256"], name   # same renderer here
-        assert o["renderer"]["versions"]["vtk"] == rec_here.record["outputs"][name]["renderer"]["versions"]["vtk"]
-        assert o["renderer"]["window"] and "gl_renderer" in o["renderer"]
+    for name, o in rec_there.record.outputs.items():
+        assert o.sha256 == rec_here.record.outputs[name].sha256, name   # same renderer here
+        assert o.renderer["versions"]["vtk"] == rec_here.record.outputs[name].renderer["versions"]["vtk"]
+        assert o.renderer["window"] and "gl_renderer" in o.renderer
     # resumable: a second cluster render makes nothing
     assert render_study(there, cluster=cluster, **kw).made == 0
 

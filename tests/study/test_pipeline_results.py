@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from flipstudy import results
 from flipstudy.errors import FlipstudyError
 from flipstudy.records import Record, ReproduceFiles, StageSeconds, Threshold
-from flipstudy.results import (AnalyzeResult, BuildResult, MotionResult, ExportResult, ImportResult,
+from flipstudy.results import (AnalyzeResult, BuildResult, CompareResult, MotionResult, ExportResult, ImportResult,
                                PlanResult, RenderResult, ReproduceResult, SimulateResult, StatusResult,
                                StepResult)
 from flipstudy.study import pipeline
@@ -23,7 +23,7 @@ from flipstudy.study.cli import main
 from flipstudy.study.demo import make_demo_study
 
 RESULTS = [BuildResult, RenderResult, SimulateResult, ExportResult, ImportResult, AnalyzeResult,
-           ReproduceResult, StatusResult, PlanResult, MotionResult]
+           ReproduceResult, StatusResult, PlanResult, MotionResult, CompareResult]
 
 # ---- strategies: any value of a field's declared type that JSON can carry
 text = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12)
@@ -49,6 +49,8 @@ def strategy(hint):
         return st.dictionaries(text, json_doc, max_size=4)
     if hint is bool:
         return st.booleans()
+    if hint is object:                        # any JSON value
+        return json_doc
     if isinstance(hint, type) and issubclass(hint, Record):
         return records_of(hint)
     if origin in (typing.Union, getattr(__import__("types"), "UnionType")):
@@ -194,3 +196,56 @@ def test_every_cli_command_body_is_short():
                 if n > 25:
                     long.append(f"{p.name}: {node.name} has {n} lines")
     assert not long, "\n".join(long)
+
+
+#: fields still holding JSON documents, and why: a build's rows are the manifest's
+#: CSV rows (column → text; the typed stimulus is flipstudy.stimuli.contract.Stimulus),
+#: and a motion command's report is the method's own report, different per command
+OPEN_FIELDS = {("BuildResult", "rows"), ("MotionResult", "report")}
+
+
+def _holds_dict(hint) -> bool:
+    if hint is dict or typing.get_origin(hint) is dict:
+        return True
+    return any(_holds_dict(a) for a in typing.get_args(hint))
+
+
+def test_no_result_is_indexed_like_a_dict():
+    """No class of flipstudy.results defines ``__getitem__`` (results are read by
+    attribute), and each step result's fields hold typed records, not dicts."""
+    classes = [c for c in vars(results).values() if isinstance(c, type) and c.__module__ == results.__name__]
+    assert {c.__name__ for c in classes} >= {c.__name__ for c in RESULTS}
+    assert [c.__name__ for c in classes if "__getitem__" in vars(c)] == []
+    for cls in RESULTS:
+        assert not hasattr(cls, "__getitem__"), cls            # not inherited either
+        hints = typing.get_type_hints(cls)
+        dicts = [f.name for f in dataclasses.fields(cls) if _holds_dict(hints[f.name])
+                 and (cls.__name__, f.name) not in OPEN_FIELDS]
+        assert dicts == [], f"{cls.__name__} holds dicts in {dicts}"
+
+
+def test_every_summary_follows_one_convention():
+    """``summary()``: no arguments, text without a trailing newline (what the command prints)."""
+    import inspect
+    for cls in RESULTS:
+        sig = inspect.signature(cls.summary)
+        assert list(sig.parameters) == ["self"] and sig.return_annotation in (str, "str"), cls
+
+
+def test_records_read_back_the_json_the_steps_wrote_key_for_key(tmp_path):
+    """A record read from a step's JSON object writes it back with the same keys in
+    the same order (so ``--json`` output is unchanged), open columns included."""
+    from flipstudy.records import AnalyzeReport, SessionStatus
+    doc = {"settings": {"correction": "loglinear", "n_boot": 50,
+                        "participants": {"n": 1, "real": ["P01"], "marked": {"simulated": True}},
+                        "participants_label": "N = 1", "n_trials": 8, "groups": ["g"]},
+           "table": [{"group": "g", "level": 0.0, "n": 8, "dprime": None}],
+           "thresholds": [{"group": "g", "method": "none", "threshold": None, "reached": False}],
+           "flow": [{"stage": "recruited", "n": 1}], "notes": ["a"], "files": {"t": "x/t.csv"}}
+    rep = AnalyzeReport.from_dict(doc)
+    assert rep.settings.participants.real == ("P01",) and rep.table[0].extra["n"] == 8
+    assert json.dumps(rep.to_dict()) == json.dumps(doc)
+    r = AnalyzeResult(out=tmp_path, report=rep, table_markdown="| t |")
+    assert AnalyzeResult.load_json(r.save_json(tmp_path / "a.json")).report.to_dict() == doc
+    with pytest.raises(FlipstudyError, match="SessionStatus: unknown field"):
+        SessionStatus.from_dict({"participant": "P", "colour": 1})

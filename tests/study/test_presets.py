@@ -64,7 +64,7 @@ def test_preset_builds_and_runs_end_to_end(tmp_path, name):
     study = tmp_path / "study"
     build_stimuli(sd, study, progress=False)
     rec = render_study(study, size=(32, 24), jobs=1, fps=10, progress=False)
-    assert len(rec.record["stimuli"]) == len(StimulusSet.read(study, files=False, design=False).rows())
+    assert len(rec.record.stimuli) == len(StimulusSet.read(study, files=False, design=False).rows())
     model = ObserverModel({g.name: (np.array([0.0, max(g.levels)]), np.array([0.9, 0.1]))
                            for g in sd.groups}, sigma=0.1, source="test")
     assert simulate(study, 3, model=model, seed=1) == ["sim001", "sim002", "sim003"]
