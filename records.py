@@ -353,6 +353,7 @@ class RenderedStimulus(Record):
 class RenderedOutput(Record):
     """One output file of a render, its content hash and what rendered it."""
     sha256: str
+    style: object = None
     renderer: dict | None = None
     extra: dict = _extra()
 

@@ -4,7 +4,9 @@ Each step — build, render, simulate, export, import, analyze, reproduce —
 returns one frozen dataclass of this module: its fields are what the step did
 (files written, counts, participants), :meth:`~StepResult.summary` is the text
 ``flipstudy`` prints for it, and :meth:`~StepResult.save_json` /
-:meth:`~StepResult.load_json` round-trip it through a JSON file.  Like
+:meth:`~StepResult.load_json` round-trip it through a JSON file.  Results are
+read by attribute (none is indexed like a dict); what a field holds beyond
+numbers, text and paths is a typed record of :mod:`flipstudy.records`.  Like
 :mod:`flipstudy.errors`, the module sits at the package root and imports none of
 the four parts, so every part can return its step's result.
 

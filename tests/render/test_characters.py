@@ -170,7 +170,7 @@ def test_design_style_is_validated_and_recorded_in_manifest_and_render_json(tmp_
     rec = render_study(tmp_path / "s", what="ghost", size=(64, 48), jobs=1, progress=False)
     assert rec.record.style["character"] == "stick"
     assert {v.style for v in rec.record.stimuli.values()} == {"stick"}
-    assert all(o["style"] == "stick" for o in rec.record.outputs.values())
+    assert all(o.style == "stick" for o in rec.record.outputs.values())
     on_disk = json.loads((tmp_path / "s" / "render" / "render.json").read_text())
     assert on_disk["stimuli"]["backflip_smooth-increase_25"]["style"] == "stick"
 

@@ -249,3 +249,17 @@ def test_records_read_back_the_json_the_steps_wrote_key_for_key(tmp_path):
     assert AnalyzeResult.load_json(r.save_json(tmp_path / "a.json")).report.to_dict() == doc
     with pytest.raises(FlipstudyError, match="SessionStatus: unknown field"):
         SessionStatus.from_dict({"participant": "P", "colour": 1})
+
+
+def test_the_results_and_their_records_import_none_of_the_four_parts():
+    """Like flipstudy.errors, the root modules results.py and records.py sit below the
+    parts: every part can return its step's result."""
+    import ast
+    root = Path(results.__file__).parent
+    for name in ("results.py", "records.py"):
+        tree = ast.parse((root / name).read_text())
+        mods = [n.module or "" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
+        mods += [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
+        parts = [m for m in mods if m.removeprefix("flipstudy.").split(".")[0]
+                 in ("stimuli", "render", "study", "analysis")]
+        assert parts == [], f"{name} imports {parts}"
