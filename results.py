@@ -31,8 +31,8 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .records import (AnalyzeReport, CompareReport, RenderRecord, ImportedFile, PlanRow, ReproduceFiles, SessionStatus, StageSeconds,
-                      Threshold, from_json, to_json)
+from .records import (AnalyzeReport, CompareReport, ImportedFile, PlanRow, RenderRecord, ReproduceFiles,
+                      SessionStatus, StageSeconds, Threshold, from_json, to_json)
 
 
 @dataclass(frozen=True)
@@ -114,7 +114,8 @@ class BuildResult(StepResult):
 @dataclass(frozen=True)
 class RenderResult(StepResult):
     """A render of a study: what, at which size and rate, how many outputs were
-    made or already up to date; ``record`` is the ``render/render.json`` written."""
+    made or already up to date; ``record`` is the ``render/render.json`` written
+    (a :class:`~flipstudy.records.RenderRecord`)."""
     study: Path
     what: tuple[str, ...]
     size: tuple[int, int]
@@ -249,8 +250,9 @@ class ImportResult(StepResult):
 
 @dataclass(frozen=True)
 class AnalyzeResult(StepResult):
-    """An analysis written to ``out``: ``report`` is what ``analyze --json`` prints
-    (settings, table, thresholds, notes, files), ``table_markdown`` the table shown."""
+    """An analysis written to ``out``: ``report`` (its ``to_dict()`` is what ``analyze
+    --json`` prints) holds the settings, table, thresholds, notes and files;
+    ``table_markdown`` is the table shown."""
     out: Path
     report: AnalyzeReport
     table_markdown: str
@@ -356,9 +358,8 @@ class ReproduceResult(StepResult):
 
 @dataclass(frozen=True)
 class StatusResult(StepResult):
-    """The sessions of a study, one dict per session (participant, session, source,
-    answered, total, complete, simulated, started, last_answer, finished); what
-    ``status --json`` prints."""
+    """The sessions of a study, one :class:`~flipstudy.records.SessionStatus` per
+    session (their ``to_dict()`` is what ``status --json`` prints)."""
     study: Path
     sessions: tuple[SessionStatus, ...]
 
@@ -394,8 +395,8 @@ class StatusResult(StepResult):
 
 @dataclass(frozen=True)
 class PlanResult(StepResult):
-    """A power analysis: one row per group and method (what ``plan --json`` prints,
-    non-finite numbers as None), the table as text and the settings it ran with."""
+    """A power analysis: one :class:`~flipstudy.records.PlanRow` per group and method
+    (their ``to_dict()`` is what ``plan --json`` prints, non-finite numbers as None), the table as text and the settings it ran with."""
     rows: tuple[PlanRow, ...]
     table: str
     observers: int
