@@ -226,8 +226,10 @@ class ComparisonAnalysis:
 
     def summary(self) -> str:
         """What ``flipstudy analyze`` prints (:class:`flipstudy.results.CompareResult`)."""
+        from flipstudy.records import CompareReport
         from flipstudy.results import CompareResult
-        return CompareResult(Path(self.files.get("json", ".")).parent, self.to_dict()).summary()
+        return CompareResult(Path(self.files.get("json", ".")).parent,
+                             CompareReport.from_dict(self.to_dict())).summary()
 
     def to_dict(self) -> dict:
         return {"participants": self.participants, "participants_label": self.label,

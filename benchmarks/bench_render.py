@@ -185,7 +185,7 @@ def bench_study(clip, n_stimuli=10, jobs=None, size=(640, 480), style=None):
                            style=style)
         dt = time.perf_counter() - t
         frames = sum(int(np.floor(clip.duration * 60 + 1e-9)) + 1 for _ in rows)
-    return dt, frames, rec["jobs"]
+    return dt, frames, rec.jobs
 
 
 def bench_default_study(style, jobs=None, size=(640, 480)):
@@ -201,7 +201,7 @@ def bench_default_study(style, jobs=None, size=(640, 480)):
         t = time.perf_counter()
         rec = render_study(d / "study", what=["video"], size=size, jobs=jobs, fps=60.0, progress=False,
                            style=style)
-        return time.perf_counter() - t, len(rows), rec["jobs"]
+        return time.perf_counter() - t, len(rows), rec.jobs
 
 
 def main(argv=None):

@@ -31,6 +31,7 @@ import numpy as np
 
 from flipstudy.stimuli._progress import Progress
 from flipstudy.errors import FlipstudyValueError, StudyRenderError
+from flipstudy.records import RenderRecord
 from flipstudy.results import RenderResult
 
 from flipstudy.stimuli.contract import Stimulus, StimulusSet, file_sha256
@@ -403,7 +404,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     return RenderResult(study=study_dir, what=tuple(rec["what"]), size=tuple(rec["size"]),
                         fps=rec["fps"], jobs=rec["jobs"], made=rec["made"], up_to_date=rec["up_to_date"],
                         seconds=rec["seconds"], n_stimuli=len(rec["stimuli"]),
-                        record_path=out / "render.json", record=rec)
+                        record_path=out / "render.json", record=RenderRecord.from_dict(rec))
 
 
 __all__ = ["RENDER_KINDS", "FRAMINGS", "StudyRenderError", "parse_size", "parse_what", "load_stimuli",

@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from flipstudy.errors import ComparisonError
+from flipstudy.records import CompareReport
 from flipstudy.results import CompareResult
 from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli.design import GIVEN_KIND
@@ -69,7 +70,7 @@ def analyze_comparison(study_dir, out_dir=None, *, responses=None, include_simul
     out = Path(out_dir) if out_dir is not None else d / "analysis"
     res = analyze_choices(ch, stimuli.sources(), metrics, out, n_boot=n_boot, ci=ci, seed=seed,
                           figures=figures, label=participants_label(who))
-    return CompareResult(out=out, report=res.to_dict())
+    return CompareResult(out=out, report=CompareReport.from_dict(res.to_dict()))
 
 
 def is_comparison_study(path) -> bool:

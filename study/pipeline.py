@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from flipstudy.records import AnalyzeReport, PlanRow, SessionStatus
 from flipstudy.results import (AnalyzeResult, BuildResult, ExportResult, ImportResult, RenderResult,
                                PlanResult, ReproduceResult, SimulateResult,
                                StatusResult)
@@ -134,8 +135,8 @@ def status(study_dir) -> StatusResult:
     if not (d / "manifest.csv").is_file():
         raise FlipstudyFileNotFoundError(f"{d} is not a study folder (no manifest.csv)")
     from .web.status import web_status
-    local = _status(d) if (db_path(d).exists() or db_path(d).is_symlink()) else []
-    return StatusResult(study=d, sessions=tuple(local + web_status(d)))     # web: import-web's
+    rows = _status(d) if (db_path(d).exists() or db_path(d).is_symlink()) else []
+    return StatusResult(study=d, sessions=tuple(SessionStatus.from_dict(r) for r in [*rows, *web_status(d)]))
 
 
 def simulate(study_dir, participants: int, *, model=None, seed: int = 0, strengths=None) -> SimulateResult:
@@ -200,7 +201,8 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     kept_out = kept_out_at_import([resolve_responses_path(r) for r in responses])
     res = _analyze(src, out, images=images or None, quest_specs=specs, exclusions=rules, kept_out=kept_out,
                    **options)
-    return AnalyzeResult(out=out, report=res.to_dict(), table_markdown=to_markdown(res.table))
+    return AnalyzeResult(out=out, report=AnalyzeReport.from_dict(res.to_dict()),
+                         table_markdown=to_markdown(res.table))
 
 
 def reproduce(out, *, cluster: str | None = None, **options) -> ReproduceResult:
@@ -238,7 +240,7 @@ def plan(design_path, *, groups=(), task: str | None = None, target_width: float
                            seed=seed, threshold=tuple(threshold))
     clean = tuple({k: (v if not isinstance(v, float) or v == v and abs(v) != float("inf") else None)
                    for k, v in r.items()} for r in rows)
-    return PlanResult(rows=clean, table=format_plan(rows, target_width, max_trials=max_trials),
+    return PlanResult(rows=tuple(PlanRow.from_dict(r) for r in clean), table=format_plan(rows, target_width, max_trials=max_trials),
                       observers=observers, threshold=tuple(threshold), seed=seed)
 
 

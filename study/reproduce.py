@@ -28,6 +28,7 @@ import contextlib
 import json
 
 from flipstudy.errors import ReproduceError
+from flipstudy.records import ReproduceFiles, StageSeconds, Threshold
 from flipstudy.results import ReproduceResult
 
 import os
@@ -269,8 +270,8 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     if missing:
         raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
     return ReproduceResult(
-        out=str(shown).rstrip("/"), files={k: str(v) for k, v in files.items()},
-        seconds=dict(seconds), n_stimuli=len(stimuli), worst_gap_pct=worst,
-        n_videos=sum(1 for s in rec.record["stimuli"].values() if "video" in s["files"]),
+        out=str(shown).rstrip("/"), files=ReproduceFiles.from_dict({k: str(v) for k, v in files.items()}),
+        seconds=StageSeconds.from_dict(dict(seconds)), n_stimuli=len(stimuli), worst_gap_pct=worst,
+        n_videos=sum(1 for s in rec.record.stimuli.values() if "video" in s.files),
         n_responses=exp.rows, n_simulated=len(exp.simulated), table_md=to_markdown(result.table),
-        thresholds=tuple(result.to_dict()["thresholds"]))
+        thresholds=tuple(Threshold.from_dict(t) for t in result.to_dict()["thresholds"]))

@@ -67,6 +67,7 @@ from ..psychds import write_dataset_description
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
 from flipstudy.errors import WebImportError
+from flipstudy.records import ImportedFile
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
 from ._read import MAX_FILE, MAX_IMPORT, Budget, read_records, read_results_file  # noqa: F401 (public here)
@@ -544,7 +545,8 @@ def import_web(study_dir, files) -> ImportResult:
     desc = write_dataset_description(d, study.dir, list(dict.fromkeys(columns + part_columns)),
                                      source="web sessions", stimuli=study.stimuli)
     return ImportResult(
-        files=tuple({k: str(v) if isinstance(v, Path) else v for k, v in r.items()} for r in report),
+        files=tuple(ImportedFile.from_dict({k: str(v) if isinstance(v, Path) else v for k, v in r.items()})
+                    for r in report),
         answers=len(rows), participants=len({p["participant"] for p in parts}), sessions=len(parts),
         incomplete=tuple(f"{p['participant']}/{p['session']} ({p['answered']}/{p['n_trials']})"
                          for p in parts if p["complete"] != "true"),

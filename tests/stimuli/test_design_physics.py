@@ -335,8 +335,8 @@ def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
     d = make_demo_study(tmp_path / "study", videos=False, levels=(0, 25, 50), original=None)
     simulate(d, 5, seed=3)
     res = export_responses(d, include_simulated=True)   # simulated answers are kept apart
-    rs = pd.read_csv(res["responses"])
-    assert res["rows"] == 5 * 2 * 5                        # 5 stimuli (1 original), twice
+    rs = pd.read_csv(res.responses)
+    assert res.rows == 5 * 2 * 5                        # 5 stimuli (1 original), twice
     assert (rs["group"] == "original").sum() == 5 * 2
     r = analyze(d, None, psychometric="none", gee=False, n_boot=50, include_simulated=True)
     t = r.table.set_index(["group", "level"])

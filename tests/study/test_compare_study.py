@@ -179,7 +179,7 @@ def test_a_small_simulated_panel_is_stored_exported_and_analysed(built, tmp_path
     from flipstudy.study.compare import analyze_comparison
     res = analyze_comparison(study, tmp_path / "again", include_simulated=True, n_boot=20, figures=False)
     assert CompareResult.load_json(res.save_json(tmp_path / "compare.json")) == res
-    pd.testing.assert_frame_equal(pd.DataFrame(res.report["ranking"]), r, atol=1e-6)   # the CSV's six decimals
+    pd.testing.assert_frame_equal(pd.DataFrame([x.to_dict() for x in res.report.ranking]), r, atol=1e-6)   # the CSV's six decimals
     assert "Bradley–Terry ranking (32 choices" in res.summary()
 
 

@@ -21,14 +21,14 @@ def run(tmp_path_factory):
 def test_every_stage_leaves_its_outputs(run):
     out, r = run
     man = list(csv.DictReader(open(out / "study" / "manifest.csv")))
-    assert len(man) == r["n_stimuli"] == 46          # 2 references + 2 × (16 + 1 shared original + 5)
+    assert len(man) == r.n_stimuli == 46          # 2 references + 2 × (16 + 1 shared original + 5)
     for row in man:
         assert (out / "study" / "render" / f"{row['stimulus']}.mp4").stat().st_size > 1000
         assert (out / "study" / "render" / f"{row['stimulus']}_ghost.png").exists()
         assert (out / "study" / "render" / f"{row['stimulus']}_trail.png").exists()
-    assert r["worst_gap_pct"] <= 1.0                # the design's tolerance, measured
+    assert r.worst_gap_pct <= 1.0                # the design's tolerance, measured
     responses = list(csv.DictReader(open(out / "study" / "responses.csv")))
-    assert len(responses) == r["n_responses"] == 4 * 88         # each of 44 motions twice
+    assert len(responses) == r.n_responses == 4 * 88         # each of 44 motions twice
     assert {x["participant"] for x in responses} == {"sim001", "sim002", "sim003", "sim004"}
     table = list(csv.DictReader(open(out / "analysis" / "table.csv")))
     assert len(table) == 25                         # 5 groups × 5 levels (AM level 0: the shared original)

@@ -169,7 +169,7 @@ def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
     session.close()
 
     out = export_responses(study_dir, tmp_path / "export" / "responses.csv")
-    rows = _rows(out["responses"])
+    rows = _rows(out.responses)
     assert [r["response"] for r in rows] == resp and [r["input"] for r in rows] == how
     assert [r["first"] for r in rows] == firsts
     assert [r["task"] for r in rows] == ["2afc"] * 8
@@ -179,7 +179,7 @@ def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
     assert all(600 <= float(r["shown_ms"]) <= 4000 for r in rows), [r["shown_ms"] for r in rows]
 
     res = tmp_path / "analysis"
-    assert cli(["analyze", str(out["responses"]), "--out", str(res), "--no-figures", "--no-gee",
+    assert cli(["analyze", str(out.responses), "--out", str(res), "--no-figures", "--no-gee",
                 "--psychometric", "none", "--n-boot", "50"]) == 0
     table = _rows(res / "table.csv")
     from scipy.stats import norm
@@ -239,7 +239,7 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
         assert status == 409
     session.close()
 
-    rows = _rows(export_responses(study_dir, tmp_path / "export" / "responses.csv")["responses"])
+    rows = _rows(export_responses(study_dir, tmp_path / "export" / "responses.csv").responses)
     assert [r["response"] for r in rows] == [answer[i] for i in range(1, n + 1)]
     quest_rows = [r for r in rows if r["method"] == "quest+"]
     assert [int(r["trial"]) for r in quest_rows] == adaptive

@@ -167,7 +167,7 @@ def read_csv(path):
 
 def check_export(study_dir, tmp_path, participant, trials, resp, how, replayed=()):
     out = export_responses(study_dir, tmp_path / "export" / "responses.csv")
-    rows = read_csv(out["responses"])
+    rows = read_csv(out.responses)
     assert len(rows) == len(trials)
     for i, (r, t) in enumerate(zip(rows, trials), start=1):
         assert r["participant"] == participant and r["session"] == "1"
@@ -182,7 +182,7 @@ def check_export(study_dir, tmp_path, participant, trials, resp, how, replayed=(
         assert int(r["late_frames"]) >= 0
         assert r["replays"] == ("1" if i in replayed else "0"), f"trial {i}"
         assert r["timestamp"].endswith("Z")
-    return rows, read_csv(out["participants"])
+    return rows, read_csv(out.participants)
 
 
 def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
