@@ -337,6 +337,7 @@ class CompareReport(Record):
     agreement: tuple[Agreement, ...]
     files: dict[str, str]
     notes: tuple[str, ...]
+    participants_label: str = ""      # "N = … (… real, … simulated)", on the figure and in notes.md
 
 
 # ---- render: the render.json record (flipstudy.render.study.render_study)
