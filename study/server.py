@@ -216,36 +216,9 @@ def _answer_in_study_names(names: PageNames, obj: dict) -> dict:
     return dict(obj, stimulus=real)
 
 
-def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
-               on_answer=None, on_changed=None, jspsych_dir=None, names: PageNames | None = None) -> Starlette:
-    """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
-    Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
-    is called after every stored answer (the CLI prints progress).  The page is
-    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
-    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first).
-    ``names``: the page's names of the stimuli (None: the study's opaque names,
-    :class:`~flipstudy.study.web.opaque.PageNames`, which writes ``STUDY/web/site-map.json``
-    when the study has none yet).
-
-    A pinned session (:meth:`Session.pin`) is checked before and after every
-    answer: once its study folder, database, manifest or design changed, every
-    API request is refused with status :data:`CHANGED_STATUS` and a message the
-    page shows, and an answer committed to a database that is no longer the
-    study's is never acknowledged as stored.  ``on_changed(message)`` is called
-    the first time (the CLI prints it)."""
-    told = []
-
-    def changed(e: StudyChanged, stored_elsewhere: bool = False) -> JSONResponse:
-        if not told:
-            told.append(True)
-            if on_changed is not None:
-                on_changed(str(e))
-        return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
-    study = session.study
-    render_dir = study.render_dir.resolve()
-    names = names or PageNames(study)
-    videos = {f"{names.video(r.stimulus)}.mp4": f"{r.stimulus}.mp4" for r in study.manifest}
-    files = local_site(session, iti_ms=iti_ms, lib=False, names=names)
+def _site_routes(files: dict[str, bytes], jspsych_dir):
+    """The handlers of the page (``GET /``) and of the site's other files (``files``:
+    :func:`local_site` without ``lib/``, whose files are read when first asked for)."""
     lib_lock = threading.Lock()
 
     def load_lib():
@@ -269,6 +242,75 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
             return _error(404, "not found")
         return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
                         headers={"Cache-Control": "no-cache"})
+    return page, static
+
+
+def _video_route(study, names: PageNames):
+    """The handler of ``GET /stimuli/<name>.mp4``: ``name`` is the page's name of a
+    stimulus of the manifest (never the stimulus's own), its file inside ``render/``."""
+    render_dir = study.render_dir.resolve()
+    videos = {f"{names.video(r.stimulus)}.mp4": f"{r.stimulus}.mp4" for r in study.manifest}
+
+    async def stimulus(request: Request):
+        name = videos.get(request.path_params["name"])
+        if name is None:                             # only the page's names of the manifest's stimuli
+            return _error(404, "no such stimulus")
+        path = (render_dir / name).resolve()
+        if path.parent != render_dir or not path.is_file():   # symlinks out, directories
+            return _error(404, "no such stimulus")
+        return FileResponse(path, media_type="video/mp4", headers={"Cache-Control": "no-cache"})
+    return stimulus
+
+
+def _checked_submit(session: Session, submit, obj: dict):
+    """``submit(session, obj)`` into the pinned study's own database only: checked before,
+    and after (a :class:`StudyChanged` then carries ``stored_elsewhere``)."""
+    session.check_intact()                   # not into a database that is not the study's
+    result = submit(session, obj)
+    try:
+        session.check_intact()               # committed into the study's own file?
+    except StudyChanged as e:
+        e.stored_elsewhere = True
+        raise
+    return result
+
+
+async def _http_error(request: Request, exc: HTTPException):
+    msg = {404: "not found", 405: "method not allowed"}.get(exc.status_code, str(exc.detail))
+    return _error(exc.status_code, msg)
+
+
+async def _server_error(request: Request, exc: Exception):
+    return _error(500, "internal error (see the terminal running flipstudy run)")
+
+
+def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
+               on_answer=None, on_changed=None, jspsych_dir=None, names: PageNames | None = None) -> Starlette:
+    """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
+    Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
+    is called after every stored answer (the CLI prints progress).  The page is
+    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
+    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first).
+    ``names``: the page's names of the stimuli (None: the study's opaque names,
+    :class:`~flipstudy.study.web.opaque.PageNames`; it writes ``STUDY/web/site-map.json``).
+
+    A pinned session (:meth:`Session.pin`) is checked before and after every
+    answer: once its study folder, database, manifest or design changed, every
+    API request is refused with status :data:`CHANGED_STATUS` and a message the
+    page shows, and an answer committed to a database that is no longer the
+    study's is never acknowledged as stored.  ``on_changed(message)`` is called
+    the first time (the CLI prints it)."""
+    told = []
+
+    def changed(e: StudyChanged, stored_elsewhere: bool = False) -> JSONResponse:
+        if not told:
+            told.append(True)
+            if on_changed is not None:
+                on_changed(str(e))
+        return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
+    study = session.study
+    names = names or PageNames(study)
+    page, static = _site_routes(local_site(session, iti_ms=iti_ms, lib=False, names=names), jspsych_dir)
 
     async def api_session(request: Request):
         try:
@@ -305,19 +347,9 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
 
     async def _submit(request: Request, submit):
         """(result, None) of ``submit(session, JSON body)``, or (None, the error response)."""
-        def checked(obj):
-            session.check_intact()                   # not into a database that is not the study's
-            result = submit(session, obj)
-            try:
-                session.check_intact()               # committed into the study's own file?
-            except StudyChanged as e:
-                e.stored_elsewhere = True
-                raise
-            return result
-
         try:
             obj = await _read_json(request)
-            return await run_in_threadpool(checked, obj), None
+            return await run_in_threadpool(_checked_submit, session, submit, obj), None
         except RequestError as e:
             return None, _error(e.status, names.text(e.message))
         except StudyChanged as e:
@@ -335,21 +367,7 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         result, err = await _submit(request, submit_demographics)
         return err if err is not None else JSONResponse(result, headers={"Cache-Control": "no-store"})
 
-    async def stimulus(request: Request):
-        name = videos.get(request.path_params["name"])
-        if name is None:                             # only the page's names of the manifest's stimuli
-            return _error(404, "no such stimulus")
-        path = (render_dir / name).resolve()
-        if path.parent != render_dir or not path.is_file():   # symlinks out, directories
-            return _error(404, "no such stimulus")
-        return FileResponse(path, media_type="video/mp4", headers={"Cache-Control": "no-cache"})
-
-    async def http_error(request: Request, exc: HTTPException):
-        msg = {404: "not found", 405: "method not allowed"}.get(exc.status_code, str(exc.detail))
-        return _error(exc.status_code, msg)
-
-    async def server_error(request: Request, exc: Exception):
-        return _error(500, "internal error (see the terminal running flipstudy run)")
+    stimulus = _video_route(study, names)
 
     app = Starlette(routes=[
         Route("/", page, methods=["GET"]),
@@ -361,7 +379,7 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
         Route("/lib/{name}", static, methods=["GET"]),
         Route("/{name}", static, methods=["GET"]),
-    ], exception_handlers={HTTPException: http_error, 500: server_error})
+    ], exception_handlers={HTTPException: _http_error, 500: _server_error})
     app.router.redirect_slashes = False
     hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}
     app.add_middleware(_Guard, allowed_hosts=hosts)
