@@ -24,6 +24,7 @@ import pytest
 
 from test_session_browser import ARGS, CHROMIUM, TIMEOUT, jspsych_dir, pw  # noqa: F401 (fixtures)
 from _kinds import INTERVAL_COLOUR_JS, colour_of, design_text, make_study, nearest
+from _site_names import study_names
 from _screenshots import screenshot
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
@@ -214,6 +215,7 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
     answer = {}
     reload_at = adaptive[2]
     with ServerThread(create_app(session, iti_ms=30)) as srv:
+        names = study_names(study_dir)
         page.goto(srv.url)
         page.wait_for_selector(f'{APP}[data-screen-id="instructions"]')
         assert "Judging motions" in page.inner_text(APP)
@@ -230,7 +232,7 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
                 _reach(page, i)
                 page.wait_for_selector(f'{APP}[data-playing="0"] button.fs-correct:enabled')
                 assert page.get_attribute(APP, "data-stimulus") == stim     # the same level
-            level = study.by_name[stim].level
+            level = study.by_name[names[stim]].level              # the page knows it by its opaque name
             answer[i] = "incorrect" if level > 30 else "correct"
             _answer(page, i, answer[i], "key" if i % 2 else "click")
         page.wait_for_selector(f'{APP}[data-screen-id="end"]')

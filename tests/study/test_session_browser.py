@@ -39,6 +39,7 @@ from flipstudy.study.order import trial_order  # noqa: E402
 from flipstudy.study.server import ServerThread, create_app  # noqa: E402
 from flipstudy.study.session import load_study, open_session  # noqa: E402
 from _screenshots import screenshot  # noqa: E402
+from _site_names import study_names  # noqa: E402
 
 BREAK_EVERY = 3
 TIMEOUT = 15_000          # ms, for any one screen
@@ -203,6 +204,8 @@ def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
             if i == 2:
                 # buttons are disabled and keys ignored until the motion has been shown
                 page.wait_for_selector(f'{APP}[data-screen-id="trial-2"][data-playing="1"]')
+                # the page knows the trial's stimulus by its opaque name only (issue 42)
+                assert study_names(tiny)[page.get_attribute(APP, "data-stimulus")] == session.trials[1].stimulus
                 assert page.is_disabled("button.fs-correct") and page.is_disabled("button.fs-incorrect")
                 page.keyboard.press("f")
                 shot = screenshot(page, "session_trial.png", tmp_path)

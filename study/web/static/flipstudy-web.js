@@ -6,7 +6,9 @@
 //
 // Names.  The exported site knows its videos and groups by opaque names only (keyed hashes;
 // the map stays in the study, STUDY/web/site-map.json): a record names a trial's video and
-// group by them and carries no clip, kind or level; import-web maps them back.
+// group by them and carries no clip, kind or level; import-web maps them back.  The local
+// runner's page too: the server sends its screens and videos by the same names and maps each
+// answer's video back to its stimulus.
 //
 // Data.  Every record (start, demographics, answer, end) is one flat JSON object.  It is
 // checkpointed in localStorage at once, then sent to the host the site was exported for:
