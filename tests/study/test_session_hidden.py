@@ -160,7 +160,7 @@ def _check(study, page, tl, given, jspsych_dir, tmp_path):
     # the round trip: each answer stored under the stimulus its video is, as given
     site_map = json.loads((study / "web" / "site-map.json").read_text())["stimuli"]
     out = export_responses(study, tmp_path / "export" / "responses.csv")
-    with open(out["responses"], newline="") as f:
+    with open(out.responses, newline="") as f:
         stored = {int(r["trial"]): r for r in csv.DictReader(f)}
     assert stored.keys() == given.keys()
     manifest = {r.stimulus: r for r in load_study(study).manifest}
