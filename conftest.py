@@ -19,7 +19,7 @@ import pytest
 from _pytest.doctest import DoctestModule
 
 ROOT = Path(__file__).resolve().parent
-PARTS = ("stimuli", "render", "study", "analysis")
+PARTS = ("stimuli", "render", "study", "analysis", "vocab")   # the four parts and the floor
 
 
 def package_module_name(path: Path) -> str | None:

@@ -4,7 +4,9 @@ Each step — build, render, simulate, export, import, analyze, reproduce —
 returns one frozen dataclass of this module: its fields are what the step did
 (files written, counts, participants), :meth:`~StepResult.summary` is the text
 ``flipstudy`` prints for it, and :meth:`~StepResult.save_json` /
-:meth:`~StepResult.load_json` round-trip it through a JSON file.  Like
+:meth:`~StepResult.load_json` round-trip it through a JSON file.  Results are
+read by attribute (none is indexed like a dict); what a field holds beyond
+numbers, text and paths is a typed record of :mod:`flipstudy.records`.  Like
 :mod:`flipstudy.errors`, the module sits at the package root and imports none of
 the four parts, so every part can return its step's result.
 
@@ -25,48 +27,21 @@ from __future__ import annotations
 import abc
 import dataclasses
 import json
-import types
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
-
-def _to_json(value):
-    if isinstance(value, Path):
-        return str(value)
-    if isinstance(value, (tuple, list)):
-        return [_to_json(v) for v in value]
-    if isinstance(value, dict):
-        return {str(k): _to_json(v) for k, v in value.items()}
-    return value
-
-
-def _from_json(hint, value):
-    """``value`` (as JSON gave it) turned back into the field type ``hint``."""
-    if value is None:
-        return None
-    origin = typing.get_origin(hint)
-    if origin in (typing.Union, types.UnionType):
-        args = [a for a in typing.get_args(hint) if a is not type(None)]
-        return _from_json(args[0], value) if len(args) == 1 else value
-    if hint is Path:
-        return Path(value)
-    if origin is tuple:
-        args = typing.get_args(hint)
-        if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(_from_json(args[0], v) for v in value)
-        return tuple(_from_json(a, v) for a, v in zip(args, value))
-    if origin is dict:
-        _, vt = typing.get_args(hint)
-        return {k: _from_json(vt, v) for k, v in value.items()}
-    return value
+from .records import (AnalyzeReport, CompareReport, ImportedFile, PlanRow, RenderRecord, ReproduceFiles,
+                      SessionStatus, StageSeconds, Threshold, from_json, to_json)
 
 
 @dataclass(frozen=True)
 class StepResult(abc.ABC):
     """Base of the step results: ``to_dict``/``from_dict``, ``save_json``/``load_json``
     and ``summary()``.  Fields hold JSON-ready values (numbers, strings, paths,
-    tuples of them, and JSON documents as dicts)."""
+    tuples of them, and :class:`~flipstudy.records.Record` objects); ``summary()`` is
+    one convention for all: no arguments, the exact text the command prints, without
+    a trailing newline."""
 
     @abc.abstractmethod
     def summary(self) -> str:
@@ -74,7 +49,7 @@ class StepResult(abc.ABC):
 
     def to_dict(self) -> dict:
         """The fields as a JSON-ready dict (paths as strings, tuples as lists)."""
-        return {f.name: _to_json(getattr(self, f.name)) for f in dataclasses.fields(self)}
+        return {f.name: to_json(getattr(self, f.name)) for f in dataclasses.fields(self)}
 
     @classmethod
     def from_dict(cls, data: dict):
@@ -85,7 +60,7 @@ class StepResult(abc.ABC):
         if unknown:
             from flipstudy.errors import FlipstudyValueError
             raise FlipstudyValueError(f"{cls.__name__}: unknown field(s) {', '.join(sorted(unknown))}")
-        return cls(**{k: _from_json(hints[k], v) for k, v in data.items()})
+        return cls(**{k: from_json(hints[k], v) for k, v in data.items()})
 
     def save_json(self, path) -> Path:
         """Write :meth:`to_dict` to ``path`` (JSON, UTF-8); returns the path."""
@@ -106,13 +81,6 @@ class StepResult(abc.ABC):
             from flipstudy.errors import FlipstudyValueError
             raise FlipstudyValueError(f"{path}: not a saved {cls.__name__} (expected a JSON object)")
         return cls.from_dict(data)
-
-    def __getitem__(self, key: str):
-        """Transitional: ``result["rows"]`` for callers written against the dicts the
-        steps returned before; new code reads the attributes."""
-        if key not in {f.name for f in dataclasses.fields(self)}:
-            raise KeyError(key)
-        return getattr(self, key)
 
 
 # ---- build: the stimuli of a design (flipstudy.stimuli.stimset.build_stimuli)
@@ -146,7 +114,8 @@ class BuildResult(StepResult):
 @dataclass(frozen=True)
 class RenderResult(StepResult):
     """A render of a study: what, at which size and rate, how many outputs were
-    made or already up to date; ``record`` is the ``render/render.json`` written."""
+    made or already up to date; ``record`` is the ``render/render.json`` written
+    (a :class:`~flipstudy.records.RenderRecord`)."""
     study: Path
     what: tuple[str, ...]
     size: tuple[int, int]
@@ -157,12 +126,7 @@ class RenderResult(StepResult):
     seconds: float
     n_stimuli: int
     record_path: Path
-    record: dict = field(repr=False, default_factory=dict)
-
-    def __getitem__(self, key: str):
-        """Transitional: ``result["outputs"]``, the ``render.json`` record's key, as the
-        dict this step returned before."""
-        return self.record[key]
+    record: RenderRecord | None = field(repr=False, default=None)
 
     def summary(self) -> str:
         return (f"rendered {self.n_stimuli} stimuli ({', '.join(self.what)}) at {self.size[0]}x"
@@ -231,7 +195,7 @@ class ExportResult(StepResult):
 class ImportResult(StepResult):
     """An import of web results files: per file what happened (``files``: file,
     status, records, new_answers), and the tables written under ``STUDY/web/``."""
-    files: tuple[dict, ...]
+    files: tuple[ImportedFile, ...]
     answers: int
     participants: int
     sessions: int
@@ -250,13 +214,13 @@ class ImportResult(StepResult):
     def summary(self) -> str:
         lines = []
         for f in self.files:
-            if f["status"] == "imported":
-                lines.append(f"{f['file']}: {f['records']} records, {f['new_answers']} new answers")
-            elif f["status"] == "nothing new":
-                lines.append(f"{f['file']}: {f['records']} records, every one already imported; the "
+            if f.status == "imported":
+                lines.append(f"{f.file}: {f.records} records, {f.new_answers} new answers")
+            elif f.status == "nothing new":
+                lines.append(f"{f.file}: {f.records} records, every one already imported; the "
                              f"file is not kept")
             else:
-                lines.append(f"{f['file']}: already imported (same content), nothing new")
+                lines.append(f"{f.file}: already imported (same content), nothing new")
         lines.append(f"{self.responses}: {self.answers} answers of {self.participants} web "
                      f"participant(s) in {self.sessions} session(s)"
                      + (f"; {self.duplicates} records read more than once, kept once"
@@ -286,52 +250,52 @@ class ImportResult(StepResult):
 
 @dataclass(frozen=True)
 class AnalyzeResult(StepResult):
-    """An analysis written to ``out``: ``report`` is what ``analyze --json`` prints
-    (settings, table, thresholds, notes, files), ``table_markdown`` the table shown."""
+    """An analysis written to ``out``: ``report`` (its ``to_dict()`` is what ``analyze
+    --json`` prints) holds the settings, table, thresholds, notes and files;
+    ``table_markdown`` is the table shown."""
     out: Path
-    report: dict
+    report: AnalyzeReport
     table_markdown: str
+
+    #: the notes the summary repeats (the others are in notes.md)
+    NOTABLE = ("not found", "no images", "failed", "differ from the ones the session stored", "no design")
 
     def summary(self) -> str:
         r = self.report
-        s = r["settings"]
-        who = s["participants"]
-        lines = [f"analysed {s['n_trials']} trials of {s['participants_label']} "
-                 f"({len(s['groups'])} groups); correction for rates of 0 or 1: {s['correction']}"]
-        if who["simulated_left_out"]:
-            lines.append(f"left out {len(who['simulated_left_out'])} simulated participant(s) "
+        s = r.settings
+        who = s.participants
+        lines = [f"analysed {s.n_trials} trials of {s.participants_label} "
+                 f"({len(s.groups)} groups); correction for rates of 0 or 1: {s.correction}"]
+        if who.simulated_left_out:
+            lines.append(f"left out {len(who.simulated_left_out)} simulated participant(s) "
                          f"(--include-simulated to keep them)")
-        if who["incomplete_left_out"]:
-            lines.append(f"left out {len(who['incomplete_left_out'])} incomplete session(s) "
-                         f"(--include-incomplete to keep them): {', '.join(who['incomplete_left_out'][:8])}"
-                         + (", ..." if len(who["incomplete_left_out"]) > 8 else ""))
-        if r.get("flow"):
-            lines.append("participant flow ([exclusions]): " + " → ".join(f"{f['stage']} {f['n']}"
-                                                                         for f in r["flow"]))
-        if who["n"] < 5:
-            lines.append(f"note: with {who['n']} participant(s), intervals and tests over participants "
+        if who.incomplete_left_out:
+            lines.append(f"left out {len(who.incomplete_left_out)} incomplete session(s) "
+                         f"(--include-incomplete to keep them): {', '.join(who.incomplete_left_out[:8])}"
+                         + (", ..." if len(who.incomplete_left_out) > 8 else ""))
+        if r.flow:
+            lines.append("participant flow ([exclusions]): " + " → ".join(f"{f.stage} {f.n}" for f in r.flow))
+        if who.n < 5:
+            lines.append(f"note: with {who.n} participant(s), intervals and tests over participants "
                          f"are not meaningful (notes.md)")
         lines += ["", self.table_markdown]
-        if r["thresholds"]:
+        if r.thresholds:
             lines.append("detection thresholds (P(incorrect) = (1 + γ)/2):")
-            for t in r["thresholds"]:
-                if t["reached"]:
-                    hi = "open" if t["threshold_ci_high"] is None else f"{t['threshold_ci_high']:.1f}"
-                    lines.append(f"  {t['group']:20s} {t['threshold']:5.1f} %  "
-                                 f"[{t['threshold_ci_low']:.1f}, {hi}]")
+            for t in r.thresholds:
+                if t.reached:
+                    hi = "open" if t.threshold_ci_high is None else f"{t.threshold_ci_high:.1f}"
+                    lines.append(f"  {t.group:20s} {t.threshold:5.1f} %  [{t.threshold_ci_low:.1f}, {hi}]")
                 else:
-                    lines.append(f"  {t['group']:20s} not reached")
-        if r.get("thresholds_groups"):
+                    lines.append(f"  {t.group:20s} not reached")
+        if r.thresholds_groups:
             lines.append("per-participant thresholds x* (thresholds_participants.csv), per group:")
-            for t in r["thresholds_groups"]:
-                lines.append(f"  {t['group']:20s} {t['method']:8s} {t['task']:6s} N = "
-                             f"{t['n_participants']:<3d} median {t['median']:5.1f} %  quartiles "
-                             f"[{t['q25']:.1f}, {t['q75']:.1f}]  mean 95 % interval width "
-                             f"{t['mean_ci_width']:.1f} %")
-        notable = [n for n in r["notes"] if "not found" in n or "no images" in n or "failed" in n
-                   or "differ from the ones the session stored" in n or "no design" in n]
-        lines += [f"note: {n}" for n in notable]
-        lines.append(f"\nwrote {len(r['files'])} files to {self.out}/ (table.csv, table_paper.md/.tex, "
+            for t in r.thresholds_groups:
+                lines.append(f"  {t.group:20s} {t.method:8s} {t.task:6s} N = "
+                             f"{t.n_participants:<3d} median {t.median:5.1f} %  quartiles "
+                             f"[{t.q25:.1f}, {t.q75:.1f}]  mean 95 % interval width "
+                             f"{t.mean_ci_width:.1f} %")
+        lines += [f"note: {n}" for n in r.notes if any(k in n for k in self.NOTABLE)]
+        lines.append(f"\nwrote {len(r.files)} files to {self.out}/ (table.csv, table_paper.md/.tex, "
                      f"figures, notes.md)")
         return "\n".join(lines)
 
@@ -343,46 +307,46 @@ class ReproduceResult(StepResult):
     """A reproduce run into ``out``: the files (name → path), the seconds per stage,
     the counts the summary states, the table as Markdown and the thresholds."""
     out: str
-    files: dict[str, str]
-    seconds: dict[str, float]
+    files: ReproduceFiles
+    seconds: StageSeconds
     n_stimuli: int
     worst_gap_pct: float
     n_videos: int
     n_responses: int
     n_simulated: int
     table_md: str
-    thresholds: tuple[dict, ...] = ()
+    thresholds: tuple[Threshold, ...] = ()
 
     def summary(self) -> str:
         s, f, out = self.seconds, self.files, self.out
-        lines = [f"flipstudy reproduce: done in {s['total']:.0f} s "
-                 f"(stimuli {s['stimuli']:.0f} s, render {s['render']:.0f} s, "
-                 f"sessions {s['sessions']:.0f} s, analysis {s['analysis']:.0f} s)", "",
+        lines = [f"flipstudy reproduce: done in {s.total:.0f} s "
+                 f"(stimuli {s.stimuli:.0f} s, render {s.render:.0f} s, "
+                 f"sessions {s.sessions:.0f} s, analysis {s.analysis:.0f} s)", "",
                  self.table_md.rstrip(), ""]
         if self.thresholds:
             lines.append("detection thresholds (P(incorrect) halfway from the base rate to 1):")
             for t in self.thresholds:
-                lines.append(f"  {t['group']:18s} " + (f"{t['threshold']:.1f} %" if t["reached"]
+                lines.append(f"  {t.group:18s} " + (f"{t.threshold:.1f} %" if t.reached
                                                        else "not reached within the tested levels"))
             lines.append("")
         lines += [
             f"outputs in {out}/:",
-            f"  {f['design']}  the paper's design (edit and rerun `flipstudy stimuli`)",
-            f"  {f['manifest']}  {self.n_stimuli} stimuli, nominal and measured errors "
+            f"  {f.design}  the paper's design (edit and rerun `flipstudy stimuli`)",
+            f"  {f.manifest}  {self.n_stimuli} stimuli, nominal and measured errors "
             f"(largest gap {self.worst_gap_pct:.2f} points)",
-            f"  {f['videos']}/  {self.n_videos} stimulus videos (.mp4), ghost and trail composites "
+            f"  {f.videos}/  {self.n_videos} stimulus videos (.mp4), ghost and trail composites "
             f"(.png), render.json",
-            f"  {f['sessions']}  every simulated answer; {f['responses']} ({self.n_responses} rows, "
+            f"  {f.sessions}  every simulated answer; {f.responses} ({self.n_responses} rows, "
             f"simulated=true)",
-            f"  {f['table_paper']}  the Table-2 layout (also .csv, .tex; table.csv has every column)",
-            f"  {f['figure_ratings']}, {Path(f['figure_dprime']).name}, "
-            f"{Path(f['figure_psychometric']).name}, {Path(f['figure_sheet']).name}  figures (PNG + PDF)",
-            f"  {f['notes']}  methods: correction, tests, fits",
+            f"  {f.table_paper}  the Table-2 layout (also .csv, .tex; table.csv has every column)",
+            f"  {f.figure_ratings}, {Path(f.figure_dprime).name}, "
+            f"{Path(f.figure_psychometric).name}, {Path(f.figure_sheet).name}  figures (PNG + PDF)",
+            f"  {f.notes}  methods: correction, tests, fits",
             "",
-            f"{f['stimuli']} holds {self.n_simulated} simulated participants (marked simulated=true; "
+            f"{f.stimuli} holds {self.n_simulated} simulated participants (marked simulated=true; "
             f"the analysis above includes them with --include-simulated). Real participants go into "
             f"a fresh study, never this one:",
-            f"  flipstudy stimuli {f['design']} --out mystudy && flipstudy render mystudy && "
+            f"  flipstudy stimuli {f.design} --out mystudy && flipstudy render mystudy && "
             f"flipstudy run mystudy --participant P01",
         ]
         return "\n".join(lines)
@@ -394,35 +358,38 @@ class ReproduceResult(StepResult):
 
 @dataclass(frozen=True)
 class StatusResult(StepResult):
-    """The sessions of a study, one dict per session (participant, session, source,
-    answered, total, complete, simulated, started, last_answer, finished); what
-    ``status --json`` prints."""
+    """The sessions of a study, one :class:`~flipstudy.records.SessionStatus` per
+    session: the local ones, then those ``import-web`` imported (source ``web-…``);
+    their ``to_dict()`` is what ``status --json`` prints."""
     study: Path
-    sessions: tuple[dict, ...]
+    sessions: tuple[SessionStatus, ...]
 
     def summary(self) -> str:
         rows = self.sessions
         if not rows:
             return "no sessions yet"
         head = ("participant", "session", "source", "answered", "", "started", "last answer", "finished")
-        table = [(r["participant"], str(r["session"]), r["source"], f"{r['answered']}/{r['total']}",
-                  "" if r["complete"] else "INCOMPLETE",
-                  r["started"] or "—", r["last_answer"] or "—", r["finished"] or "no") for r in rows]
+        table = [(r.participant, str(r.session), r.source, f"{r.answered}/{r.total}",
+                  "" if r.complete else "INCOMPLETE",
+                  r.started or "—", r.last_answer or "—", r.finished or "no") for r in rows]
         widths = [max(len(h), *(len(t[i]) for t in table)) for i, h in enumerate(head)]
 
         def line(cells):
             return "  ".join(c.ljust(w) for c, w in zip(cells, widths)).rstrip()
         lines = [line(head), *(line(t) for t in table)]
-        done = sum(1 for r in rows if r["finished"])
+        done = sum(1 for r in rows if r.finished)
         lines.append(f"{len(rows)} session(s), {done} finished")
-        real = sorted({r["participant"] for r in rows if not r["simulated"]})
-        sim = sorted({r["participant"] for r in rows if r["simulated"]})
-        lines.append(f"{len(real)} real participant(s), {len(sim)} simulated"
+        real = sorted({r.participant for r in rows if not r.simulated})
+        sim = sorted({r.participant for r in rows if r.simulated})
+        web = sorted({r.participant for r in rows if str(r.source).startswith("web")})
+        lines.append(f"{len(real)} real participant(s)"
+                     + (f" ({len(web)} imported from the web, in web/responses.csv)" if web else "")
+                     + f", {len(sim)} simulated"
                      + (" (left out of export and analyze unless --include-simulated)" if sim else ""))
-        inc = [r for r in rows if not r["complete"]]
+        inc = [r for r in rows if not r.complete]
         if inc:
             lines.append(f"{len(inc)} incomplete session(s) (analyze leaves them out by default): "
-                         + ", ".join(f"{r['participant']}/{r['session']} {r['answered']}/{r['total']}"
+                         + ", ".join(f"{r.participant}/{r.session} {r.answered}/{r.total}"
                                      for r in inc))
         return "\n".join(lines)
 
@@ -432,9 +399,9 @@ class StatusResult(StepResult):
 
 @dataclass(frozen=True)
 class PlanResult(StepResult):
-    """A power analysis: one row per group and method (what ``plan --json`` prints,
-    non-finite numbers as None), the table as text and the settings it ran with."""
-    rows: tuple[dict, ...]
+    """A power analysis: one :class:`~flipstudy.records.PlanRow` per group and method
+    (their ``to_dict()`` is what ``plan --json`` prints, non-finite numbers as None), the table as text and the settings it ran with."""
+    rows: tuple[PlanRow, ...]
     table: str
     observers: int
     threshold: tuple[float, float]
@@ -465,7 +432,7 @@ class MotionResult(StepResult):
 
 __all__ = ["StepResult", "BuildResult", "RenderResult", "SimulateResult", "ExportResult",
            "ImportResult", "AnalyzeResult", "ReproduceResult", "StatusResult", "PlanResult",
-           "MotionResult"]
+           "MotionResult", "CompareResult"]
 
 
 # ---- analyze of a comparison study: the ranking of its sources (flipstudy.study.compare)
@@ -476,24 +443,24 @@ class CompareResult(StepResult):
     --json`` prints (participants, the Bradley–Terry ranking, the agreement of the
     clips' numbers with the choices, notes, files)."""
     out: Path
-    report: dict
+    report: CompareReport
 
     def summary(self) -> str:
         r = self.report
-        rank = sorted(r["ranking"], key=lambda x: -x["strength"])
-        lines = [f"comparison study: {r['participants']} participant(s)",
-                 f"Bradley–Terry ranking ({r['choices']} choices; θ in logits, {r['reference']} = 0, "
-                 f"{100 * r['ci']:g} % intervals):"]
-        lines += [f"  {x['source']:16s} θ = {x['strength']:+.2f} [{x['low']:+.2f}, {x['high']:+.2f}]   "
-                  f"won {x['wins']}/{x['n']}" for x in rank]
-        if r["agreement"]:
+        rank = sorted(r.ranking, key=lambda x: -x.strength)
+        lines = [f"comparison study: {r.participants} participant(s)",
+                 f"Bradley–Terry ranking ({r.choices} choices; θ in logits, {r.reference} = 0, "
+                 f"{100 * r.ci:g} % intervals):"]
+        lines += [f"  {x.source:16s} θ = {x.strength:+.2f} [{x.low:+.2f}, {x.high:+.2f}]   "
+                  f"won {x.wins}/{x.n}" for x in rank]
+        if r.agreement:
             lines.append("agreement with people's choices (smaller number predicted chosen; "
                          "bootstrap over participants):")
-            for a in r["agreement"]:
-                lines.append(f"  {a['metric']:22s} accuracy {a['accuracy']:.2f} [{a['accuracy_low']:.2f}, "
-                             f"{a['accuracy_high']:.2f}]  AUC {a['auc']:.2f} [{a['auc_low']:.2f}, "
-                             f"{a['auc_high']:.2f}]  ({a['n']} trials)" if a.get("n")
-                             else f"  {a['metric']:22s} not measured on these clips")
-        lines += [f"note: {n}" for n in r["notes"]]
-        lines += [f"wrote {p}" for p in r["files"].values()]
+            for a in r.agreement:
+                lines.append(f"  {a.metric:22s} accuracy {a.accuracy:.2f} [{a.accuracy_low:.2f}, "
+                             f"{a.accuracy_high:.2f}]  AUC {a.auc:.2f} [{a.auc_low:.2f}, "
+                             f"{a.auc_high:.2f}]  ({a.n} trials)" if a.n
+                             else f"  {a.metric:22s} not measured on these clips")
+        lines += [f"note: {n}" for n in r.notes]
+        lines += [f"wrote {p}" for p in r.files.values()]
         return "\n".join(lines)

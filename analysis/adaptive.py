@@ -48,10 +48,11 @@ import numpy as np
 from scipy.special import ndtri, xlogy
 
 from flipstudy.errors import FlipstudyValueError
+from flipstudy.vocab import groupkeys
 
 from .stats import _WSCALE, detection_threshold, psychometric_curve
 
-TASKS = ("yes-no", "2afc")
+TASKS = groupkeys.TASKS          # the design's tasks (flipstudy.vocab.groupkeys)
 #: base rates γ the yes/no posterior considers (the paper's originals: 0.28)
 GAMMA_GRID = np.round(np.arange(0.0, 0.7001, 0.05), 2)
 #: grid points of m and of the width

@@ -26,7 +26,7 @@ calibrated by default: those kinds are measured, not scored.
 >>> t = fwp_counts()                       # what the default is fitted on
 >>> t.head(2).to_dict("records")
 [{'group': 'smooth-increase', 'level': 0.0, 'k': 21, 'n': 76, 'shared': True}, {'group': 'smooth-increase', 'level': 17.0, 'k': 22, 'n': 76, 'shared': False}]
->>> fn = fit_function(("angular-momentum", "abrupt", -1, None), [0, 17, 25, 37, 50],
+>>> fn = fit_function((kinds.AM.name, "abrupt", -1, None), [0, 17, 25, 37, 50],
 ...                   [21, 13, 24, 51, 59], [76] * 5, n_real=19, n_samples=50)
 >>> fn["kind"], fn["n_real"], len(fn["samples"]["threshold"]), 25 < fn["threshold"] < 45
 ('angular-momentum', 19, 50, True)
@@ -39,6 +39,7 @@ import numpy as np
 import pandas as pd
 
 from flipstudy.errors import CalibrationError
+from flipstudy.vocab import kinds
 
 from .simulate import PAPER_TABLE2
 from .stats import fit_psignifit, pooled_magnitudes, psychometric_curve
@@ -60,11 +61,11 @@ FWP_SOURCE = {
     "participants": FWP_PARTICIPANTS, "simulated": 0,
 }
 #: FwP group → (kind, variant, sign)
-FWP_GROUPS = {"smooth-increase": ("angular-momentum", "smooth", 1),
-              "smooth-decrease": ("angular-momentum", "smooth", -1),
-              "abrupt-increase": ("angular-momentum", "abrupt", 1),
-              "abrupt-decrease": ("angular-momentum", "abrupt", -1),
-              "takeoff-increase": ("takeoff-angle", None, 1)}
+FWP_GROUPS = {"smooth-increase": (kinds.AM.name, "smooth", 1),
+              "smooth-decrease": (kinds.AM.name, "smooth", -1),
+              "abrupt-increase": (kinds.AM.name, "abrupt", 1),
+              "abrupt-decrease": (kinds.AM.name, "abrupt", -1),
+              "takeoff-increase": (kinds.TAKEOFF_ANGLE.name, None, 1)}
 
 
 def _stable_seed(seed: int, key) -> int:
@@ -110,7 +111,7 @@ def fwp_counts(groups=None) -> pd.DataFrame:
             if r is None:
                 continue
             rows.append((g, float(lv), round(FWP_N * (1 - r / 100)), FWP_N,
-                         lv == 0 and FWP_GROUPS[g][0] == "angular-momentum"))
+                         lv == 0 and FWP_GROUPS[g][0] == kinds.AM.name))
     return pd.DataFrame(rows, columns=["group", "level", "k", "n", "shared"])
 
 
@@ -211,7 +212,7 @@ def leave_one_out(seed: int = 0, n_samples: int = 400) -> pd.DataFrame:
         cal = fwp_calibration([h for h in AM_GROUPS if h != g], seed=seed, n_samples=n_samples)
         # the held-out variant and sign have no entry: the score's lookup falls back to
         # the kind's pooled entry (flipstudy.stimuli.calibration.Calibration.lookup)
-        fn = next(f for f in cal["functions"] if f["kind"] == "angular-momentum" and f["pooled"])
+        fn = next(f for f in cal["functions"] if f["kind"] == kinds.AM.name and f["pooled"])
         obs = table[table["group"] == g]
         pred = predict_ratings(fn, obs["level"])
         rows.append(pred.assign(group=g, observed=[

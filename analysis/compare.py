@@ -222,14 +222,18 @@ class ComparisonAnalysis:
     participants: int
     files: dict = field(default_factory=dict)
     notes: tuple = ()
+    label: str = ""             # which participants, "N = … (… real, … simulated)"
 
     def summary(self) -> str:
         """What ``flipstudy analyze`` prints (:class:`flipstudy.results.CompareResult`)."""
+        from flipstudy.records import CompareReport
         from flipstudy.results import CompareResult
-        return CompareResult(Path(self.files.get("json", ".")).parent, self.to_dict()).summary()
+        return CompareResult(Path(self.files.get("json", ".")).parent,
+                             CompareReport.from_dict(self.to_dict())).summary()
 
     def to_dict(self) -> dict:
-        return {"participants": self.participants, "choices": self.ranking.n_choices,
+        return {"participants": self.participants, "participants_label": self.label,
+                "choices": self.ranking.n_choices,
                 "ranking": json.loads(self.ranking.table.to_json(orient="records")),
                 "reference": self.ranking.reference, "ci": self.ranking.ci, "method": self.ranking.method,
                 "agreement": json.loads(self.agreement.to_json(orient="records")),
@@ -238,18 +242,22 @@ class ComparisonAnalysis:
 
 def analyze_choices(ch: pd.DataFrame, sources: list[str], metrics: pd.DataFrame | None = None,
                     out_dir=None, *, n_boot: int = 2000, ci: float = 0.95, seed=0,
-                    figures: bool = True) -> ComparisonAnalysis:
+                    figures: bool = True, label: str | None = None) -> ComparisonAnalysis:
     """Ranking, win rates and agreement of a comparison study's choices; with
     ``out_dir`` the tables (``ranking.csv``, ``win_rates.csv``, ``agreement.csv``,
-    ``comparison.json``) and the figure (``comparison.png``/``.pdf``)."""
+    ``comparison.json``), ``notes.md`` and the figure (``comparison.png``/``.pdf``).
+    ``label``: which participants the answers are from
+    (:func:`flipstudy.analysis.io.participants_label`), on the figure and in the notes;
+    default ``N = …`` from the choices."""
     if not len(ch):
         raise ComparisonError("no 2AFC answers of a comparison study to analyse")
     ranking = bradley_terry(ch, sources, ci)
     wins = win_rates(ch)
     agree = agreement(ch, metrics, n_boot=n_boot, ci=ci, seed=seed) if metrics is not None \
         else pd.DataFrame()
-    files = {}
-    res = ComparisonAnalysis(ranking, wins, agree, int(ch["participant"].nunique()), files)
+    files, n = {}, int(ch["participant"].nunique())
+    label = label or f"N = {n} participant{'s' if n != 1 else ''}"
+    res = ComparisonAnalysis(ranking, wins, agree, n, files, label=label)
     if out_dir is not None:
         out = Path(out_dir)
         out.mkdir(parents=True, exist_ok=True)
@@ -259,15 +267,44 @@ def analyze_choices(ch: pd.DataFrame, sources: list[str], metrics: pd.DataFrame 
         files.update(ranking=out / "ranking.csv", win_rates=out / "win_rates.csv",
                      agreement=out / "agreement.csv")
         if figures:
-            files["figure"] = comparison_figure(ranking, wins, out / "comparison.png")
+            files["figure"] = comparison_figure(ranking, wins, out / "comparison.png", label=label)
+        (out / "notes.md").write_text(_notes_md(res, ch, sources), encoding="utf-8")
+        files["notes"] = out / "notes.md"
         (out / "comparison.json").write_text(json.dumps(res.to_dict(), indent=1, default=float) + "\n")
         files["json"] = out / "comparison.json"
     return res
 
 
-def comparison_figure(ranking: Ranking, wins: pd.DataFrame, path) -> Path:
+def _notes_md(res: ComparisonAnalysis, ch: pd.DataFrame, sources) -> str:
+    """``notes.md`` of a comparison analysis: who, what was compared, the ranking, the
+    agreement and the notes, as the other analyses write theirs."""
+    r, rk = res.to_dict(), res.ranking
+    lines = ["# Comparison notes", "",
+             f"{res.label}; {rk.n_choices} choices between {len(sources)} sources "
+             f"({', '.join(sources)}) over {ch['item'].nunique()} item(s).", "",
+             f"Ranking: {rk.method}; θ in logits, {rk.reference} = 0, {100 * rk.ci:g} % intervals.", "",
+             "| source | θ | interval | won |", "|:--|--:|:--|--:|"]
+    lines += [f"| {x['source']} | {x['strength']:+.2f} | [{x['low']:+.2f}, {x['high']:+.2f}] | "
+              f"{x['wins']}/{x['n']} |" for x in sorted(r["ranking"], key=lambda x: -x["strength"])]
+    if r["agreement"]:
+        lines += ["", "## Agreement of the clips' numbers with the choices", "",
+                  "Smaller number predicted chosen; bootstrap intervals over participants.", "",
+                  "| metric | accuracy | AUC | trials |", "|:--|:--|:--|--:|"]
+        lines += [f"| {a['metric']} | {a['accuracy']:.2f} [{a['accuracy_low']:.2f}, "
+                  f"{a['accuracy_high']:.2f}] | {a['auc']:.2f} [{a['auc_low']:.2f}, "
+                  f"{a['auc_high']:.2f}] | {a['n']} |" if a.get("n")
+                  else f"| {a['metric']} | not measured on these clips | | 0 |" for a in r["agreement"]]
+    if res.participants < 5:
+        lines += ["", f"- {res.participants} participant(s): the intervals over participants are "
+                      f"not meaningful below 5."]
+    lines += [f"- {x}" for x in res.notes]
+    return "\n".join(lines) + "\n"
+
+
+def comparison_figure(ranking: Ranking, wins: pd.DataFrame, path, label: str | None = None) -> Path:
     """Left: the sources' strengths with their intervals; right: each item's win
-    rate per source.  Writes ``path`` (PNG) and the same name as PDF."""
+    rate per source; ``label`` (which participants) in small type underneath.
+    Writes ``path`` (PNG) and the same name as PDF."""
     import matplotlib.pyplot as plt
     t = ranking.table.sort_values("strength", ascending=True, kind="stable")
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 3.4), gridspec_kw={"width_ratios": [1, 1.4]})
@@ -285,6 +322,8 @@ def comparison_figure(ranking: Ranking, wins: pd.DataFrame, path) -> Path:
     bx.set_ylabel("win rate (chosen as possible)")
     bx.set_title("per item")
     bx.legend(fontsize=8, loc="upper right")
+    if label:
+        fig.supxlabel(label, fontsize=7, color="#444444")
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=110)

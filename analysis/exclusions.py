@@ -35,10 +35,11 @@ import numpy as np
 import pandas as pd
 
 from flipstudy.errors import ResponsesError
+from flipstudy.vocab.online import EXCLUSION_FIELDS
 
 RULES = ("incomplete", "catch accuracy", "dropped frames", "response time")
-DEFAULTS = {"catch_groups": [], "min_catch_accuracy_pct": 0.0, "max_flagged_pct": 100.0,
-            "require_complete": False, "min_median_rt_ms": 0.0}
+#: each rule's default (no participant excluded): the design's ``[exclusions]`` table's own
+DEFAULTS = {k: list(d) if isinstance(d, list) else d for k, (_, d, _) in EXCLUSION_FIELDS.items()}
 
 
 def _truthy(col: pd.Series) -> pd.Series:
@@ -230,6 +231,8 @@ def flow_figure(flow: pd.DataFrame):
         ax.set_yticks(y, flow["stage"])
         ax.set_xlabel("participants")
         ax.set_xlim(0, max(1, int(flow["n"].max())) * 1.15)
+        from matplotlib.ticker import MaxNLocator
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))     # whole participants
         ax.set_title("Participant flow (exclusion rules stated in the design)")
         fig.tight_layout()
     return fig

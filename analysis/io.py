@@ -7,19 +7,23 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from flipstudy.vocab import answers, groupkeys
+from flipstudy.vocab.design import SHARED_ORIGINAL_GROUP
+
 REQUIRED = ("participant", "group", "level", "response")
-DESIGN_COLUMNS = ("participant", "session", "trial", "stimulus", "group", "level", "repetition",
-                  "response", "rt_ms", "shown_ms", "timestamp")
+#: DESIGN.md's long format, as the answer record declares it (flipstudy.vocab.answers)
+DESIGN_COLUMNS = answers.DESIGN_COLUMNS
 #: display order of the default design's groups; other names follow in order of appearance
 DEFAULT_GROUP_ORDER = ("smooth-increase", "smooth-decrease", "abrupt-increase",
                        "abrupt-decrease", "takeoff-increase")
 IGNORED_GROUPS = ("reference",)
-#: the group of the shared originals (stimuli.design.SHARED_ORIGINAL_GROUP)
-SHARED_ORIGINAL = "original"
+#: the group of the shared originals (the design's, flipstudy.vocab.design)
+SHARED_ORIGINAL = SHARED_ORIGINAL_GROUP
 EXPORT_HINT = "flipstudy export {d} --out {d}/responses.csv"
-#: the values of the optional columns ``task`` and ``method`` (missing: yes-no, constant)
-TASKS = ("yes-no", "2afc")
-METHODS = ("constant", "quest+")
+#: the values of the optional columns ``task`` and ``method`` (missing: yes-no, constant):
+#: the design's (flipstudy.vocab.groupkeys)
+TASKS = groupkeys.TASKS
+METHODS = groupkeys.METHODS
 
 
 def resolve_responses_path(path: str | Path) -> Path:

@@ -9,6 +9,8 @@ import numpy as np
 import pandas as pd
 from scipy.special import expit, logit, ndtr
 
+from flipstudy.vocab import kinds
+
 #: Majkowska & Faloutsos 2007, Table 2: mean rating (% judged correct) and d′ per
 #: group and level.  Minus signs lost in the text extraction are restored (each
 #: checked against the ratings: z(1 − r) − z(1 − r₀)).  The smooth-increase 37 %
@@ -94,7 +96,7 @@ def _design(groups_levels, n_participants, clips, repetitions):
 
 
 def _kind(group: str) -> str:
-    return "takeoff-angle" if "takeoff" in group else "angular-momentum"
+    return kinds.TAKEOFF_ANGLE.name if "takeoff" in group else kinds.AM.name
 
 
 def paper_panel(n_participants: int = 19, *, clips=("backflip", "frontflip"), repetitions: int = 2,
@@ -124,9 +126,9 @@ def paper_panel(n_participants: int = 19, *, clips=("backflip", "frontflip"), re
     prob = {(g, float(lv)): r / 100.0 for g, lv, r in zip(tab["group"], tab["level"], tab[col])}
     if original == "shared":
         am0 = [prob[(g, 0.0)] for g, lvs in groups_levels
-               if _kind(g) == "angular-momentum" and 0.0 in map(float, lvs)]
+               if _kind(g) == kinds.AM.name and 0.0 in map(float, lvs)]
         if am0:
-            groups_levels = [(g, [lv for lv in lvs if not (float(lv) == 0 and _kind(g) == "angular-momentum")])
+            groups_levels = [(g, [lv for lv in lvs if not (float(lv) == 0 and _kind(g) == kinds.AM.name)])
                              for g, lvs in groups_levels] + [("original", [0.0])]
             prob[("original", 0.0)] = float(np.mean(am0))
     cells, per_part, participant, group, level, clip, rep = _design(

@@ -14,7 +14,7 @@ same way, and a threshold in ms maps back to poses per second by ``1000/x*``
 with no frame rate needed.  (At 60 fps the original itself holds each pose
 16.7 ms; it is drawn at 0.)
 
->>> magnitudes([0, 10, 20, -17], ["pose-rate", "pose-rate", "pose-rate", "angular-momentum"])
+>>> magnitudes([0, 10, 20, -17], ["pose-rate", "pose-rate", "pose-rate", "gravity"])
 array([  0., 100.,  50.,  17.])
 >>> level_unit("pose-rate"), magnitude_unit("pose-rate"), magnitude_unit(None)
 ('poses/s', 'ms', '%')
@@ -24,8 +24,10 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-#: the error kind whose levels are poses per second (stimuli.injection.KINDS)
-POSE_RATE = "pose-rate"
+from flipstudy.vocab import kinds
+
+#: the error kind whose levels are poses per second (declared in flipstudy.vocab.kinds)
+POSE_RATE = kinds.POSE_RATE.name
 
 
 def group_kinds(df: pd.DataFrame) -> dict:
@@ -66,8 +68,9 @@ def pose_rate_of(hold_ms) -> np.ndarray:
 
 
 def level_unit(kind) -> str:
-    """The unit the levels of a group of ``kind`` are written in."""
-    return "poses/s" if is_pose_rate(kind) else "%"
+    """The unit the levels of a group of ``kind`` are written in (its registry entry's)."""
+    entry = kinds.find(kind) if isinstance(kind, str) else None
+    return entry.level_unit if entry is not None else "%"
 
 
 def magnitude_unit(kind) -> str:

@@ -53,7 +53,7 @@ def build_responses(work: Path) -> Path:
     build_stimuli(load_design(work / "design.toml"), work / "study", progress=False)
     stimuli = StimulusSet.read(work / "study")
     simulate(stimuli, 19, seed=1)
-    return Path(export_responses(stimuli, include_simulated=True)["responses"])
+    return Path(export_responses(stimuli, include_simulated=True).responses)
 
 
 def cpu_of(cmd: list[str], env: dict) -> float:

@@ -37,9 +37,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-KINDS = [("angular-momentum", "smooth", 1), ("angular-momentum", "abrupt", 1),
-         ("angular-momentum", "smooth", -1), ("takeoff-angle", None, 1),
-         ("takeoff-angle", None, -1), ("angular-momentum", "abrupt", -1)]
+from flipstudy.vocab.kinds import AM, TAKEOFF_ANGLE  # noqa: E402
+
+KINDS = [(AM.name, "smooth", 1), (AM.name, "abrupt", 1),
+         (AM.name, "smooth", -1), (TAKEOFF_ANGLE.name, None, 1),
+         (TAKEOFF_ANGLE.name, None, -1), (AM.name, "abrupt", -1)]
 
 
 #: modules imported before timing, here and (as start-up) on the workers

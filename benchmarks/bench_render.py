@@ -39,6 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from flipstudy.render._pv import pv  # noqa: E402  (EGL offscreen before anything else)
+from flipstudy.vocab.kinds import AM  # noqa: E402
 from flipstudy.render.geometry import piece_frames, resample  # noqa: E402
 from flipstudy.render.scene import Scene  # noqa: E402
 from flipstudy.render.staging import stage  # noqa: E402
@@ -173,7 +174,7 @@ def bench_study(clip, n_stimuli=10, jobs=None, size=(640, 480), style=None):
             name = f"s{i:02d}"
             save_bvh(clip.replace(rotations=q), d / f"{name}.bvh", scale=1.0)
             rows.append({"stimulus": name, "clip": "base", "group": "g",
-                         "kind": "reference" if i == 0 else "angular-momentum", "profile": "smooth",
+                         "kind": "reference" if i == 0 else AM.name, "profile": "smooth",
                          "level": 5 * i, "takeoff": t0, "landing": t1, "bvh": f"{name}.bvh"})
         with open(d / "manifest.csv", "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -184,7 +185,7 @@ def bench_study(clip, n_stimuli=10, jobs=None, size=(640, 480), style=None):
                            style=style)
         dt = time.perf_counter() - t
         frames = sum(int(np.floor(clip.duration * 60 + 1e-9)) + 1 for _ in rows)
-    return dt, frames, rec["jobs"]
+    return dt, frames, rec.jobs
 
 
 def bench_default_study(style, jobs=None, size=(640, 480)):
@@ -200,7 +201,7 @@ def bench_default_study(style, jobs=None, size=(640, 480)):
         t = time.perf_counter()
         rec = render_study(d / "study", what=["video"], size=size, jobs=jobs, fps=60.0, progress=False,
                            style=style)
-        return time.perf_counter() - t, len(rows), rec["jobs"]
+        return time.perf_counter() - t, len(rows), rec.jobs
 
 
 def main(argv=None):

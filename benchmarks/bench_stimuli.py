@@ -24,9 +24,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from _common import median_s  # noqa: E402
+from flipstudy.vocab.kinds import AM  # noqa: E402
 MOCAP = ROOT.parent / "shared" / "mocap"
 #: a quest+ group's dense grid (issue 19): 61 levels of the built-in back flip
-GRID_DESIGN = """[study]
+GRID_DESIGN = f"""[study]
 name = "grid"
 seed = 7
 [[clips]]
@@ -34,9 +35,9 @@ name = "backflip"
 source = "backflip"
 [[groups]]
 name = "am-inc"
-kind = "angular-momentum"
+kind = "{AM.name}"
 profile = "smooth"
-levels = {from = 0, to = 60, step = 1}
+levels = {{from = 0, to = 60, step = 1}}
 method = "quest+"
 """
 PAPER_S = 3.0
@@ -54,7 +55,7 @@ def naive(design) -> int:
                 clip = load_base_clip(spec, design)
                 a = analyse(clip)
                 e = g.sign * lv / 100.0
-                inj = (inject_angular_momentum(a, e, g.profile) if g.kind == "angular-momentum"
+                inj = (inject_angular_momentum(a, e, g.profile) if g.kind == AM.name
                        else inject_takeoff_angle(a, e))
                 measure(a, inj)
                 n += 1

@@ -124,8 +124,9 @@ def check_rendered(stimuli, kind: str = "video", hash_files: bool = True) -> dic
     >>> from flipstudy.errors import StaleRenderError
     >>> from flipstudy.render import check_rendered
     >>> from flipstudy.stimuli import Stimulus, StimulusSet
+    >>> from flipstudy.vocab.kinds import AM
     >>> with tempfile.TemporaryDirectory() as tmp:
-    ...     s = StimulusSet(tmp, [Stimulus("bf_0", "backflip", "original", "angular-momentum")])
+    ...     s = StimulusSet(tmp, [Stimulus("bf_0", "backflip", "original", AM.name)])
     ...     try:
     ...         check_rendered(s)
     ...     except StaleRenderError as e:

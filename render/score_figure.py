@@ -11,6 +11,9 @@ from .plots import _mpl
 #: The files ``score --figure`` writes (matplotlib's formats by suffix).
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg")
 _PHASE_COLORS = {"flight": "#dbe9f6", "ground": "#eeeeee"}
+#: the 95 % bands of the scored errors: a faint fill, one hatching each, an outline
+BAND_ALPHA = 0.08
+BAND_HATCHES = ("////", "\\\\\\\\", "....", "xxxx", "||||", "----")
 
 
 def score_figure(clip, scored, path, *, strip: bool = True, panel_size=(120, 170)) -> Path:
@@ -58,7 +61,10 @@ def score_figure(clip, scored, path, *, strip: bool = True, panel_size=(120, 170
         c = cmap(i % 10)
         lab = f"{e.label()}\n{e.phase}: {e.size:+.1f} {e.unit}, p = {100 * e.p:.1f} %"
         if e.t1 - e.t0 > 1e-6:
-            ax.fill_between([e.t0, e.t1], e.p_low, e.p_high, color=c, alpha=0.18, lw=0)
+            # a faint fill, the band's own hatching and an outline in its colour: where
+            # bands overlap, each stays readable (no muddy blend of two fills)
+            ax.fill_between([e.t0, e.t1], e.p_low, e.p_high, facecolor=(*c[:3], BAND_ALPHA),
+                            edgecolor=c, hatch=BAND_HATCHES[i % len(BAND_HATCHES)], lw=1.0)
             ax.plot([e.t0, e.t1], [e.p, e.p], color=c, lw=2.2, label=lab)
         else:
             ax.errorbar([e.t0], [e.p], yerr=[[e.p - e.p_low], [e.p_high - e.p]], fmt="o", color=c,

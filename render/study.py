@@ -31,6 +31,7 @@ import numpy as np
 
 from flipstudy.stimuli._progress import Progress
 from flipstudy.errors import FlipstudyValueError, StudyRenderError
+from flipstudy.records import RenderRecord
 from flipstudy.results import RenderResult
 
 from flipstudy.stimuli.contract import Stimulus, StimulusSet, file_sha256
@@ -126,6 +127,20 @@ def _methods(style) -> dict:
 FRAMINGS = ("clip", "stimulus")
 
 
+def _refuse_unrecorded(out: Path, tasks: list, old: dict) -> None:
+    """Render writes over only what it made: an output file already at ``out`` that
+    ``render.json`` does not list (a file of the researcher's, a figure another command
+    put there) is refused before anything is made, naming it."""
+    listed = old.get("outputs") if isinstance(old.get("outputs"), dict) else {}
+    for t in tasks:
+        for kind in t["what"]:
+            p = out / RENDER_KINDS[kind].format(s=t["stimulus"])
+            if (p.exists() or p.is_symlink()) and p.name not in listed:
+                raise StudyRenderError(
+                    f"{p}: not made by `flipstudy render` ({out / 'render.json'} does not list it), "
+                    f"so it is not written over: move it aside, then render again")
+
+
 def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None = None,
                  fps: float = 60.0, style=None, out=None, frames: bool = False,
                  progress: bool = True, orient: bool = True, force: bool = False,
@@ -187,9 +202,10 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     >>> import tempfile, pathlib
     >>> from flipstudy.stimuli.design import Design
     >>> from flipstudy.stimuli.stimset import build_stimuli
+    >>> from flipstudy.vocab.kinds import AM
     >>> design = Design.from_dict({"study": {"name": "tiny", "seed": 7},
     ...     "clips": [{"name": "backflip", "source": "backflip"}],
-    ...     "groups": [{"name": "smooth-increase", "kind": "angular-momentum", "profile": "smooth",
+    ...     "groups": [{"name": "smooth-increase", "kind": AM.name, "profile": "smooth",
     ...                 "sign": 1, "levels": [0, 25]}]})
     >>> tmp = tempfile.TemporaryDirectory()
     >>> study = pathlib.Path(tmp.name) / "study"
@@ -223,7 +239,7 @@ def render_study(study_dir, what=("video",), size=(640, 480), jobs: int | None =
     return RenderResult(study=study_dir, what=tuple(rec["what"]), size=tuple(rec["size"]),
                         fps=rec["fps"], jobs=rec["jobs"], made=rec["made"], up_to_date=rec["up_to_date"],
                         seconds=rec["seconds"], n_stimuli=len(rec["stimuli"]),
-                        record_path=out / "render.json", record=rec)
+                        record_path=out / "render.json", record=RenderRecord.from_dict(rec))
 
 
 # the named steps of :func:`render_study`
@@ -260,6 +276,7 @@ def _prepare(rows, clips, study_dir: Path, out: Path, *, what, size, fps, style,
     placed = list(zip(st.offsets, st.yaws, takeoffs, landings, body_list, camera_of))
     tasks, n_kept, expected = _plan(rows, placed, shas, outputs, what=what, style=style,
                                     study_dir=study_dir, sid=sid, frames=frames, force=force, out=out)
+    _refuse_unrecorded(out, tasks, old)
     settings_records = {k: v for k, v in (old.get("settings_records") or {}).items()
                         if any(o_.get("settings") == k for o_ in outputs.values())}
     settings_records[sid] = pixel

@@ -64,31 +64,21 @@ from flipstudy.errors import FlipstudyValueError, StimulusError
 from .injection import Injected, _inside, _need_flight
 from .motion.clip import Clip, derived_meta
 from .physics import center_of_mass
+from flipstudy.vocab import kinds
 
 #: the standard gravity that ``acceleration`` levels are fractions of, m/s²
 G0 = 9.81
 
-GRAVITY_POLICIES = ("takeoff-velocity", "apex-height", "flight-time")
-AXES = ("horizontal", "vertical")
-SPANS = ("flight", "whole")
-#: design level bounds in percent by (kind, sign): (largest magnitude, is it excluded)
-BALLISTIC_LEVEL_BOUNDS = {
-    ("gravity", 1): (300.0, False),             # up to 4 g
-    ("gravity", -1): (100.0, True),             # no gravity: no landing
-    ("horizontal-velocity", 1): (100.0, False),
-    ("horizontal-velocity", -1): (100.0, True),
-    ("vertical-velocity", 1): (100.0, False),
-    ("vertical-velocity", -1): (100.0, True),   # the COM must come down to the floor
-    ("acceleration", 1): (100.0, True),         # percent of 9.81 m/s²; a vertical one
-    ("acceleration", -1): (100.0, True),        # of +100 % would cancel gravity
-    ("time-scale", 1): (300.0, False),          # up to 4× speed
-    ("time-scale", -1): (100.0, True),          # −100 % stops the motion
-    ("pose-rate", 1): (1000.0, False)}          # poses per second (0: the original)
+GRAVITY_POLICIES = kinds.GRAVITY.option[2]
+AXES = kinds.get("acceleration").option[2]
+SPANS = kinds.get("time-scale").option[2]
+#: design level bounds in percent by (kind, sign): (largest magnitude, is it excluded),
+#: of this module's kinds (declared in the registry, :mod:`flipstudy.vocab.kinds`)
+BALLISTIC_LEVEL_BOUNDS = {ks: b for ks, b in kinds.level_bounds().items()
+                          if kinds.get(ks[0]).family == "ballistic"}
 #: the design option (a group key) each kind takes and its values (the default, or
 #: None when the key must be given)
-KIND_OPTIONS = {"gravity": ("policy", None, GRAVITY_POLICIES),
-                "acceleration": ("axis", None, AXES),
-                "time-scale": ("span", "flight", SPANS)}
+KIND_OPTIONS = kinds.kind_options()
 #: the longest flight a stimulus may have, seconds: human flights (jumps, flips,
 #: trampolines, ski jumps) last well under this; a level whose flight would be longer
 #: (a gravity or vertical acceleration that nearly cancels the fall) is refused before
@@ -97,8 +87,8 @@ MAX_FLIGHT_S = 10.0
 #: the longest stimulus, seconds (a time-scale "whole" slows the whole clip down)
 MAX_CLIP_S = 120.0
 #: kinds this module makes, and the group option each one takes (None: none)
-BALLISTIC_KINDS = {"gravity": "policy", "horizontal-velocity": None, "vertical-velocity": None,
-                   "acceleration": "axis", "time-scale": "span", "pose-rate": None}
+BALLISTIC_KINDS = {k.name: (k.option[0] if k.option else None) for k in kinds.study_kinds()
+                   if k.family == "ballistic"}
 
 
 def _flight(a: Analysis):

@@ -22,21 +22,14 @@ from flipstudy.errors import StimulusError
 from .injection import Injected, _lowest
 from .motion.clip import Clip
 from .physics import momentum
+from flipstudy.vocab import kinds
 
 #: the manifest's extra columns of a study that uses a ballistic kind (its rows of
 #: every kind have them; the default study's manifest does not)
 from .contract import EXTRA_COLUMNS  # the ballistic columns are part of the contract
 
-#: per kind: what is changed (quantity, unit)
-QUANTITY = {"gravity": ("apparent gravity", "m/s²"),
-            "horizontal-velocity": ("horizontal take-off velocity", "m/s"),
-            "vertical-velocity": ("vertical take-off velocity", "m/s"),
-            "acceleration": ("added in-flight acceleration", "m/s²"),
-            "time-scale": ("playback rate of the flight", "×"),
-            "pose-rate": ("pose updates per second", "poses/s"),
-            "angular-momentum": ("|L| change", "%"),
-            "takeoff-angle": ("horizontal take-off velocity change", "%"),
-            "reference": ("none", "")}
+#: per kind: what is changed (quantity, unit), as the registry declares it
+QUANTITY = {**{k.name: k.quantity for k in kinds.study_kinds()}, "reference": ("none", "")}
 
 
 def fit_free(com: np.ndarray, t: np.ndarray) -> np.ndarray:
@@ -185,7 +178,8 @@ def measure_ballistic(original: Analysis, inj: Injected) -> dict:
 def _quantity(inj: Injected, m: dict, g_o: float, vh_o: float, v_o: np.ndarray, fps: float) -> dict:
     """quantity, unit, nominal and measured value and ``measured_error_pct``."""
     kind, e = inj.kind, inj.error
-    q, unit = QUANTITY.get(kind, (kind, ""))
+    entry = kinds.find(kind)
+    q, unit = entry.quantity if entry is not None else QUANTITY.get(kind, (kind, ""))
     if kind == "gravity":
         nom, got, err = (1 + e) * g_o, m["apparent_gravity"], m["apparent_gravity"] / g_o - 1
     elif kind == "horizontal-velocity":

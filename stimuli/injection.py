@@ -44,13 +44,13 @@ from flipstudy.errors import FlipstudyValueError, StimulusError
 from .flight import path_values
 from .motion.clip import Clip, derived_meta
 from .physics import center_of_mass
+from flipstudy.vocab import kinds
 
-KINDS = ("angular-momentum", "takeoff-angle",
-         # the ballistic kinds of flipstudy.stimuli.ballistic
-         "gravity", "horizontal-velocity", "vertical-velocity", "acceleration", "time-scale",
-         "pose-rate")
-PROFILES = ("smooth", "abrupt")
-COM_POLICIES = ("angle", "landing")
+#: the kinds a design may inject, as registered (:mod:`flipstudy.vocab.kinds`) when
+#: this module was imported (the design reads the registry itself)
+KINDS = kinds.study_kind_names()
+PROFILES = kinds.AM.variants
+COM_POLICIES = kinds.COM_POLICIES
 
 
 @dataclass
@@ -169,7 +169,7 @@ def inject_angular_momentum(a: Analysis, error: float, profile: str = "smooth",
     shift[ld_new + 1:] = end_new - c_end
     out = new.replace(root_pos=new.root_pos + shift,
                       meta=derived_meta(clip.meta, f"angular-momentum {profile} {error:+.3f}"))
-    return Injected(out, "angular-momentum", profile, float(error), to, ld_new, src, Tn,
+    return Injected(out, kinds.AM.name, profile, float(error), to, ld_new, src, Tn,
                     float(t_to), float(t_ld_new))
 
 
@@ -192,7 +192,7 @@ def inject_takeoff_angle(a: Analysis, error: float) -> Injected:
     shift = error * vh[None] * np.clip(t, 0.0, T)[:, None]
     out = clip.replace(root_pos=clip.root_pos + shift,
                        meta=derived_meta(clip.meta, f"takeoff-angle {error:+.3f}"))
-    return Injected(out, "takeoff-angle", None, float(error), a.takeoff, a.landing, None, T,
+    return Injected(out, kinds.TAKEOFF_ANGLE.name, None, float(error), a.takeoff, a.landing, None, T,
                     float(t_to), float(t_ld))
 
 
@@ -285,7 +285,7 @@ def measure(original: Analysis, inj: Injected) -> dict:
     Lo = original.L_norm
     k = np.arange(inj.takeoff, inj.landing + 1)
     n = k.size
-    if inj.kind == "angular-momentum":
+    if inj.kind == kinds.AM.name:
         src = inj.rate_src[k]
         # the original's |L| at the source instants, from its own airborne frames only
         ko = np.arange(original.takeoff, original.landing + 1)

@@ -86,9 +86,10 @@ def load_clip(spec: str, scale: float | None = None, fps: float | None = None,
         return clip                         # physically exact at any fps
     p = Path(spec)
     if not p.exists():
+        from ._io import missing_file_hint
         raise FlipstudyFileNotFoundError(f"{spec}: neither a built-in clip ({', '.join(BUILTIN_NAMES)}) "
                                          f"nor an existing BVH, joint-position (.npy/.npz) or AMASS "
-                                         f"(.npz) file")
+                                         f"(.npz) file ({missing_file_hint(p, spec, also=BUILTIN_NAMES)})")
     check = check and gate
     if p.suffix.lower() in POSITION_SUFFIXES:
         from .motion.positions import load_positions

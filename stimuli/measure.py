@@ -77,6 +77,7 @@ from .ballistic_measure import fit_free, pose_updates
 from .flight import contact_mask, effector_points, foot_points
 from .measure_fits import _ground_fit, _ground_velocity, _quad, split_trend_step, velocity_jolt  # noqa: F401
 from .motion.clip import Clip
+from flipstudy.vocab import kinds
 
 #: frames of a ground phase through which a quadratic gives its velocity at a contact
 #: instant (the last three before take-off, the first three after touchdown: on the
@@ -112,18 +113,15 @@ SMALL_L = 10.0
 #: a foot point is on the floor while within this (m, for a 1.7 m body) of its contact level
 SKATE_TOUCH = 0.02
 
-UNITS = {"gravity": "% of 9.81", "acceleration": "% of 9.81", "time-scale": "%",
-         "angular-momentum": "%", "air-jolt": "m/s", "takeoff-angle": "%",
-         "horizontal-velocity": "%", "vertical-velocity": "%",
-         "takeoff-velocity-jump": "m/s", "landing-velocity-jump": "m/s",
-         "pose-rate": "poses/s", "foot-skate": "mm", "penetration": "mm", "floating": "mm"}
+#: kind -> the unit of its measured sizes (the registry's, :mod:`flipstudy.vocab.kinds`)
+UNITS = kinds.measured_units()
 
 
 @dataclass(frozen=True)
 class Inconsistency:
     """One physical inconsistency of a motion.
 
-    ``kind``: the study kind that injects it (:data:`flipstudy.stimuli.injection.KINDS`)
+    ``kind``: the study kind that injects it (a kind of the registry, :mod:`flipstudy.vocab.kinds`)
     or one of the extra kinds; ``variant``: "smooth"/"abrupt" (angular momentum),
     "horizontal"/"vertical" (acceleration, landing components), else "";
     ``phase``: "flight 1", "takeoff 1", "landing 1", "ground 0", "clip";
@@ -240,7 +238,7 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
     phases.sort(key=lambda p: p[2])
 
     def add(kind, variant, phase, size, t0, t1, worst, same_as=""):
-        unit = "%" if kind == "landing-velocity-jump" and variant else UNITS[kind]
+        unit = "%" if kind == "landing-velocity-jump" and variant else kinds.get(kind).unit
         items.append(Inconsistency(kind, variant, phase, float(size), unit, float(t0),
                                    float(t1), float(worst), same_as))
 
@@ -271,49 +269,7 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
                             f"is given as a magnitude")
         add("acceleration", "horizontal", ph, 100.0 * along / G0, t_to, t_ld, mid)
 
-        # contacts: the ground phase before (after) against the flight.  Frames beside the
-        # flight that still lie on its parabola are the flight's (a stimulus whose feet stay
-        # at the floor a few frames after its velocity changed): the velocity changes where
-        # the COM leaves the parabola, which is where the two sides are compared
-        res = com[fr] - _quad(cf, t)
-        thr = max(3.0 * float(np.sqrt(np.mean(np.sum(res * res, 1)))), ON_PATH * size)
-        prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
-        next_start = flights[i].takeoff_time if i < len(flights) else np.inf
-        inst = {}
-        for p, t_c, side in ((f"takeoff {i}", t_to, -1), (f"landing {i}", t_ld, 1)):
-            lim = (frame_t >= prev_end - 1e-9) if side < 0 else (frame_t <= next_start + 1e-9)
-            near = (frame_t <= t_c + 1e-9) if side < 0 else (frame_t >= t_c - 1e-9)
-            g_fr = np.flatnonzero(lim & near)
-            g_fr = g_fr[::-1] if side < 0 else g_fr                  # nearest the contact first
-            k = g_fr[:int(round(EXTEND_S * fps))]
-            on = np.linalg.norm(com[k] - _quad(cf, frame_t[k]), axis=1) <= thr
-            n_on = int(np.argmin(on)) if not on.all() else on.size
-            n_on = n_on if n_on > 1 else 0          # the frame at the instant is both sides'
-            if n_on:
-                if n_on < k.size:                    # where the position meets: the instant
-                    tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
-                    gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
-                    t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-                    if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
-                        t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
-                warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
-                                f"ground phase the analyser finds; its velocity changes at "
-                                f"{t_c:.4f} s, where the sides are compared")
-            gf = np.sort(g_fr[n_on:][:GROUND_FRAMES])
-            if gf.size < 3:
-                warnings.append(f"{p}: fewer than 3 ground frames beside it; not measured")
-                continue
-            vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
-            if not n_on and np.linalg.norm(va - vg) > 0.05 and g_fr.size:
-                # the velocity changes: the instant is where the two sides' positions meet,
-                # between the nearest ground frame and the flight's nearest frame
-                tt = np.linspace(g_fr[0], g_fr[0] - side, 41) / fps
-                gq = _ground_fit(com, fps, gf, tt)
-                t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
-                vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
-            inst[side] = t_c
-            add(f"{p.split()[0]}-velocity-jump", "", p, np.linalg.norm(va - vg), t_c, t_c, t_c)
-            _components(add, warnings, p, va, vg, t_c, takeoff=side < 0)
+        inst = _contacts(add, warnings, com, frame_t, fps, fr, t, cf, size, flights, i, t_to, t_ld, v_air)
 
         # |L| over the flight, from the instants where the COM joins and leaves its parabola
         t0_, t1_ = inst.get(-1, t_to), inst.get(1, t_ld)
@@ -321,8 +277,8 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
         if L0 < SMALL_L * clip_mass(a) / 70.0:
             warnings.append(f"{ph}: |L| is {L0:.1f} kg·m²/s, small (a flip's is 25-50): its "
                             f"changes in % are large for small absolute changes")
-        add("angular-momentum", "smooth", ph, smooth, t_to, t_ld, t_ld)
-        add("angular-momentum", "abrupt", ph, step, t_to, t_ld,
+        add(kinds.AM.name, "smooth", ph, smooth, t_to, t_ld, t_ld)
+        add(kinds.AM.name, "abrupt", ph, step, t_to, t_ld,
             t0_ + t_step if np.isfinite(t_step) else mid)
         jolt, t_j = velocity_jolt(t, com[fr])
         add("air-jolt", "", ph, jolt, t_to, t_ld, t_j)
@@ -330,7 +286,66 @@ def measure(clip: Clip, analysis: Analysis | None = None) -> Measurement:
     add("pose-rate", "", "clip", 0.0, 0.0, dur, 0.0)
 
     _ground(add, warnings, clip, a, phases, fps)
+    _registered(add, clip, a)
     return Measurement(name, fps, float(dur), tuple(phases), tuple(items), tuple(warnings))
+
+
+def _contacts(add, warnings, com, frame_t, fps, fr, t, cf, size, flights, i, t_to, t_ld, v_air) -> dict:
+    """The take-off and landing items of flight ``i`` (1-based; ``fr``, ``t``: its
+    frames and their times, ``cf``: its fitted parabola, ``v_air``: its velocity) and
+    the instants where the COM joins and leaves the parabola, ``{-1: take-off, 1: landing}``."""
+    # contacts: the ground phase before (after) against the flight.  Frames beside the
+    # flight that still lie on its parabola are the flight's (a stimulus whose feet stay
+    # at the floor a few frames after its velocity changed): the velocity changes where
+    # the COM leaves the parabola, which is where the two sides are compared
+    res = com[fr] - _quad(cf, t)
+    thr = max(3.0 * float(np.sqrt(np.mean(np.sum(res * res, 1)))), ON_PATH * size)
+    prev_end = flights[i - 2].landing_time if i > 1 else -np.inf
+    next_start = flights[i].takeoff_time if i < len(flights) else np.inf
+    inst = {}
+    for p, t_c, side in ((f"takeoff {i}", t_to, -1), (f"landing {i}", t_ld, 1)):
+        lim = (frame_t >= prev_end - 1e-9) if side < 0 else (frame_t <= next_start + 1e-9)
+        near = (frame_t <= t_c + 1e-9) if side < 0 else (frame_t >= t_c - 1e-9)
+        g_fr = np.flatnonzero(lim & near)
+        g_fr = g_fr[::-1] if side < 0 else g_fr                  # nearest the contact first
+        k = g_fr[:int(round(EXTEND_S * fps))]
+        on = np.linalg.norm(com[k] - _quad(cf, frame_t[k]), axis=1) <= thr
+        n_on = int(np.argmin(on)) if not on.all() else on.size
+        n_on = n_on if n_on > 1 else 0          # the frame at the instant is both sides'
+        if n_on:
+            if n_on < k.size:                    # where the position meets: the instant
+                tt = np.linspace(k[n_on], k[n_on - 1], 41) / fps
+                gq = _ground_fit(com, fps, np.sort(g_fr[n_on:][:GROUND_FRAMES]), tt)
+                t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+                if abs(t_c * fps - k[n_on - 1]) < AT_FRAME:   # at a frame: both sides'
+                    t_c, n_on = float(k[n_on - 1] / fps), n_on - 1
+            warnings.append(f"{p}: the COM stays on the flight's parabola {n_on} frames into the "
+                            f"ground phase the analyser finds; its velocity changes at "
+                            f"{t_c:.4f} s, where the sides are compared")
+        gf = np.sort(g_fr[n_on:][:GROUND_FRAMES])
+        if gf.size < 3:
+            warnings.append(f"{p}: fewer than 3 ground frames beside it; not measured")
+            continue
+        vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+        if not n_on and np.linalg.norm(va - vg) > 0.05 and g_fr.size:
+            # the velocity changes: the instant is where the two sides' positions meet,
+            # between the nearest ground frame and the flight's nearest frame
+            tt = np.linspace(g_fr[0], g_fr[0] - side, 41) / fps
+            gq = _ground_fit(com, fps, gf, tt)
+            t_c = float(tt[np.argmin(np.linalg.norm(gq - _quad(cf, tt), axis=1))])
+            vg, va = _ground_velocity(com, fps, gf, t_c), v_air(t_c)
+        inst[side] = t_c
+        add(f"{p.split()[0]}-velocity-jump", "", p, np.linalg.norm(va - vg), t_c, t_c, t_c)
+        _components(add, warnings, p, va, vg, t_c, takeoff=side < 0)
+    return inst
+
+
+def _registered(add, clip: Clip, a: Analysis) -> None:
+    """The items of the kinds registered with a measure of their own (:mod:`flipstudy.vocab.kinds`)."""
+    for entry in kinds.all_kinds():
+        extra = entry.measurer()
+        if extra is not None:
+            extra(clip, a, add)
 
 
 def clip_mass(a: Analysis) -> float:

@@ -22,9 +22,12 @@ The folder ``out`` is handled so that a study is never lost:
   is replaced only if the caller passes ``replace_check``, a function
   ``replace_check(folder, foreign_names)`` that raises to refuse; the
   ``flipstudy stimuli`` command passes one that refuses while the study holds
-  any real participant's answer (:func:`flipstudy.study.archive.refuse_real_answers`).
-  The check runs again at the moment of the swap, so a study copied to ``out``
-  while the build runs is not deleted either.
+  any real participant's answer (:func:`flipstudy.study.archive.refuse_real_answers`)
+  and returns the files other commands made and recorded that may go with the old
+  set.  Every other file, at any depth (the researcher's ``consent.md``,
+  ``analysis/``), is kept in the new study (:mod:`.replace`).  The check runs again
+  at the moment of the swap, so a study copied to ``out`` while the build runs is
+  not deleted either.
 """
 
 from __future__ import annotations
@@ -49,10 +52,12 @@ from types import SimpleNamespace
 import numpy as np
 
 from ._progress import Progress
+from .replace import BUILD_FILES, carry, discard_old, kept_files, own_files  # noqa: F401 (BUILD_FILES)
 from .analyse import analyse
 from .design import GIVEN_KIND, SHARED_ORIGINAL_GROUP, Design, Group, SourceGroup, SourceSpec
-from .injection import Injected, check, inject_angular_momentum, inject_takeoff_angle, measure
-from .ballistic import BALLISTIC_KINDS, check_design_flights, inject_kind
+from .injection import Injected, check, measure
+from .ballistic import check_design_flights
+from flipstudy.vocab import kinds
 from .ballistic_measure import EXTRA_COLUMNS, measure_ballistic
 from .contract import MANIFEST_COLUMNS, StimulusSet  # noqa: F401  (MANIFEST_COLUMNS: re-exported)
 from flipstudy.errors import ManifestError
@@ -78,8 +83,11 @@ def load_base_clip(spec, design: Design) -> Clip:
         if not p.is_absolute() and design.path is not None:
             p = design.path.parent / p
         if not p.exists():
+            from ._io import missing_file_hint
+            hint = missing_file_hint(p, spec.source, also=BUILTIN_NAMES,
+                                     base=design.path.parent if design.path is not None else None)
             raise DesignError(f"{where}clips '{spec.name}': source {spec.source!r} is neither a built-in clip "
-                              f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p})")
+                              f"({', '.join(BUILTIN_NAMES)}) nor an existing BVH file ({p}; {hint})")
         from .loading import POSITION_SUFFIXES, check_up_axis, load_clip
         if p.suffix.lower() in POSITION_SUFFIXES:   # joint positions (22: humanml3d-22); the design's gate runs below
             clip = load_clip(str(p), scale=spec.scale, fps=spec.fps, gate=False)
@@ -149,7 +157,7 @@ def clip_arrays(clip: Clip, takeoff: int, landing: int) -> dict:
 
 
 #: the pseudo-group of a clip's shared original (level 0 of every sharing group)
-SHARED_ORIGINAL = Group(SHARED_ORIGINAL_GROUP, "angular-momentum", None, 1, [0.0], "shared")
+SHARED_ORIGINAL = Group(SHARED_ORIGINAL_GROUP, kinds.AM.name, None, 1, [0.0], "shared")
 
 
 def plan(design: Design) -> list[tuple]:
@@ -340,7 +348,7 @@ def uses_ballistic_kinds(design: Design) -> bool:
     """Does a design use a kind of :mod:`flipstudy.stimuli.ballistic`?  Its
     manifest then has the columns of :data:`flipstudy.stimuli.ballistic_measure.EXTRA_COLUMNS`
     (after ``style``), for every row."""
-    return any(g.kind in BALLISTIC_KINDS for g in design.groups)
+    return any(g.kind in kinds.ballistic_kind_names() for g in design.groups)
 
 
 def _options(group) -> dict:
@@ -359,33 +367,28 @@ def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
     name, spec, group, level = item
     tmp = Path(folder)
     extended = uses_ballistic_kinds(design)
+    entry = kinds.find(group.kind) if group is not None else None
     if group is None or level == 0:
         inj = Injected(a.clip, group.kind if group else "reference",
                        group.profile if group else None, 0.0, a.takeoff, a.landing,
                        np.arange(a.clip.num_frames, dtype=float), a.flight_s,
                        a.takeoff_time, a.landing_time, opts=_options(group))
-    elif group.kind == "angular-momentum":
-        inj = inject_angular_momentum(a, group.sign * level / 100.0, group.profile,
-                                      design.com_policy)
-    elif group.kind in BALLISTIC_KINDS:
-        try:
-            inj = inject_kind(a, group.kind, group.sign * level / 100.0,
-                              group.policy or group.axis or group.span, rate=level)
-        except StimulusError as e:
-            raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
     else:
-        inj = inject_takeoff_angle(a, group.sign * level / 100.0)
+        try:
+            inj = entry.injector()(a, group, level, design)
+        except StimulusError as e:
+            if entry.family != "ballistic":
+                raise
+            raise StimulusError(f"{name} (group '{group.name}', level {level:g}): {e}") from None
+    ballistic = inj.kind in kinds.ballistic_kind_names()
     if inj.kind == "reference":
-        m = measure(a, Injected(a.clip, "takeoff-angle", None, 0.0, a.takeoff, a.landing,
+        m = measure(a, Injected(a.clip, kinds.TAKEOFF_ANGLE.name, None, 0.0, a.takeoff, a.landing,
                                 None, a.flight_s, a.takeoff_time, a.landing_time))
         m["measured_error_pct"] = 0.0
-    elif inj.kind in BALLISTIC_KINDS:
-        m = measure_ballistic(a, inj)
-        check(m, inj, design.tolerance_pct, name, "[study] tolerance_pct")
     else:
-        m = measure(a, inj)
+        m = kinds.get(inj.kind).checker()(a, inj)
         check(m, inj, design.tolerance_pct, name, "[study] tolerance_pct")
-    if extended and inj.kind not in BALLISTIC_KINDS:
+    if extended and not ballistic:
         m = {**measure_ballistic(a, inj), **m}
         m["nominal_value"], m["measured_value"] = (group.sign * level if group else 0.0), \
             m["measured_error_pct"]
@@ -400,7 +403,7 @@ def make_stimulus(design: Design, a, item: tuple, folder) -> dict:
         "kind": group.kind if group else "reference",
         "profile": (group.profile or "") if group else "",
         "level": level,
-        "nominal_error_pct": 100.0 * inj.error if group and group.kind in BALLISTIC_KINDS
+        "nominal_error_pct": 100.0 * inj.error if group and entry is not None and entry.family == "ballistic"
         else (group.sign * level if level else 0.0) if group else 0.0,
         "measured_error_pct": m["measured_error_pct"],
         "takeoff_angle_deg": m["takeoff_angle_deg"],
@@ -435,7 +438,6 @@ def write_manifest(path: Path, rows: list[dict]) -> None:
 
 AT_FDCWD = -100
 RENAME_NOREPLACE, RENAME_EXCHANGE = 1, 2
-BUILD_FILES = ("manifest.csv", "design.toml")
 
 
 def lock_path(out) -> Path:
@@ -503,36 +505,35 @@ def _renameat2(src: Path, dst: Path, flags: int) -> bool:
 
 def foreign_files(folder) -> list[str]:
     """Top-level names in ``folder`` that a build does not write (folders end in
-    ``/``): everything but ``manifest.csv``, ``design.toml`` and the ``.bvh`` /
-    ``.npz`` files its manifest lists."""
+    ``/``): everything but ``manifest.csv``, ``design.toml``, the ``.bvh`` / ``.npz``
+    files its manifest lists and ``.locks``."""
     folder = Path(folder)
-    ours = set(BUILD_FILES)
-    try:
-        for r in StimulusSet.read(folder, files=False, design=False):
-            ours.update((str(r.bvh), str(r.npz)))
-    except (OSError, ManifestError):
-        ours = set()                      # no readable manifest: nothing here is known to be ours
-    ours.add(".locks")                    # who serves or replaces the study: no data of it
+    ours = own_files(folder)
     return sorted(p.name + ("/" if p.is_dir() else "") for p in folder.iterdir() if p.name not in ours)
 
 
-def _check_replaceable(folder: Path, replace_check, shown: Path) -> None:
+def _check_replaceable(folder: Path, replace_check, shown: Path) -> set:
+    """Refuse (raise) unless ``folder`` may be replaced; returns the names below it
+    that ``replace_check`` lets go with it (a set it returned), else none: every
+    file not the build's own is then kept (:mod:`.replace`)."""
     if folder.is_symlink() or not folder.is_dir():
         raise StudyFolderError(f"{shown} exists and is not a folder; choose another --out")
     foreign = foreign_files(folder)
     if not foreign:
-        return
+        return set()
     if replace_check is None:
         listed = ", ".join(foreign[:6]) + (", ..." if len(foreign) > 6 else "")
         raise StudyFolderError(
             f"{shown} holds files a stimuli build did not write ({listed}): participants' answers "
             f"or renders may be among them, so it is not replaced. Move it aside first "
             f"(`flipstudy archive {shown}`) or choose another --out")
-    replace_check(folder, foreign)
+    got = replace_check(folder, foreign)
+    return set(got) if isinstance(got, (set, frozenset)) else set()
 
 
 def _install(tmp: Path, out: Path, force: bool, replace_check) -> None:
-    """Put the finished build ``tmp`` at ``out`` (under the lock)."""
+    """Put the finished build ``tmp`` at ``out`` (under the lock), keeping every file
+    of the old ``out`` that neither the old build nor ``replace_check`` made."""
     if not (out.exists() or out.is_symlink()):
         if _renameat2(tmp, out, RENAME_NOREPLACE):
             return
@@ -543,20 +544,24 @@ def _install(tmp: Path, out: Path, force: bool, replace_check) -> None:
     if not force:
         raise FlipstudyFileExistsError(f"{out} appeared while the build ran; it is left as it is "
                               f"(pass --force to replace it)")
-    _check_replaceable(out, replace_check, out)
+    removable = _check_replaceable(out, replace_check, out)
+    carry(out, tmp, kept_files(out, removable))           # the researcher's files go along
+    old = out.parent / f".{out.name}.old-{os.getpid()}"   # a killed build's: sorted out by the next
     if _renameat2(tmp, out, RENAME_EXCHANGE):             # atomic: out is always a complete study
+        os.rename(tmp, old)                              # the old study, never taken for a new build
         try:                                             # what was swapped out, checked once more
-            _check_replaceable(tmp, replace_check, out)
+            removable = _check_replaceable(old, replace_check, out)
         except BaseException:                          # answers arrived in the last instant
-            if not _renameat2(tmp, out, RENAME_EXCHANGE):  # swap back; never delete them
-                os.rename(tmp, out.parent / f"{out.name}.previous-{os.getpid()}")
+            if _renameat2(old, out, RENAME_EXCHANGE):      # swap back; never delete them
+                shutil.rmtree(old, ignore_errors=True)    # the new build (links to kept files)
+            else:
+                os.rename(old, out.parent / f"{out.name}.previous-{os.getpid()}")
             raise
-        shutil.rmtree(tmp, ignore_errors=True)
+        discard_old(old, out, removable)
         return
-    old = out.parent / f".{out.name}.old-{os.getpid()}"   # fallback: restored by the next build
     os.rename(out, old)
     os.rename(tmp, out)
-    shutil.rmtree(old, ignore_errors=True)
+    discard_old(old, out, removable)
 
 
 def _recover_and_clean(out: Path) -> None:
@@ -567,5 +572,10 @@ def _recover_and_clean(out: Path) -> None:
     olds = sorted(parent.glob(f".{out.name}.old-*"), key=lambda p: p.stat().st_mtime)
     if olds and not (out.exists() or out.is_symlink()):
         os.rename(olds.pop(), out)
-    for p in olds + list(parent.glob(f".{out.name}.tmp-*")):
+    for p in olds:                        # a killed replace: only what it may delete goes
+        if out.is_dir():
+            discard_old(p, out, ())
+        else:
+            shutil.rmtree(p, ignore_errors=True)
+    for p in parent.glob(f".{out.name}.tmp-*"):   # a new build's files (and links to kept ones)
         shutil.rmtree(p, ignore_errors=True)

@@ -2,11 +2,13 @@
 and ``flipstudy archive`` (move a whole study aside, under a dated name).
 
 "Real answers" are answers of participants who are not simulated: rows of
-``sessions.sqlite`` whose session's ``source`` is not ``simulated``, and rows of
+``sessions.sqlite`` whose session's ``source`` is not ``simulated`` (or that have no
+session row), the raw web results ``import-web`` keeps (``web/imports/*``), and rows of
 any exported or imported response table in the folder (a ``*.csv`` with
 ``participant`` and ``response`` columns) that are not marked simulated (column
 ``simulated`` true, or ``input`` = ``simulated`` in tables exported before that
-column existed).  A database that cannot be read counts as holding real answers.
+column existed).  A database that cannot be read, or that lacks one of its tables,
+counts as holding real answers.
 
 Examples
 --------
@@ -35,28 +37,39 @@ import sqlite3
 from datetime import datetime, timezone
 from pathlib import Path
 
-from flipstudy.errors import ArchiveError, StudyHasAnswers
+from flipstudy.errors import ArchiveError, StudyHasAnswersError
 
-from .store import DB_NAME
+from .store import DB_NAME, SCHEMA
 
 TRUE = {"1", "true", "yes", "y", "t"}
+#: where ``import-web`` keeps the raw web results it read
+RAW_DIR = "web/imports"
 
 
 def _db_answers(path: Path) -> tuple[dict, dict]:
     """(real, simulated): participant → number of answers, from ``sessions.sqlite``."""
+    from .storefile import file_problem, missing_tables, what_is_missing
     real: dict = {}
     sim: dict = {}
+    problem = file_problem(path)
+    if problem is not None:
+        raise sqlite3.DatabaseError(problem)
     uri = f"file:{path}?mode=rw"           # never creates; as the last reader it removes the -wal/-shm it made
     conn = sqlite3.connect(uri, uri=True, timeout=30.0)
     try:
         tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-        if not {"sessions", "responses"} <= tables:
-            return real, sim
-        for pid, source, n in conn.execute(
-                "SELECT r.participant, s.source, COUNT(*) FROM responses r JOIN sessions s "
+        if not tables:
+            return real, sim                 # an empty database: a store not used yet
+        gone = missing_tables(conn, SCHEMA,        # a version-1 store lacks version 2's columns
+                              columns=conn.execute("PRAGMA user_version").fetchone()[0] != 1)
+        if gone:                             # answers may be in what is left: never "none"
+            raise sqlite3.DatabaseError(what_is_missing(gone))
+        for pid, source, n in conn.execute(  # an answer without its session row is a real one
+                "SELECT r.participant, s.source, COUNT(*) FROM responses r LEFT JOIN sessions s "
                 "ON s.participant = r.participant AND s.session = r.session "
                 "GROUP BY r.participant, s.source"):
-            (sim if source == "simulated" else real)[pid] = n
+            d = sim if source == "simulated" else real
+            d[pid] = d.get(pid, 0) + n
     finally:
         conn.close()
     return real, sim
@@ -91,7 +104,7 @@ def answers_in(study_dir) -> dict:
     sim: dict = {}
     where, unreadable = [], []
     db = d / DB_NAME
-    if db.exists():
+    if db.exists() or db.is_symlink():
         try:
             r, s = _db_answers(db)
         except sqlite3.Error as e:
@@ -121,9 +134,28 @@ def answers_in(study_dir) -> dict:
                 real[k] = max(real.get(k, 0), v)
             for k, v in s.items():
                 sim[k] = max(sim.get(k, 0), v)
+    raw = _raw_imports(d)
+    if raw:
+        where.append(f"{RAW_DIR}/")
     return {"real_answers": sum(real.values()), "real_participants": sorted(real),
             "simulated_answers": sum(sim.values()), "simulated_participants": sorted(sim),
-            "where": where, "unreadable": unreadable}
+            "where": where, "unreadable": unreadable, "raw_imports": raw}
+
+
+def _raw_imports(d: Path) -> list[str]:
+    """The raw web results ``import-web`` keeps (``web/imports/*``): participants'
+    answers as they came, whatever the tables say."""
+    from .owned import files_below
+    imports = d / RAW_DIR
+    if not imports.is_dir() or imports.is_symlink():
+        return [RAW_DIR] if imports.exists() or imports.is_symlink() else []
+    return [f"{RAW_DIR}/{f}" for f in files_below(imports)]
+
+
+def holds_answers(a: dict) -> bool:
+    """Does the :func:`answers_in` summary ``a`` count anything a command must not
+    replace: a real answer, a file that could not be read, a raw web result?"""
+    return bool(a["real_answers"] or a["unreadable"] or a.get("raw_imports"))
 
 
 def describe(a: dict) -> str:
@@ -137,6 +169,8 @@ def describe(a: dict) -> str:
                      f"participant(s) ({', '.join(a['where'])})")
     if a["unreadable"]:
         parts.append(f"file(s) that could not be read ({', '.join(a['unreadable'])})")
+    if a.get("raw_imports"):
+        parts.append(f"{len(a['raw_imports'])} raw web result file(s) kept by import-web ({RAW_DIR}/)")
     if a["simulated_answers"]:
         parts.append(f"{answers(a['simulated_answers'])} of {len(a['simulated_participants'])} "
                      f"simulated participant(s)")
@@ -144,13 +178,13 @@ def describe(a: dict) -> str:
 
 
 def refuse_real_answers(folder, foreign=(), *, shown=None, command: str = "stimuli --force"):
-    """Raise :class:`StudyHasAnswers` when ``folder`` holds any real answer (or a
+    """Raise :class:`StudyHasAnswersError` when ``folder`` holds any real answer (or a
     file that cannot be read); return the :func:`answers_in` summary otherwise.
     Used as ``replace_check`` of :func:`flipstudy.stimuli.stimset.build_stimuli`."""
     shown = Path(shown) if shown is not None else Path(folder)
     a = answers_in(folder)
-    if a["real_answers"] or a["unreadable"]:
-        raise StudyHasAnswers(
+    if holds_answers(a):
+        raise StudyHasAnswersError(
             f"{shown} holds {describe(a)}; `flipstudy {command}` never replaces a study with "
             f"participants' answers. Move it aside first with `flipstudy archive {shown}` (it "
             f"keeps everything, under {shown.name}-archived-DATE), or build into another --out")

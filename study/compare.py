@@ -14,6 +14,7 @@ from pathlib import Path
 import pandas as pd
 
 from flipstudy.errors import ComparisonError
+from flipstudy.records import CompareReport
 from flipstudy.results import CompareResult
 from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli.design import GIVEN_KIND
@@ -49,7 +50,7 @@ def analyze_comparison(study_dir, out_dir=None, *, responses=None, include_simul
     left to the error analysis).  Returns a
     :class:`flipstudy.analysis.compare.ComparisonAnalysis`."""
     from flipstudy.analysis.compare import analyze_choices, choices
-    from flipstudy.analysis.io import load_responses, select_participants
+    from flipstudy.analysis.io import load_responses, participants_label, select_participants
     d = Path(study_dir)
     stimuli = StimulusSet.read(d)
     if not stimuli.sourced:
@@ -68,8 +69,8 @@ def analyze_comparison(study_dir, out_dir=None, *, responses=None, include_simul
     metrics = clip_metrics(StimulusSet(stimuli.folder, [s for s in stimuli if s.stimulus in used]))
     out = Path(out_dir) if out_dir is not None else d / "analysis"
     res = analyze_choices(ch, stimuli.sources(), metrics, out, n_boot=n_boot, ci=ci, seed=seed,
-                          figures=figures)
-    return CompareResult(out=out, report=res.to_dict())
+                          figures=figures, label=participants_label(who))
+    return CompareResult(out=out, report=CompareReport.from_dict(res.to_dict()))
 
 
 def is_comparison_study(path) -> bool:

@@ -21,9 +21,10 @@ from typing import Iterable
 import numpy as np
 
 from flipstudy.stimuli.contract import Stimulus, StimulusSet
+from flipstudy.vocab import kinds
 
-DEMO_GROUPS = (("smooth-increase", "angular-momentum", "smooth", 1),
-               ("abrupt-decrease", "angular-momentum", "abrupt", -1))
+DEMO_GROUPS = (("smooth-increase", kinds.AM.name, "smooth", 1),
+               ("abrupt-decrease", kinds.AM.name, "abrupt", -1))
 
 
 def write_test_video(path, *, size=(64, 48), frames: int = 30, fps: float = 30.0,
@@ -65,7 +66,7 @@ def demo_design_text(*, name="demo", seed=7, repetitions=2, replay=False, break_
         lines += ["[reference]", "clips = [" + ", ".join(f'"{c}"' for c in clips) + "]", ""]
     for g, kind, profile, sign in groups:
         lines += ["[[groups]]", f'name = "{g}"', f'kind = "{kind}"']
-        if kind == "angular-momentum":
+        if kinds.get(kind).profiled:
             lines.append(f'profile = "{profile}"')
         lines += [f"sign = {sign}", "levels = [" + ", ".join(f"{v:g}" for v in levels) + "]", ""]
     return "\n".join(lines) + ("\n" + extra if extra else "")

@@ -52,20 +52,17 @@ from pathlib import Path
 
 from flipstudy.stimuli.contract import StimulusSet
 from flipstudy.stimuli._io import atomic_write_text
+from flipstudy.vocab import answers
 
 from . import store
 from .lock import study_writer
 
-RESPONSE_COLUMNS = ["participant", "session", "trial", "stimulus", "group", "level", "repetition",
-                    "response", "rt_ms", "shown_ms", "timestamp", "clip", "kind", "late_frames",
-                    "replays", "input", "simulated", "complete"]
-ADAPTIVE_COLUMNS = ["method", "task", "first", "original_stimulus", "quest_threshold",
-                    "quest_ci_low", "quest_ci_high"]
+#: the columns, as the answer record declares them (:mod:`flipstudy.vocab.answers`)
+RESPONSE_COLUMNS = list(answers.RESPONSE_COLUMNS)
+ADAPTIVE_COLUMNS = list(answers.ADAPTIVE_COLUMNS)
 TRUTH_FILE = "simulated_truth.csv"
-TRUTH_COLUMNS = ["participant", "session", "group", "task", "threshold", "width", "gamma", "lapse"]
-PARTICIPANT_COLUMNS = ["participant", "session", "source", "age", "gender", "animation_experience",
-                       "gymnastics_experience", "started", "finished", "answered", "n_trials",
-                       "simulated", "complete"]
+TRUTH_COLUMNS = list(answers.TRUTH_COLUMNS)
+PARTICIPANT_COLUMNS = list(answers.PARTICIPANT_COLUMNS)
 
 
 def _flag(v) -> str:
@@ -234,3 +231,56 @@ def status(study_dir) -> list[dict]:
         return store.status_rows(conn)
     finally:
         conn.close()
+
+
+def _has_rows(path: Path) -> bool:
+    with open(path, newline="", encoding="utf-8") as f:
+        rows = csv.reader(f)
+        next(rows, None)                                   # the header
+        return any(any(cell.strip() for cell in row) for row in rows)
+
+
+def refuse_no_answers(path) -> None:
+    """Before ``flipstudy analyze``: a study folder without ``responses.csv``, or a
+    study's ``responses.csv`` without a row, raises :class:`~flipstudy.errors.NeedsExportError`
+    whose message names the commands that work from what the study's sessions hold
+    (none yet: ``run`` or ``simulate``; only simulated ones: ``--include-simulated``).
+    Anything else (a table with rows, a file outside a study) passes.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from flipstudy.errors import NeedsExportError
+    >>> from flipstudy.study.demo import make_demo_study
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     study = make_demo_study(pathlib.Path(tmp) / "s", videos=False)
+    ...     try:
+    ...         refuse_no_answers(study)
+    ...     except NeedsExportError as e:
+    ...         print("no sessions yet" in str(e), "flipstudy simulate" in str(e))
+    True True
+    """
+    from flipstudy.errors import NeedsExportError
+    p = Path(path)
+    d, csv_path = (p, p / "responses.csv") if p.is_dir() else (p.parent, p)
+    if not (d / "manifest.csv").is_file() or (not p.is_dir() and not p.is_file()):
+        return
+    if csv_path.is_file() and _has_rows(csv_path):
+        return
+    what = f"{csv_path} holds no answers" if csv_path.is_file() else \
+        f"{d} is a study folder without responses.csv"
+    sessions = status(d) if store.db_path(d).exists() else []
+    n_real = sum(1 for s in sessions if not s["simulated"])
+    n_sim = len(sessions) - n_real
+    if n_real:
+        raise NeedsExportError(f"{what}: run `flipstudy export {d}` first, then `flipstudy analyze {d}`")
+    if n_sim:
+        raise NeedsExportError(f"{what}: its {n_sim} session(s) are all simulated, which export and "
+                          f"analyze leave out by default: run `flipstudy export {d} "
+                          f"--include-simulated`, then `flipstudy analyze {d} --include-simulated`")
+    web = (f"; answers imported from the web are analysed with `flipstudy analyze {d / 'web'}`"
+           if (d / "web" / "responses.csv").is_file() else "")
+    raise NeedsExportError(f"{what} and no sessions yet: run `flipstudy run {d} --participant ID`, then "
+                      f"`flipstudy export {d}` and `flipstudy analyze {d}`; or pilot it with "
+                      f"`flipstudy simulate {d} --participants 4`, `flipstudy export {d} "
+                      f"--include-simulated` and `flipstudy analyze {d} --include-simulated`{web}")

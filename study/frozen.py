@@ -34,7 +34,7 @@ import hashlib
 import sqlite3
 from pathlib import Path
 
-from flipstudy.errors import DesignFrozen
+from flipstudy.errors import DesignFrozenError
 
 from .store import DB_NAME
 
@@ -110,10 +110,10 @@ def design_change(study_dir) -> str | None:
 
 
 def refuse_changed_design(study_dir, command: str) -> None:
-    """Raise :class:`DesignFrozen` when :func:`design_change` finds a change."""
+    """Raise :class:`DesignFrozenError` when :func:`design_change` finds a change."""
     msg = design_change(study_dir)
     if msg is not None:
-        raise DesignFrozen(f"{msg}; `flipstudy {command}` refuses a study whose design changed")
+        raise DesignFrozenError(f"{msg}; `flipstudy {command}` refuses a study whose design changed")
 
 
 def write_design(out, text: str, *, force: bool = False) -> None:
@@ -122,7 +122,7 @@ def write_design(out, text: str, *, force: bool = False) -> None:
     without ``force``."""
     from flipstudy.stimuli._io import atomic_write_text
 
-    from .archive import answers_in, describe
+    from .archive import answers_in, describe, holds_answers
     from .lock import StudyLock, study_closed
     from .owned import is_study
     out = Path(out)
@@ -135,9 +135,8 @@ def write_design(out, text: str, *, force: bool = False) -> None:
         return
     with StudyLock(folder, "init"), study_closed(folder, "init --force"):
         a = answers_in(folder)
-        if a["real_answers"] or a["simulated_answers"] or a["unreadable"] or \
-                recorded_design(folder) is not None:
-            raise DesignFrozen(
+        if holds_answers(a) or a["simulated_answers"] or recorded_design(folder) is not None:
+            raise DesignFrozenError(
                 f"{out} is the design of the study {folder}, which holds {describe(a)}: a study's "
                 f"design is frozen once it has an answer (every participant must see the same "
                 f"design). Write the new design elsewhere and build a new study from it")

@@ -104,7 +104,7 @@ class Trial:
     def to_dict(self) -> dict:
         """The trial as JSON-able data (an unresolved slot's NaN level is None).
 
-        >>> Trial(3, "", "backflip", "g", "angular-momentum", math.nan, 1, "quest+").to_dict()["level"] is None
+        >>> Trial(3, "", "backflip", "g", "takeoff-angle", math.nan, 1, "quest+").to_dict()["level"] is None
         True
         """
         d = asdict(self)

@@ -5,17 +5,25 @@ A *study folder* is a folder with ``manifest.csv`` and ``design.toml`` (what
 ``flipstudy stimuli`` writes) or with ``sessions.sqlite``.  It owns:
 
 * ``sessions.sqlite`` (and its ``-wal``, ``-shm``, ``-journal``), ``manifest.csv``,
-  ``design.toml`` and the stimulus files (``*.bvh``, ``*.npz``) at its top;
+  ``design.toml``, the researcher's ``consent.md`` and ``debrief.md`` and the
+  stimulus files (``*.bvh``, ``*.npz``) at its top;
 * everything under ``render/`` (videos, ``render.json``), ``web/`` (imported
   results, ``web/responses.csv``, ``web/participants.csv``) and ``.locks/``;
 * the tables ``flipstudy export`` writes there (``responses.csv``,
   ``participants.csv``, ``simulated_truth.csv``, ``dataset_description.json``):
   only ``export`` of that study may write them;
-* the folder itself (an output folder may not be a study, hold one, or be one of
-  the owned folders above).
+* the folder itself (an output folder may not be a study, hold one at any depth,
+  or be one of the owned folders above).
 
 ``analysis/`` and any other name are the user's: ``analyze`` and ``figure`` write
 there freely.
+
+What a ``--force`` may delete or replace is one rule: only what the command made
+itself, as recorded when it made it (``export-web``: its ``flipstudy-site.json``;
+``reproduce``: :data:`MADE_RECORD`; ``stimuli``: its ``manifest.csv`` and the
+outputs other commands recorded, :func:`recorded_outputs`), never a file it did
+not write, at any depth (:func:`not_made`, :func:`refuse_not_made`); a study is
+recognised by its files at any depth below (:func:`study_below`).
 
 Examples
 --------
@@ -35,6 +43,7 @@ flipstudy.errors.OwnedPathError: .../st/manifest.csv is the stimulus list of the
 """
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from flipstudy.errors import OwnedPathError
@@ -47,6 +56,8 @@ STUDY_FILES = {
     "sessions.sqlite-journal": "the answer database's journal",
     "manifest.csv": "the stimulus list",
     "design.toml": "the design",
+    "consent.md": "the researcher's consent text",
+    "debrief.md": "the researcher's debrief text",
 }
 #: what ``flipstudy export`` writes into the study it exports (only it may)
 EXPORT_FILES = {
@@ -56,6 +67,10 @@ EXPORT_FILES = {
     "dataset_description.json": "the exported tables' description",
     "data": "the exported tables as Psych-DS data files (data/*_data.csv)",
 }
+#: at most this many files and folders are looked through below an output folder
+WALK_LIMIT = 200_000
+#: what SQLite writes beside a database, which goes with it
+SIDE_FILES = ("-wal", "-shm", "-journal")
 #: folders of a study folder whose every file it owns
 STUDY_DIRS = {"render": "the rendered videos", "web": "the web results",
               ".locks": "the server locks"}
@@ -105,14 +120,57 @@ def owner(path) -> tuple[Path, str, str] | None:
         elif top in EXPORT_FILES:           # data/: export's Psych-DS data files
             return parent, f"one of {EXPORT_FILES[top]}", str(rel)
         return None                       # inside a study, but the user's (analysis/, ...)
-    if p.is_dir():                        # a folder holding a study one level down
-        try:
-            for child in p.iterdir():
-                if child.is_dir() and is_study(child):
-                    return child, "inside the output folder", "."
-        except OSError:
-            pass
+    if p.is_dir():                        # a folder holding a study at any depth below
+        inner = study_below(p)
+        if inner is not None:
+            return inner, "inside the output folder", "."
     return None
+
+
+def _walk(folder: Path, limit: int):
+    """``(folder, dirnames, filenames)`` below ``folder`` (symbolic links to folders are
+    not followed: they are files here); more than ``limit`` entries refuse."""
+    seen = 0
+    for top, dirs, files in os.walk(folder, followlinks=False):
+        seen += len(dirs) + len(files)
+        if seen > limit:
+            raise OwnedPathError(f"{folder} holds more than {limit} files and folders; flipstudy does "
+                                 f"not replace or write into a folder it cannot look through for a "
+                                 f"study's files: choose a new or smaller folder")
+        links = [d for d in dirs if os.path.islink(os.path.join(top, d))]
+        dirs[:] = [d for d in dirs if d not in links]
+        yield Path(top), dirs, files + links
+
+
+def study_below(folder, *, limit: int = WALK_LIMIT) -> Path | None:
+    """The first study folder (:func:`is_study`) at any depth strictly below ``folder``,
+    recognised by its files (``sessions.sqlite``, or ``manifest.csv`` with
+    ``design.toml``); None when there is none."""
+    folder = Path(folder)
+    for top, dirs, files in _walk(folder, limit):
+        names = set(dirs) | set(files)
+        if top != folder and ("sessions.sqlite" in names or {"manifest.csv", "design.toml"} <= names):
+            return top
+    return None
+
+
+def files_below(folder, *, limit: int = WALK_LIMIT) -> list[str]:
+    """Every file (and symbolic link) at any depth below ``folder``, as sorted relative
+    POSIX names (``render/a.mp4``)."""
+    folder = Path(folder)
+    return sorted((top / f).relative_to(folder).as_posix() for top, _, files in _walk(folder, limit)
+                  for f in files)
+
+
+def not_made(folder, made, *, limit: int = WALK_LIMIT) -> list[str]:
+    """The files below ``folder`` that are not in ``made`` (relative POSIX names: what a
+    command recorded as it made them); a database's ``-wal``/``-shm``/``-journal``
+    go with it, and lock files (``.locks/``) are no one's.  What a ``--force`` may
+    replace is a folder where this is empty."""
+    made = set(made)
+    return [f for f in files_below(folder, limit=limit)
+            if f not in made and ".locks" not in f.split("/")[:-1]      # locks: no one's data
+            and not any(f == m + side for m in made for side in SIDE_FILES)]
 
 
 def refuse_owned(path, command: str, *, study=None, allow=()) -> None:
@@ -135,8 +193,78 @@ def refuse_owned(path, command: str, *, study=None, allow=()) -> None:
                          f"choose a path outside it (or under {folder}/analysis/)")
 
 
+#: what ``import-web`` and ``export-web`` write under ``web/`` (``web/imports/``: never)
+WEB_MADE = ("sites.json", "imports.json", "responses.csv", "participants.csv",
+            "dataset_description.json")
+
+
+def recorded_outputs(study_dir) -> set[str]:
+    """The files below a study folder that flipstudy commands made and recorded, which
+    go with its stimulus set when ``stimuli --force`` replaces it (relative POSIX
+    names): ``render/render.json`` and the outputs it lists, ``sessions.sqlite`` and
+    its side files, ``export``'s tables (:data:`EXPORT_FILES`, ``data/*_data.csv``) and
+    the tables of ``web/`` (:data:`WEB_MADE`, ``web/data/*_data.csv``).  Raw web
+    results (``web/imports/``) are never among them: they are answers."""
+    d = Path(study_dir)
+    made = {"sessions.sqlite" + side for side in ("", *SIDE_FILES)}
+    try:
+        import json
+        outputs = json.loads((d / "render" / "render.json").read_text(encoding="utf-8")).get("outputs")
+        if isinstance(outputs, dict):
+            made |= {"render/render.json"} | {f"render/{k}" for k in outputs if isinstance(k, str)}
+    except (OSError, ValueError, AttributeError):
+        pass
+    made |= {k for k in EXPORT_FILES if k != "data"} | {f"web/{k}" for k in WEB_MADE}
+    for sub in ("data", "web/data"):
+        if (d / sub).is_dir():
+            made |= {f"{sub}/{f}" for f in files_below(d / sub) if f.endswith("_data.csv") and "/" not in f}
+    return made
+
+
+#: the record of a folder a command makes whole (``reproduce``'s OUT): every file it wrote
+MADE_RECORD = ".flipstudy-made.json"
+
+
+def record_made(folder, command: str) -> None:
+    """Write :data:`MADE_RECORD` into ``folder``: ``command`` and every file below it
+    now, the files that command may replace later (:func:`made_by_record`)."""
+    import json
+    files = [f for f in files_below(folder) if f != MADE_RECORD]
+    (Path(folder) / MADE_RECORD).write_text(json.dumps({"command": command, "files": files},
+                                                       indent=1) + "\n", encoding="utf-8")
+
+
+def made_by_record(folder) -> set[str]:
+    """The files :func:`record_made` recorded in ``folder`` (and the record), or only
+    the record when there is none: then nothing else is known to be the command's."""
+    import json
+    try:
+        files = json.loads((Path(folder) / MADE_RECORD).read_text(encoding="utf-8")).get("files")
+    except (OSError, ValueError, AttributeError):
+        files = None
+    return {f for f in files if isinstance(f, str)} | {MADE_RECORD} if isinstance(files, list) \
+        else {MADE_RECORD}
+
+
+def refuse_not_made(folder, made, command: str, what: str) -> None:
+    """Raise :class:`OwnedPathError` when ``folder`` holds a file not in ``made``
+    (:func:`not_made`) or a study at any depth: ``command`` replaces ``folder`` only
+    when everything in it is what it made itself (``what``: "the earlier site")."""
+    folder = Path(folder)
+    inner = study_below(folder)
+    if inner is not None:
+        raise OwnedPathError(f"{folder} holds the study {inner}; `flipstudy {command}` never deletes "
+                             f"a study: move it out first, or choose another --out")
+    extra = not_made(folder, made)
+    if extra:
+        listed = ", ".join(extra[:4]) + (f" and {len(extra) - 4} more" if len(extra) > 4 else "")
+        raise OwnedPathError(f"{folder} holds file(s) that {what} did not have ({listed}); `flipstudy "
+                             f"{command}` replaces only what it made itself: move them out first, "
+                             f"or choose another --out")
+
+
 #: the options whose values are paths a command writes (checked before every command runs)
-OUTPUT_OPTIONS = ("out", "participants_out", "plot", "ghost", "strip")
+OUTPUT_OPTIONS = ("out", "participants_out", "plot", "ghost", "strip", "figure", "composite")
 #: commands whose ``--out`` is a study they build themselves (they guard it their own way)
 BUILDS_STUDY = ("stimuli", "reproduce")
 

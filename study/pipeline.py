@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from flipstudy.records import AnalyzeReport, PlanRow, SessionStatus
 from flipstudy.results import (AnalyzeResult, BuildResult, ExportResult, ImportResult, RenderResult,
                                PlanResult, ReproduceResult, SimulateResult,
                                StatusResult)
@@ -51,19 +52,43 @@ def build(design, out, *, force: bool = False, progress: bool = True, cluster: s
     replaced = {}
 
     def replace_check(folder, foreign):
-        # refuses while the study holds any real answer; otherwise notes what goes
+        # refuses while the study holds any real answer or another study; what other
+        # commands made and recorded goes with the old set, every other file is kept
         replaced["answers"] = refuse_real_answers(folder, foreign, shown=Path(out))
-        replaced["foreign"] = foreign
+        replaced.update(_replaceable(folder, Path(out)))
+        return replaced["removed"]
 
     from .lock import StudyLock, study_closed
     with StudyLock(out, "stimuli"), study_closed(out, "stimuli --force"), open_cluster(cluster) as c:
         res = build_stimuli(design, out, force=force, progress=progress, replace_check=replace_check,
                             cluster=c)
     if replaced:
+        kept = replaced["kept"]
         res = dataclasses.replace(res, replaced=(
             f"replaced {out}: it held no real participant's answers ({describe(replaced['answers'])}); "
-            f"removed with it: {', '.join(replaced['foreign'])}"))
+            f"removed with it: {', '.join(replaced['gone']) or 'nothing else'}"
+            + (f"; kept, as they were: {', '.join(kept[:6])}{' ...' if len(kept) > 6 else ''}"
+               if kept else "")))
     return res
+
+
+def _replaceable(folder: Path, shown: Path) -> dict:
+    """What ``stimuli --force`` does with the old study ``folder``: ``removed`` (the
+    recorded outputs that go with the old set), ``gone`` (those present, by top-level
+    name) and ``kept`` (every other file, which stays); refuses a study inside it."""
+    from flipstudy.errors import StudyHasAnswersError
+    from flipstudy.stimuli.replace import kept_files, own_files
+
+    from .owned import files_below, recorded_outputs, study_below
+    inner = study_below(folder)
+    if inner is not None:
+        raise StudyHasAnswersError(f"{shown} holds the study {inner}; `flipstudy stimuli --force` never "
+                              f"deletes a study: move it out first, or build into another --out")
+    removed = recorded_outputs(folder)
+    own = own_files(folder)
+    gone = sorted({f.split("/")[0] + ("/" if "/" in f else "") for f in files_below(folder)
+                   if f in removed and f.split("/")[0] not in own})
+    return {"removed": removed, "gone": gone, "kept": kept_files(folder, removed)}
 
 
 def render(study_dir, *, cluster: str | None = None, **options) -> RenderResult:
@@ -85,13 +110,13 @@ def render(study_dir, *, cluster: str | None = None, **options) -> RenderResult:
 def _refuse_replacing_seen(study_dir, names) -> None:
     """Refuse to make again videos of a study holding real participants' answers:
     they answered the videos as they are, and the next participant would see others."""
-    from .archive import answers_in, describe
-    from flipstudy.errors import StudyHasAnswers
+    from .archive import answers_in, describe, holds_answers
+    from flipstudy.errors import StudyHasAnswersError
     a = answers_in(study_dir)
-    if not (a["real_answers"] or a["unreadable"]):
+    if not holds_answers(a):
         return
     d = Path(study_dir)
-    raise StudyHasAnswers(
+    raise StudyHasAnswersError(
         f"{d} holds {describe(a)}; rendering now would replace {len(names)} video(s) they may have "
         f"seen (first: {names[0]}), so later participants would answer other pictures. The videos "
         f"as they are still serve `flipstudy run`. For the new look, build a new study "
@@ -100,7 +125,8 @@ def _refuse_replacing_seen(study_dir, names) -> None:
 
 
 def status(study_dir) -> StatusResult:
-    """``flipstudy status``: the sessions of a study (none before the first)."""
+    """``flipstudy status``: the sessions of a study (none before the first), the
+    local ones and those ``import-web`` imported (source ``web-…``)."""
     from flipstudy.errors import FlipstudyFileNotFoundError
 
     from .export import status as _status
@@ -108,7 +134,9 @@ def status(study_dir) -> StatusResult:
     d = Path(study_dir)
     if not (d / "manifest.csv").is_file():
         raise FlipstudyFileNotFoundError(f"{d} is not a study folder (no manifest.csv)")
-    return StatusResult(study=d, sessions=tuple(_status(d)) if db_path(d).exists() else ())
+    from .web.status import web_status
+    rows = _status(d) if (db_path(d).exists() or db_path(d).is_symlink()) else []
+    return StatusResult(study=d, sessions=tuple(SessionStatus.from_dict(r) for r in [*rows, *web_status(d)]))
 
 
 def simulate(study_dir, participants: int, *, model=None, seed: int = 0, strengths=None) -> SimulateResult:
@@ -144,7 +172,10 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     from flipstudy.analysis.pipeline import analyze as _analyze
     from flipstudy.analysis.tables import to_markdown
     from flipstudy.stimuli.design import load_design
+    from .export import refuse_no_answers
     responses = list(responses) if isinstance(responses, (list, tuple)) else [responses]
+    for r in responses:                    # no answers yet: the commands that give some
+        refuse_no_answers(r)
     src = resolve_responses_path(responses[0])
     from .frozen import refuse_changed_design
     for r in responses:                    # a study whose design changed after its answers
@@ -170,7 +201,8 @@ def analyze(responses, out=None, *, images=None, **options) -> AnalyzeResult:
     kept_out = kept_out_at_import([resolve_responses_path(r) for r in responses])
     res = _analyze(src, out, images=images or None, quest_specs=specs, exclusions=rules, kept_out=kept_out,
                    **options)
-    return AnalyzeResult(out=out, report=res.to_dict(), table_markdown=to_markdown(res.table))
+    return AnalyzeResult(out=out, report=AnalyzeReport.from_dict(res.to_dict()),
+                         table_markdown=to_markdown(res.table))
 
 
 def reproduce(out, *, cluster: str | None = None, **options) -> ReproduceResult:
@@ -208,7 +240,7 @@ def plan(design_path, *, groups=(), task: str | None = None, target_width: float
                            seed=seed, threshold=tuple(threshold))
     clean = tuple({k: (v if not isinstance(v, float) or v == v and abs(v) != float("inf") else None)
                    for k, v in r.items()} for r in rows)
-    return PlanResult(rows=clean, table=format_plan(rows, target_width, max_trials=max_trials),
+    return PlanResult(rows=tuple(PlanRow.from_dict(r) for r in clean), table=format_plan(rows, target_width, max_trials=max_trials),
                       observers=observers, threshold=tuple(threshold), seed=seed)
 
 

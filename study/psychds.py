@@ -27,68 +27,23 @@ import platform
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
-from flipstudy.stimuli.injection import KINDS
+from flipstudy.vocab.answers import meanings
 
 FILE = "dataset_description.json"
 DATA_DIR = "data"              # Psych-DS: every data file lives under data/
 SCHEMA_VERSION = "Psych-DS 0.1.0"
 
-#: what each column of the response tables means
+#: what each column of the response tables means: the declared answer record's
+#: (:mod:`flipstudy.vocab.answers`), then the columns only some tables carry
 COLUMNS = {
-    "participant": "participant ID",
-    "session": "session number of the participant (1-based)",
-    "trial": "trial number within the session (1-based)",
-    "stimulus": "stimulus name (manifest.csv)",
-    "group": "error group of the stimulus",
-    "level": "nominal error in percent (0 = the original motion); of kind pose-rate, poses "
-             "per second (0 = the original motion)",
-    "repetition": "which showing of the stimulus (1-based)",
-    "response": "the answer: correct or incorrect (physically plausible or not)",
-    "rt_ms": "reaction time in milliseconds, from the end of the motion to the answer",
-    "shown_ms": "how long the motion was shown, milliseconds ('playing' to 'ended')",
-    "timestamp": "when the answer was stored (ISO 8601, UTC)",
-    "clip": "base clip of the stimulus",
-    "kind": "kind of error (" + ", ".join(KINDS) + ")",
+    **meanings(),
     "style": "character style the stimulus was drawn in (ellipsoids, capsules, stick, "
              "point-light, mannequin; from manifest.csv)",
-    "late_frames": "frames shown late or dropped during the motion",
-    "replays": "times the participant replayed the motion",
-    "input": "how the answer was given: key, click or simulated",
-    "simulated": "true for a simulated participant",
-    "complete": "false when the session did not answer every trial",
-    "source": "where the answer came from (web-jatos, web-pavlovia, web-static)",
     "run_id": "the browser run the answer came from (web sessions)",
-    "frames_expected": "frames of the video",
-    "frames_presented": "video frames presented (requestVideoFrameCallback presentedFrames)",
-    "frames_dropped": "video frames never presented (frames_expected - frames_presented)",
-    "dropped_pct": "frames_dropped in percent of frames_expected",
-    "playback_ms": "milliseconds from the first presented frame to the end of playback",
-    "video_ms": "duration of the video in milliseconds",
     "refresh_hz": "display refresh rate measured at the start of the run",
-    "timing": "how frames were counted: rvfc (requestVideoFrameCallback) or raf (fallback)",
-    "playback_flagged": "true when dropped_pct exceeds max_dropped_pct",
-    "max_dropped_pct": "the site's dropped-frame threshold, percent",
     "repeat": "1: a trial flagged for dropped frames shown once more at the end (its first "
               "answer, repeat 0, is the row before); the analysis uses the repeat in its place",
     "source_file": "the imported file the answer was first read from",
-    "age": "age in years (empty: prefer not to say)",
-    "gender": "gender (option code)",
-    "animation_experience": "experience with computer animation",
-    "gymnastics_experience": "experience with gymnastics or acrobatics",
-    "started": "when the session started (ISO 8601, UTC)",
-    "finished": "when the session's last answer was stored",
-    "answered": "answers given in the session",
-    "n_trials": "trials of the session",
-    "method": "how the trial's level was chosen: constant (stimuli fixed in advance) or quest+ "
-              "(adaptive: QUEST+ picked the level from the participant's earlier answers)",
-    "task": "yes-no (one motion: correct or incorrect?) or 2afc (an original and a modified "
-            "motion: which was physically correct? response first or second)",
-    "first": "2afc: which motion was shown first (original or modified)",
-    "original_stimulus": "2afc: the original motion the modified one was shown with",
-    "quest_threshold": "quest+: posterior mean of the group's detection threshold x* after this "
-                       "answer (percent; P(x*) = (1 + guess rate)/2)",
-    "quest_ci_low": "quest+: lower end of the 95 % posterior interval of x* after this answer",
-    "quest_ci_high": "quest+: upper end of the 95 % posterior interval of x* after this answer",
 }
 
 

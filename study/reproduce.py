@@ -25,8 +25,10 @@ comes out should resemble the paper's, within the noise of 19 participants.
 from __future__ import annotations
 
 import contextlib
+import json
 
 from flipstudy.errors import ReproduceError
+from flipstudy.records import ReproduceFiles, StageSeconds, Threshold
 from flipstudy.results import ReproduceResult
 
 import os
@@ -53,8 +55,9 @@ def sheet_label(row: Stimulus) -> str:
     r"""A sheet panel's title: the stimulus and its error (kind, profile, signed
     nominal level).
 
+    >>> from flipstudy.vocab.kinds import AM
     >>> sheet_label(Stimulus("backflip_abrupt-decrease_50", "backflip", "abrupt-decrease",
-    ...                      "angular-momentum", "abrupt", 50.0, nominal_error_pct=-50.0))
+    ...                      AM.name, "abrupt", 50.0, nominal_error_pct=-50.0))
     'backflip_abrupt-decrease_50\nangular momentum, abrupt, −50 %'
     >>> sheet_label(Stimulus("backflip_reference", "backflip", "reference", "reference"))
     'backflip_reference\noriginal (no error)'
@@ -91,6 +94,92 @@ def _say(quiet: bool, text: str) -> None:
         print(text, file=sys.stderr, flush=True)
 
 
+def _swap(value, pairs):
+    if isinstance(value, str):
+        for old, new in pairs:
+            value = value.replace(old, new)
+        return value
+    if isinstance(value, list):
+        return [_swap(v, pairs) for v in value]
+    if isinstance(value, dict):
+        return {k: _swap(v, pairs) for k, v in value.items()}
+    return value
+
+
+def _repoint(work: Path, out: Path) -> None:
+    """Make the records written during the build (``render.json``, ``summary.json``,
+    ``notes.md``) name ``out``, where the build is moved, instead of the temporary
+    ``work`` folder, which is gone once the build is in place."""
+    pairs = [(str(work.resolve()), str(out.resolve())), (str(work), str(out))]
+    for rel in ("study/render/render.json", "analysis/summary.json"):
+        p = work / rel
+        if p.is_file():
+            data = _swap(json.loads(p.read_text(encoding="utf-8")), pairs)
+            p.write_text(json.dumps(data, indent=2, ensure_ascii=rel.startswith("study")) + "\n", encoding="utf-8")
+    notes = work / "analysis" / "notes.md"
+    if notes.is_file():
+        notes.write_text(_swap(notes.read_text(encoding="utf-8"), pairs), encoding="utf-8")
+
+
+def _outputs(out: Path) -> dict:
+    """What a run leaves at ``out``, by name (:class:`~flipstudy.results.ReproduceResult` ``files``)."""
+    a = out / "analysis"
+    return {
+        "design": out / "design.toml",
+        "manifest": out / "study" / "manifest.csv",
+        "stimuli": out / "study",
+        "videos": out / "study" / "render",
+        "render_settings": out / "study" / "render" / "render.json",
+        "sessions": out / "study" / "sessions.sqlite",
+        "responses": out / "study" / "responses.csv",
+        "participants": out / "study" / "participants.csv",
+        "analysis": a,
+        "table": a / "table.csv",
+        "table_paper": a / "table_paper.md",
+        "table_latex": a / "table_paper.tex",
+        "figure_ratings": a / "ratings.png",
+        "figure_dprime": a / "dprime.png",
+        "figure_psychometric": a / "psychometric.png",
+        "figure_sheet": a / "sheet.png",
+        "notes": a / "notes.md",
+    }
+
+
+def _guard(out: Path, stack=None) -> None:
+    """``--force`` never replaces real participants' answers, nor a study a ``flipstudy
+    run`` server has open (``stack``: hold them closed until it exits), nor a file that
+    an earlier run did not record making (:data:`flipstudy.study.owned.MADE_RECORD`)."""
+    from .archive import refuse_real_answers
+    from .lock import study_closed
+    from .owned import made_by_record, refuse_not_made
+    if not out.is_dir():
+        return
+    for d in [out, *sorted(p for p in out.iterdir() if p.is_dir() and p.name != ".locks")]:
+        hold = study_closed(d, "reproduce --force")
+        if stack is None:
+            with hold:
+                pass
+        else:
+            stack.enter_context(hold)
+        refuse_real_answers(d, shown=d, command="reproduce --force")
+    refuse_not_made(out, made_by_record(out), "reproduce --force", "the earlier reproduce run")
+
+
+def _move_into_place(work: Path, out: Path) -> None:
+    """Record what the run made, then put ``work`` at ``out`` (checked once more)."""
+    from .owned import record_made
+    record_made(work, "reproduce")
+    with contextlib.ExitStack() as held:
+        _guard(out, held)          # answers may have arrived while the run went on
+        if out.exists():
+            old = out.with_name(f".{out.name}.old-{os.getpid()}")
+            out.rename(old)
+            work.rename(out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            work.rename(out)
+
+
 def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = None,
               size=SIZE, force: bool = False, quiet: bool = False, cluster=None) -> ReproduceResult:
     """Run the whole pipeline into ``out``; returns a :class:`~flipstudy.results.ReproduceResult`
@@ -115,25 +204,11 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
     from .export import export_responses
     from .simulate import simulate
 
-    from .archive import refuse_real_answers
-    from .lock import study_closed
-
     shown, out = str(out), Path(out)
     if out.exists() and not force and (not out.is_dir() or any(out.iterdir())):
         raise ReproduceError(f"{out} exists and is not empty; choose another --out or pass --force "
                              f"to replace it")
-
-    def guard(stack=None):         # --force never replaces real participants' answers,
-        if out.is_dir():           # nor a study a `flipstudy run` server has open
-            for d in [out, *sorted(p for p in out.iterdir() if p.is_dir() and p.name != ".locks")]:
-                hold = study_closed(d, "reproduce --force")
-                if stack is None:
-                    with hold:
-                        pass
-                else:
-                    stack.enter_context(hold)
-                refuse_real_answers(d, shown=d, command="reproduce --force")
-    guard()
+    _guard(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     work = Path(tempfile.mkdtemp(prefix=f".{out.name}.partial-", dir=out.parent))
     seconds: dict = {}
@@ -183,47 +258,20 @@ def reproduce(out, *, participants: int = 19, seed: int = 1, jobs: int | None = 
                              include_simulated=True)
         seconds["analysis"] = time.perf_counter() - t
 
-        # move into place: nothing half-written is ever at OUT
-        with contextlib.ExitStack() as held:
-            guard(held)            # answers may have arrived while the run went on
-            if out.exists():
-                old = out.with_name(f".{out.name}.old-{os.getpid()}")
-                out.rename(old)
-                work.rename(out)
-                shutil.rmtree(old, ignore_errors=True)
-            else:
-                work.rename(out)
+        _repoint(work, out)               # the records name OUT, not the build folder
+        _move_into_place(work, out)       # nothing half-written is ever at OUT
     except BaseException:
         shutil.rmtree(work, ignore_errors=True)
         raise
     seconds["total"] = time.perf_counter() - t_all
 
-    a = out / "analysis"
-    files = {
-        "design": out / "design.toml",
-        "manifest": out / "study" / "manifest.csv",
-        "stimuli": out / "study",
-        "videos": out / "study" / "render",
-        "render_settings": out / "study" / "render" / "render.json",
-        "sessions": out / "study" / "sessions.sqlite",
-        "responses": out / "study" / "responses.csv",
-        "participants": out / "study" / "participants.csv",
-        "analysis": a,
-        "table": a / "table.csv",
-        "table_paper": a / "table_paper.md",
-        "table_latex": a / "table_paper.tex",
-        "figure_ratings": a / "ratings.png",
-        "figure_dprime": a / "dprime.png",
-        "figure_psychometric": a / "psychometric.png",
-        "figure_sheet": a / "sheet.png",
-        "notes": a / "notes.md",
-    }
+    files = _outputs(out)
     missing = [str(p) for p in files.values() if not p.exists()]
     if missing:
         raise ReproduceError(f"the run finished but these outputs are missing: {missing}")
     return ReproduceResult(
-        out=str(shown).rstrip("/"), files={k: str(v) for k, v in files.items()},
-        seconds=dict(seconds), n_stimuli=len(stimuli), worst_gap_pct=worst,
-        n_videos=sum(1 for s in rec.record["stimuli"].values() if "video" in s["files"]),
+        out=str(shown).rstrip("/"), files=ReproduceFiles.from_dict({k: str(v) for k, v in files.items()}),
+        seconds=StageSeconds.from_dict(dict(seconds)), n_stimuli=len(stimuli), worst_gap_pct=worst,
+        n_videos=sum(1 for s in rec.record.stimuli.values() if "video" in s.files),
         n_responses=exp.rows, n_simulated=len(exp.simulated), table_md=to_markdown(result.table),
-        thresholds=tuple(result.to_dict()["thresholds"]))
+        thresholds=tuple(Threshold.from_dict(t) for t in result.to_dict()["thresholds"]))

@@ -13,11 +13,18 @@ error is a JSON object ``{"error": "..."}`` with a 4xx status):
 ``GET  /api/trial/<n>``     trial ``n``'s filled screen (:func:`flipstudy.study.timeline.trial_screen`
                             of ``session.resolve(n)``: an adaptive trial's level is chosen
                             here); only the current trial (the first unanswered) is served
-``POST /api/answer``        one trial's answer (:func:`flipstudy.study.session.submit_answer`)
+``POST /api/answer``        one trial's answer (:func:`flipstudy.study.session.submit_answer`);
+                            the reply is its ``status``, ``trial``, ``next_trial`` and ``finished``
 ``POST /api/demographics``  the demographics (:func:`flipstudy.study.session.submit_demographics`)
-``GET  /stimuli/<name>.mp4`` a stimulus video: ``name`` must be a stimulus of the
-                            manifest and the file must resolve inside
+``GET  /stimuli/<name>.mp4`` a stimulus video: ``name`` must be the page's name of a
+                            stimulus of the manifest and the file must resolve inside
                             ``STUDY_DIR/render/`` (no traversal, no symlinks out)
+
+Conditions hidden from the participant: the page knows each stimulus by its opaque name
+only (:class:`flipstudy.study.web.opaque.PageNames`, the exported site's names, from
+``STUDY/web/site-map.json``), in its screens, video URLs, ``config.js`` and messages;
+an answer's ``stimulus`` is that name, mapped back here, so the database stores the
+study's own names.
 
 Experimenter actions (export, status) are command-line only.  The server binds
 to 127.0.0.1 unless told otherwise, accepts only loopback ``Host`` headers then
@@ -62,12 +69,13 @@ from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, Response
 from starlette.routing import Route
 
-from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChanged
+from flipstudy.errors import JsPsychFetchError, RequestError, SessionError, StudyChangedError
 
 from .session import Session, load_study, open_session, submit_answer, submit_demographics
 from .timeline import build_timeline, is_default, trial_screen
 from .validate import MAX_BODY, parse_json_object
 from .web import jspsych as jsp
+from .web.opaque import PageNames, hide_config
 from .web.site import LOCAL, lib_files, site_config, site_csp, site_files
 
 MEDIA_TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
@@ -172,49 +180,45 @@ async def _read_json(request: Request) -> dict:
 CHANGED_STATUS = 410
 
 
-def _changed_message(e: StudyChanged, stored_elsewhere: bool) -> str:
+def _changed_message(e: StudyChangedError, stored_elsewhere: bool) -> str:
     return ("This session cannot record answers any more: the study was changed on the "
             "experimenter's computer" + (", so your last answer was NOT recorded" if stored_elsewhere
                                           else "") +
             ". Please tell the experimenter. (" + str(e) + ")")
 
 
-def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None, lib: bool = True) -> dict[str, bytes]:
+def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None, lib: bool = True,
+               names: PageNames | None = None) -> dict[str, bytes]:
     """The files of the site ``export-web`` builds, in its ``local`` host mode, for
-    ``session``'s study: ``{relative path: bytes}``.  jsPsych (``lib/``, left out
-    with ``lib=False``) comes from ``jspsych_dir`` or npm's cache
-    (:func:`flipstudy.study.web.jspsych.fetch`)."""
+    ``session``'s study: ``{relative path: bytes}``, its videos by their opaque names
+    (``names``; None: the study's, :class:`~flipstudy.study.web.opaque.PageNames`).
+    jsPsych (``lib/``, left out with ``lib=False``) comes from ``jspsych_dir`` or npm's
+    cache (:func:`flipstudy.study.web.jspsych.fetch`)."""
     folder = jsp.fetch(jspsych_dir)[0] if lib else None
+    names = names or PageNames(session.study)
     cfg = site_config(session.study, host=LOCAL, iti_ms=iti_ms, n_trials=session.n_trials)
-    return site_files(cfg, folder)
+    return site_files(hide_config(cfg, names.map), folder)
 
 
-def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
-               on_answer=None, on_changed=None, jspsych_dir=None) -> Starlette:
-    """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
-    Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
-    is called after every stored answer (the CLI prints progress).  The page is
-    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
-    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first).
+#: what the page is told of a stored answer (not the next trial's stimulus, group or level)
+ANSWER_REPLY = ("status", "trial", "next_trial", "finished")
 
-    A pinned session (:meth:`Session.pin`) is checked before and after every
-    answer: once its study folder, database, manifest or design changed, every
-    API request is refused with status :data:`CHANGED_STATUS` and a message the
-    page shows, and an answer committed to a database that is no longer the
-    study's is never acknowledged as stored.  ``on_changed(message)`` is called
-    the first time (the CLI prints it)."""
-    told = []
 
-    def changed(e: StudyChanged, stored_elsewhere: bool = False) -> JSONResponse:
-        if not told:
-            told.append(True)
-            if on_changed is not None:
-                on_changed(str(e))
-        return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
-    study = session.study
-    render_dir = study.render_dir.resolve()
-    videos = {f"{r.stimulus}.mp4" for r in study.manifest}
-    files = local_site(session, iti_ms=iti_ms, lib=False)
+def _answer_in_study_names(names: PageNames, obj: dict) -> dict:
+    """The page's answer with its ``stimulus`` (the page's name of a video) the study's;
+    :class:`RequestError` (400) for a name the page was not given."""
+    page_name = obj.get("stimulus")
+    if not isinstance(page_name, str):
+        return obj                                   # missing or not a string: refused as before
+    real = names.stimulus(page_name)
+    if real is None:
+        raise RequestError(400, f"stimulus: {page_name[:40]!r} is not the name of a video of this page")
+    return dict(obj, stimulus=real)
+
+
+def _site_routes(files: dict[str, bytes], jspsych_dir):
+    """The handlers of the page (``GET /``) and of the site's other files (``files``:
+    :func:`local_site` without ``lib/``, whose files are read when first asked for)."""
     lib_lock = threading.Lock()
 
     def load_lib():
@@ -238,13 +242,83 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
             return _error(404, "not found")
         return Response(files[name], media_type=MEDIA_TYPES[name[name.rindex("."):]],
                         headers={"Cache-Control": "no-cache"})
+    return page, static
+
+
+def _video_route(study, names: PageNames):
+    """The handler of ``GET /stimuli/<name>.mp4``: ``name`` is the page's name of a
+    stimulus of the manifest (never the stimulus's own), its file inside ``render/``."""
+    render_dir = study.render_dir.resolve()
+    videos = {f"{names.video(r.stimulus)}.mp4": f"{r.stimulus}.mp4" for r in study.manifest}
+
+    async def stimulus(request: Request):
+        name = videos.get(request.path_params["name"])
+        if name is None:                             # only the page's names of the manifest's stimuli
+            return _error(404, "no such stimulus")
+        path = (render_dir / name).resolve()
+        if path.parent != render_dir or not path.is_file():   # symlinks out, directories
+            return _error(404, "no such stimulus")
+        return FileResponse(path, media_type="video/mp4", headers={"Cache-Control": "no-cache"})
+    return stimulus
+
+
+def _checked_submit(session: Session, submit, obj: dict):
+    """``submit(session, obj)`` into the pinned study's own database only: checked before,
+    and after (a :class:`StudyChangedError` then carries ``stored_elsewhere``)."""
+    session.check_intact()                   # not into a database that is not the study's
+    result = submit(session, obj)
+    try:
+        session.check_intact()               # committed into the study's own file?
+    except StudyChangedError as e:
+        e.stored_elsewhere = True
+        raise
+    return result
+
+
+async def _http_error(request: Request, exc: HTTPException):
+    msg = {404: "not found", 405: "method not allowed"}.get(exc.status_code, str(exc.detail))
+    return _error(exc.status_code, msg)
+
+
+async def _server_error(request: Request, exc: Exception):
+    return _error(500, "internal error (see the terminal running flipstudy run)")
+
+
+def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
+               on_answer=None, on_changed=None, jspsych_dir=None, names: PageNames | None = None) -> Starlette:
+    """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
+    Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
+    is called after every stored answer (the CLI prints progress).  The page is
+    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
+    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first).
+    ``names``: the page's names of the stimuli (None: the study's opaque names,
+    :class:`~flipstudy.study.web.opaque.PageNames`; it writes ``STUDY/web/site-map.json``).
+
+    A pinned session (:meth:`Session.pin`) is checked before and after every
+    answer: once its study folder, database, manifest or design changed, every
+    API request is refused with status :data:`CHANGED_STATUS` and a message the
+    page shows, and an answer committed to a database that is no longer the
+    study's is never acknowledged as stored.  ``on_changed(message)`` is called
+    the first time (the CLI prints it)."""
+    told = []
+
+    def changed(e: StudyChangedError, stored_elsewhere: bool = False) -> JSONResponse:
+        if not told:
+            told.append(True)
+            if on_changed is not None:
+                on_changed(str(e))
+        return _error(CHANGED_STATUS, _changed_message(e, stored_elsewhere))
+    study = session.study
+    names = names or PageNames(study)
+    page, static = _site_routes(local_site(session, iti_ms=iti_ms, lib=False, names=names), jspsych_dir)
 
     async def api_session(request: Request):
         try:
             session.check_intact()
-        except StudyChanged as e:
+        except StudyChangedError as e:
             return changed(e)
-        tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms))
+        tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms,
+                                                            name=names.video))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
 
     tagged = not is_default(study.design)
@@ -256,7 +330,7 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
             raise RequestError(409, f"trial {n} is not the current trial (the current one is "
                                     f"{nxt if nxt <= session.n_trials else 'none: the session is finished'})")
         return trial_screen(session.resolve(n), session.n_trials, replay=replay, iti_ms=iti_ms,
-                            tagged=tagged)
+                            tagged=tagged, name=names.video)
 
     async def api_trial(request: Request):
         raw = request.path_params["n"]
@@ -266,58 +340,34 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
             session.check_intact()
             screen = await run_in_threadpool(current_trial, int(raw))
         except RequestError as e:
-            return _error(e.status, e.message)
-        except StudyChanged as e:
+            return _error(e.status, names.text(e.message))
+        except StudyChangedError as e:
             return changed(e)
         return JSONResponse(screen, headers={"Cache-Control": "no-store"})
 
     async def _submit(request: Request, submit):
         """(result, None) of ``submit(session, JSON body)``, or (None, the error response)."""
-        def checked(obj):
-            session.check_intact()                   # not into a database that is not the study's
-            result = submit(session, obj)
-            try:
-                session.check_intact()               # committed into the study's own file?
-            except StudyChanged as e:
-                e.stored_elsewhere = True
-                raise
-            return result
-
         try:
             obj = await _read_json(request)
-            return await run_in_threadpool(checked, obj), None
+            return await run_in_threadpool(_checked_submit, session, submit, obj), None
         except RequestError as e:
-            return None, _error(e.status, e.message)
-        except StudyChanged as e:
+            return None, _error(e.status, names.text(e.message))
+        except StudyChangedError as e:
             return None, changed(e, getattr(e, "stored_elsewhere", False))
 
     async def api_answer(request: Request):
-        result, err = await _submit(request, submit_answer)
+        result, err = await _submit(request, lambda s, obj: submit_answer(s, _answer_in_study_names(names, obj)))
         if err is not None:
             return err
         if on_answer is not None and result["status"] == "stored":
             on_answer(result)
-        return JSONResponse(result, headers={"Cache-Control": "no-store"})
+        return JSONResponse({k: result[k] for k in ANSWER_REPLY}, headers={"Cache-Control": "no-store"})
 
     async def api_demographics(request: Request):
         result, err = await _submit(request, submit_demographics)
         return err if err is not None else JSONResponse(result, headers={"Cache-Control": "no-store"})
 
-    async def stimulus(request: Request):
-        name = request.path_params["name"]
-        if name not in videos:                       # only the manifest's names, as given
-            return _error(404, "no such stimulus")
-        path = (render_dir / name).resolve()
-        if path.parent != render_dir or not path.is_file():   # symlinks out, directories
-            return _error(404, "no such stimulus")
-        return FileResponse(path, media_type="video/mp4", headers={"Cache-Control": "no-cache"})
-
-    async def http_error(request: Request, exc: HTTPException):
-        msg = {404: "not found", 405: "method not allowed"}.get(exc.status_code, str(exc.detail))
-        return _error(exc.status_code, msg)
-
-    async def server_error(request: Request, exc: Exception):
-        return _error(500, "internal error (see the terminal running flipstudy run)")
+    stimulus = _video_route(study, names)
 
     app = Starlette(routes=[
         Route("/", page, methods=["GET"]),
@@ -329,7 +379,7 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
         Route("/favicon.ico", lambda request: Response(status_code=204), methods=["GET"]),
         Route("/lib/{name}", static, methods=["GET"]),
         Route("/{name}", static, methods=["GET"]),
-    ], exception_handlers={HTTPException: http_error, 500: server_error})
+    ], exception_handlers={HTTPException: _http_error, 500: _server_error})
     app.router.redirect_slashes = False
     hosts = None if allowed_hosts is None else {h.lower() for h in allowed_hosts} | {"[::1]"}
     app.add_middleware(_Guard, allowed_hosts=hosts)
@@ -408,6 +458,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
         print(f"flipstudy run: note: took over the lock of a server that is gone "
               f"(pid {lock.previous['pid']}, since {lock.previous.get('since', '?')})", file=out)
     jspsych_folder, _ = jsp.fetch()          # the page's jsPsych (npm's cache), before anyone waits
+    names = PageNames(study)                 # the page's opaque names (STUDY/web/site-map.json)
     session = open_session(study, participant, new_session=new_session)
     session.pin()                    # answers go into this folder's database, or are refused
     state = session.state()
@@ -443,7 +494,7 @@ def _serve_locked(study, participant, lock, *, host, port, open_browser, new_ses
               f"(Ctrl-C) and start it again on the study as it is now", file=out, flush=True)
 
     app = create_app(session, iti_ms=iti_ms, allowed_hosts=allowed, on_answer=progress,
-                     on_changed=changed, jspsych_dir=jspsych_folder)
+                     on_changed=changed, jspsych_dir=jspsych_folder, names=names)
     config = uvicorn.Config(app, log_level="warning", access_log=False, proxy_headers=False,
                             server_header=False, lifespan="off", timeout_graceful_shutdown=3)
     server = uvicorn.Server(config)

@@ -52,6 +52,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 from .order import Trial
+from .storefile import check_file, check_tables
 
 DB_NAME = "sessions.sqlite"
 SCHEMA_VERSION = 2
@@ -157,6 +158,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     in autocommit mode; use :func:`transaction` for writes.  It may be shared
     between threads if the caller serialises its use (the server does)."""
     path = db_path(study_dir)
+    check_file(path)                      # a dangling link, a folder, /dev/zero: damaged, not new
     if not create and not path.exists():
         raise FlipstudyFileNotFoundError(f"{path}: no sessions yet (run `flipstudy run` or `flipstudy simulate`)")
     existed = path.exists() and path.stat().st_size > 0
@@ -164,6 +166,9 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
     try:
         if existed:
             _check_readable(conn, path)
+            v = conn.execute("PRAGMA user_version").fetchone()[0]
+            if v in (0, 1, SCHEMA_VERSION):       # a table missing: damaged, never taken for empty
+                check_tables(conn, path, SCHEMA, columns=v != 1)   # version 1: before migrating
         conn.row_factory = sqlite3.Row
         _set_wal(conn)
         conn.execute("PRAGMA synchronous=FULL")
@@ -186,6 +191,7 @@ def connect(study_dir, *, create: bool = True) -> sqlite3.Connection:
                     conn.execute("INSERT OR REPLACE INTO meta VALUES ('schema_version', ?)",
                                  (str(SCHEMA_VERSION),))
                     conn.execute(f"PRAGMA user_version={SCHEMA_VERSION}")
+            check_tables(conn, path, SCHEMA)
         elif version != SCHEMA_VERSION:
             raise FlipstudyStateError(f"{path}: schema version {version}; this flipstudy reads versions "
                                f"1 and {SCHEMA_VERSION}")

@@ -153,12 +153,15 @@ def texts(design) -> dict:
 
 
 def trial_screen(t, n: int, *, replay: bool, iti_ms: int, video_url: str = "/stimuli/{name}.mp4",
-                 tagged: bool = False) -> dict:
+                 tagged: bool = False, name=None) -> dict:
     """The screen of trial ``t`` (:class:`flipstudy.study.order.Trial`) of ``n``.
     An adaptive trial whose level is not chosen yet (no stimulus) gives the
     placeholder ``{"adaptive": true}``; once resolved, the filled screen (it keeps
     ``"adaptive": true``).  ``tagged``: yes/no screens carry ``"task"`` (studies
-    that are not all yes/no, constant stimuli)."""
+    that are not all yes/no, constant stimuli).  ``name(stimulus)``: what the screen
+    calls a stimulus, in ``stimulus`` and in the video URLs (the local runner: its
+    opaque name, :class:`flipstudy.study.web.opaque.PageNames`; None: the stimulus's own)."""
+    name = name or str
     task = getattr(t, "task", "yes-no") or "yes-no"
     adaptive = (getattr(t, "method", "constant") or "constant") != "constant"
     common = {"type": "trial-2afc" if task == "2afc" else "trial", "id": f"trial-{t.trial}",
@@ -166,14 +169,14 @@ def trial_screen(t, n: int, *, replay: bool, iti_ms: int, video_url: str = "/sti
     if adaptive and not t.stimulus:
         return dict(common, adaptive=True, task=task)
     if task == "2afc":
-        modified, original = video_url.format(name=t.stimulus), video_url.format(name=t.original)
-        screen = dict(common, stimulus=t.stimulus,
+        modified, original = video_url.format(name=name(t.stimulus)), video_url.format(name=name(t.original))
+        screen = dict(common, stimulus=name(t.stimulus),
                       videos=[original, modified] if t.first == "original" else [modified, original],
                       first=t.first, labels=["1", "2"], gap_ms=GAP_MS, keys=dict(KEYS_2AFC),
                       replay=replay, iti_ms=int(iti_ms), prompt=PROMPT_2AFC, submit="/api/answer",
                       task=task)
     else:
-        screen = dict(common, stimulus=t.stimulus, video=video_url.format(name=t.stimulus),
+        screen = dict(common, stimulus=name(t.stimulus), video=video_url.format(name=name(t.stimulus)),
                       replay=replay, iti_ms=int(iti_ms), prompt=PROMPT, submit="/api/answer")
         if tagged:
             screen["task"] = task
@@ -183,9 +186,11 @@ def trial_screen(t, n: int, *, replay: bool, iti_ms: int, video_url: str = "/sti
 
 
 def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
-                   video_url: str = "/stimuli/{name}.mp4") -> dict:
+                   video_url: str = "/stimuli/{name}.mp4", name=None) -> dict:
     """The screens of ``session`` (:class:`flipstudy.study.session.Session`) and where to
-    start, given its ``state`` (:meth:`Session.state`)."""
+    start, given its ``state`` (:meth:`Session.state`).  ``name(stimulus)``: what the
+    screens call a stimulus (:func:`trial_screen`; None: the stimulus's own name)."""
+    name = name or str
     state = state or session.state()
     settings = session.study.design.session          # the design's [session] table
     keys = dict(KEYS)
@@ -209,7 +214,7 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
             "type": "examples", "id": "examples", "title": "Examples of correct motions",
             "text": "These motions are physically correct. Watch each one; you can watch "
                     "them again before you start.",
-            "stimuli": [{"video": video_url.format(name=r.stimulus),
+            "stimuli": [{"video": video_url.format(name=name(r.stimulus)),
                          "label": f"Correct motion {i + 1} of {len(refs)}"}
                         for i, r in enumerate(refs)],
             "button": "Start the test"})
@@ -218,7 +223,7 @@ def build_timeline(session, state: dict | None = None, *, iti_ms: int = 500,
     every = max(int(settings.break_every), 1)
     for t in session.trials:
         screens.append(trial_screen(t, n, replay=replay, iti_ms=iti_ms, video_url=video_url,
-                                    tagged=tagged))
+                                    tagged=tagged, name=name))
         if t.trial % every == 0 and t.trial < n:
             screens.append({"type": "break", "id": f"break-{t.trial}", "title": "Break",
                             "text": f"Take a short rest. {t.trial} of {n} {words['noun']}s done. "

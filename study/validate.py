@@ -12,6 +12,7 @@ import json
 import math
 import re
 from flipstudy.errors import RequestError
+from flipstudy.vocab import answers
 
 PARTICIPANT_RE = re.compile(r"[A-Za-z0-9_-]{1,32}")
 RESPONSES = ("correct", "incorrect", "first", "second")
@@ -106,9 +107,9 @@ def _choice(obj, key, options) -> str:
     return v
 
 
-ANSWER_FIELDS = {"participant", "session", "trial", "stimulus", "response", "rt_ms", "shown_ms",
-                 "late_frames"}
-ANSWER_OPTIONAL = {"replays", "input"}
+#: the fields of a posted answer, as the answer record declares them (flipstudy.vocab.answers)
+ANSWER_FIELDS = set(answers.POSTED)
+ANSWER_OPTIONAL = set(answers.POSTED_OPTIONAL)
 
 
 def parse_answer(obj: dict, *, participant: str, session: int, n_trials: int,

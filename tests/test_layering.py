@@ -1,6 +1,15 @@
 """The one-way flow of DESIGN.md, checked on the source: stimuli → render → study,
 stimuli → analysis; the CLI (``flipstudy.study.cli``) sits on top of all four.
 
+Below all four is the floor, ``flipstudy.vocab`` (the folder ``vocab/``, a
+sub-package of the root package like the root modules ``errors.py`` and
+``results.py``): the study's vocabulary (the error-kind registry, the design, the
+stimulus set contract).  Every part may import it; it imports none of them, so
+reading a design loads no physics (see docs/reference/layout.md).  It is a
+sub-package of the root, not a folder inside ``stimuli/``, because importing any
+module of ``flipstudy.stimuli`` runs that package first, and because ``analysis``,
+which may not import ``stimuli``, reads the same words.
+
 Every import in every module counts, those inside functions too (a function-level
 import is still a dependency, and cycles held together by them are still cycles).
 """
@@ -12,12 +21,15 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PARTS = ("stimuli", "render", "study", "analysis")
-#: what each part may import of the others
+#: the floor below the four parts (the study's vocabulary)
+FLOOR = "vocab"
+#: what each part (and the floor) may import of the others
 ALLOWED = {
-    "stimuli": set(),
-    "render": {"stimuli"},
-    "analysis": set(),                # the error family is flipstudy.errors, at the root
-    "study": {"stimuli", "render", "analysis"},
+    FLOOR: set(),                     # the floor imports no part: no physics
+    "stimuli": {FLOOR},
+    "render": {"stimuli", FLOOR},
+    "analysis": {FLOOR},              # the error family is flipstudy.errors, at the root
+    "study": {"stimuli", "render", "analysis", FLOOR},
 }
 
 
@@ -51,7 +63,7 @@ def imports_of(root: Path, path: Path) -> list[tuple[str, int]]:
 
 def graph(root: Path) -> dict[str, dict[str, int]]:
     """module → {imported flipstudy module: line}, for every module of the four parts."""
-    files = [p for part in PARTS for p in (root / part).rglob("*.py")]
+    files = [p for part in (*PARTS, FLOOR) for p in (root / part).rglob("*.py")]
     names = {module_name(root, p): p for p in files}
     g = {}
     for n, p in names.items():
@@ -119,7 +131,7 @@ def test_the_flow_is_one_way_and_acyclic():
 
 def test_the_check_catches_a_render_module_importing_study(tmp_path):
     """The checker itself: a copy of the tree with one forbidden import and one cycle."""
-    for part in PARTS:
+    for part in (*PARTS, FLOOR):
         shutil.copytree(ROOT / part, tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
     f = tmp_path / "render" / "style.py"
     f.write_text(f.read_text() + "\n\ndef _late():\n    from flipstudy.study import store\n")
@@ -137,7 +149,36 @@ def test_installed_distribution_has_one_top_level_name():
     cfg = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     pkgs = set(cfg["packages"])
     assert {p.split(".")[0] for p in pkgs} == {"flipstudy"}
-    on_disk = {module_name(ROOT, p) for part in PARTS for p in (ROOT / part).rglob("__init__.py")}
+    on_disk = {module_name(ROOT, p) for part in (*PARTS, FLOOR) for p in (ROOT / part).rglob("__init__.py")}
     assert on_disk | {"flipstudy"} == pkgs, "a package folder is missing from pyproject's list"
     for p, d in cfg["package-dir"].items():
         assert (ROOT / d / "__init__.py").exists(), (p, d)
+
+
+def test_the_check_catches_the_floor_importing_the_physics(tmp_path):
+    """The floor may import no part: a floor module importing stimuli is refused."""
+    for part in (*PARTS, FLOOR):
+        shutil.copytree(ROOT / part, tmp_path / part, ignore=shutil.ignore_patterns("__pycache__"))
+    f = tmp_path / FLOOR / "kinds.py"
+    f.write_text(f.read_text() + "\n\ndef _late():\n    from flipstudy.stimuli import physics\n")
+    bad = violations(tmp_path)
+    assert any("flipstudy.vocab.kinds" in b and "vocab may not import stimuli" in b for b in bad), bad
+
+
+def test_reading_a_design_imports_no_physics():
+    """In a fresh interpreter, reading and checking the paper's design (and a stimulus
+    set's rows, and the kind registry) loads no module of the four parts, nor numpy
+    or scipy: the vocabulary stands on its own floor."""
+    import subprocess
+    import sys
+    code = ("import sys\n"
+            "from flipstudy.vocab.design import PAPER_DESIGN, parse_design\n"
+            "from flipstudy.vocab import kinds\n"
+            "d = parse_design(PAPER_DESIGN, 'paper.toml')\n"
+            "assert len(d.stimulus_names()) == 46 and kinds.get(d.groups[0].kind).variants\n"
+            "parts = ('stimuli', 'render', 'study', 'analysis')\n"
+            "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'scipy')\n"
+            "             or (m.startswith('flipstudy.') and m.split('.')[1] in parts))\n"
+            "print(','.join(bad))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "", out.stdout

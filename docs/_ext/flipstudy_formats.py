@@ -63,9 +63,29 @@ def _dataclass_rows(cls, names=None):
         yield [_code(name), _code(f.type).replace("|", "\\|"), _default(f), _esc(notes.get(name, ""))]
 
 
+def _bounds(k) -> str:
+    return ", ".join(f"{'+' if s > 0 else '−'}{top:g} {k.level_unit}" + (" (excl.)" if excl else "")
+                     for s, (top, excl) in sorted(k.bounds.items(), reverse=True))
+
+
+def _kind_rows():
+    """One row per registered error kind (flipstudy.vocab.kinds), in registration order."""
+    from flipstudy.vocab import kinds
+    for k in kinds.all_kinds():
+        variants = ", ".join(k.variants) + (" (`profile`)" if k.profiled else "")
+        if k.option is not None:
+            variants = (variants + "; " if variants else "") + f"`{k.option[0]}`: " + ", ".join(k.option[2])
+        injected = k.inject.rsplit(":", 1)[1] if k.injected else "measured only"
+        yield [_code(k.name), _esc(k.doc), _bounds(k) if k.bounds else " ", _esc(k.unit), _esc(variants) or " ",
+               _esc(injected), _esc("; ".join(k.side_effects)) or " ", _esc(", ".join(k.calibration)) or " "]
+
+
 def _rows(name):
     from flipstudy.stimuli import contract, design
     from flipstudy.study import export
+    if name == "error-kinds":
+        yield from _kind_rows()
+        return
     if name == "design-study":
         notes = _comments(design.Design)
         for key, (typ, default, _check) in design.STUDY_FIELDS.items():
@@ -94,11 +114,13 @@ def _rows(name):
             yield [str(i), _code(c)]
         return
     raise ValueError(f"flipstudy-format: unknown format {name!r}; known: design-study, design-clips, "
-                     f"design-groups, design-session, manifest, manifest-ballistic, "
+                     f"design-groups, design-session, manifest, manifest-ballistic, error-kinds, "
                      f"{', '.join(cols)}, calibration")
 
 
-_HEADERS = {4: ["key / column", "type", "default", "meaning (from the source)"], 2: ["#", "column"]}
+_HEADERS = {4: ["key / column", "type", "default", "meaning (from the source)"], 2: ["#", "column"],
+            8: ["kind", "what", "levels (design)", "measured in", "variants / option", "injected by",
+                "side effects", "calibration sources"]}
 
 
 class FormatTable(Directive):

@@ -11,7 +11,7 @@ render, simulated panel, ranking.
 
 * ``gt``: the CMU takes, read with the fixes ``../shared/mocap/SOURCES.md`` asks
   for: subjects 87 and 88 are 60 Hz although the una-dinosauria headers say
-  120 Hz (``fps=60``), frame 1 of every raw CMU file is a T-pose (dropped), the
+  120 Hz (``fps=60``), frame 1 of every raw CMU file is a T-pose (the loader drops it), the
   ASF length unit is 0.056444 m (the loader's unit guess finds it); their joints
   at the SMPL body joints
   (:data:`flipstudy.stimuli.motion.positions.CMU_AS_SMPL22`), as a motion-generation model
@@ -61,13 +61,14 @@ accept_unphysical = true
 
 def ground_truth(mocap: Path, name: str) -> tuple[np.ndarray, float]:
     """A CMU take as (F, 22, 3) joint positions in the HumanML3D layout (metres, Y up)
-    at its true rate, without the leading T-pose frame; and that rate."""
+    at its true rate, without the leading T-pose frame (the loader drops it:
+    ``meta["dropped_frames"] == [0]``; every frame it keeps is the take's); and that rate."""
     from flipstudy.stimuli.loading import load_clip
     from flipstudy.stimuli.motion.positions import CMU_AS_SMPL22, SMPL22_NAMES
     file, rate = TAKES[name]
     c = load_clip(str(mocap / file), fps=rate)
     idx = [c.skeleton.index(CMU_AS_SMPL22[n]) for n in SMPL22_NAMES]
-    return c.joint_positions()[1:, idx], c.fps
+    return c.joint_positions()[:, idx], c.fps
 
 
 def jittered(X: np.ndarray, rng, sd_frames: float = 0.35) -> np.ndarray:

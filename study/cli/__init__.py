@@ -99,7 +99,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         from ..owned import check_outputs
         check_outputs(args.command, args)           # no output path is a study's own file
-        return args.func(args)
+        import warnings
+        with warnings.catch_warnings():             # the package's warnings: one line each
+            warnings.showwarning = _warning_line(args.command, warnings.showwarning)
+            return args.func(args)
     except Terminated:                              # SIGTERM: one line, 128 + SIGTERM
         return _terminated(args.command)
     except KeyboardInterrupt:                       # Ctrl-C: one line, the shell's 128 + SIGINT
@@ -118,6 +121,22 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except Exception as e:                          # a bug: the traceback, and ask for a report
         return _bug(args, e)
+
+
+def _warning_line(command: str, fallback):
+    """A ``warnings.showwarning`` that prints a warning the package raises (a
+    UserWarning or FutureWarning from a flipstudy module) as one line,
+    ``flipstudy COMMAND: WARNING: message``, and hands any other to ``fallback``."""
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        ours = issubclass(category, (UserWarning, FutureWarning)) and \
+            Path(filename).resolve().is_relative_to(root)
+        if not ours:
+            return fallback(message, category, filename, lineno, file, line)
+        print(f"flipstudy {command}: WARNING: {message}", file=file or sys.stderr)
+    return show
 
 
 def _broken_pipe() -> int:

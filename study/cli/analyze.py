@@ -85,5 +85,5 @@ def handler(args) -> int:
                       psychometric=args.psychometric, gee=not args.no_gee,
                       figures=not args.no_figures, include_simulated=args.include_simulated,
                       include_incomplete=args.include_incomplete)
-    print(json.dumps(res.report, indent=2, ensure_ascii=False) if args.json else res.summary())
+    print(json.dumps(res.report.to_dict(), indent=2, ensure_ascii=False) if args.json else res.summary())
     return 0

@@ -23,7 +23,7 @@ def analyze_comparison_cmd(args) -> int:
     refuse_changed_design(Path(args.responses[0]), "analyze")
     res = analyze_comparison(args.responses[0], args.out, include_simulated=args.include_simulated,
                              n_boot=args.n_boot, ci=args.ci, seed=args.seed, figures=not args.no_figures)
-    print(json.dumps(res.report, indent=2, ensure_ascii=False) if args.json else res.summary())
+    print(json.dumps(res.report.to_dict(), indent=2, ensure_ascii=False) if args.json else res.summary())
     return 0
 
 

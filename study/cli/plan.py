@@ -54,5 +54,5 @@ def handler(args) -> int:
         res = plan(args.design, groups=args.group, task=args.task, target_width=args.target_width,
                    observers=args.observers, seed=args.seed, max_trials=args.max_trials,
                    threshold=args.threshold)
-    print(json.dumps(list(res.rows), indent=2) if args.json else res.summary())
+    print(json.dumps([r.to_dict() for r in res.rows], indent=2) if args.json else res.summary())
     return 0

@@ -54,7 +54,7 @@ def cmd_status(args) -> int:
     changed = design_change(args.study_dir)
     if changed:                     # flagged on every call; run, export and analyze refuse
         print(f"flipstudy status: WARNING: {changed}", file=sys.stderr)
-    print(json.dumps(list(res.sessions), indent=2) if args.json else res.summary())
+    print(json.dumps([r.to_dict() for r in res.sessions], indent=2) if args.json else res.summary())
     return 0
 
 

@@ -57,6 +57,7 @@ import re
 from pathlib import Path
 
 from flipstudy.stimuli._io import atomic_write_text
+from flipstudy.vocab import answers
 
 from .. import store
 from ..lock import study_writer
@@ -66,6 +67,7 @@ from ..psychds import write_dataset_description
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS, MAX_REPLAYS, MAX_RT_MS, MAX_SHOWN_MS, PARTICIPANT_RE
 from flipstudy.errors import WebImportError
+from flipstudy.records import ImportedFile
 from flipstudy.results import ImportResult
 from ._fields import _bool, _need, _num, _str
 from ._read import MAX_FILE, MAX_IMPORT, Budget, read_records, read_results_file  # noqa: F401 (public here)
@@ -109,9 +111,8 @@ RESPONSES_BY_TASK = {"yes-no": ("correct", "incorrect"), "2afc": ("first", "seco
 
 COMMON = ("format", "record", "site_id", "study", "manifest_sha256", "host", "participant", "run_id",
           "run_started", "timestamp")
-ANSWER = ("trial", "stimulus", "group", "level", "repetition", "response", "rt_ms", "shown_ms",
-          "input", "replays", "frames_expected", "frames_presented", "frames_dropped", "dropped_pct",
-          "playback_ms", "video_ms", "timing", "playback_flagged", "max_dropped_pct")
+#: a web answer record's fields, as the answer record declares them (flipstudy.vocab.answers)
+ANSWER = answers.WEB_ANSWER
 
 
 class _Checker:
@@ -398,7 +399,8 @@ def _table_text(columns, rows) -> str:
 
 
 def _local_participants(study_dir: Path) -> set:
-    if not store.db_path(study_dir).exists():
+    db = store.db_path(study_dir)
+    if not (db.exists() or db.is_symlink()):        # a dangling link is a damaged store, not none
         return set()
     conn = store.connect(study_dir, create=False)
     try:
@@ -543,7 +545,8 @@ def import_web(study_dir, files) -> ImportResult:
     desc = write_dataset_description(d, study.dir, list(dict.fromkeys(columns + part_columns)),
                                      source="web sessions", stimuli=study.stimuli)
     return ImportResult(
-        files=tuple({k: str(v) if isinstance(v, Path) else v for k, v in r.items()} for r in report),
+        files=tuple(ImportedFile.from_dict({k: str(v) if isinstance(v, Path) else v for k, v in r.items()})
+                    for r in report),
         answers=len(rows), participants=len({p["participant"] for p in parts}), sessions=len(parts),
         incomplete=tuple(f"{p['participant']}/{p['session']} ({p['answered']}/{p['n_trials']})"
                          for p in parts if p["complete"] != "true"),

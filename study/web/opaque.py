@@ -15,6 +15,11 @@ exported from it uses the same names, and the map only grows as the manifest doe
 ``import-web`` reads each record through :func:`reveal`: the names are mapped back
 exactly, and a name the map does not know (or a missing map) refuses the import.
 
+The local runner (``flipstudy run``) gives its page the same names (:class:`PageNames`):
+its trial screens, examples, video URLs, ``config.js`` and messages name no stimulus,
+and each answer's video is mapped back to its stimulus on the server, which stores the
+study's own names.
+
 >>> key = bytes(32)
 >>> name = opaque_id(key, "stimulus", "backflip_catch_100")
 >>> len(name), all(c in "0123456789abcdef" for c in name), "catch" in name
@@ -29,6 +34,7 @@ import hmac
 import json
 import math
 import os
+import re
 import secrets
 from dataclasses import dataclass
 from pathlib import Path
@@ -214,3 +220,47 @@ class Revealer:
                 out.update(level=row.level if row is not None else math.nan,
                            clip=row.clip if row is not None else "", kind=row.kind if row is not None else "")
         return out
+
+
+class PageNames:
+    """The names the local runner's page knows the stimuli by: the study's opaque names
+    (:func:`site_map`, created as ``export-web`` creates it: the exported site's names).
+
+    The server (:mod:`flipstudy.study.server`) sends the page each video, trial and
+    example by :meth:`video`, reads each answer's ``stimulus`` back with
+    :meth:`stimulus`, and passes each message it sends through :meth:`text`.
+
+    >>> from types import SimpleNamespace as NS
+    >>> import tempfile
+    >>> st = NS(dir=tempfile.mkdtemp(), manifest=[NS(stimulus="backflip_catch_100", group="catch")],
+    ...         design=NS(groups=[NS(name="catch")]))
+    >>> names = PageNames(st)
+    >>> page = names.video("backflip_catch_100")
+    >>> names.stimulus(page), names.stimulus("backflip_catch_100")
+    ('backflip_catch_100', None)
+    >>> names.text("trial 3 shows 'backflip_catch_100' (level 100 %, chosen by QUEST+)") == f"trial 3 shows '{page}'"
+    True
+    """
+
+    #: what a message says of a level ("(level 25 %, chosen by QUEST+)"): left out of the page's
+    LEVEL_RE = re.compile(r" ?\(level [^)]*\)")
+
+    def __init__(self, study):
+        self.map = site_map(study)
+        self.real = {self.map.video(r.stimulus): r.stimulus for r in study.manifest}
+        names = sorted(set(self.real.values()), key=len, reverse=True)
+        self._names = (re.compile(r"(?<![\w.-])(?:" + "|".join(re.escape(n) for n in names) + r")(?![\w.-])")
+                       if names else None)
+
+    def video(self, stimulus: str) -> str:
+        """The page's name of ``stimulus`` (its opaque name)."""
+        return self.map.video(stimulus)
+
+    def stimulus(self, page_name) -> str | None:
+        """The stimulus the page's ``page_name`` names (None: not one of the page's names)."""
+        return self.real.get(page_name) if isinstance(page_name, str) else None
+
+    def text(self, message: str) -> str:
+        """``message`` as the page may read it: each stimulus by its page name, no level."""
+        message = self.LEVEL_RE.sub("", message)
+        return self._names.sub(lambda mo: self.video(mo.group(0)), message) if self._names else message

@@ -53,11 +53,13 @@ from types import SimpleNamespace
 from flipstudy.errors import SiteError
 
 from .. import timeline as local_timeline
+from ..owned import refuse_not_made
 from ..session import load_study
 from ..validate import DEMOGRAPHIC_FIELDS
 from . import jspsych as jsp
 from .opaque import hide_config, site_map
 from .order import RULE, order_groups
+from .sides import sides_config
 
 FORMAT = "flipstudy-web/1"
 HOSTS = ("static", "jatos", "pavlovia")
@@ -228,6 +230,7 @@ def site_config(study, *, host: str = "static", iti_ms: int = 500, max_dropped_p
         "videos": vids, "demographic_fields": DEMOGRAPHIC_FIELDS, "texts": _texts(study, n),
         "jspsych_version": jsp.PACKAGES["jspsych"],
         "online": online_config(study),
+        "sides": sides_config(study),          # which tone is the left side (a sentence, a picture)
     }
     if not local_timeline.is_default(design):
         cfg.update(keys_2afc=dict(local_timeline.KEYS_2AFC), gap_ms=local_timeline.GAP_MS)
@@ -287,6 +290,15 @@ def _index_html(host: str, scripts: list[str]) -> str:
         "<noscript><p>This study needs JavaScript.</p></noscript>", "</body>", "</html>", ""])
 
 
+def _site_files(out: Path) -> set[str]:
+    """What the site at ``out`` was made of: the files its record lists, and the record."""
+    try:
+        listed = json.loads((out / SITE_RECORD).read_text(encoding="utf-8")).get("files", {})
+    except (OSError, ValueError, AttributeError):
+        listed = {}
+    return ({str(k) for k in listed} if isinstance(listed, dict) else set()) | {SITE_RECORD}
+
+
 def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
                 max_dropped_pct: float | None = None, video_width: int = 640, jspsych_dir=None,
                 force: bool = False) -> dict:
@@ -314,6 +326,8 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
                                                else "; pass --force to replace the earlier site"))
     if out.resolve() == study.dir.resolve() or study.dir.resolve() in out.resolve().parents:
         raise SiteError(f"{out}: write the site outside the study folder {study.dir}")
+    if out.is_dir():                      # --force replaces only the earlier site's own files
+        refuse_not_made(out, _site_files(out), "export-web --force", "the earlier site")
     missing = study.missing_videos()
     if missing:
         raise SiteError(f"{study.render_dir}: no video of {len(missing)} stimuli (e.g. {missing[0]}.mp4); "
@@ -353,6 +367,7 @@ def export_site(study_dir, out, *, host: str = "static", iti_ms: int = 500,
         (tmp / SITE_RECORD).write_text(json.dumps(record, indent=2) + "\n")
         os.chmod(tmp, 0o755)
         if out.exists():
+            refuse_not_made(out, _site_files(out), "export-web --force", "the earlier site")
             old = out.with_name(f".{out.name}.old")
             if old.exists():
                 shutil.rmtree(old)

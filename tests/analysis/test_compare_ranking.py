@@ -102,9 +102,25 @@ def test_agreement_of_an_unrelated_number_is_near_chance_with_an_interval_around
     assert r.auc_low < r.auc < r.auc_high and 0.03 < r.auc_high - r.auc_low < 0.3
 
 
-def test_analyze_choices_writes_tables_and_figure(tmp_path):
-    ch = simulate_choices(TRUE, ["jitter", "floaty"], "gt", 3, 10, np.random.default_rng(6))
-    res = analyze_choices(ch, SOURCES, None, tmp_path, n_boot=50)
+def test_analyze_choices_writes_tables_figure_and_notes(tmp_path, monkeypatch):
+    """The tables, the figure (saying which participants it shows, as every figure
+    does) and notes.md beside them (issue 42)."""
+    import matplotlib.figure
+
+    texts, save = [], matplotlib.figure.Figure.savefig
+
+    def savefig(fig, path, **kw):                   # the figure's own texts (supxlabel, ...)
+        texts.extend(t.get_text() for t in fig.texts)
+        return save(fig, path, **kw)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
+    ch = simulate_choices(TRUE, ["jitter", "floaty"], "gt", 3, 4, np.random.default_rng(6))
+    label = "N = 4 participants (0 real, 4 simulated)"
+    res = analyze_choices(ch, SOURCES, None, tmp_path, n_boot=50, label=label)
     assert pd.read_csv(tmp_path / "ranking.csv").source.tolist() == SOURCES
     assert (tmp_path / "comparison.png").stat().st_size > 1000 and (tmp_path / "comparison.pdf").is_file()
     assert "Bradley–Terry" in res.summary()
+    assert label in texts
+    notes = (tmp_path / "notes.md").read_text()
+    assert notes.startswith("# Comparison notes") and label in notes and "over 3 item(s)" in notes
+    assert "not meaningful below 5" in notes and res.to_dict()["participants_label"] == label

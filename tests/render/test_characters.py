@@ -168,9 +168,9 @@ def test_design_style_is_validated_and_recorded_in_manifest_and_render_json(tmp_
         man = list(csv.DictReader(f))
     assert [r["style"] for r in man] == ["stick", "stick"]
     rec = render_study(tmp_path / "s", what="ghost", size=(64, 48), jobs=1, progress=False)
-    assert rec["style"]["character"] == "stick"
-    assert {v["style"] for v in rec["stimuli"].values()} == {"stick"}
-    assert all(o["style"] == "stick" for o in rec["outputs"].values())
+    assert rec.record.style["character"] == "stick"
+    assert {v.style for v in rec.record.stimuli.values()} == {"stick"}
+    assert all(o.style == "stick" for o in rec.record.outputs.values())
     on_disk = json.loads((tmp_path / "s" / "render" / "render.json").read_text())
     assert on_disk["stimuli"]["backflip_smooth-increase_25"]["style"] == "stick"
 

@@ -361,7 +361,7 @@ def test_render_study_one_camera_identical_frames_before_takeoff(tmp_path):
     assert (out / "ref.mp4").exists() and (out / "edit_ghost.png").exists()
     assert (out / "edit_overlay.png").exists() and not (out / "ref_overlay.png").exists()
     saved = json.loads((out / "render.json").read_text())
-    assert Camera.from_dict(saved["camera"]) == Camera.from_dict(rec["camera"])
+    assert Camera.from_dict(saved["camera"]) == Camera.from_dict(rec.record.camera)
     assert saved["size"] == [160, 120] and saved["fps"] == 60.0
     assert {"pyvista", "vtk", "openimageio"} <= set(saved["versions"])
     assert Style.from_dict(saved["style"]) == Style()
@@ -377,7 +377,7 @@ def test_render_study_in_parallel_workers(tmp_path):
     a, t0, t1 = jumper(flip=0.0)
     _write_study(tmp_path, [("s0", a, 0), ("s1", a, 10), ("s2", a, 20)], t0, t1)
     rec = render_study(tmp_path, what="ghost", size=(96, 64), jobs=2, progress=False)
-    assert rec["jobs"] == 2
+    assert rec.jobs == 2
     imgs = [read_image(tmp_path / "render" / f"s{k}_ghost.png") for k in range(3)]
     assert imgs[0].shape == (64, 96, 3)
     # the same clip, the same camera, another process: the same picture

@@ -24,7 +24,7 @@ def test_render_json_records_the_anti_aliasing_and_the_encoder_the_files_show(tm
     _write_study(tmp_path, [(f"s{k}", a, 0 if k == 0 else 10 * k) for k in range(2)], t0, t1)
     rec = render_study(tmp_path, what=["video", "ghost", "trail"], size=(64, 48), fps=10.0, jobs=1,
                        progress=False)
-    assert rec["made"] == 6
+    assert rec.made == 6
     assert len(built) == 1            # videos, ghosts and trails of both in one scene
     on_disk = json.loads((tmp_path / "render" / "render.json").read_text())
     assert on_disk["anti_aliasing"] == {"style": "fxaa", "method": ANTI_ALIASING_METHODS["fxaa"]}

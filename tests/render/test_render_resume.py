@@ -137,19 +137,19 @@ def test_ctrl_c_stops_render_at_once_and_a_rerun_makes_only_the_rest(tmp_path, m
 
     # the rerun (in this process, one worker) makes only what is missing
     rec2 = render_study(study, size=(64, 48), fps=30.0, jobs=1, progress=False)
-    assert rec2["made"] == n - len(made) and rec2["up_to_date"] == len(made)
+    assert rec2.made == n - len(made) and rec2.up_to_date == len(made)
     after = snapshot(study)
     assert {k: after[k] for k in before} == before         # not one of them touched
     assert check_rendered(study)["size"] == [64, 48]
 
     # a rerun of a finished render touches no video
     rec3 = render_study(study, size=(64, 48), fps=30.0, jobs=1, progress=False)
-    assert rec3["made"] == 0 and rec3["up_to_date"] == n and snapshot(study) == after
+    assert rec3.made == 0 and rec3.up_to_date == n and snapshot(study) == after
     # a stimulus changed after rendering: only its video is stale
     bvh = study / "s03.bvh"
     bvh.write_text(bvh.read_text().replace("Frame Time:", "Frame Time:", 1) + "\n")
     rec4 = render_study(study, size=(64, 48), fps=30.0, jobs=1, progress=False)
-    assert rec4["made"] == 1
+    assert rec4.made == 1
     assert {k for k, v in snapshot(study).items() if v != after[k]} == {"s03.mp4"}
 
     # a re-render at another size, interrupted after two stimuli: mixed sizes, refused
@@ -190,7 +190,7 @@ def test_sigkill_of_render_leaves_no_worker(tmp_path):
     made = set(outputs)
     assert made and all(file_sha256(study / "render" / f) == o["sha256"] for f, o in outputs.items())
     rec = render_study(study, size=(64, 48), fps=30.0, jobs=1, progress=False)
-    assert rec["made"] == 6 - len(made) and not list((study / "render").glob(".partial-*"))
+    assert rec.made == 6 - len(made) and not list((study / "render").glob(".partial-*"))
 
 
 def test_ctrl_c_in_stimuli_is_one_line_and_leaves_nothing(tmp_path):

@@ -497,9 +497,19 @@ HEADER_FRAMES = {
 RAW_CMU = ["88_01.bvh", "87_03.bvh", "88_05.bvh", "90_11.bvh"]
 
 
-def test_the_shared_folder_has_every_documented_file(SHARED):
-    found = {p.name for folder in ("mocap", "peer-bvh") for p in (SHARED / folder).glob("*.bvh")}
+def test_the_shared_folder_has_every_documented_file(shared_path):
+    # a folder that is absent skips with its name (shared_path); one that is there must hold them
+    found = {p.name for folder in ("mocap", "peer-bvh") for p in shared_path(folder).glob("*.bvh")}
     assert set(HEADER_FRAMES) <= found
+
+
+def test_a_missing_shared_folder_skips_the_documented_files_test(shared_path, tmp_path, monkeypatch):
+    (tmp_path / "mocap").mkdir()                     # ../shared with mocap/ but no peer-bvh/
+    for name in HEADER_FRAMES:
+        (tmp_path / "mocap" / name).write_text("")
+    monkeypatch.setitem(shared_path.__globals__, "SHARED_DIR", tmp_path)
+    with pytest.raises(pytest.skip.Exception, match="peer-bvh not found"):
+        test_the_shared_folder_has_every_documented_file(shared_path)
 
 
 def test_every_real_file_loads(shared_bvh):

@@ -166,7 +166,7 @@ def test_levels_out_of_range_in_percent_with_field_and_file(tmp_path, kind_lines
 def test_level_bounds_property(level, sign, kind):
     """A level is accepted exactly when it lies in its kind's range (AM −90…+500 %,
     both ends excluded: the injection's own range; take-off −100…+100 %), and a
-    refusal quotes it in percent."""
+    refusal quotes it in percent, as written (12 significant digits)."""
     prof = 'profile = "abrupt"\n' if kind == "angular-momentum" else ""
     text = ONE_CLIP.format(study="", clip="", source="backflip").replace(
         'kind = "takeoff-angle"\nlevels = [0, 20]',
@@ -177,7 +177,7 @@ def test_level_bounds_property(level, sign, kind):
     if ok:
         assert list(parse_design(text, "d.toml").groups[0].levels) == [level]
     else:
-        with pytest.raises(DesignError, match=re.escape(f"{level:g} %")):
+        with pytest.raises(DesignError, match=re.escape(f"{level:.12g} %")):
             parse_design(text, "d.toml")
 
 
@@ -335,8 +335,8 @@ def test_shared_original_end_to_end_simulate_export_analyze(tmp_path):
     d = make_demo_study(tmp_path / "study", videos=False, levels=(0, 25, 50), original=None)
     simulate(d, 5, seed=3)
     res = export_responses(d, include_simulated=True)   # simulated answers are kept apart
-    rs = pd.read_csv(res["responses"])
-    assert res["rows"] == 5 * 2 * 5                        # 5 stimuli (1 original), twice
+    rs = pd.read_csv(res.responses)
+    assert res.rows == 5 * 2 * 5                        # 5 stimuli (1 original), twice
     assert (rs["group"] == "original").sum() == 5 * 2
     r = analyze(d, None, psychometric="none", gee=False, n_boot=50, include_simulated=True)
     t = r.table.set_index(["group", "level"])

@@ -51,3 +51,11 @@ def test_design_tables_cover_every_key_with_its_default(formats):
 def test_unknown_format_names_the_known_ones(formats):
     with pytest.raises(ValueError, match="known: design-study"):
         list(formats._rows("nope"))
+
+
+def test_error_kinds_table_lists_every_registered_kind(formats):
+    from flipstudy.vocab import kinds
+    rows = list(formats._rows("error-kinds"))
+    assert _names(rows) == [k.name for k in kinds.all_kinds()]
+    am = rows[0]
+    assert am[2] == "+500 % (excl.), −90 % (excl.)" and "FwP 2007 Table 2" in am[7]

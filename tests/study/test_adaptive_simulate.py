@@ -36,7 +36,7 @@ def test_observers_answer_every_group_and_their_truth_is_exported(tmp_path):
     study = make_study(tmp_path / "s", groups=("yn", "quest", "twoafc", "quest2afc"), trials=8)
     assert simulate(study, 2, seed=4) == ["sim001", "sim002"]
     res = export_responses(study, include_simulated=True)
-    rows = read(res["responses"])
+    rows = read(res.responses)
     assert list(rows[0]) == RESPONSE_COLUMNS + ADAPTIVE_COLUMNS
     assert len(rows) == 2 * (4 + 8 + 4 + 8) and all(r["complete"] == "true" for r in rows)
     for r in rows:
@@ -48,7 +48,7 @@ def test_observers_answer_every_group_and_their_truth_is_exported(tmp_path):
             assert float(r["quest_ci_low"]) <= float(r["quest_threshold"]) <= float(r["quest_ci_high"])
             assert r["stimulus"] == f"backflip_{r['group']}_{r['level']}"
     truth = read(tmp_path / "s" / TRUTH_FILE)
-    assert res["truth"] == tmp_path / "s" / TRUTH_FILE and len(truth) == 2 * 4
+    assert res.truth == tmp_path / "s" / TRUTH_FILE and len(truth) == 2 * 4
     conn = store.connect(study)
     stored = {r["participant"]: json.loads(r["simulated_truth"]) for r in store.truth_rows(conn)}
     conn.close()
@@ -100,7 +100,7 @@ def test_a_simulation_stopped_midway_resumes_to_the_same_answers(tmp_path, monke
     simulate(cut, 1, seed=5)
     keep = ("trial", "stimulus", "level", "response", "rt_ms", "quest_threshold", "first")
     a, b = (sorted(tuple(r[k] for k in keep) for r in read(export_responses(
-        d, include_simulated=True)["responses"])) for d in (whole, cut))
+        d, include_simulated=True).responses)) for d in (whole, cut))
     assert a == b and len(a) == 14
 
 
@@ -123,9 +123,9 @@ def test_the_paper_style_study_keeps_its_columns_and_model(tmp_path):
     study = make_demo_study(tmp_path / "s", videos=False)
     simulate(study, 2, seed=1)
     res = export_responses(study, include_simulated=True)
-    with open(res["responses"]) as f:
+    with open(res.responses) as f:
         assert f.readline().strip().split(",") == RESPONSE_COLUMNS
-    assert res["truth"] is None and not (tmp_path / "s" / TRUTH_FILE).exists()
+    assert res.truth is None and not (tmp_path / "s" / TRUTH_FILE).exists()
     two = make_study(tmp_path / "t", groups=("twoafc",))
     with pytest.raises(ModelError, match="2afc"):
         simulate(two, 1, model=tmp_path / "nothing.toml")

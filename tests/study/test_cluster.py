@@ -93,18 +93,18 @@ def test_cluster_build_and_render_are_the_local_bytes(tmp_path, cluster):
     kw = dict(what=("video", "ghost"), size=(64, 48), fps=15.0, progress=False)
     rec_here = render_study(here, jobs=1, **kw)
     rec_there = render_study(there, cluster=cluster, **kw)
-    assert rec_there["made"] == rec_here["made"] == 2 * len(rows_here)
-    assert rec_there["jobs"] == 2
+    assert rec_there.made == rec_here.made == 2 * len(rows_here)
+    assert rec_there.jobs == 2
     out1, out2 = here / "render", there / "render"
     for r in rows_here:
         f = f"{r['stimulus']}.mp4"
         np.testing.assert_array_equal(frames(out1 / f), frames(out2 / f))
-    for name, o in rec_there["outputs"].items():
-        assert o["sha256"] == rec_here["outputs"][name]["sha256"], name   # same renderer here
-        assert o["renderer"]["versions"]["vtk"] == rec_here["outputs"][name]["renderer"]["versions"]["vtk"]
-        assert o["renderer"]["window"] and "gl_renderer" in o["renderer"]
+    for name, o in rec_there.record.outputs.items():
+        assert o.sha256 == rec_here.record.outputs[name].sha256, name   # same renderer here
+        assert o.renderer["versions"]["vtk"] == rec_here.record.outputs[name].renderer["versions"]["vtk"]
+        assert o.renderer["window"] and "gl_renderer" in o.renderer
     # resumable: a second cluster render makes nothing
-    assert render_study(there, cluster=cluster, **kw)["made"] == 0
+    assert render_study(there, cluster=cluster, **kw).made == 0
 
 
 def test_a_worker_killed_mid_build_has_its_tasks_rerun(tmp_path, cluster):
@@ -167,7 +167,7 @@ def test_a_worker_killed_mid_render_has_its_video_made_again(tmp_path, cluster):
     th.join(180)
     assert victim is not None, "no render task was ever seen processing"
     assert "error" not in box, box.get("error")
-    assert box["rec"]["made"] == len(rows)
+    assert box["rec"].made == len(rows)
     check_rendered(study)                              # every video recorded, intact
     assert not list((study / "render").glob(".partial-*"))
     cluster.client.wait_for_workers(2, timeout=60)

@@ -39,15 +39,16 @@ def example(tmp_path_factory):
 
 def test_the_ground_truth_is_the_take_at_its_true_rate_without_the_t_pose(example):
     """gt/88_01.npz: the take's joints at the SMPL body joints, 60 Hz, frame 1 (the
-    T-pose) dropped; read back through the loading rule its flight's gravity is
+    T-pose) dropped once, by the loader (issue 42: the example dropped another); read back through the loading rule its flight's gravity is
     near 9.81 m/s² (SOURCES.md: 10.7-11.7 for a rough COM at 1/60 s, 43-47 at the
     header's 1/120 s)."""
     from flipstudy.stimuli.loading import load_clip
     raw = load_bvh(MOCAP / "88_01.bvh", fps=60.0)
+    assert raw.meta["dropped_frames"] == [0]        # the loader already dropped the T-pose
     with np.load(example / "gt" / "88_01.npz") as z:
         X, fps = z["joints"], float(z["fps"])
-    assert X.shape == (raw.num_frames - 1, 22, 3) and fps == 60.0
-    hips = raw.joint_positions()[1:, raw.skeleton.index("Hips")]
+    assert X.shape == (raw.num_frames, 22, 3) and fps == 60.0      # no second frame dropped
+    hips = raw.joint_positions()[:, raw.skeleton.index("Hips")]
     np.testing.assert_allclose(X[:, 0], hips, atol=1e-5)                 # SMPL joint 0: the pelvis
     clip = load_clip(str(example / "gt" / "88_01.npz"))
     assert clip.fps == 60.0 and 8.5 < analyse(clip).apparent_gravity < 12.5

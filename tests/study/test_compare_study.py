@@ -179,7 +179,7 @@ def test_a_small_simulated_panel_is_stored_exported_and_analysed(built, tmp_path
     from flipstudy.study.compare import analyze_comparison
     res = analyze_comparison(study, tmp_path / "again", include_simulated=True, n_boot=20, figures=False)
     assert CompareResult.load_json(res.save_json(tmp_path / "compare.json")) == res
-    pd.testing.assert_frame_equal(pd.DataFrame(res.report["ranking"]), r, atol=1e-6)   # the CSV's six decimals
+    pd.testing.assert_frame_equal(pd.DataFrame([x.to_dict() for x in res.report.ranking]), r, atol=1e-6)   # the CSV's six decimals
     assert "Bradley–Terry ranking (32 choices" in res.summary()
 
 
@@ -333,3 +333,35 @@ def test_compare_all_adds_the_pairs_without_the_first_source(tmp_path):
     assert main(["analyze", str(tmp_path / "study"), "--include-simulated", "--n-boot", "20", "--no-figures"]) == 0
     r = pd.read_csv(tmp_path / "study" / "analysis" / "ranking.csv").set_index("source")
     assert (r.n == 2 * 5 * 2).all() and r.n.sum() == 2 * 30      # each source in 2 of the 3 pairs
+
+
+@pytest.mark.slow                                   # measures the clips (about 8 s)
+def test_the_comparison_figure_says_who_and_the_analysis_writes_notes(built, tmp_path, monkeypatch):
+    """Every figure says which participants it shows (N = … (… real, … simulated)),
+    and the comparison analysis writes notes.md like the other analyses (issue 42)."""
+    import shutil
+
+    import matplotlib.figure
+
+    from flipstudy.study.compare import analyze_comparison
+    from flipstudy.study.simulate import simulate
+    study = tmp_path / "study"
+    shutil.copytree(built, study)
+    simulate(study, 3, seed=2, strengths={"gt": 0.0, "jitter": -1.0, "floaty": -2.0})
+    from flipstudy.study.export import export_responses
+    export_responses(study, include_simulated=True)
+    texts, save = [], matplotlib.figure.Figure.savefig
+
+    def savefig(fig, path, **kw):                   # the figure's own texts (supxlabel, ...)
+        texts.extend(t.get_text() for t in fig.texts)
+        return save(fig, path, **kw)
+
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig", savefig)
+    res = analyze_comparison(study, tmp_path / "out", include_simulated=True, n_boot=20)
+    label = "N = 3 participants (0 real, 3 simulated)"
+    assert label in texts
+    notes = (tmp_path / "out" / "notes.md").read_text()
+    assert notes.startswith("# Comparison notes") and label in notes
+    assert "| gt |" in notes and "not meaningful below 5" in notes
+    assert res.report["participants_label"] == label
+    assert res.report["files"]["notes"] == str(tmp_path / "out" / "notes.md")

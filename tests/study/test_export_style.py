@@ -53,10 +53,10 @@ def _study(tmp_path, a="", b="", study_style=None):
 def test_export_carries_the_manifest_style_and_analysis_splits_by_it(tmp_path):
     d = _study(tmp_path, a='style = "stick"', b='style = "point-light"')
     res = export_responses(d, include_simulated=True)
-    header = res["responses"].read_text().splitlines()[0].split(",")
+    header = res.responses.read_text().splitlines()[0].split(",")
     k = header.index("kind")
     assert header[k + 1] == "style" and [c for c in header if c != "style"] == RESPONSE_COLUMNS
-    rs = pd.read_csv(res["responses"])
+    rs = pd.read_csv(res.responses)
     with open(d / "manifest.csv", newline="") as f:
         man = {r["stimulus"]: r["style"] for r in csv.DictReader(f)}
     assert set(man.values()) == {"stick", "point-light"}
@@ -65,7 +65,7 @@ def test_export_carries_the_manifest_style_and_analysis_splits_by_it(tmp_path):
     assert set(rs.loc[rs["group"] == "smooth-increase", "style"]) == {"stick"}
     assert set(rs.loc[rs["group"] == "abrupt-decrease", "style"]) == {"point-light"}
     # the analysis reads the exported file and splits its table by style
-    r = analyze(res["responses"], None, psychometric="none", gee=False, n_boot=50,
+    r = analyze(res.responses, None, psychometric="none", gee=False, n_boot=50,
                 include_simulated=True)
     assert list(r.table.columns[:2]) == ["group", "style"]
     by = r.table.groupby("style")["group"].agg(set).to_dict()
@@ -83,16 +83,16 @@ def test_export_carries_the_manifest_style_and_analysis_splits_by_it(tmp_path):
 def test_export_without_a_style_has_no_style_column(tmp_path):
     d = _study(tmp_path)
     res = export_responses(d, include_simulated=True)
-    header = res["responses"].read_text().splitlines()[0].split(",")
+    header = res.responses.read_text().splitlines()[0].split(",")
     assert header == RESPONSE_COLUMNS
-    r = analyze(res["responses"], None, psychometric="none", gee=False, n_boot=50,
+    r = analyze(res.responses, None, psychometric="none", gee=False, n_boot=50,
                 include_simulated=True)
     assert "style" not in r.table.columns
 
 
 def test_one_study_wide_style_is_exported_but_does_not_split(tmp_path):
     d = _study(tmp_path, study_style="mannequin")
-    rs = pd.read_csv(export_responses(d, include_simulated=True)["responses"])
+    rs = pd.read_csv(export_responses(d, include_simulated=True).responses)
     assert set(rs["style"]) == {"mannequin"}
     r = analyze(d / "responses.csv", None, psychometric="none", gee=False, n_boot=50,
                 include_simulated=True)

@@ -47,7 +47,7 @@ def test_a_web_id_cannot_be_used_by_run_or_simulate_and_imports_go_on(study, tmp
     assert "sim002" not in {r["participant"] for r in status(study)}
     # and the study still takes web results, and local IDs stay out of the web
     out = import_web(study, [jsonl(tmp_path / "w2.jsonl", run_records(study, "W02", run="r3"))])
-    assert out["participants"] == 3
+    assert out.participants == 3
     open_session(load_study(study), "L01")
     with pytest.raises(WebImportError, match="L01 also has local sessions"):
         import_web(study, [jsonl(tmp_path / "l.jsonl", run_records(study, "L01", run="r4"))])
@@ -101,7 +101,7 @@ def test_import_web_checks_the_study_name_and_the_site(study, tmp_path):
         import_web(study, [good])                      # a design edited after the export
     design.write_text(text)
     out = import_web(study, [good])
-    assert out["answers"] == 8
+    assert out.answers == 8
 
 
 def test_a_file_of_duplicate_records_is_not_kept(study, tmp_path):
@@ -111,7 +111,7 @@ def test_a_file_of_duplicate_records_is_not_kept(study, tmp_path):
     table = (study / "web" / "responses.csv").read_bytes()
     big = jsonl(tmp_path / "dups.jsonl", recs * 300)                 # every record already kept
     out = import_web(study, [big])
-    assert out["files"][0]["status"] == "nothing new" and out["files"][0]["new_answers"] == 0
+    assert out.files[0].status == "nothing new" and out.files[0].new_answers == 0
     assert sorted((study / "web" / "imports").iterdir()) == kept    # not kept, so never re-read
     assert (study / "web" / "responses.csv").read_bytes() == table
     ledger = json.loads((study / "web" / "imports.json").read_text())
@@ -119,7 +119,7 @@ def test_a_file_of_duplicate_records_is_not_kept(study, tmp_path):
                                                                  (str(big), False)]
     # imported again: known by its hash, not read again
     again = import_web(study, [big])
-    assert again["files"][0]["status"] == "already imported" and again["files"][0]["records"] == 0
+    assert again.files[0].status == "already imported" and again.files[0].records == 0
 
 
 def test_import_web_of_a_folder_a_fifo_or_deep_json(study, tmp_path, capsys):

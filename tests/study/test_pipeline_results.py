@@ -14,7 +14,8 @@ from hypothesis import strategies as st
 
 from flipstudy import results
 from flipstudy.errors import FlipstudyError
-from flipstudy.results import (AnalyzeResult, BuildResult, MotionResult, ExportResult, ImportResult,
+from flipstudy.records import Record, ReproduceFiles, StageSeconds, Threshold
+from flipstudy.results import (AnalyzeResult, BuildResult, CompareResult, MotionResult, ExportResult, ImportResult,
                                PlanResult, RenderResult, ReproduceResult, SimulateResult, StatusResult,
                                StepResult)
 from flipstudy.study import pipeline
@@ -22,7 +23,7 @@ from flipstudy.study.cli import main
 from flipstudy.study.demo import make_demo_study
 
 RESULTS = [BuildResult, RenderResult, SimulateResult, ExportResult, ImportResult, AnalyzeResult,
-           ReproduceResult, StatusResult, PlanResult, MotionResult]
+           ReproduceResult, StatusResult, PlanResult, MotionResult, CompareResult]
 
 # ---- strategies: any value of a field's declared type that JSON can carry
 text = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12)
@@ -46,6 +47,12 @@ def strategy(hint):
         return st.floats(-1e6, 1e6, allow_nan=False)
     if hint is dict:
         return st.dictionaries(text, json_doc, max_size=4)
+    if hint is bool:
+        return st.booleans()
+    if hint is object:                        # any JSON value
+        return json_doc
+    if isinstance(hint, type) and issubclass(hint, Record):
+        return records_of(hint)
     if origin in (typing.Union, getattr(__import__("types"), "UnionType")):
         args = [a for a in typing.get_args(hint) if a is not type(None)]
         return st.none() | strategy(args[0])
@@ -58,6 +65,16 @@ def strategy(hint):
         k, v = typing.get_args(hint)
         return st.dictionaries(strategy(k), strategy(v), max_size=4)
     raise AssertionError(f"no strategy for {hint}")
+
+
+def records_of(cls):
+    """Any record of ``cls``, its open columns (``extra``) named unlike its fields."""
+    hints = typing.get_type_hints(cls)
+    declared = {f.name for f in dataclasses.fields(cls)} - {"extra"}
+    kw = {n: strategy(hints[n]) for n in declared}
+    if "extra" in hints:
+        kw["extra"] = st.dictionaries(text.filter(lambda k: k not in declared), json_doc, max_size=3)
+    return st.builds(cls, **kw)
 
 
 def instances(cls):
@@ -145,7 +162,7 @@ def test_simulate_export_analyze_print_their_results_summaries(tmp_path, capsys)
                            include_simulated=True)
     assert out == ana.summary().replace(str(twin), str(study)) + "\n"
     assert ana.out == twin / "analysis" and (ana.out / "table.csv").is_file()
-    assert ana.report["settings"]["n_trials"] == exp.rows
+    assert ana.report.settings.n_trials == exp.rows
     back = AnalyzeResult.load_json(ana.save_json(tmp_path / "analyze.json"))
     assert back.summary() == ana.summary()
 
@@ -156,14 +173,10 @@ def test_simulate_export_analyze_print_their_results_summaries(tmp_path, capsys)
 def test_reproduce_summary_matches_the_counts_it_states():
     """A ReproduceResult's summary states its counts and files (thresholds of None shown
     as not reached)."""
-    files = {k: f"p/{k}" for k in ("design", "manifest", "videos", "sessions", "responses",
-                                  "table_paper", "figure_ratings", "figure_dprime",
-                                  "figure_psychometric", "figure_sheet", "notes", "stimuli")}
-    r = ReproduceResult(out="p", files=files, seconds=dict.fromkeys(
-        ("total", "stimuli", "render", "sessions", "analysis"), 1.0), n_stimuli=46, worst_gap_pct=0.25,
-        n_videos=46, n_responses=88, n_simulated=1, table_md="| t |",
-        thresholds=({"group": "g", "reached": False, "threshold": None},
-                    {"group": "h", "reached": True, "threshold": 12.34}))
+    files = ReproduceFiles(**{f.name: f"p/{f.name}" for f in dataclasses.fields(ReproduceFiles)})
+    r = ReproduceResult(out="p", files=files, seconds=StageSeconds(*[1.0] * 6), n_stimuli=46,
+                        worst_gap_pct=0.25, n_videos=46, n_responses=88, n_simulated=1, table_md="| t |",
+                        thresholds=(Threshold("g", reached=False), Threshold("h", True, 12.34)))
     s = r.summary()
     assert "p/manifest  46 stimuli" in s and "(largest gap 0.25 points)" in s
     assert "  g                  not reached within the tested levels" in s
@@ -183,3 +196,70 @@ def test_every_cli_command_body_is_short():
                 if n > 25:
                     long.append(f"{p.name}: {node.name} has {n} lines")
     assert not long, "\n".join(long)
+
+
+#: fields still holding JSON documents, and why: a build's rows are the manifest's
+#: CSV rows (column → text; the typed stimulus is flipstudy.stimuli.contract.Stimulus),
+#: and a motion command's report is the method's own report, different per command
+OPEN_FIELDS = {("BuildResult", "rows"), ("MotionResult", "report")}
+
+
+def _holds_dict(hint) -> bool:
+    if hint is dict or typing.get_origin(hint) is dict:
+        return True
+    return any(_holds_dict(a) for a in typing.get_args(hint))
+
+
+def test_no_result_is_indexed_like_a_dict():
+    """No class of flipstudy.results defines ``__getitem__`` (results are read by
+    attribute), and each step result's fields hold typed records, not dicts."""
+    classes = [c for c in vars(results).values() if isinstance(c, type) and c.__module__ == results.__name__]
+    assert {c.__name__ for c in classes} >= {c.__name__ for c in RESULTS}
+    assert [c.__name__ for c in classes if "__getitem__" in vars(c)] == []
+    for cls in RESULTS:
+        assert not hasattr(cls, "__getitem__"), cls            # not inherited either
+        hints = typing.get_type_hints(cls)
+        dicts = [f.name for f in dataclasses.fields(cls) if _holds_dict(hints[f.name])
+                 and (cls.__name__, f.name) not in OPEN_FIELDS]
+        assert dicts == [], f"{cls.__name__} holds dicts in {dicts}"
+
+
+def test_every_summary_follows_one_convention():
+    """``summary()``: no arguments, text without a trailing newline (what the command prints)."""
+    import inspect
+    for cls in RESULTS:
+        sig = inspect.signature(cls.summary)
+        assert list(sig.parameters) == ["self"] and sig.return_annotation in (str, "str"), cls
+
+
+def test_records_read_back_the_json_the_steps_wrote_key_for_key(tmp_path):
+    """A record read from a step's JSON object writes it back with the same keys in
+    the same order (so ``--json`` output is unchanged), open columns included."""
+    from flipstudy.records import AnalyzeReport, SessionStatus
+    doc = {"settings": {"correction": "loglinear", "n_boot": 50,
+                        "participants": {"n": 1, "real": ["P01"], "marked": {"simulated": True}},
+                        "participants_label": "N = 1", "n_trials": 8, "groups": ["g"]},
+           "table": [{"group": "g", "level": 0.0, "n": 8, "dprime": None}],
+           "thresholds": [{"group": "g", "method": "none", "threshold": None, "reached": False}],
+           "flow": [{"stage": "recruited", "n": 1}], "notes": ["a"], "files": {"t": "x/t.csv"}}
+    rep = AnalyzeReport.from_dict(doc)
+    assert rep.settings.participants.real == ("P01",) and rep.table[0].extra["n"] == 8
+    assert json.dumps(rep.to_dict()) == json.dumps(doc)
+    r = AnalyzeResult(out=tmp_path, report=rep, table_markdown="| t |")
+    assert AnalyzeResult.load_json(r.save_json(tmp_path / "a.json")).report.to_dict() == doc
+    with pytest.raises(FlipstudyError, match="SessionStatus: unknown field"):
+        SessionStatus.from_dict({"participant": "P", "colour": 1})
+
+
+def test_the_results_and_their_records_import_none_of_the_four_parts():
+    """Like flipstudy.errors, the root modules results.py and records.py sit below the
+    parts: every part can return its step's result."""
+    import ast
+    root = Path(results.__file__).parent
+    for name in ("results.py", "records.py"):
+        tree = ast.parse((root / name).read_text())
+        mods = [n.module or "" for n in ast.walk(tree) if isinstance(n, ast.ImportFrom)]
+        mods += [a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
+        parts = [m for m in mods if m.removeprefix("flipstudy.").split(".")[0]
+                 in ("stimuli", "render", "study", "analysis")]
+        assert parts == [], f"{name} imports {parts}"

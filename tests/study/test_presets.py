@@ -64,12 +64,12 @@ def test_preset_builds_and_runs_end_to_end(tmp_path, name):
     study = tmp_path / "study"
     build_stimuli(sd, study, progress=False)
     rec = render_study(study, size=(32, 24), jobs=1, fps=10, progress=False)
-    assert len(rec["stimuli"]) == len(StimulusSet.read(study, files=False, design=False).rows())
+    assert len(rec.record.stimuli) == len(StimulusSet.read(study, files=False, design=False).rows())
     model = ObserverModel({g.name: (np.array([0.0, max(g.levels)]), np.array([0.9, 0.1]))
                            for g in sd.groups}, sigma=0.1, source="test")
     assert simulate(study, 3, model=model, seed=1) == ["sim001", "sim002", "sim003"]
     exp = export_responses(study, include_simulated=True)
-    res = analyze(exp["responses"], tmp_path / "analysis", include_simulated=True, n_boot=50,
+    res = analyze(exp.responses, tmp_path / "analysis", include_simulated=True, n_boot=50,
                   psychometric="none", gee=False, figures=False)
     tab = res.table
     assert set(tab["group"]) == {g.name for g in sd.groups}

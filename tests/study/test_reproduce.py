@@ -21,14 +21,14 @@ def run(tmp_path_factory):
 def test_every_stage_leaves_its_outputs(run):
     out, r = run
     man = list(csv.DictReader(open(out / "study" / "manifest.csv")))
-    assert len(man) == r["n_stimuli"] == 46          # 2 references + 2 × (16 + 1 shared original + 5)
+    assert len(man) == r.n_stimuli == 46          # 2 references + 2 × (16 + 1 shared original + 5)
     for row in man:
         assert (out / "study" / "render" / f"{row['stimulus']}.mp4").stat().st_size > 1000
         assert (out / "study" / "render" / f"{row['stimulus']}_ghost.png").exists()
         assert (out / "study" / "render" / f"{row['stimulus']}_trail.png").exists()
-    assert r["worst_gap_pct"] <= 1.0                # the design's tolerance, measured
+    assert r.worst_gap_pct <= 1.0                # the design's tolerance, measured
     responses = list(csv.DictReader(open(out / "study" / "responses.csv")))
-    assert len(responses) == r["n_responses"] == 4 * 88         # each of 44 motions twice
+    assert len(responses) == r.n_responses == 4 * 88         # each of 44 motions twice
     assert {x["participant"] for x in responses} == {"sim001", "sim002", "sim003", "sim004"}
     table = list(csv.DictReader(open(out / "analysis" / "table.csv")))
     assert len(table) == 25                         # 5 groups × 5 levels (AM level 0: the shared original)
@@ -42,6 +42,8 @@ def test_every_stage_leaves_its_outputs(run):
     settings = json.loads((out / "study" / "render" / "render.json").read_text())
     assert settings["size"] == [160, 120] and settings["style"]["anti_aliasing"] == "fxaa"
     assert not list(out.parent.glob(".paper.partial-*"))
+    assert settings["study"] == str((out / "study").resolve())
+    assert ".partial-" not in (out / "analysis" / "summary.json").read_text()
 
 
 @pytest.mark.slow
@@ -115,3 +117,47 @@ def test_force_refused_while_the_study_holds_a_real_answer(run, tmp_path):
     with pytest.raises(OSError, match="1 answer of 1 real participant"):
         reproduce(copy, participants=2, size=(160, 120), quiet=True, force=True)
     assert snap() == before and sorted(p.name for p in tmp_path.iterdir()) == ["paper"]
+
+
+@pytest.mark.slow                                   # builds the stimuli (about 5 s)
+def test_the_records_name_the_output_not_the_build_folder(tmp_path, monkeypatch):
+    """render.json and summary.json are written inside the hidden build folder; once it
+    is moved to OUT they name OUT (the build folder no longer exists)."""
+    import types
+
+    import pandas as pd
+
+    from flipstudy import analysis, render
+    import flipstudy.analysis.pipeline  # noqa: F401
+    import flipstudy.analysis.tables  # noqa: F401
+    import flipstudy.render.study  # noqa: F401
+    from flipstudy.render.record import write_record
+
+    def fake_render(stimuli, **k):                  # records the study as render_study does
+        rd = stimuli.folder / "render"
+        rd.mkdir(exist_ok=True)
+        rec = {"study": str(stimuli.folder.resolve()), "stimuli": {}}
+        write_record(rd, rec)
+        return types.SimpleNamespace(record=rec)
+
+    def fake_analyze(responses, out, **k):          # records its files as analyze does
+        out.mkdir(parents=True)
+        names = ["table.csv", "table_paper.md", "table_paper.tex", "ratings.png", "dprime.png",
+                 "psychometric.png", "sheet.png", "notes.md"]
+        for n in names:
+            (out / n).write_text("x")
+        (out / "summary.json").write_text(json.dumps({"files": {n: str(out / n) for n in names}}))
+        return types.SimpleNamespace(table=pd.DataFrame({"a": [1]}),
+                                     to_dict=lambda: {"thresholds": []})
+
+    monkeypatch.setattr(render.study, "render_study", fake_render)
+    monkeypatch.setattr(analysis.pipeline, "analyze", fake_analyze)
+    monkeypatch.setattr(analysis.tables, "to_markdown", lambda table: "")
+    out = tmp_path / "paper"
+    reproduce(out, participants=2, quiet=True)
+    rec = json.loads((out / "study" / "render" / "render.json").read_text())
+    assert rec["study"] == str((out / "study").resolve())
+    summary = json.loads((out / "analysis" / "summary.json").read_text())
+    assert summary["files"]["notes.md"] == str(out / "analysis" / "notes.md")
+    for f in ("study/render/render.json", "analysis/summary.json"):
+        assert ".partial-" not in (out / f).read_text()

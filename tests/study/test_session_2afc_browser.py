@@ -24,6 +24,7 @@ import pytest
 
 from test_session_browser import ARGS, CHROMIUM, TIMEOUT, jspsych_dir, pw  # noqa: F401 (fixtures)
 from _kinds import INTERVAL_COLOUR_JS, colour_of, design_text, make_study, nearest
+from _site_names import study_names
 from _screenshots import screenshot
 
 pytestmark = pytest.mark.skipif(not os.path.exists(CHROMIUM),
@@ -169,7 +170,7 @@ def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
     session.close()
 
     out = export_responses(study_dir, tmp_path / "export" / "responses.csv")
-    rows = _rows(out["responses"])
+    rows = _rows(out.responses)
     assert [r["response"] for r in rows] == resp and [r["input"] for r in rows] == how
     assert [r["first"] for r in rows] == firsts
     assert [r["task"] for r in rows] == ["2afc"] * 8
@@ -179,7 +180,7 @@ def test_2afc_session_in_chromium_stored_and_analysed(page, tmp_path):
     assert all(600 <= float(r["shown_ms"]) <= 4000 for r in rows), [r["shown_ms"] for r in rows]
 
     res = tmp_path / "analysis"
-    assert cli(["analyze", str(out["responses"]), "--out", str(res), "--no-figures", "--no-gee",
+    assert cli(["analyze", str(out.responses), "--out", str(res), "--no-figures", "--no-gee",
                 "--psychometric", "none", "--n-boot", "50"]) == 0
     table = _rows(res / "table.csv")
     from scipy.stats import norm
@@ -214,6 +215,7 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
     answer = {}
     reload_at = adaptive[2]
     with ServerThread(create_app(session, iti_ms=30)) as srv:
+        names = study_names(study_dir)
         page.goto(srv.url)
         page.wait_for_selector(f'{APP}[data-screen-id="instructions"]')
         assert "Judging motions" in page.inner_text(APP)
@@ -230,7 +232,7 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
                 _reach(page, i)
                 page.wait_for_selector(f'{APP}[data-playing="0"] button.fs-correct:enabled')
                 assert page.get_attribute(APP, "data-stimulus") == stim     # the same level
-            level = study.by_name[stim].level
+            level = study.by_name[names[stim]].level              # the page knows it by its opaque name
             answer[i] = "incorrect" if level > 30 else "correct"
             _answer(page, i, answer[i], "key" if i % 2 else "click")
         page.wait_for_selector(f'{APP}[data-screen-id="end"]')
@@ -239,7 +241,7 @@ def test_adaptive_group_interleaved_with_yes_no_survives_a_reload(page, tmp_path
         assert status == 409
     session.close()
 
-    rows = _rows(export_responses(study_dir, tmp_path / "export" / "responses.csv")["responses"])
+    rows = _rows(export_responses(study_dir, tmp_path / "export" / "responses.csv").responses)
     assert [r["response"] for r in rows] == [answer[i] for i in range(1, n + 1)]
     quest_rows = [r for r in rows if r["method"] == "quest+"]
     assert [int(r["trial"]) for r in quest_rows] == adaptive

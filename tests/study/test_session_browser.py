@@ -39,6 +39,7 @@ from flipstudy.study.order import trial_order  # noqa: E402
 from flipstudy.study.server import ServerThread, create_app  # noqa: E402
 from flipstudy.study.session import load_study, open_session  # noqa: E402
 from _screenshots import screenshot  # noqa: E402
+from _site_names import study_names  # noqa: E402
 
 BREAK_EVERY = 3
 TIMEOUT = 15_000          # ms, for any one screen
@@ -167,7 +168,7 @@ def read_csv(path):
 
 def check_export(study_dir, tmp_path, participant, trials, resp, how, replayed=()):
     out = export_responses(study_dir, tmp_path / "export" / "responses.csv")
-    rows = read_csv(out["responses"])
+    rows = read_csv(out.responses)
     assert len(rows) == len(trials)
     for i, (r, t) in enumerate(zip(rows, trials), start=1):
         assert r["participant"] == participant and r["session"] == "1"
@@ -182,7 +183,7 @@ def check_export(study_dir, tmp_path, participant, trials, resp, how, replayed=(
         assert int(r["late_frames"]) >= 0
         assert r["replays"] == ("1" if i in replayed else "0"), f"trial {i}"
         assert r["timestamp"].endswith("Z")
-    return rows, read_csv(out["participants"])
+    return rows, read_csv(out.participants)
 
 
 def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
@@ -193,6 +194,9 @@ def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
     with ServerThread(create_app(session, iti_ms=50)) as srv:
         page.goto(srv.url)
         screen(page, "instructions")
+        # which tone is the left side: the sentence and the picture (issue 42)
+        assert "left arm and leg are the lighter tone" in page.inner_text(".fs-sides figcaption")
+        assert page.eval_on_selector(".fs-sides img", "i => i.complete && i.naturalWidth") == 520
         shot = screenshot(page, "session_instructions.png", tmp_path)
         assert shot.stat().st_size <= 150_000
         do_intro(page)
@@ -200,6 +204,8 @@ def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
             if i == 2:
                 # buttons are disabled and keys ignored until the motion has been shown
                 page.wait_for_selector(f'{APP}[data-screen-id="trial-2"][data-playing="1"]')
+                # the page knows the trial's stimulus by its opaque name only (issue 42)
+                assert study_names(tiny)[page.get_attribute(APP, "data-stimulus")] == session.trials[1].stimulus
                 assert page.is_disabled("button.fs-correct") and page.is_disabled("button.fs-incorrect")
                 page.keyboard.press("f")
                 shot = screenshot(page, "session_trial.png", tmp_path)

@@ -7,6 +7,7 @@ import urllib.request
 import pytest
 
 from _kinds import design_text, make_study
+from _site_names import study_names
 from flipstudy.study.server import ServerThread, create_app
 from flipstudy.study.session import load_study, open_session, submit_answer
 from flipstudy.study.timeline import INSTRUCTIONS, KEYS_2AFC, PROMPT_2AFC, build_timeline, trial_screen
@@ -84,15 +85,16 @@ def _get(url):
 def test_api_trial_serves_the_current_trial_only(tmp_path):
     s = _session(tmp_path, [QUEST, YES_NO], repetitions=1)
     with ServerThread(create_app(s, iti_ms=0)) as srv:
+        names = study_names(s.study.dir)          # the page's (opaque) names → the stimuli
         for n in range(1, s.n_trials + 1):
             status, screen = _get(srv.url + f"api/trial/{n}")
             assert status == 200 and screen["trial"] == n
             want = s.resolve(n)
-            assert screen["stimulus"] == want.stimulus and want.stimulus in s.study.by_name
+            assert names[screen["stimulus"]] == want.stimulus and want.stimulus in s.study.by_name
             if n < s.n_trials:
                 assert _get(srv.url + f"api/trial/{n + 1}")[0] == 409       # not yet
             level = s.study.by_name[want.stimulus].level
-            submit_answer(s, {"participant": "P01", "session": 1, "trial": n, "stimulus": screen["stimulus"],
+            submit_answer(s, {"participant": "P01", "session": 1, "trial": n, "stimulus": want.stimulus,
                               "response": "incorrect" if level > 20 else "correct", "rt_ms": 500.0,
                               "shown_ms": 400.0, "late_frames": 0})
             assert _get(srv.url + f"api/trial/{n}")[0] == 409                # answered
@@ -110,9 +112,11 @@ def test_served_adaptive_levels_follow_quest(tmp_path, task):
     levels = [v for v in g.levels if not (task == "2afc" and v == 0)]
     q = Quest.new(quest_model(levels, task, QuestSettings(**vars(g.quest))))
     with ServerThread(create_app(s, iti_ms=0)) as srv:
+        names = study_names(s.study.dir)          # the page's (opaque) names → the stimuli
         for n in range(1, s.n_trials + 1):
             _, screen = _get(srv.url + f"api/trial/{n}")
-            level = s.study.by_name[screen["stimulus"]].level
+            stimulus = names[screen["stimulus"]]
+            level = s.study.by_name[stimulus].level
             assert level == q.next_level()
             if task == "2afc":
                 seen = "first" if level < 30 else ("first" if screen["first"] == "original" else "second")
@@ -120,7 +124,7 @@ def test_served_adaptive_levels_follow_quest(tmp_path, task):
             else:
                 seen = "incorrect" if level >= 30 else "correct"
                 detected = seen == "incorrect"
-            submit_answer(s, {"participant": "P01", "session": 1, "trial": n, "stimulus": screen["stimulus"],
+            submit_answer(s, {"participant": "P01", "session": 1, "trial": n, "stimulus": stimulus,
                               "response": seen, "rt_ms": 500.0, "shown_ms": 400.0, "late_frames": 0})
             q.update(level, detected)
     s.close()

@@ -10,6 +10,7 @@ import sqlite3
 
 import pytest
 
+from _site_names import site_name
 from flipstudy.study.demo import make_demo_study
 from flipstudy.study.server import ServerThread, create_app
 from flipstudy.study.session import load_study, open_session
@@ -49,9 +50,15 @@ def counts(d):
         conn.close()
 
 
+def video_url(d, stimulus):
+    """The URL the page is given for ``stimulus``'s video (its opaque name)."""
+    return f"/stimuli/{site_name(d, stimulus)}.mp4"
+
+
 def good_answer(session, trial=1, **kw):
+    """An answer as the page sends it (the trial's video by the page's name of it)."""
     body = {"participant": "P01", "session": 1, "trial": trial,
-            "stimulus": session.trials[trial - 1].stimulus, "response": "correct",
+            "stimulus": site_name(session.study.dir, session.trials[trial - 1].stimulus), "response": "correct",
             "rt_ms": 500.0, "shown_ms": 200.0, "late_frames": 0}
     body.update(kw)
     return body
@@ -94,7 +101,7 @@ def test_serves_jspsych_from_lib(served):
     pkg, (src, _) = "jspsych", jsp.BUNDLES["jspsych"]
     assert data == (folder / "node_modules" / pkg / "css" / "jspsych.css").read_bytes()
     assert request(srv, "GET", "/lib/jspsych.js")[2] == (folder / "node_modules" / pkg / src).read_bytes()
-    st, h, data = request(srv, "GET", "/stimuli/backflip_reference.mp4")
+    st, h, data = request(srv, "GET", video_url(d, "backflip_reference"))
     assert st == 200 and h["content-type"] == "video/mp4"
     assert data == (d / "render" / "backflip_reference.mp4").read_bytes()
     st, _, data = request(srv, "GET", "/api/session")
@@ -114,6 +121,7 @@ TRAVERSAL = [
     "/stimuli//etc/passwd",
     "/stimuli/%2Fetc%2Fpasswd",
     "/stimuli/render/backflip_reference.mp4",
+    "/stimuli/backflip_reference.mp4",             # a stimulus's own name (the page's is opaque)
     "/stimuli/backflip_reference",                 # a manifest name without the video suffix
     "/stimuli/backflip_reference.bvh",
     "/stimuli/backflip_reference.mp4/",
@@ -165,11 +173,11 @@ def test_symlink_out_of_render_is_refused(served, tmp_path):
     video.unlink()
     os.symlink(d.parent / "outside.mp4", video)
     try:
-        assert_json_4xx(*request(srv, "GET", "/stimuli/backflip_smooth-increase_0.mp4"), expect=404)
+        assert_json_4xx(*request(srv, "GET", video_url(d, "backflip_smooth-increase_0")), expect=404)
     finally:
         video.unlink()
         video.write_bytes(saved)
-    assert request(srv, "GET", "/stimuli/backflip_smooth-increase_0.mp4")[0] == 200
+    assert request(srv, "GET", video_url(d, "backflip_smooth-increase_0"))[0] == 200
 
 
 def test_foreign_host_header_and_cross_origin_posts(served):

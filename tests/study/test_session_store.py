@@ -218,7 +218,7 @@ def test_simulate_and_export_leave_real_rows_alone_and_mark_or_omit_simulated(st
     p2 = open_session(load_study(study_dir), "P02")       # stopped after 4 of 12
     for i in range(1, 5):
         answer(p2, i)
-    real_only = read_csv(export_responses(study_dir, tmp_path / "before.csv")["responses"])
+    real_only = read_csv(export_responses(study_dir, tmp_path / "before.csv").responses)
     assert len(real_only) == 16
     assert cli(["simulate", str(study_dir), "--participants", "3", "--seed", "2"]) == 0
     assert "--include-simulated" in capsys.readouterr().out
@@ -261,7 +261,7 @@ def test_analyze_leaves_out_simulated_and_incomplete_and_says_who(study_dir, tmp
     for i in range(1, 7):
         answer(p4, i)
     simulate(study_dir, 5, seed=1)
-    csv_all = export_responses(study_dir, tmp_path / "r.csv", include_simulated=True)["responses"]
+    csv_all = export_responses(study_dir, tmp_path / "r.csv", include_simulated=True).responses
     res = analyze(csv_all, tmp_path / "a", psychometric="none", gee=False, n_boot=50)
     who = res.settings["participants"]
     assert who["real"] == ["P01", "P02", "P03"] and who["simulated"] == []
@@ -291,7 +291,7 @@ def test_analyze_leaves_out_simulated_and_incomplete_and_says_who(study_dir, tmp
     # a study with only simulated participants: nothing to analyse, and the error says why
     only = make_demo_study(tmp_path / "sim", videos=False, levels=(0, 25, 50))
     simulate(only, 2, seed=1)
-    csv_sim = export_responses(only, tmp_path / "s.csv", include_simulated=True)["responses"]
+    csv_sim = export_responses(only, tmp_path / "s.csv", include_simulated=True).responses
     from flipstudy.errors import ResponsesError
     with pytest.raises(ResponsesError, match="--include-simulated"):
         analyze(csv_sim, None, psychometric="none", gee=False, n_boot=50)
@@ -367,7 +367,7 @@ def test_simulate_answers_every_trial_deterministically(study_dir, tmp_path, cap
 
 def test_simulate_resumes_an_interrupted_participant(study_dir, tmp_path):
     simulate(study_dir, 1, seed=9)
-    full = read_csv(export_responses(study_dir, tmp_path / "full.csv", include_simulated=True)["responses"])
+    full = read_csv(export_responses(study_dir, tmp_path / "full.csv", include_simulated=True).responses)
     other = make_demo_study(tmp_path / "other", videos=False, levels=(0, 25, 50))
     # a simulated participant stopped after 5 answers, then resumed
     import flipstudy.study.simulate as sim
@@ -379,7 +379,7 @@ def test_simulate_resumes_an_interrupted_participant(study_dir, tmp_path):
                           "shown_ms": float(r["shown_ms"]), "late_frames": int(r["late_frames"]),
                           "input": "simulated"})
     sim.simulate(other, 1, seed=9)
-    resumed = read_csv(export_responses(other, tmp_path / "resumed.csv", include_simulated=True)["responses"])
+    resumed = read_csv(export_responses(other, tmp_path / "resumed.csv", include_simulated=True).responses)
     assert [(r["trial"], r["response"]) for r in resumed] == [(r["trial"], r["response"]) for r in full]
 
 
@@ -398,7 +398,7 @@ def test_simulated_panel_reproduces_table_2(tmp_path):
                         groups=(("abrupt-decrease", "angular-momentum", "abrupt", -1),),
                         levels=(0, 17, 25, 37, 50))
     simulate(d, 80, seed=2)
-    rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True)["responses"])
+    rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True).responses)
     for lv, p in zip((0, 17, 25, 37, 50), (0.72, 0.83, 0.68, 0.33, 0.22)):
         cell = [r["response"] == "correct" for r in rs if r["level"] == str(lv)]
         assert len(cell) == 80
@@ -422,7 +422,7 @@ def test_sessions_on_a_stimulus_set_built_from_motion_capture(tmp_path):
     study = load_study(d)
     assert [r.stimulus for r in study.references] == ["backflip_reference"]
     simulate(d, 2, seed=4)
-    rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True)["responses"])
+    rs = read_csv(export_responses(d, tmp_path / "r.csv", include_simulated=True).responses)
     assert len(rs) == 2 * 2 * 2 * 2
     assert {(r["group"], r["level"]) for r in rs} == {
         (g, lv) for g in ("smooth-increase", "abrupt-decrease") for lv in ("0", "25")}

@@ -6,7 +6,9 @@
 //
 // Names.  The exported site knows its videos and groups by opaque names only (keyed hashes;
 // the map stays in the study, STUDY/web/site-map.json): a record names a trial's video and
-// group by them and carries no clip, kind or level; import-web maps them back.
+// group by them and carries no clip, kind or level; import-web maps them back.  The local
+// runner's page too: the server sends its screens and videos by the same names and maps each
+// answer's video back to its stimulus.
 //
 // Data.  Every record (start, demographics, answer, end) is one flat JSON object.  It is
 // checkpointed in localStorage at once, then sent to the host the site was exported for:
@@ -295,8 +297,17 @@
   }
 
   // ---- screens -----------------------------------------------------------------------------
-  function card(title, paragraphs) {
-    return `<div class="fs-card"><h1>${esc(title)}</h1>${paragraphs.map((p) => `<p>${esc(p)}</p>`).join('')}</div>`;
+  function card(title, paragraphs, extra = '') {
+    return `<div class="fs-card"><h1>${esc(title)}</h1>${paragraphs.map((p) => `<p>${esc(p)}</p>`).join('')}${extra}</div>`;
+  }
+
+  // which tone is the left side: the sentence and the picture of config.sides (left and
+  // right limbs differ only by tone)
+  function sidesHtml() {
+    const S = C.sides;
+    if (!S) return '';
+    const img = S.image ? `<img src="${S.image}" alt="${esc(S.alt)}" width="${S.width}" height="${S.height}">` : '';
+    return `<figure class="fs-sides">${img}<figcaption>${esc(S.text)}</figcaption></figure>`;
   }
 
   function demographicsHtml(fields) {
@@ -343,7 +354,7 @@
 
   function instructionsNode(id, title, paragraphs, button) {
     if (id === 'instructions') {
-      return {type: jsPsychInstructions, pages: [card(title, paragraphs)], show_clickable_nav: true, allow_keys: false, allow_backward: false,
+      return {type: jsPsychInstructions, pages: [card(title, paragraphs, sidesHtml())], show_clickable_nav: true, allow_keys: false, allow_backward: false,
               button_label_next: button || 'Continue', on_load: () => setScreen('instructions', 'instructions')};
     }
     return {type: jsPsychHtmlButtonResponse, choices: [button || 'Continue'], stimulus: card(title, paragraphs),
@@ -494,7 +505,7 @@
   function consentScreen(html) {
     return new Promise((resolve) => {
       setScreen('consent', 'consent');
-      app().innerHTML = `<div class="fs-card fs-consent"><h1>Consent</h1><div class="fs-consent-text">${html}</div>
+      app().innerHTML = `<div class="fs-card fs-consent">${/^\s*<h[1-6]>/.test(html) ? '' : '<h1>Consent</h1>'}<div class="fs-consent-text">${html}</div>
         <div class="fs-actions"><button id="fs-consent-no" class="jspsych-btn">I do not agree</button>
         <button id="fs-consent-yes" class="jspsych-btn fs-next">I agree to take part</button></div></div>`;
       document.getElementById('fs-consent-yes').addEventListener('click', () => { app().innerHTML = ''; resolve(true); });

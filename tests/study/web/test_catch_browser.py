@@ -168,7 +168,7 @@ def test_the_guides_prolific_design_keeps_the_attentive_and_excludes_the_careles
     rnd = catch[catch["role"] == "rnd"]
     right = ((rnd["level"] == 0) == (rnd["response"] == "correct")).mean() * 100
     assert len(rnd) == 4 and right < 75
-    flow = {f["stage"]: f["n"] for f in res.report["flow"]}
+    flow = {f.stage: f.n for f in res.report.flow}
     assert flow["recruited"] == 3 and flow["excluded: catch accuracy"] == 2 and flow["analysed"] == 1
     assert part["exclusion_rule"].to_dict() == {"att": "", "inc": "catch accuracy", "rnd": "catch accuracy"}
     assert part["catch_trials"].to_dict() == {"att": 4, "inc": 4, "rnd": 4}    # what each saw: 2 clips × 2
@@ -181,7 +181,7 @@ def test_the_guides_prolific_design_keeps_the_attentive_and_excludes_the_careles
     for g in ("smooth-increase", "smooth-decrease", "abrupt-increase", "abrupt-decrease"):
         assert cells[(g, 0.0)] == 2                                 # the attentive one's two originals
     assert cells[("takeoff-increase", 0.0)] == 2 and "catch" not in set(table["group"])
-    assert res.report["settings"]["n_trials"] == 48 - 4              # the kept one's trials, catch ones left out
+    assert res.report.settings.n_trials == 48 - 4              # the kept one's trials, catch ones left out
     # the local path: the same answers give the same groups, catch trials and exclusions
     _, lrows, lpart, ltable = _analysed(_local(study), tmp_path / "local")
     key = ["role", "stimulus", "group", "level", "catch", "response", "excluded", "exclusion_rule"]

@@ -128,6 +128,8 @@ def test_prolific_link_end_to_end_ids_redirect_catch_exclusion(page, study, tmp_
         page.goto(f"http://{origin}/index.html?PROLIFIC_PID={PID}&STUDY_ID={STUDY_ID}&SESSION_ID={SESSION_ID}")
         page.wait_for_selector('#jspsych-target[data-screen-id="consent"]')
         assert "Prolific ID only" in page.inner_text("#jspsych-target")
+        # the text's own heading is the page's title: no "Consent" above it (issue 42)
+        assert page.locator(".fs-consent h1, .fs-consent h2").all_inner_texts() == ["Taking part"]
         assert host.bodies == []                                   # nothing before consent
         _shot(page, "web_consent.png", tmp_path)
         page.click("#fs-consent-yes")
@@ -168,7 +170,7 @@ def test_prolific_link_end_to_end_ids_redirect_catch_exclusion(page, study, tmp_
         and set(mine["SESSION_ID"]) == {SESSION_ID}
     res = analyze([study / "web" / "responses.csv"], tmp_path / "analysis", psychometric="none", gee=False,
                   n_boot=50, figures=True)
-    flow = {f["stage"]: f["n"] for f in res.report["flow"]}
+    flow = {f.stage: f.n for f in res.report.flow}
     assert flow["recruited"] == 2 and flow["excluded: catch accuracy"] == 1 and flow["analysed"] == 1
     kept = pd.read_csv(tmp_path / "analysis" / "responses_exclusions.csv", dtype=str, keep_default_na=False)
     assert set(kept.loc[kept["participant"] == PID, "exclusion_rule"]) == {"catch accuracy"}

