@@ -127,7 +127,17 @@ class DesignError(FlipstudyError, ValueError):
 
 
 class SynthError(FlipstudyError, ValueError):
-    """Parameters for which no consistent motion exists (the message says which)."""
+    """Parameters for which no consistent motion exists (the message says which).
+
+    Examples
+    --------
+    >>> from flipstudy import builtin
+    >>> try:
+    ...     builtin("backflip", height=2.5, crouch_depth=0.1, flight_time=0.3)
+    ... except SynthError as e:
+    ...     print(str(e)[:59])
+    take-off: the legs cannot put the centre of mass on the pla
+    """
 
 
 class StimulusError(FlipstudyError, ValueError):

@@ -39,8 +39,7 @@ KNOWN_SUB_GAP: set[str] = {
     "flipstudy.stimuli.edit.concat.FeetReport", "flipstudy.stimuli.edit.concat.point_cloud_distance",
     "flipstudy.stimuli.edit.concat.MotionGraphReport", "flipstudy.stimuli.control.JumpReport", "flipstudy.stimuli.control.JumpResult",
     "flipstudy.stimuli.control.jump", "flipstudy.stimuli.control.plan", "flipstudy.stimuli.control.assign_energy",
-    "flipstudy.stimuli.control.choose", "flipstudy.stimuli.control.sample_field",
-    "flipstudy.stimuli.synth.SynthError"
+    "flipstudy.stimuli.control.choose", "flipstudy.stimuli.control.sample_field"
 }
 
 
