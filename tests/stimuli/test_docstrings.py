@@ -30,16 +30,9 @@ SUBPACKAGES = ("flipstudy.stimuli.motion", "flipstudy.stimuli.edit", "flipstudy.
 # (48 of their 73 have one now: stimuli.motion, stimuli.edit, most of stimuli.synth, parts
 # of stimuli.control and stimuli.edit.concat)
 KNOWN_SUB_GAP: set[str] = {
-    "flipstudy.stimuli.edit.concat.Concatenation",
-    "flipstudy.stimuli.edit.concat.ConcatReport", "flipstudy.stimuli.edit.concat.Phases", "flipstudy.stimuli.edit.concat.Timing", "flipstudy.stimuli.edit.concat.optimal_timing",
-    "flipstudy.stimuli.edit.concat.optimal_timing_bruteforce",
-    "flipstudy.stimuli.edit.concat.Motion", "flipstudy.stimuli.edit.concat.blendable_periods",
-    "flipstudy.stimuli.edit.concat.support_frames", "flipstudy.stimuli.edit.concat.smooth",
-    "flipstudy.stimuli.edit.concat.two_bone_ik", "flipstudy.stimuli.edit.concat.pin_feet",
-    "flipstudy.stimuli.edit.concat.FeetReport", "flipstudy.stimuli.edit.concat.point_cloud_distance",
-    "flipstudy.stimuli.edit.concat.MotionGraphReport", "flipstudy.stimuli.control.JumpReport", "flipstudy.stimuli.control.JumpResult",
+    "flipstudy.stimuli.control.JumpReport", "flipstudy.stimuli.control.JumpResult",
     "flipstudy.stimuli.control.jump", "flipstudy.stimuli.control.plan", "flipstudy.stimuli.control.assign_energy",
-    "flipstudy.stimuli.control.choose", "flipstudy.stimuli.control.sample_field"
+    "flipstudy.stimuli.control.choose", "flipstudy.stimuli.control.sample_field",
 }
 
 

@@ -108,7 +108,35 @@ def smooth(blended: Clip, body: Body, window: tuple[int, int], L: np.ndarray,
     ``"profile"``: eq. 9's mean reached without a jump in speed at the window's
     ends (measured again and corrected, up to ``passes`` times, until the rate is
     within ``tol`` of 1); ``"none"``.  Returns the clip, the window's last frame
-    in it and what was applied (``None``: nothing)."""
+    in it and what was applied (``None``: nothing).
+
+    Parameters
+    ----------
+    blended : Clip
+    body : Body
+    window : tuple of int
+    L : ndarray, shape (F,)
+    ends : tuple of float
+    mode : {"profile", "uniform", "none"}
+    passes : int
+    tol : float
+
+    Returns
+    -------
+    clip : Clip
+    last : int
+    applied : dict or None
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> from flipstudy.stimuli.edit.concat import motion_of
+    >>> m = motion_of(builtin("backflip"))
+    >>> Ln = np.linalg.norm(m.L, axis=1)
+    >>> out, last, applied = smooth(m.clip, m.body, (200, 220), Ln, (Ln[200], Ln[220]), mode="uniform")
+    >>> out.num_frames, last, applied["mode"]
+    (397, 220, 'uniform')
+    """
     if mode not in ("uniform", "profile", "none"):
         raise ConcatError(f"smoothing must be 'profile', 'uniform' or 'none', got {mode!r}")
     f0, f1 = window

@@ -48,7 +48,32 @@ def two_bone_ik(clip: Clip, hip: int, knee: int, ankle: int, frames: np.ndarray,
     """Analytic two-bone IK: in ``frames`` put the ``ankle`` joint at ``target``
     (n,3) by bending the knee about the leg's plane and turning the thigh about
     the hip, keeping the foot's world orientation.  Vectorised over frames; exact
-    where the target is in reach (otherwise the leg is stretched towards it)."""
+    where the target is in reach (otherwise the leg is stretched towards it).
+
+    Parameters
+    ----------
+    clip : Clip
+    hip, knee, ankle : int
+        Joint indices of the leg.
+    frames : ndarray of int, shape (n,)
+    target : ndarray, shape (n, 3)
+    lateral : ndarray, shape (n, 3), optional
+        The body's left-right axis, to keep the knee's plane.
+
+    Returns
+    -------
+    Clip
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> clip = builtin("backflip")
+    >>> hip, knee, ankle = (clip.skeleton.index(n) for n in ("LeftUpLeg", "LeftLeg", "LeftFoot"))
+    >>> target = clip.joint_positions()[:3, ankle] + [0.02, 0.05, 0.0]
+    >>> out = two_bone_ik(clip, hip, knee, ankle, np.arange(3), target)
+    >>> bool(np.allclose(out.joint_positions()[:3, ankle], target))
+    True
+    """
     frames = np.asarray(frames, int)
     if frames.size == 0:
         return clip
@@ -161,7 +186,28 @@ def pin_feet(clip: Clip, body: Body, window: tuple[int, int], fade_s: float = 0.
     foot is in the air, eased over its swing (at most ``fade_s``), never while it
     supports the body.  Frames where a foot would go below ``floor`` are lifted onto it.
     Returns the clip and a :class:`FeetReport`: the measured slide (horizontal
-    motion of the pinned points while in contact, cm) and floor clearance."""
+    motion of the pinned points while in contact, cm) and floor clearance.
+
+    Parameters
+    ----------
+    clip : Clip
+    body : Body
+    window : tuple of int
+    fade_s, release_in_contact : float
+    floor : float, optional
+
+    Returns
+    -------
+    Clip, FeetReport
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import analyse, builtin
+    >>> clip = builtin("backflip")
+    >>> out, rep = pin_feet(clip, analyse(clip).body, (0, 20))
+    >>> rep.pinned, rep.released, rep.foot_slide_cm < 1.0
+    (['l:0-158', 'r:0-158'], ['in contact', 'in contact'], True)
+    """
     f0, f1 = window
     F = clip.num_frames
     fl, fr = foot_contacts(clip, body)

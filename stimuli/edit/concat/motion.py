@@ -29,7 +29,29 @@ from .phases import UP, Phases, align_angle, phases, yaw
 
 @dataclass
 class Motion:
-    """What the concatenation needs of one motion, computed once."""
+    """What the concatenation needs of one motion, computed once (:func:`motion_of`).
+
+    Attributes
+    ----------
+    clip : Clip
+    body : Body
+    L, com : ndarray, shape (F, 3)
+        Angular momentum about the COM and the COM.
+    arms : ndarray, shape (F, P, 3)
+        Piece COM − body COM.
+    foot_l, foot_r : ndarray of bool, shape (F,)
+        Foot contact.
+    feet_centre, facing : ndarray, shape (F, 3)
+        Mid-point of the balls of the feet; unit torso facing on the ground.
+    phases : Phases
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> m = motion_of(builtin("backflip"))
+    >>> m.phases.main, bool(m.double_support[0]), round(m.main_peak) > 0
+    ((108, 247), True, True)
+    """
 
     clip: Clip
     body: Body

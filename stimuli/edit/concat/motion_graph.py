@@ -33,7 +33,30 @@ def point_cloud_distance(P1: np.ndarray, P2: np.ndarray, s1: np.ndarray, s2: np.
     P2 at ``s2``, all pairs: Σ‖p − T_{θ,x0,z0} p'‖² minimised over a rotation θ
     about the vertical and a ground translation, in closed form (a rotation about
     Y is a multiplication of z + i·x by e^{iθ}).  Returns D (n1,n2), θ (n1,n2)
-    and the window means (for the translation)."""
+    and the window means (for the translation).
+
+    Parameters
+    ----------
+    P1, P2 : ndarray, shape (F, J, 3)
+        Joint positions.
+    s1, s2 : ndarray of int, shape (n1,) and (n2,)
+        First frames of the windows.
+    k : int
+        Frames per window.
+
+    Returns
+    -------
+    D, theta : ndarray, shape (n1, n2)
+    mean1, mean2 : ndarray of complex
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> P = builtin("backflip").joint_positions()
+    >>> D, theta, _, _ = point_cloud_distance(P, P, np.array([0, 100]), np.array([0, 100]), 10)
+    >>> bool(D[0, 0] < 1e-9), bool(D[0, 1] > 1.0), bool(np.allclose(D, D.T))
+    (True, True, True)
+    """
     a, ma, ya = _cloud(P1, s1, k)
     b, mb, yb = _cloud(P2, s2, k)
     cross = a @ np.conj(b).T                              # Σ a·conj(b) for every pair

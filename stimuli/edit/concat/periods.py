@@ -30,7 +30,29 @@ def _half(mo: Motion, r, which: str) -> np.ndarray:
 
 def blendable_periods(m1: Motion, m2: Motion, rule: str) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """The candidate (case, frames of motion 1, frames of motion 2) of the rule,
-    before the support truncation (the halves the paper lists)."""
+    before the support truncation (the halves the paper lists).
+
+    Parameters
+    ----------
+    m1, m2 : Motion
+        The two motions (:func:`~flipstudy.stimuli.edit.concat.motion_of`).
+    rule : {"forward", "reverse"}
+
+    Returns
+    -------
+    list of (str, ndarray, ndarray)
+        Raises :class:`~flipstudy.errors.ConcatError` when the reverse rule finds
+        no phase to blend.
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> from flipstudy.stimuli.edit.concat import motion_of
+    >>> m = motion_of(builtin("backflip"))
+    >>> (case, f1, f2), = blendable_periods(m, m, "forward")
+    >>> case, (int(f1[0]), int(f1[-1])), (int(f2[0]), int(f2[-1]))   # t_m = 234
+    ('latter half of main 1 + initial half of main 2', (234, 247), (108, 234))
+    """
     p1, p2 = m1.phases, m2.phases
     if rule == "forward":
         return [("latter half of main 1 + initial half of main 2",
@@ -52,7 +74,30 @@ def support_frames(m1: Motion, m2: Motion, f1: np.ndarray, f2: np.ndarray):
     """The frames of ``f1`` (motion 1's period) and ``f2`` (motion 2's) in double
     support, and which support it is (a phrase for the report); when that leaves
     either period empty, the frames where one and the same foot supports in both
-    motions.  Raises :class:`ConcatError` when no foot supports both."""
+    motions.  Raises :class:`ConcatError` when no foot supports both.
+
+    Parameters
+    ----------
+    m1, m2 : Motion
+    f1, f2 : ndarray of int
+        The blendable frames of each motion (:func:`blendable_periods`).
+
+    Returns
+    -------
+    s1, s2 : ndarray of int
+        The frames kept of each period.
+    support : str
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli import builtin
+    >>> from flipstudy.stimuli.edit.concat import motion_of
+    >>> m = motion_of(builtin("backflip"))
+    >>> (_, f1, f2), = blendable_periods(m, m, "forward")
+    >>> s1, s2, support = support_frames(m, m, f1, f2)
+    >>> support, int(s1[0]), int(s2[-1])        # the take-off frames of the main phase
+    ('double support', 237, 159)
+    """
     d1, d2 = f1[m1.double_support[f1]], f2[m2.double_support[f2]]
     if d1.size and d2.size:
         return d1, d2, "double support"

@@ -26,7 +26,21 @@ UP = np.array([0.0, 1.0, 0.0])
 @dataclass
 class Phases:
     """Frame ranges (inclusive; ``None`` when the phase is absent) of a motion's
-    preparatory, main and posterior phases, and the frame t_m they grew from."""
+    preparatory, main and posterior phases, and the frame t_m they grew from.
+
+    Attributes
+    ----------
+    tm : int
+        The frame the main phase grew from (largest |L|, or given).
+    prep, main, post : tuple of int or None
+        First and last frame of each phase.
+
+    Examples
+    --------
+    >>> p = Phases(tm=4, prep=(0, 1), main=(2, 7), post=None)
+    >>> p.as_dict()
+    {'tm': 4, 'preparatory': (0, 1), 'main': (2, 7), 'posterior': None}
+    """
 
     tm: int
     prep: tuple[int, int] | None

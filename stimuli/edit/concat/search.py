@@ -21,6 +21,27 @@ from flipstudy.errors import ConcatError
 
 @dataclass
 class Timing:
+    """The optimal offset of the second motion and its cost terms (eqs. 3-7), as
+    :func:`optimal_timing` and :func:`optimal_timing_bruteforce` return it.
+
+    Attributes
+    ----------
+    T : int
+        Motion 2's frame g is played at motion 1's frame g + T.
+    fT : int
+        The blending centre f_T, in motion 1's frames.
+    F, F_dm, F_inertia, F_time : float
+        The cost at the optimum and its three terms.
+    costs : dict
+        T → F for every offset examined.
+
+    Examples
+    --------
+    >>> t = Timing(T=5, fT=10, F=3.0, F_dm=1.0, F_inertia=1.0, F_time=1.0)
+    >>> t.T, t.F_dm + t.F_inertia + t.F_time == t.F
+    (5, True)
+    """
+
     T: int                 # motion 2's frame g is played at motion 1's frame g + T
     fT: int                # blending centre, in motion 1's frames
     F: float               # F_dm + F_inertia + F_time at the optimum
@@ -41,7 +62,33 @@ def optimal_timing(L1, L2, r1, r2, m, frames1, frames2, f_start: int | None = No
     bool masks pairs out (e.g. facing too different).  Every frame pair (f, g) is
     one cell of an (n1 × n2) array; the offset T = f − g is its diagonal, sheared
     into a column, and f_T, F_dm, F_inertia and F_time are read off per column —
-    no loop over T or f."""
+    no loop over T or f.
+
+    Parameters
+    ----------
+    L1, L2 : ndarray, shape (F1, 3) and (F2, 3)
+        Angular momenta of the two motions.
+    r1, r2 : ndarray, shape (F1, P, 3) and (F2, P, 3)
+        Moment arms (piece COM − body COM).
+    m : ndarray, shape (P,)
+        Piece masses.
+    frames1, frames2 : array of int
+        The blendable frames of each motion.
+    f_start : int, optional
+    allowed : ndarray of bool, shape (n1, n2), optional
+
+    Returns
+    -------
+    Timing
+        Raises :class:`~flipstudy.errors.ConcatError` when no pair is allowed.
+
+    Examples
+    --------
+    >>> L = np.cumsum(np.ones((30, 3)), axis=0); r = np.zeros((30, 2, 3))
+    >>> t = optimal_timing(L, L[5:], r, r[5:], np.ones(2), np.arange(10, 20), np.arange(0, 20))
+    >>> t.T, t.fT, t.F, t.costs[4]              # motion 2 is motion 1 five frames on
+    (5, 10, 0.0, 3.0)
+    """
     L1, L2 = np.asarray(L1, float), np.asarray(L2, float)
     f1, f2 = np.asarray(frames1, int), np.asarray(frames2, int)
     if f1.size == 0 or f2.size == 0:
@@ -88,7 +135,25 @@ def optimal_timing_bruteforce(L1, L2, r1, r2, m, frames1, frames2, f_start: int 
                               allowed: np.ndarray | None = None) -> Timing:
     """The paper's search, as written: for every offset T, scan every frame for
     f_T, then evaluate F(T).  A plain Python loop, the reference for
-    :func:`optimal_timing` (same result)."""
+    :func:`optimal_timing` (same result).
+
+    Parameters
+    ----------
+    L1, L2, r1, r2, m, frames1, frames2, f_start, allowed
+        As for :func:`optimal_timing`.
+
+    Returns
+    -------
+    Timing
+
+    Examples
+    --------
+    >>> L = np.cumsum(np.ones((30, 3)), axis=0); r = np.zeros((30, 2, 3))
+    >>> args = (L, L[5:], r, r[5:], np.ones(2), np.arange(10, 20), np.arange(0, 20))
+    >>> t = optimal_timing_bruteforce(*args)
+    >>> t.T, t.fT, t.costs == optimal_timing(*args).costs
+    (5, 10, True)
+    """
     f1, f2 = [int(x) for x in frames1], [int(x) for x in frames2]
     f_start = f1[0] if f_start is None else int(f_start)
     pos2 = {g: jj for jj, g in enumerate(f2)}
