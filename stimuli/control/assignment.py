@@ -52,7 +52,32 @@ def assign_energy(field: SampleField, k, required: float, choice: Choice, travel
     sampling actually solves: over the pelvis position p (feet fixed, legs by
     CCD), minimise the balance error |b(p)|² subject to E_el(p) ≥ (1−ε)E_k,
     the thrust's room (legs extended after ``travel``, feet reaching) and the
-    balanced box, by SLSQP from the sampled answer."""
+    balanced box, by SLSQP from the sampled answer.
+
+    Parameters
+    ----------
+    field : SampleField
+    k : ndarray, shape (6,)
+    required : float
+        The energy E_k to store, J.
+    choice : Choice
+        The sampled answer (:func:`.windup.choose`).
+    travel : sequence of 3 float, optional
+    eps : float
+
+    Returns
+    -------
+    Assignment
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli.control import STRENGTH, Jumper, choose, parse_k, sample_field
+    >>> k = parse_k("global-normal") * STRENGTH
+    >>> f = sample_field(Jumper(), spacing=(0.03, 0.03, 0.03))      # a coarse field, quick
+    >>> a = assign_energy(f, k, 300.0, choose(f, k, 300.0))
+    >>> a.success, a.distance < 0.02, a.energy >= 0.95 * 300.0      # next to the sampled crouch
+    (True, True, True)
+    """
     j = field.jumper
     k = np.asarray(k, float)
     feet = j.feet()

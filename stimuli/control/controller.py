@@ -43,7 +43,32 @@ class JumpReport(Report):
     (:func:`.checks.check`) are ``None`` with ``check=False``.
 
     Lengths in metres, times in seconds, velocities m/s, energies J, spring
-    constants in the thesis's units; ``scene`` is the course's name."""
+    constants in the thesis's units; ``scene`` is the course's name.
+
+    Attributes
+    ----------
+    scene : str
+    start, target, landing_point : list of float
+        The feet's midpoint at the start, planned and measured at the landing.
+    landing_error_m : float or None
+    t_air, t_windup : float
+    v0, a, displacement : list of float
+        The path (3.5.1).
+    E_k, E_el_crouch, E_land, E_el_landing : float
+        Kinetic energy at take-off and elastic energy stored in the crouch; the same at landing.
+    takeoff, touchdown : int
+        The first frames at or after the take-off and touch-down instants.
+
+    The other fields are listed with their comments in the source.
+
+    Examples
+    --------
+    >>> rep = jump((0, 0, 1.3), fps=30).report
+    >>> rep.scene, rep.target, rep.E_el_crouch >= 0.95 * rep.E_k
+    ('forward', [0.0, 0.0, 1.3], True)
+    >>> "landing_error_m" in rep.to_dict()
+    True
+    """
 
     scene: str
     start: list
@@ -102,7 +127,21 @@ class JumpReport(Report):
 class JumpResult(Result[JumpReport]):
     """The jump's clip, its flight (``takeoff`` and ``landing``: the first and
     last frames strictly inside it), its typed report and the plan it was
-    built from."""
+    built from.
+
+    Attributes
+    ----------
+    clip : Clip
+    takeoff, landing : int
+    report : JumpReport
+    plan : Plan
+
+    Examples
+    --------
+    >>> res = jump((0, 0, 1.3), fps=30)
+    >>> res.clip.fps, res.takeoff < res.landing, res.plan.iterations > 0
+    (30.0, True, True)
+    """
 
     clip: Clip
     takeoff: int
@@ -128,7 +167,33 @@ def jump(target=None, *, course: str | Course = "forward", t_air: float | None =
     ``check=False`` skips the checks of the built frames (:mod:`.checks`).
 
     Raises ``ValueError`` naming the parameter for bad input and saying what
-    to change for an unreachable target."""
+    to change for an unreachable target.
+
+    Parameters
+    ----------
+    target : sequence of 3 float, optional
+    course : str or Course
+    t_air, t_windup, crouch_time : float, optional
+        Seconds in the air, of the windup and of the crouch.
+    k : str, float or sequence of 6 float
+    strength, mass, height, fps : float
+    g : float or sequence of 3 float
+    check : bool
+
+    Returns
+    -------
+    JumpResult
+
+    Examples
+    --------
+    >>> res = jump((0, 0, 1.3), fps=30)
+    >>> res.report.landing_error_m < 0.05, res.clip.meta["scene"]
+    (True, 'forward')
+    >>> jump((0, 0, 1.3), t_air=-1)
+    Traceback (most recent call last):
+    ...
+    flipstudy.errors.FlipstudyValueError: air: expected a positive time in seconds, got -1
+    """
     t0 = time.perf_counter()
     if isinstance(course, Course):
         sc = course if target is None else course.with_target(target)

@@ -83,7 +83,30 @@ def _touchdown(jumper, feet1, F1, delta, lean):
 
 
 def plan(jumper: Jumper, course: Course, k, t_air: float, t_windup: float, g, max_iter: int = 12) -> Plan:
-    """Solve the jump's fixed point (see the module docstring)."""
+    """Solve the jump's fixed point (see the module docstring).
+
+    Parameters
+    ----------
+    jumper : Jumper
+    course : Course
+    k : ndarray, shape (6,)
+        The springs used (thesis units × strength).
+    t_air, t_windup : float
+    g : float or sequence of 3 float
+    max_iter : int
+
+    Returns
+    -------
+    Plan
+        Raises ``ValueError`` saying what to change for an unreachable target.
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli.control import STRENGTH, Jumper, make_course, parse_k
+    >>> pl = plan(Jumper(), make_course("forward"), parse_k("global-normal") * STRENGTH, 0.5, 0.2, 9.81)
+    >>> pl.iterations < 12, pl.windup.satisfied, bool(pl.path.v0[1] > 0)   # converged, enough energy, upwards
+    (True, True, True)
+    """
     field_ = sample_field(jumper, k=k)                # uneven legs: the pelvis rolls in a crouch
     gv = gravity_vector(g)
     F0, F1 = np.asarray(course.start, float), np.asarray(course.target, float)

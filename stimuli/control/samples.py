@@ -120,7 +120,25 @@ _CACHE: dict = {}
 def sample_field(jumper: Jumper, spacing=SPACING, k=None) -> SampleField:
     """The sample field of a jumper (cached per height, mass and spacing, and
     per the legs' asymmetry of ``k``: uneven legs crouch with the pelvis
-    rolled, :func:`.uneven.pelvis_roll`; equal legs or no ``k``: upright)."""
+    rolled, :func:`.uneven.pelvis_roll`; equal legs or no ``k``: upright).
+
+    Parameters
+    ----------
+    jumper : Jumper
+    spacing : tuple of 3 float
+        The grid (x, y, z), metres.
+    k : sequence of 6 float, optional
+
+    Returns
+    -------
+    SampleField
+
+    Examples
+    --------
+    >>> f = sample_field(Jumper(), spacing=(0.03, 0.03, 0.03))
+    >>> f.pelvis.shape[1], bool(f.ok.any()), sample_field(Jumper(), spacing=(0.03, 0.03, 0.03)) is f
+    (3, True, True)
+    """
     c = 0.0 if k is None else round(leg_asymmetry(k), 9)
     key = (round(jumper.height, 9), round(jumper.mass, 9), tuple(spacing)) + ((c,) if c else ())
     if key in _CACHE:

@@ -98,7 +98,36 @@ def choose(field: SampleField, k, required: float, travel=None, eps: float = EPS
     enough, take the most energetic one (landings that must dissipate the rest)
     of those the upper body balances within :data:`BEST_EFFORT_BALANCE`,
     instead of raising ``ValueError``.  ``cheapest``: ``(t_air, E_k)`` of the air time
-    that needs the least energy, named in the refusal."""
+    that needs the least energy, named in the refusal.
+
+    Parameters
+    ----------
+    field : SampleField
+    k : ndarray, shape (6,)
+    required : float
+        E_k, J.
+    travel, takeoff_offset : sequence of 3 float, optional
+    eps : float
+    best_effort : bool
+    cheapest : tuple of float, optional
+
+    Returns
+    -------
+    Choice
+
+    Examples
+    --------
+    >>> from flipstudy.stimuli.control import STRENGTH, Jumper, parse_k, sample_field
+    >>> k = parse_k("global-normal") * STRENGTH
+    >>> f = sample_field(Jumper(), spacing=(0.03, 0.03, 0.03))
+    >>> c = choose(f, k, 300.0)
+    >>> c.satisfied, c.energy >= 0.95 * 300.0, c.candidates > 1
+    (True, True, True)
+    >>> choose(f, k, 1e5)
+    Traceback (most recent call last):
+    ...
+    flipstudy.errors.FlipstudyValueError: target unreachable: the jump needs E_k = 100000 J ...
+    """
     E = field.energy(k)
     bal = field.balanced(k)
     base = field.ok & bal.inside
