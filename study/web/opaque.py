@@ -248,7 +248,7 @@ class PageNames:
     def __init__(self, study):
         self.map = site_map(study)
         self.real = {self.map.video(r.stimulus): r.stimulus for r in study.manifest}
-        self.originals = {r.stimulus: r.original for r in study.manifest}
+        self.originals = {r.stimulus: getattr(r, "original", "") for r in study.manifest}
         names = sorted(set(self.real.values()), key=len, reverse=True)
         self._names = (re.compile(r"(?<![\w.-])(?:" + "|".join(re.escape(n) for n in names) + r")(?![\w.-])")
                        if names else None)
