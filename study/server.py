@@ -204,9 +204,22 @@ def local_site(session: Session, *, iti_ms: int = 500, jspsych_dir=None, lib: bo
 ANSWER_REPLY = ("status", "trial", "next_trial", "finished")
 
 
-def _answer_in_study_names(names: PageNames, obj: dict) -> dict:
+def _answer_in_study_names(names: PageNames, obj: dict, session: Session | None = None) -> dict:
     """The page's answer with its ``stimulus`` (the page's name of a video) the study's;
-    :class:`RequestError` (400) for a name the page was not given."""
+    :class:`RequestError` (400) for a name the page was not given.  A 2AFC answer names
+    its two videos in the order shown (``stimuli``): its ``stimulus`` is the one that
+    is not the comparison, and that order must be the one the session stored for the
+    trial (``first``; else 409)."""
+    if isinstance(obj, dict) and "stimuli" in obj:
+        got = names.pair(obj["stimuli"])
+        if got is None:
+            raise RequestError(400, "stimuli: not the page's names of a 2AFC trial's two videos")
+        n = obj.get("trial")
+        trials = session.trials if session is not None else []
+        if isinstance(n, int) and 1 <= n <= len(trials) and trials[n - 1].first not in ("", got[1]):
+            raise RequestError(409, f"trial {n}: its two videos were not shown in that order")
+        obj = {k: v for k, v in obj.items() if k != "stimuli"}
+        return dict(obj, stimulus=got[0])
     page_name = obj.get("stimulus")
     if not isinstance(page_name, str):
         return obj                                   # missing or not a string: refused as before
@@ -356,7 +369,8 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
             return None, changed(e, getattr(e, "stored_elsewhere", False))
 
     async def api_answer(request: Request):
-        result, err = await _submit(request, lambda s, obj: submit_answer(s, _answer_in_study_names(names, obj)))
+        result, err = await _submit(request, lambda s, obj: submit_answer(
+            s, _answer_in_study_names(names, obj, s)))
         if err is not None:
             return err
         if on_answer is not None and result["status"] == "stored":

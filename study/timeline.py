@@ -20,11 +20,12 @@ jsPsych trials for each type and runs the screens in order from ``start``.  Type
                   ``replay`` (bool), ``iti_ms``, ``prompt``, ``submit`` (URL); a
                   yes/no trial of a study that also has 2AFC or adaptive groups
                   carries ``"task": "yes-no"``
-``trial-2afc``    two-alternative forced choice: ``trial``, ``of``, ``stimulus`` (the
-                  modified one, what the answer names), ``videos`` (two URLs, in
-                  the order shown), ``first`` (``"original"`` or ``"modified"``),
-                  ``labels`` (``["1", "2"]``, shown over each motion), ``gap_ms``
-                  (the blank stage between the two), ``keys`` (``{"first": "f",
+``trial-2afc``    two-alternative forced choice: ``trial``, ``of``, ``stimuli`` (the
+                  page's names of the two videos, in the order shown; the answer
+                  names them so; which is the original is not said), ``videos``
+                  (their two URLs, in that order), ``labels`` (``["1", "2"]``,
+                  shown over each motion), ``gap_ms`` (the blank stage between
+                  the two), ``keys`` (``{"first": "f",
                   "second": "j"}``), ``prompt``, ``replay`` (both motions again),
                   ``iti_ms``, ``submit``; the answer's ``response`` is ``"first"``
                   or ``"second"`` (the interval judged physically correct)
@@ -169,10 +170,11 @@ def trial_screen(t, n: int, *, replay: bool, iti_ms: int, video_url: str = "/sti
     if adaptive and not t.stimulus:
         return dict(common, adaptive=True, task=task)
     if task == "2afc":
-        modified, original = video_url.format(name=name(t.stimulus)), video_url.format(name=name(t.original))
-        screen = dict(common, stimulus=name(t.stimulus),
-                      videos=[original, modified] if t.first == "original" else [modified, original],
-                      first=t.first, labels=["1", "2"], gap_ms=GAP_MS, keys=dict(KEYS_2AFC),
+        shown = [name(t.original), name(t.stimulus)]       # the order shown (the page never
+        if t.first != "original":                          # learns which is the original)
+            shown.reverse()
+        screen = dict(common, stimuli=shown, videos=[video_url.format(name=x) for x in shown],
+                      labels=["1", "2"], gap_ms=GAP_MS, keys=dict(KEYS_2AFC),
                       replay=replay, iti_ms=int(iti_ms), prompt=PROMPT_2AFC, submit="/api/answer",
                       task=task)
     else:

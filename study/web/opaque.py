@@ -248,6 +248,7 @@ class PageNames:
     def __init__(self, study):
         self.map = site_map(study)
         self.real = {self.map.video(r.stimulus): r.stimulus for r in study.manifest}
+        self.originals = {r.stimulus: getattr(r, "original", "") for r in study.manifest}
         names = sorted(set(self.real.values()), key=len, reverse=True)
         self._names = (re.compile(r"(?<![\w.-])(?:" + "|".join(re.escape(n) for n in names) + r")(?![\w.-])")
                        if names else None)
@@ -259,6 +260,31 @@ class PageNames:
     def stimulus(self, page_name) -> str | None:
         """The stimulus the page's ``page_name`` names (None: not one of the page's names)."""
         return self.real.get(page_name) if isinstance(page_name, str) else None
+
+    def pair(self, page_names) -> tuple[str, str] | None:
+        """``(modified, first)`` of a 2AFC trial's two videos as the page names them, in
+        the order shown: the stimulus that is not the comparison, and ``"original"`` or
+        ``"modified"`` (what was shown first); None when they are not the page's names
+        of a stimulus and its original.
+
+        >>> from types import SimpleNamespace as NS
+        >>> import tempfile
+        >>> st = NS(dir=tempfile.mkdtemp(), design=NS(groups=[NS(name="g")]),
+        ...         manifest=[NS(stimulus="o", group="g", original=""), NS(stimulus="m", group="g", original="o")])
+        >>> names = PageNames(st)
+        >>> names.pair([names.video("m"), names.video("o")]), names.pair([names.video("o"), names.video("o")])
+        (('m', 'modified'), None)
+        """
+        if not isinstance(page_names, list) or len(page_names) != 2:
+            return None
+        a, b = (self.stimulus(x) for x in page_names)
+        if a is None or b is None:
+            return None
+        if self.originals.get(b) == a:
+            return b, "original"
+        if self.originals.get(a) == b:
+            return a, "modified"
+        return None
 
     def text(self, message: str) -> str:
         """``message`` as the page may read it: each stimulus by its page name, no level."""

@@ -40,8 +40,10 @@ QUEST = {"name": "quest-walk", "sign": 1, "levels": {"from": 0, "to": 60, "step"
 #: levels as a page could show them (the others are the stimulus names' ends, searched too)
 LEVEL_WORDS = ["37.5", "62.5", "7.5", "52.5"]
 #: what a trial screen and an answer's reply may carry (no clip, kind, group or level)
-SCREEN_KEYS = {"type", "id", "trial", "of", "stimulus", "video", "videos", "replay", "iti_ms", "prompt", "submit",
-               "task", "adaptive", "first", "labels", "gap_ms", "keys"}
+SCREEN_KEYS = {"type", "id", "trial", "of", "stimulus", "stimuli", "video", "videos", "replay", "iti_ms", "prompt",
+               "submit", "task", "adaptive", "labels", "gap_ms", "keys"}
+#: what would say which of a 2AFC trial's two videos is the original (the correct answer)
+WHICH_IS_WHICH = {"original", "modified"}
 REPLY_KEYS = {"status", "trial", "next_trial", "finished"}
 HIDDEN_KEYS = {"level", "kind", "group", "clip", "profile", "original", "condition"}
 
@@ -88,7 +90,9 @@ def _walk(obj, key=None):
 
 
 def _answer(n, stimulus, response):
-    return {"participant": "P01", "session": 1, "trial": n, "stimulus": stimulus, "response": response,
+    """The page's answer: a 2AFC trial's names its two videos (a list) as shown."""
+    shown = {"stimuli": stimulus} if isinstance(stimulus, list) else {"stimulus": stimulus}
+    return {"participant": "P01", "session": 1, "trial": n, **shown, "response": response,
             "rt_ms": 500.0, "shown_ms": 130.0, "late_frames": 0}
 
 
@@ -119,13 +123,16 @@ def _run_session(page):
             assert page.req("GET", video)[0] == 200, video
         two = screen["type"] == "trial-2afc"
         response = (("first", "second") if two else ("correct", "incorrect"))[n % 2]
-        other = next(t["stimulus"] for t in trials if t.get("stimulus") not in (None, screen["stimulus"]))
+        mine = screen["stimuli"] if two else screen["stimulus"]
+        other = next(t["stimulus"] for t in trials if t.get("stimulus") not in (None, mine))
         assert page.req("POST", "/api/answer", _answer(n, other, response), probe=True)[0] == 409
         assert page.req("POST", "/api/answer", _answer(n, "backflip_catch_100", response), probe=True)[0] == 400
         assert page.req("GET", "/stimuli/backflip_catch_100.mp4", probe=True)[0] == 404
-        reply = page.json("POST", "/api/answer", _answer(n, screen["stimulus"], response))
+        if two:              # the pair in the other order is not what the trial showed
+            assert page.req("POST", "/api/answer", _answer(n, mine[::-1], response), probe=True)[0] == 409
+        reply = page.json("POST", "/api/answer", _answer(n, mine, response))
         assert reply["status"] == "stored"
-        given[n] = (screen["stimulus"], response)
+        given[n] = (mine, response)
     assert tl["n_trials"] == len(given)
     return tl, given
 
@@ -155,6 +162,10 @@ def _check(study, page, tl, given, jspsych_dir, tmp_path):
     assert not HIDDEN_KEYS & {v for k, v in _walk([cfg["videos"], cfg["references"]]) if k == "key"}
     screens = [s for s in tl["timeline"] if s.get("trial")] + [r for r in replies if "type" in r]
     assert len(screens) == 2 * len(given) and all(set(s) <= SCREEN_KEYS for s in screens), screens
+    # nor which of a 2AFC trial's two videos is the original: no field's value, no "first"
+    pairs = [s for s in screens if s["type"] == "trial-2afc"]
+    assert pairs and all(len(s["stimuli"]) == 2 and "stimulus" not in s and "first" not in s for s in pairs)
+    assert not [(k, v) for s in screens + replies for k, v in _walk(s) if v in WHICH_IS_WHICH]
     assert all(set(r) == REPLY_KEYS for r in replies if "status" in r and "trial" in r)
 
     # the round trip: each answer stored under the stimulus its video is, as given
@@ -165,6 +176,12 @@ def _check(study, page, tl, given, jspsych_dir, tmp_path):
     assert stored.keys() == given.keys()
     manifest = {r.stimulus: r for r in load_study(study).manifest}
     for trial, (name, response) in given.items():
+        if isinstance(name, list):     # 2AFC: the modified one of the two, the order as shown
+            a, b = (site_map[x] for x in name)
+            first = "original" if manifest[b].original == a else "modified"
+            name = name[1] if first == "original" else name[0]
+            assert (r := stored[trial])["first"] == first, trial
+            assert r["original_stimulus"] == manifest[site_map[name]].original
         r, real = stored[trial], manifest[site_map[name]]
         assert (r["stimulus"], r["group"], float(r["level"]), r["response"]) == \
             (real.stimulus, real.group, real.level, response), trial

@@ -43,9 +43,11 @@ def test_2afc_screen_shows_the_pair_in_the_stored_order(tmp_path):
     for x, t in zip(screens, s.trials):
         pair = [f"/stimuli/{t.original}.mp4", f"/stimuli/{t.stimulus}.mp4"]
         assert x["videos"] == (pair if t.first == "original" else pair[::-1])
-        assert (x["stimulus"], x["first"], x["keys"], x["prompt"]) == (t.stimulus, t.first, KEYS_2AFC, PROMPT_2AFC)
+        assert x["stimuli"] == [v[len("/stimuli/"):-len(".mp4")] for v in x["videos"]]
+        assert "first" not in x and "stimulus" not in x        # nothing says which is the original
+        assert (x["keys"], x["prompt"]) == (KEYS_2AFC, PROMPT_2AFC)
         assert x["replay"] is True and x["labels"] == ["1", "2"] and x["gap_ms"] > 0
-    assert sorted(x["first"] for x in screens) == ["modified", "modified", "original", "original"]
+    assert sorted(t.first for t in s.trials) == ["modified", "modified", "original", "original"]
     text = " ".join(tl["timeline"][0]["paragraphs"])
     assert "two motions" in text and "F = the first motion" in text and "incorrect" not in text
 
@@ -115,12 +117,17 @@ def test_served_adaptive_levels_follow_quest(tmp_path, task):
         names = study_names(s.study.dir)          # the page's (opaque) names → the stimuli
         for n in range(1, s.n_trials + 1):
             _, screen = _get(srv.url + f"api/trial/{n}")
-            stimulus = names[screen["stimulus"]]
+            if task == "2afc":                 # the modified one of the two, and what came first
+                a, b = (names[x] for x in screen["stimuli"])
+                first = "original" if s.study.by_name[b].original == a else "modified"
+                stimulus = b if first == "original" else a
+            else:
+                stimulus = names[screen["stimulus"]]
             level = s.study.by_name[stimulus].level
             assert level == q.next_level()
             if task == "2afc":
-                seen = "first" if level < 30 else ("first" if screen["first"] == "original" else "second")
-                detected = (seen == "first") == (screen["first"] == "original")
+                seen = "first" if level < 30 else ("first" if first == "original" else "second")
+                detected = (seen == "first") == (first == "original")
             else:
                 seen = "incorrect" if level >= 30 else "correct"
                 detected = seen == "incorrect"

@@ -5,9 +5,10 @@
 // html-button-response asks "Which motion was physically correct?" (First / Second, keys
 // F / J; with replay allowed, "Replay both" runs the pair again: a loop node).
 //
-// The answer record is the yes/no one with task = "2afc", first ("original" | "modified":
-// which was shown first), original (the comparison stimulus) and response "first" |
-// "second".  Its playback fields add up both motions' first showings (frames expected,
+// `t.pair` is the trial's two videos (their opaque names) in the order shown; the page is
+// not told which is the original.  The answer record is the yes/no one with task = "2afc",
+// the pair as shown and response "first" | "second" (the interval chosen); the server
+// (local) or import-web (the site's map) works out which was the original.  Its playback fields add up both motions' first showings (frames expected,
 // presented and dropped, playback_ms, video_ms, shown_ms), so a dropped frame in either is
 // counted and flagged against max_dropped_pct as for one motion.
 'use strict';
@@ -21,7 +22,7 @@
     const keys = C.keys_2afc;
     const sid = repeat ? `repeat-${t.trial}` : `trial-${t.trial}`;
     const progress = repeat ? `Once more: trial ${t.trial} of ${env.n}` : `Trial ${t.trial} of ${env.n}`;
-    const infos = () => (t.first === 'original' ? [t.original, t.stimulus] : [t.stimulus, t.original]).map((s) => C.videos[s]);
+    const infos = () => t.pair.map((s) => C.videos[s]);
     const head = `<p class="fs-progress"><span>${esc(progress)}</span><span>${esc(keys.first.toUpperCase())} = first · ${esc(keys.second.toUpperCase())} = second</span></p>`;
     const question = `<p class="fs-prompt">${esc(C.texts.prompt_2afc)}</p>`;
     const fix = `<div class="fs-stage"><div class="fs-fixation">+</div></div>`;
@@ -37,7 +38,7 @@
         setScreen(sid, 'trial-2afc');
         const el = env.app();
         el.dataset.trial = String(t.trial);
-        el.dataset.stimulus = t.stimulus;
+        el.dataset.stimulus = t.pair[i];
         el.dataset.playing = '1';
         el.dataset.interval = String(i + 1);
         const v = document.getElementById('jspsych-video-button-response-stimulus');
@@ -80,8 +81,10 @@
         const tAnswer = performance.now();
         const vb = jsPsych.pluginAPI.video_buffers;
         for (const info of infos()) if (vb && vb[info.video]) { URL.revokeObjectURL(vb[info.video]); delete vb[info.video]; }
-        return record(Object.assign({record: 'answer', trial: t.trial, stimulus: t.stimulus, group: t.group,
-          repetition: t.repetition, task: '2afc', first: t.first, original: t.original,
+        // the site's records still say what its order gave (stimulus, first, original)
+        const shown = t.first ? {stimulus: t.stimulus, first: t.first, original: t.original} : {pair: t.pair.join(' ')};
+        return record(Object.assign({record: 'answer', trial: t.trial}, shown, {group: t.group,
+          repetition: t.repetition, task: '2afc',
           response: data.response === 0 ? 'first' : 'second',
           rt_ms: Math.round((tAnswer - (tEnabled === null ? tAnswer : tEnabled)) * 10) / 10, input, replays, repeat,
           refresh_hz: env.refresh, max_dropped_pct: C.max_dropped_pct}, combine(first, C.max_dropped_pct)));

@@ -134,7 +134,11 @@
       for (let k = 0; k < Math.floor(n / 2); k++) firsts.push('original', 'modified');
       if (n % 2) firsts.push(rng.random() < 0.5 ? 'original' : 'modified');
       rng.shuffle(firsts);
-      idx.forEach((i, k) => { trials[i].first = firsts[k]; });
+      idx.forEach((i, k) => {
+        const t = trials[i];
+        t.first = firsts[k];
+        t.pair = t.first === 'original' ? [t.original, t.stimulus] : [t.stimulus, t.original];   // as shown
+      });
     }
   }
 

@@ -801,10 +801,7 @@
   // the site's trial object of a server trial screen
   function trialOf(s) {
     const t = {trial: s.trial, task: s.type === 'trial-2afc' ? '2afc' : 'yes-no', stimulus: s.stimulus || null};
-    if (t.task === '2afc' && s.videos) {
-      t.first = s.first;
-      t.original = nameOf(s.videos[s.first === 'original' ? 0 : 1]);
-    }
+    if (t.task === '2afc' && s.stimuli) t.pair = s.stimuli.slice();     // in the order shown
     return t;
   }
 
@@ -824,7 +821,9 @@
         await postJSON('api/demographics', body);
         return;
       }
-      Object.assign(body, {trial: rec.trial, stimulus: rec.stimulus, response: rec.response, rt_ms: rec.rt_ms,
+      if (rec.pair) body.stimuli = rec.pair.split(' ');                 // a 2AFC trial: its two, as shown
+      else body.stimulus = rec.stimulus;
+      Object.assign(body, {trial: rec.trial, response: rec.response, rt_ms: rec.rt_ms,
         shown_ms: rec.shown_ms, late_frames: rec.frames_dropped, replays: rec.replays, input: rec.input});
       const r = await postJSON('api/answer', body);
       state.next = r.next_trial;
@@ -834,7 +833,7 @@
     const loader = videoLoader(jsPsych);
     // the videos of the two trials after trial k that are known before they are served
     const upcoming = (k) => data.timeline.filter((x) => (x.type === 'trial' || x.type === 'trial-2afc') && x.trial > k
-      && x.stimulus).slice(0, 2).flatMap((x) => (x.videos || [x.video]).map(siteVideo));
+      && (x.stimulus || x.stimuli)).slice(0, 2).flatMap((x) => (x.videos || [x.video]).map(siteVideo));
     let current = 0;
     const fetchVideos = async (urls) => { await loader.fetch(urls); loader.prefetch(upcoming(current)); };
     const env = {jsPsych, n, refresh, record, fetchVideos};
@@ -855,7 +854,7 @@
         nodes.unshift(waitNode(env, '<div class="fs-stage"><div class="fs-fixation">+</div></div>', `serve-trial-${s.trial}`,
           async () => {
             current = s.trial;
-            if (s.adaptive && !s.stimulus) Object.assign(t, trialOf(await request(`api/trial/${s.trial}`)));
+            if (s.adaptive && !s.stimulus && !s.stimuli) Object.assign(t, trialOf(await request(`api/trial/${s.trial}`)));
           }));
         tl.push({timeline: nodes, conditional_function: () => !passed(s.trial)});
       } else if (s.type === 'end') {
