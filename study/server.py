@@ -299,13 +299,12 @@ async def _server_error(request: Request, exc: Exception):
 
 def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1", "localhost", "::1"),
                on_answer=None, on_changed=None, jspsych_dir=None, names: PageNames | None = None) -> Starlette:
-    """The ASGI app serving ``session``.  ``allowed_hosts`` (names accepted in the
-    Host header; None = any) guards against DNS rebinding.  ``on_answer(result)``
-    is called after every stored answer (the CLI prints progress).  The page is
-    :func:`local_site`; jsPsych's ``lib/`` files are read when first asked for
-    (``jspsych_dir``: where its npm packages are; :func:`serve` fetches them first).
+    """The ASGI app serving ``session``.  ``allowed_hosts`` (Host header names; None =
+    any) guards against DNS rebinding; ``on_answer(result)`` is called after every
+    stored answer.  The page is :func:`local_site`; jsPsych's ``lib/`` files are read
+    when first asked for (``jspsych_dir``: its npm packages; :func:`serve` fetches them).
     ``names``: the page's names of the stimuli (None: the study's opaque names,
-    :class:`~flipstudy.study.web.opaque.PageNames`; it writes ``STUDY/web/site-map.json``).
+    :class:`~flipstudy.study.web.opaque.PageNames`, kept in ``STUDY/web/site-map.json``).
 
     A pinned session (:meth:`Session.pin`) is checked before and after every
     answer: once its study folder, database, manifest or design changed, every
@@ -330,8 +329,8 @@ def create_app(session: Session, *, iti_ms: int = 500, allowed_hosts=("127.0.0.1
             session.check_intact()
         except StudyChangedError as e:
             return changed(e)
-        tl = await run_in_threadpool(lambda: build_timeline(session, session.state(), iti_ms=iti_ms,
-                                                            name=names.video))
+        tl = await run_in_threadpool(
+            lambda: build_timeline(session, session.state(), iti_ms=iti_ms, name=names.video))
         return JSONResponse(tl, headers={"Cache-Control": "no-store"})
 
     tagged = not is_default(study.design)

@@ -141,6 +141,7 @@ def test_analyze_never_crashes_on_a_valid_table(df, monkeypatch_save):
         assert tex.isascii()
 
 
+@pytest.mark.slow
 @settings(max_examples=5, deadline=None, database=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(df=response_tables())

@@ -173,6 +173,7 @@ def test_ctrl_c_stops_render_at_once_and_a_rerun_makes_only_the_rest(tmp_path, m
     assert f"flipstudy render {study}" in msg
 
 
+@pytest.mark.slow
 def test_sigkill_of_render_leaves_no_worker(tmp_path):
     study = tiny_study(tmp_path / "study", 6)
     proc = start(["render", str(study), *RENDER])

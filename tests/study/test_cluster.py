@@ -79,6 +79,7 @@ def test_parse_address_refuses_what_it_cannot_use():
             cl.parse_address(bad)
 
 
+@pytest.mark.slow
 def test_cluster_build_and_render_are_the_local_bytes(tmp_path, cluster):
     d = design((10, 25))
     here, there = tmp_path / "local", tmp_path / "cluster"
@@ -107,6 +108,7 @@ def test_cluster_build_and_render_are_the_local_bytes(tmp_path, cluster):
     assert render_study(there, cluster=cluster, **kw).made == 0
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_build_has_its_tasks_rerun(tmp_path, cluster):
     d = design(tuple(range(2, 26, 2)))                 # 15 stimuli
     want = build_stimuli(d, tmp_path / "local", progress=False).rows
@@ -139,6 +141,7 @@ def test_a_worker_killed_mid_build_has_its_tasks_rerun(tmp_path, cluster):
     assert before[victim] not in worker_pids(cluster).values()    # it was really killed
 
 
+@pytest.mark.slow
 def test_a_worker_killed_mid_render_has_its_video_made_again(tmp_path, cluster):
     from flipstudy.render.record import check_rendered
     study = tmp_path / "study"

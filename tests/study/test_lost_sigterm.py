@@ -6,6 +6,7 @@ failed there, status -15).  Now: one line ``flipstudy CMD: terminated``, exit
 status 143 (128 + SIGTERM, what a shell reports for a SIGTERM death, so a
 scheduler still sees the cause), and nothing half-written or locked is left.
 """
+import pytest
 import json
 import os
 import signal
@@ -31,6 +32,7 @@ def _stimuli_terminated(tmp_path, design, out, *extra):
     assert _leftovers(tmp_path, out.name) == []              # no .st.lock, no .st.tmp-*
 
 
+@pytest.mark.slow
 def test_sigterm_of_stimuli_leaves_no_lock_no_staging_and_the_old_study(tmp_path):
     from flipstudy.study.demo import demo_design_text
     design = tmp_path / "design.toml"
@@ -46,6 +48,7 @@ def test_sigterm_of_stimuli_leaves_no_lock_no_staging_and_the_old_study(tmp_path
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
 
 
+@pytest.mark.slow
 def test_sigterm_of_render_stops_its_workers_and_leaves_only_recorded_videos(tmp_path):
     n = 6
     study = tiny_study(tmp_path / "study", n)

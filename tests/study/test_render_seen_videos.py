@@ -48,6 +48,7 @@ def _real_answer(st) -> None:
     s.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args", [["--size", "80x60"], ["--framing", "stimulus"], ["--force"]])
 def test_render_refuses_to_replace_videos_real_participants_saw(tmp_path, capsys, args):
     st = _study(tmp_path)
@@ -65,6 +66,7 @@ def test_render_refuses_to_replace_videos_real_participants_saw(tmp_path, capsys
     assert not [p for p in (st / "render").iterdir() if p.name.startswith(".")]
 
 
+@pytest.mark.slow
 def test_render_remakes_videos_of_a_study_with_simulated_answers_only(tmp_path, capsys):
     from flipstudy.study.simulate import simulate
     st = _study(tmp_path)

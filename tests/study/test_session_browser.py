@@ -186,6 +186,7 @@ def check_export(study_dir, tmp_path, participant, trials, resp, how, replayed=(
     return rows, read_csv(out.participants)
 
 
+@pytest.mark.slow
 def test_whole_session_in_chromium(page, tiny_replay, tmp_path):
     tiny = tiny_replay
     session = open_session(load_study(tiny), "P01")

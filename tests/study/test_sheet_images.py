@@ -1,5 +1,7 @@
 """Issue 33: ``analyze STUDY`` puts the study's own ghosts and trails on the figure sheet,
 the pair ``reproduce`` shows (an original and its clip's strongest error)."""
+import pytest
+
 from pathlib import Path
 
 from flipstudy.stimuli.contract import Stimulus, StimulusSet
@@ -49,6 +51,7 @@ def test_the_default_study_keeps_reproduces_pair(tmp_path):
                                                                 "backflip_abrupt-decrease_50"}
 
 
+@pytest.mark.slow
 def test_analyze_of_a_studys_own_responses_table_shows_its_ghosts(tmp_path):
     # `analyze STUDY/responses.csv` (the table `export` writes into the study) draws the sheet
     # with the study's ghosts and trails, as `analyze STUDY` does; a copy of the table

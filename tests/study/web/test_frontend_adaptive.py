@@ -26,6 +26,7 @@ GROUPS = [{"name": "smooth-increase", "sign": 1, "levels": [0, 25]},
            "method": "quest+", "trials": 6, "stop_width": 1000}]
 
 
+@pytest.mark.slow
 def test_skipped_quest_slots_are_passed_over_before_and_after_a_reload(page, tmp_path):  # noqa: F811
     study_dir = make_study(tmp_path / "study", design_text(GROUPS, repetitions=2, break_every=40))
     session = open_session(load_study(study_dir), "S01")

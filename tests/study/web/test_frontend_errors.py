@@ -37,6 +37,7 @@ class Refusing:
         return await self.app(scope, receive, send)
 
 
+@pytest.mark.slow
 def test_a_server_error_is_shown_and_the_page_never_moves_on(page, tiny):  # noqa: F811
     session = open_session(load_study(tiny), "E01")
     app = Refusing(create_app(session, iti_ms=30))
