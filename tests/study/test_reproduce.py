@@ -138,7 +138,7 @@ def test_the_records_name_the_output_not_the_build_folder(tmp_path, monkeypatch)
         rd.mkdir(exist_ok=True)
         rec = {"study": str(stimuli.folder.resolve()), "stimuli": {}}
         write_record(rd, rec)
-        return types.SimpleNamespace(record=rec)
+        return types.SimpleNamespace(record=types.SimpleNamespace(stimuli={}))   # a RenderRecord with no stimulus
 
     def fake_analyze(responses, out, **k):          # records its files as analyze does
         out.mkdir(parents=True)

@@ -19,6 +19,7 @@ import test_web_browser
 from test_session_browser import CHROMIUM, TIMEOUT, jspsych_dir, page, pw  # noqa: F401 (fixtures)
 from test_prolific_between import BATCH_STANDIN
 from _prolific import guide_prolific_tables
+from _site_names import study_names
 
 from flipstudy.stimuli.presets import PRESETS
 from flipstudy.study.demo import write_demo_record, write_placeholder_study, write_test_video
@@ -67,10 +68,11 @@ def answers(study):
     return {"att": lambda s: "incorrect" if level[s] else "correct", "inc": lambda s: "incorrect", "rnd": _coin}
 
 
-def _through(page, answer, think_ms=0):
+def _through(page, answer, think_ms=0, real=None):
     """Consent to the end screen, every trial answered by ``answer(stimulus)`` ``think_ms``
     after the buttons are shown (the examples and breaks clicked through); returns how many
-    trials were answered."""
+    trials were answered.  ``real``: the study's map of the page's opaque names (the page
+    names no stimulus)."""
     page.click("#fs-consent-yes")
     page.wait_for_selector('#jspsych-target[data-screen-id="instructions"]', timeout=60_000)
     page.click("#jspsych-instructions-next")
@@ -94,7 +96,8 @@ def _through(page, answer, think_ms=0):
         page.wait_for_selector("button.fs-correct:enabled")
         if think_ms:
             page.wait_for_timeout(think_ms)
-        page.click(f"button.fs-{answer(page.get_attribute('#jspsych-target', 'data-stimulus'))}")
+        shown = page.get_attribute('#jspsych-target', 'data-stimulus')
+        page.click(f"button.fs-{answer(real[shown] if real is not None else shown)}")
         page.wait_for_function(f"() => window.flipstudyState.checkpoint.answers().length >= {i}")
     page.wait_for_selector('#jspsych-target[data-saved="1"]')
     return n
@@ -129,7 +132,8 @@ def _web(page, study, tmp_path, jspsych_dir, monkeypatch):  # noqa: F811
         for role, answer in answers(study).items():
             page.goto(f"http://{origin}/index.html?PROLIFIC_PID=W{role}&STUDY_ID=63aa01&SESSION_ID=s{role}")
             page.wait_for_selector('#jspsych-target[data-screen-id="consent"]', timeout=60_000)
-            n = _through(page, answer, think_ms=300 if role == "att" else 0)   # (the guide's min_median_rt_ms)
+            n = _through(page, answer, think_ms=300 if role == "att" else 0,   # (the guide's min_median_rt_ms)
+                         real=study_names(study))
     assert n == 48 and all("prolific.com" in u for u in blocked)          # only the completion redirects
     f = tmp_path / "jatos_results.txt"
     f.write_text("".join(host.bodies))
