@@ -15,10 +15,11 @@ def _flat(text: str) -> str:
 def test_getting_started_gives_the_readmes_timings_and_test_counts():
     readme = _flat((ROOT / "README.md").read_text(encoding="utf-8"))
     start = _flat((ROOT / "docs" / "getting_started.md").read_text(encoding="utf-8"))
-    for claim in ("the whole command took 100–110 s over four runs",
-                  "about 1,770 tests in 3 min 50 s to 4 min 15 s over four runs",
-                  "(4 min 45 s to 5 min 10 s with the venv and the install)"):
-        assert claim in readme, claim              # the README's numbers, as the test knows them
+    import re
+    # the README's own sentences on the two commands' times, whatever numbers they hold
+    claims = [m.group(0) for m in re.finditer(r"[^.]*(?:the whole command took|tests in)[^.]*\.", readme)]
+    assert len(claims) >= 2, claims
+    for claim in claims:
         assert claim in start, claim
     assert "1,730" not in start and "338 s" not in start
 
