@@ -191,7 +191,7 @@ def test_same_design_same_bytes_and_atomic_replace(tmp_path):
 def test_interrupted_run_leaves_nothing(tmp_path, monkeypatch):
     shared_file("88_01.bvh")
     d = _real_design(tmp_path)
-    import flipstudy.stimuli.stimset as ss
+    import flipstudy.stimuli.injection as ss    # the measure the kinds registry names (injection:measure)
     calls = {"n": 0, "armed": False}
     real_measure = ss.measure
 

@@ -236,7 +236,7 @@ def test_one_worker_renders_200_videos_in_flat_memory(tmp_path):
             stop.set()
             th.join()
         assert worker_pids(one) == {next(iter(worker_pids(one))): pid}   # the same process throughout
-    assert rec["made"] == 200
+    assert rec.made == 200
     mid = [r for n, r in samples if 95 <= n <= 105]
     late = [r for n, r in samples if n >= 105]
     assert mid and late, samples[-3:]

@@ -363,5 +363,5 @@ def test_the_comparison_figure_says_who_and_the_analysis_writes_notes(built, tmp
     notes = (tmp_path / "out" / "notes.md").read_text()
     assert notes.startswith("# Comparison notes") and label in notes
     assert "| gt |" in notes and "not meaningful below 5" in notes
-    assert res.report["participants_label"] == label
-    assert res.report["files"]["notes"] == str(tmp_path / "out" / "notes.md")
+    assert res.report.participants_label == label
+    assert res.report.files["notes"] == str(tmp_path / "out" / "notes.md")
