@@ -139,7 +139,7 @@ class FormatTable(Directive):
         return self._parse(lines)
 
     def _calibration(self):
-        from flipstudy.stimuli import calibration
+        from flipstudy.vocab import calibration      # the floor holds the format (stimuli.calibration re-exports it)
         doc = inspect.getdoc(calibration)
         schema = doc.split("Schema::", 1)[1].split("\n\n", 2)[1]
         lines = [f"Format tag `{calibration.FORMAT}`; tasks {', '.join(calibration.TASKS)}.", "",
